@@ -1,0 +1,83 @@
+//! One error type for the whole crate.
+//!
+//! Every failure a user can cause is a value of [`Error`], never a panic.
+//! Messages are one line and name the file, line and column where there is one.
+
+use std::path::PathBuf;
+
+/// The crate's error.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A problem at a definite place in a CSV file.
+    /// `line` is 1-based and counts the header as line 1.
+    #[error("{file}:{line}{}: {message}", column.as_ref().map(|c| format!(": column '{c}'")).unwrap_or_default())]
+    Csv {
+        file: String,
+        line: u64,
+        column: Option<String>,
+        message: String,
+    },
+
+    /// A problem with a whole input (file or in-memory data), not one cell.
+    #[error("{source_name}: {message}")]
+    Input {
+        source_name: String,
+        message: String,
+    },
+
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// JSON (de)serialisation failed.
+    #[error("{context}: {source}")]
+    Json {
+        context: String,
+        #[source]
+        source: serde_json::Error,
+    },
+
+    /// A parameter or option is out of its valid range.
+    #[error("invalid parameter: {0}")]
+    InvalidParameter(String),
+
+    /// A joint vector has the wrong length for the robot or model.
+    #[error("joint count mismatch: expected {expected}, got {got}")]
+    JointCount { expected: usize, got: usize },
+
+    /// A robot preset name that does not exist.
+    #[error("unknown robot '{name}' (known: {known})")]
+    UnknownRobot { name: String, known: String },
+
+    /// Numerical inverse kinematics did not reach the target.
+    #[error(
+        "inverse kinematics did not converge after {iterations} iterations \
+         (position residual {position_mm:.3e} mm, orientation residual {orientation_rad:.3e} rad)"
+    )]
+    IkNotConverged {
+        iterations: usize,
+        position_mm: f64,
+        orientation_rad: f64,
+    },
+
+    /// A linear-algebra step failed (e.g. a matrix that stays singular).
+    #[error("numerical failure: {0}")]
+    Numerical(String),
+}
+
+/// Crate-wide result alias.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Wrap an I/O error with the path it concerns.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

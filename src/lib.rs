@@ -1,0 +1,25 @@
+//! # robokrige
+//!
+//! Universal-Kriging surrogate models of an industrial robot's TCP error over the
+//! **extended joint space** `s = [θ1..θn, λ1..λn]` (λ = ±1, the direction each
+//! joint last moved), and everything around them: kinematics, a measurement
+//! simulator, dataset I/O.
+//!
+//! Module map (see `DESIGN.md` of the project):
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK, presets |
+//! | [`space`] | direction coefficients λ (seed 003 eq 5) |
+//! | [`dataset`] | the measurement CSV: read, validate, write |
+//! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
+//! | [`stats`] | summaries of error sets |
+
+pub mod dataset;
+pub mod error;
+pub mod kinematics;
+pub mod sim;
+pub mod space;
+pub mod stats;
+
+pub use error::{Error, Result};

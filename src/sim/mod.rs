@@ -1,0 +1,1 @@
+//! Measurement simulator (under construction).

@@ -1,0 +1,1 @@
+//! Summaries of TCP error sets (under construction).
