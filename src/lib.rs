@@ -21,5 +21,6 @@ pub mod kinematics;
 pub mod sim;
 pub mod space;
 pub mod stats;
+pub mod trajectory;
 
 pub use error::{Error, Result};

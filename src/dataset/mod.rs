@@ -1,1 +1,357 @@
-//! placeholder
+//! The measurement CSV: read, validate, write.
+//!
+//! # File format
+//!
+//! One row per measured pose, in the order the robot visited them. The first
+//! line is a header; column names are case-sensitive, cells are trimmed of
+//! surrounding whitespace, and a UTF-8 byte-order mark is accepted.
+//!
+//! | column | meaning |
+//! |---|---|
+//! | `q1`..`qN` | commanded joint positions in degrees (mm for a prismatic joint). Required, numbered contiguously from 1 without leading zeros; N ≥ 1 |
+//! | `dir1`..`dirN` | optional direction of approach, `+1` or `-1` (`1`, `+1`, `-1`, `1.0`, `-1.0`, …). All N or none; when absent they are derived from the row order with [`derive_directions`] |
+//! | `ex`,`ey`,`ez` | optional TCP error in mm (measured − nominal); all three or none |
+//! | `x`,`y`,`z` | optional measured TCP position in mm; all three or none. May appear together with `ex`,`ey`,`ez` |
+//! | `id` | optional row label (any text) |
+//! | anything else | a covariate, e.g. `time_s`, `temp_c`, `payload_kg` |
+//!
+//! Joint, direction, error and position cells must be finite numbers; an empty
+//! cell there is an error. A covariate column whose non-empty cells all parse
+//! as finite numbers is a numeric [`Covariate`] (empty cells are missing and
+//! stored as NaN); any other covariate column is kept as a [`TextColumn`].
+//! A file with neither `ex`,`ey`,`ez` nor `x`,`y`,`z` is valid: a plain pose
+//! list, e.g. for prediction.
+//!
+//! Every problem is reported as a [`crate::Error`] naming the file, the line
+//! (the header is line 1) and the column where there is one.
+//!
+//! [`write_csv`] writes the columns in the order `id`, `q1..qN`, `dir1..dirN`,
+//! `ex,ey,ez`, `x,y,z`, covariates, text columns. Directions are always
+//! written, so a dataset whose directions were [`DirSource::Derived`] reads
+//! back as [`DirSource::Given`]; everything else round-trips exactly.
+
+mod read;
+mod write;
+
+pub use read::{read_csv, read_csv_from};
+pub use write::{write_csv, write_csv_to};
+
+use crate::space::derive_directions;
+use crate::{Error, Result};
+
+/// Column names with a fixed meaning; covariates and text columns may not use them.
+const RESERVED: [&str; 7] = ["ex", "ey", "ez", "x", "y", "z", "id"];
+
+/// Where the direction coefficients came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum DirSource {
+    /// Read from `dir1..dirN` columns (or passed in explicitly).
+    Given,
+    /// Derived from the order of the poses with [`derive_directions`].
+    Derived,
+}
+
+/// A numeric covariate column such as `temp_c`.
+///
+/// Missing cells are NaN; `missing` counts them. Equality treats two missing
+/// cells as equal, so a dataset with gaps still equals itself after a round trip.
+#[derive(Debug, Clone)]
+pub struct Covariate {
+    /// Column name as in the header.
+    pub name: String,
+    /// One value per row; NaN where the cell was empty.
+    pub values: Vec<f64>,
+    /// Number of missing (NaN) values.
+    pub missing: usize,
+}
+
+impl PartialEq for Covariate {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+            && self.missing == other.missing
+            && self.values.len() == other.values.len()
+            && self
+                .values
+                .iter()
+                .zip(&other.values)
+                .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()))
+    }
+}
+
+/// A covariate column with at least one non-numeric cell, kept as text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextColumn {
+    /// Column name as in the header.
+    pub name: String,
+    /// One (trimmed) cell per row.
+    pub values: Vec<String>,
+}
+
+/// A measurement campaign: poses in visiting order plus what was measured there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    /// File name (or `"<memory>"`) used in messages.
+    pub source: String,
+    /// Commanded joint positions, m rows × n joints (degrees, or mm for a prismatic joint).
+    pub q: Vec<Vec<f64>>,
+    /// Direction coefficients λ, m × n, each exactly ±1.0.
+    pub dir: Vec<Vec<f64>>,
+    /// Whether `dir` was given or derived from the row order.
+    pub dir_source: DirSource,
+    /// TCP errors `[ex, ey, ez]` in mm (measured − nominal), if measured.
+    pub errors: Option<Vec<[f64; 3]>>,
+    /// Measured TCP positions `[x, y, z]` in mm, if recorded.
+    pub positions: Option<Vec<[f64; 3]>>,
+    /// Row labels from the `id` column.
+    pub ids: Option<Vec<String>>,
+    /// Numeric covariates in header order.
+    pub covariates: Vec<Covariate>,
+    /// Text covariates in header order.
+    pub text: Vec<TextColumn>,
+}
+
+impl Dataset {
+    /// Build a pose list (no measurements) from joint vectors in visiting order.
+    ///
+    /// With `dir == None` the directions are derived from the order of `q`
+    /// (first pose +1 on every joint) and `dir_source` is [`DirSource::Derived`].
+    /// The result is checked with [`Dataset::validate`].
+    pub fn from_poses(
+        source: impl Into<String>,
+        q: Vec<Vec<f64>>,
+        dir: Option<Vec<Vec<f64>>>,
+    ) -> Result<Dataset> {
+        let mut d = Dataset {
+            source: source.into(),
+            q,
+            dir: Vec::new(),
+            dir_source: DirSource::Given,
+            errors: None,
+            positions: None,
+            ids: None,
+            covariates: Vec::new(),
+            text: Vec::new(),
+        };
+        d.check_q()?;
+        match dir {
+            Some(dir) => d.dir = dir,
+            None => {
+                d.dir = derive_directions(&d.q, None);
+                d.dir_source = DirSource::Derived;
+            }
+        }
+        d.validate()?;
+        Ok(d)
+    }
+
+    /// Number of joints n (0 for an empty dataset).
+    pub fn n_joints(&self) -> usize {
+        self.q.first().map_or(0, Vec::len)
+    }
+
+    /// Number of poses m.
+    pub fn len(&self) -> usize {
+        self.q.len()
+    }
+
+    /// True when there are no poses.
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
+
+    /// The numeric covariate called `name`, if any.
+    pub fn covariate(&self, name: &str) -> Option<&Covariate> {
+        self.covariates.iter().find(|c| c.name == name)
+    }
+
+    /// The TCP errors, or an [`Error::Input`] if the data has no `ex,ey,ez` columns.
+    pub fn errors_or_err(&self) -> Result<&[[f64; 3]]> {
+        self.errors
+            .as_deref()
+            .ok_or_else(|| self.input_err("has no ex,ey,ez columns; add the measured TCP errors"))
+    }
+
+    /// Check internal consistency, for datasets built or edited in memory.
+    ///
+    /// Requires at least one pose and one joint; every row of `q` and `dir`
+    /// has n entries; `q`, errors and positions are finite; directions are
+    /// exactly ±1; every column has m entries; a covariate's `missing` equals
+    /// its NaN count and its other values are finite; covariate and text
+    /// column names are unique and not reserved (`qK`, `dirK`, `ex`.., `x`.., `id`).
+    pub fn validate(&self) -> Result<()> {
+        self.check_q()?;
+        self.check_dir()?;
+        self.check_triplets("errors", self.errors.as_deref())?;
+        self.check_triplets("positions", self.positions.as_deref())?;
+        if let Some(ids) = &self.ids {
+            self.check_len("ids", ids.len())?;
+        }
+        for c in &self.covariates {
+            self.check_covariate(c)?;
+        }
+        for t in &self.text {
+            self.check_len(&format!("text column '{}'", t.name), t.values.len())?;
+        }
+        self.check_names()
+    }
+
+    /// An [`Error::Input`] about this dataset.
+    fn input_err(&self, message: impl Into<String>) -> Error {
+        Error::Input {
+            source_name: self.source.clone(),
+            message: message.into(),
+        }
+    }
+
+    /// Non-empty, rectangular, finite joint matrix.
+    fn check_q(&self) -> Result<()> {
+        let n = self.n_joints();
+        if self.q.is_empty() || n == 0 {
+            return Err(self.input_err("no poses (need at least one row with one joint)"));
+        }
+        for (i, row) in self.q.iter().enumerate() {
+            if row.len() != n {
+                return Err(self.input_err(format!(
+                    "q row {i} (0-based) has {} joints but row 0 has {n}",
+                    row.len()
+                )));
+            }
+            if row.iter().any(|v| !v.is_finite()) {
+                return Err(self.input_err(format!("q row {i} (0-based) has a NaN/inf value")));
+            }
+        }
+        Ok(())
+    }
+
+    /// `dir` is m × n with entries exactly ±1.
+    fn check_dir(&self) -> Result<()> {
+        let n = self.n_joints();
+        self.check_len("dir", self.dir.len())?;
+        for (i, row) in self.dir.iter().enumerate() {
+            if row.len() != n {
+                return Err(self.input_err(format!(
+                    "dir row {i} (0-based) has {} entries but there are {n} joints",
+                    row.len()
+                )));
+            }
+            if let Some(v) = row.iter().find(|v| **v != 1.0 && **v != -1.0) {
+                return Err(self.input_err(format!(
+                    "dir row {i} (0-based): direction must be +1 or -1, found {v}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Optional xyz triplets: m rows, all finite.
+    fn check_triplets(&self, what: &str, rows: Option<&[[f64; 3]]>) -> Result<()> {
+        let Some(rows) = rows else { return Ok(()) };
+        self.check_len(what, rows.len())?;
+        match rows.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
+            Some(i) => Err(self.input_err(format!("{what} row {i} (0-based) has a NaN/inf value"))),
+            None => Ok(()),
+        }
+    }
+
+    /// Length m, consistent missing count, no infinities.
+    fn check_covariate(&self, c: &Covariate) -> Result<()> {
+        self.check_len(&format!("covariate '{}'", c.name), c.values.len())?;
+        let nan = c.values.iter().filter(|v| v.is_nan()).count();
+        if nan != c.missing {
+            return Err(self.input_err(format!(
+                "covariate '{}' says {} missing but has {nan} NaN values",
+                c.name, c.missing
+            )));
+        }
+        if c.values.iter().any(|v| v.is_infinite()) {
+            return Err(self.input_err(format!("covariate '{}' has an infinite value", c.name)));
+        }
+        Ok(())
+    }
+
+    /// A column has one entry per pose.
+    fn check_len(&self, what: &str, len: usize) -> Result<()> {
+        if len == self.len() {
+            Ok(())
+        } else {
+            Err(self.input_err(format!("{what} has {len} rows but q has {}", self.len())))
+        }
+    }
+
+    /// Covariate and text names are unique, non-empty and not reserved.
+    fn check_names(&self) -> Result<()> {
+        let names = self.covariates.iter().map(|c| &c.name);
+        let names: Vec<&String> = names.chain(self.text.iter().map(|t| &t.name)).collect();
+        for (i, name) in names.iter().enumerate() {
+            if name.is_empty() || name.trim() != name.as_str() {
+                return Err(self.input_err(format!("column name '{name}' is empty or padded")));
+            }
+            if is_reserved(name) {
+                return Err(self.input_err(format!("column name '{name}' is reserved")));
+            }
+            if names[..i].contains(name) {
+                return Err(self.input_err(format!("column name '{name}' is used twice")));
+            }
+        }
+        Ok(())
+    }
+}
+
+// ----- column-name and cell rules of the format, shared with `read` -----
+
+/// True for names with a fixed meaning in the file format (`q7`, `dir2`, `ex`, `id`, …),
+/// including malformed joint names such as `q0` or `dir01`.
+fn is_reserved(name: &str) -> bool {
+    RESERVED.contains(&name)
+        || joint_suffix(name, "q").is_some()
+        || joint_suffix(name, "dir").is_some()
+}
+
+/// The digits after `prefix` if `name` is `prefix` followed by one or more ASCII digits.
+fn joint_suffix<'a>(name: &'a str, prefix: &str) -> Option<&'a str> {
+    let digits = name.strip_prefix(prefix)?;
+    (!digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())).then_some(digits)
+}
+
+/// Parses one trimmed cell, or says what is wrong with it.
+type CellParser = fn(&str) -> std::result::Result<f64, String>;
+
+/// A required finite number.
+fn number(cell: &str) -> std::result::Result<f64, String> {
+    if cell.is_empty() {
+        return Err("missing value; fill in the cell or remove the row".into());
+    }
+    match cell.parse::<f64>() {
+        Err(_) => Err(format!("expected a number, found '{cell}'")),
+        Ok(v) if !v.is_finite() => Err(format!(
+            "value is NaN/inf ('{cell}'); remove or fix the row"
+        )),
+        Ok(v) => Ok(v),
+    }
+}
+
+/// A direction coefficient: exactly +1 or -1.
+fn direction(cell: &str) -> std::result::Result<f64, String> {
+    if cell.is_empty() {
+        return Err("missing value; direction must be +1 or -1".into());
+    }
+    match cell.parse::<f64>() {
+        Ok(v) if v == 1.0 || v == -1.0 => Ok(v),
+        _ => Err(format!("direction must be +1 or -1, found {cell}")),
+    }
+}
+
+/// Values and missing count if every non-empty cell is a finite number.
+fn numeric_column(cells: &[String]) -> Option<(Vec<f64>, usize)> {
+    let mut missing = 0;
+    let mut values = Vec::with_capacity(cells.len());
+    for cell in cells {
+        if cell.is_empty() {
+            missing += 1;
+            values.push(f64::NAN);
+        } else {
+            values.push(cell.parse::<f64>().ok().filter(|v| v.is_finite())?);
+        }
+    }
+    Some((values, missing))
+}

@@ -1,0 +1,202 @@
+//! `robokrige simulate`.
+
+use clap::{Args, ValueEnum};
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, Truth, simulate};
+use robokrige::stats::summarize;
+use robokrige::{Error, Result, dataset, kinematics};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Kind {
+    /// Latin-hypercube poses in the joint ranges, visited in order (the training campaign).
+    Lhs,
+    /// Independent random verification poses.
+    Verify,
+    /// Single-axis indexing tests, each grid point approached from both sides (seed 000 §2.3).
+    Indexing,
+    /// A circle of commanded TCP points (a trajectory to compensate; not measured).
+    Circle,
+}
+
+impl From<Kind> for CampaignKind {
+    fn from(k: Kind) -> Self {
+        match k {
+            Kind::Lhs => CampaignKind::Lhs,
+            Kind::Verify => CampaignKind::Verify,
+            Kind::Indexing => CampaignKind::Indexing,
+            Kind::Circle => CampaignKind::Circle,
+        }
+    }
+}
+
+/// Simulate a measurement campaign and write it in the measurement CSV format.
+///
+/// The same --robot and --seed always give the same true robot, whatever the
+/// --kind, so a training campaign, its verification poses and a trajectory can
+/// be made separately. The simulator's truth (true parameters, effects, noise
+/// floor) goes to a JSON beside the CSV, never into it.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  robokrige simulate --robot comau-nj220 --poses 300 --seed 1 -o comau_lhs.csv
+  robokrige simulate --kind verify --poses 30 --seed 1 -o comau_verify.csv
+  robokrige simulate --kind circle --seed 1 -o circle.csv
+  robokrige simulate --robot scara-rh3frh5515 --kind indexing --seed 1 -o scara_idx.csv
+  robokrige simulate --seed 2 --effect temperature:delta_k=6,tau_s=1200 -o warm.csv
+
+Effects (repeatable --effect NAME[:key=value,...]; defaults in brackets):
+  temperature  delta_k [6], tau_s [1200], expansion_per_k [4e-5]  -> drift with time_s/temp_c
+  payload      kg [0/60/120] (levels in equal blocks of rows)      -> payload_kg column
+  harmonic     joint [2], period_deg [7.5], amp_deg [0.004], phase_rad [0]
+  tracker-step row [150], dx [0.15], dy [-0.1], dz [0.1] (mm, no column records it)
+  crosstalk    joint [1], from [2], gain_deg [0.01]  (joint deviates by gain*sin(q_from))")]
+pub struct SimulateArgs {
+    /// Robot preset: comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515.
+    #[arg(long, default_value = "comau-nj220")]
+    robot: String,
+    /// Campaign kind.
+    #[arg(long, value_enum, default_value = "lhs")]
+    kind: Kind,
+    /// Number of poses (lhs 300, verify 30) or circle points (72); ignored by indexing.
+    #[arg(long)]
+    poses: Option<usize>,
+    /// Seed of the true robot and of the campaign.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Undeclared effect NAME[:key=value,...]; repeat for several.
+    #[arg(long = "effect", value_name = "SPEC")]
+    effects: Vec<String>,
+    /// Joint ranges overriding the preset's, e.g. "-20:20,-40:0,-150:-100,-15:15,-55:15,-15:15" (degrees).
+    #[arg(long, allow_hyphen_values = true)]
+    ranges: Option<String>,
+    /// Circle diameter, mm.
+    #[arg(long, default_value_t = 100.0)]
+    diameter: f64,
+    /// Forward/backward passes per indexed joint.
+    #[arg(long, default_value_t = 3)]
+    cycles: usize,
+    /// Output CSV.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Truth sidecar JSON [default: OUTPUT with .truth.json].
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// Print the summary as JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: SimulateArgs) -> Result<()> {
+    let robot = kinematics::preset(&a.robot)?;
+    let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
+    if let Some(p) = a.poses {
+        spec.poses = p;
+    }
+    spec.effects = a
+        .effects
+        .iter()
+        .map(|s| Effect::parse(s))
+        .collect::<Result<_>>()?;
+    spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
+    spec.circle_diameter_mm = a.diameter;
+    spec.indexing_cycles = a.cycles;
+    let (out, truth) = simulate(&robot, &spec)?;
+    let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
+    write_truth(&truth_path, &truth)?;
+    let summary = match &out {
+        SimOutput::Measurements(d) => {
+            dataset::write_csv(&a.output, d)?;
+            let s = summarize(d.errors.as_deref().unwrap_or(&[]));
+            serde_json::json!({
+                "output": a.output, "truth": truth_path, "rows": d.q.len(),
+                "error": s,
+                "noise_floor_mm": truth.noise_floor_mm,
+                "direction_spread_mm": truth.direction_spread_mm,
+            })
+        }
+        SimOutput::Trajectory(t) => {
+            t.write_csv(&a.output)?;
+            serde_json::json!({"output": a.output, "truth": truth_path, "points": t.len()})
+        }
+    };
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).map_err(|e| json_err("summary", e))?
+        );
+    } else {
+        print_summary(&summary);
+    }
+    Ok(())
+}
+
+fn print_summary(s: &serde_json::Value) {
+    let f = |v: &serde_json::Value| v.as_f64().map_or("-".into(), |x| format!("{x:.4}"));
+    let v3 = |v: &serde_json::Value| {
+        v.as_array().map_or("-".into(), |a| {
+            a.iter().map(|x| f(x)).collect::<Vec<_>>().join(" / ")
+        })
+    };
+    println!(
+        "wrote {} ({})",
+        s["output"].as_str().unwrap_or(""),
+        s["truth"]
+            .as_str()
+            .map_or(String::new(), |t| format!("truth: {t}"))
+    );
+    if let Some(n) = s.get("points") {
+        println!("trajectory points: {n}");
+        return;
+    }
+    let e = &s["error"];
+    println!("rows: {}", s["rows"]);
+    println!(
+        "3D error (mm): mean {}  std {}  min {}  max {}",
+        f(&e["mean_3d_mm"]),
+        f(&e["std_3d_mm"]),
+        f(&e["min_3d_mm"]),
+        f(&e["max_3d_mm"])
+    );
+    println!("per-axis RMS x / y / z (mm): {}", v3(&e["rms_mm"]));
+    println!(
+        "direction spread |δ(λ=+1) − δ(λ=−1)| x / y / z (mm, truth, mean over poses): {}",
+        v3(&s["direction_spread_mm"])
+    );
+    println!(
+        "noise floor σ x / y / z (mm, truth): {}",
+        v3(&s["noise_floor_mm"])
+    );
+}
+
+/// `a.csv` → `a.truth.json`.
+pub fn truth_path_for(output: &Path) -> PathBuf {
+    output.with_extension("truth.json")
+}
+
+fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
+    let text = serde_json::to_string_pretty(truth).map_err(|e| json_err("truth", e))?;
+    std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
+}
+
+fn json_err(context: &str, source: serde_json::Error) -> Error {
+    Error::Json {
+        context: context.into(),
+        source,
+    }
+}
+
+fn parse_ranges(s: &str) -> Result<Vec<(f64, f64)>> {
+    s.split(',')
+        .map(|part| {
+            let (lo, hi) = part.split_once(':').ok_or_else(|| {
+                Error::InvalidParameter(format!("--ranges: '{part}' is not LO:HI"))
+            })?;
+            let p = |x: &str| {
+                x.trim().parse::<f64>().map_err(|_| {
+                    Error::InvalidParameter(format!("--ranges: '{x}' is not a number"))
+                })
+            };
+            Ok((p(lo)?, p(hi)?))
+        })
+        .collect()
+}

@@ -1,0 +1,400 @@
+//! Reading the measurement CSV (format: see the [module docs](super)).
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+
+use super::{
+    CellParser, Covariate, Dataset, DirSource, TextColumn, direction, is_reserved, joint_suffix,
+    number, numeric_column,
+};
+use crate::space::derive_directions;
+use crate::{Error, Result};
+
+/// The UTF-8 byte-order mark some spreadsheet programs put at the start.
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// Read a measurement CSV file. Messages name the file by `path` as given.
+pub fn read_csv(path: &Path) -> Result<Dataset> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    read_csv_from(bytes.as_slice(), &path.display().to_string())
+}
+
+/// Read a measurement CSV from any reader; `source_name` is used in messages
+/// and stored as [`Dataset::source`].
+pub fn read_csv_from(mut reader: impl Read, source_name: &str) -> Result<Dataset> {
+    let mut bytes = Vec::new();
+    reader.read_to_end(&mut bytes).map_err(|e| Error::Input {
+        source_name: source_name.to_string(),
+        message: format!("reading failed: {e}"),
+    })?;
+    let body = bytes.strip_prefix(BOM).unwrap_or(&bytes);
+    let parser = Parser {
+        src: source_name.to_string(),
+        ..Parser::default()
+    };
+    parser.parse(body)
+}
+
+/// Which cells of a row hold what, worked out from the header.
+struct Layout {
+    names: Vec<String>,
+    q: Vec<usize>,
+    dir: Option<Vec<usize>>,
+    errors: Option<[usize; 3]>,
+    positions: Option<[usize; 3]>,
+    id: Option<usize>,
+    other: Vec<usize>,
+}
+
+/// Parsing state: the source name for messages and the columns collected so far.
+#[derive(Default)]
+struct Parser {
+    src: String,
+    /// Line of the header: 1 unless the file starts with blank lines.
+    header_line: u64,
+    q: Vec<Vec<f64>>,
+    dir: Vec<Vec<f64>>,
+    errors: Vec<[f64; 3]>,
+    positions: Vec<[f64; 3]>,
+    ids: Vec<String>,
+    other: Vec<Vec<String>>,
+}
+
+impl Parser {
+    /// Parse the whole file body (BOM already removed).
+    fn parse(mut self, body: &[u8]) -> Result<Dataset> {
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(body);
+        let mut records = rdr.records();
+        let mut lines = LineCounter {
+            body,
+            offset: 0,
+            line: 1,
+        };
+        let header = match records.next() {
+            None => {
+                return Err(
+                    self.input_err("file is empty; the first line must be a header with q1..qN")
+                );
+            }
+            Some(rec) => rec.map_err(|e| self.csv_lib_err(&e, &mut lines))?,
+        };
+        self.header_line = lines.line_of(&header);
+        let layout = self.layout(&header)?;
+        self.other = vec![Vec::new(); layout.other.len()];
+        for rec in records {
+            let rec = rec.map_err(|e| self.csv_lib_err(&e, &mut lines))?;
+            if is_blank(&rec) {
+                continue;
+            }
+            let line = lines.line_of(&rec);
+            self.row(&layout, &rec, line)?;
+        }
+        if self.q.is_empty() {
+            return Err(
+                self.input_err("no data rows after the header; add one row per measured pose")
+            );
+        }
+        Ok(self.finish(&layout))
+    }
+
+    // ----- header -------------------------------------------------------
+
+    /// Classify the header's columns and check that the required ones are there.
+    fn layout(&self, header: &csv::StringRecord) -> Result<Layout> {
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        self.check_names(&names)?;
+        let q_map = self.numbered(&names, "q")?;
+        let q = self.joint_columns(&names, &q_map)?;
+        let dir_map = self.numbered(&names, "dir")?;
+        let dir = self.dir_columns(&names, &dir_map, q.len())?;
+        let errors = self.triplet(&names, ["ex", "ey", "ez"])?;
+        let positions = self.triplet(&names, ["x", "y", "z"])?;
+        let id = names.iter().position(|n| n == "id");
+        // Every reserved name present was claimed above; the rest are covariates.
+        let other = (0..names.len())
+            .filter(|&i| !is_reserved(&names[i]))
+            .collect();
+        Ok(Layout {
+            names,
+            q,
+            dir,
+            errors,
+            positions,
+            id,
+            other,
+        })
+    }
+
+    /// No empty and no duplicate column names.
+    fn check_names(&self, names: &[String]) -> Result<()> {
+        for (i, name) in names.iter().enumerate() {
+            if name.is_empty() {
+                let msg = format!(
+                    "header cell {} is empty; name the column or remove the stray comma",
+                    i + 1
+                );
+                return Err(self.header_err(None, msg));
+            }
+            if names[..i].contains(name) {
+                let msg = "column name appears twice in the header; rename or remove one";
+                return Err(self.header_err(Some(name), msg));
+            }
+        }
+        Ok(())
+    }
+
+    /// Map joint number → cell index for columns named `prefix` + digits.
+    fn numbered(&self, names: &[String], prefix: &str) -> Result<BTreeMap<usize, usize>> {
+        let mut map = BTreeMap::new();
+        for (i, name) in names.iter().enumerate() {
+            let Some(digits) = joint_suffix(name, prefix) else {
+                continue;
+            };
+            match digits.parse::<usize>() {
+                Ok(k) if k >= 1 && !digits.starts_with('0') => {
+                    map.insert(k, i);
+                }
+                _ => {
+                    let msg = format!(
+                        "joint columns are numbered from 1 without leading zeros \
+                         ({prefix}1, {prefix}2, …); rename this column"
+                    );
+                    return Err(self.header_err(Some(name), msg));
+                }
+            }
+        }
+        Ok(map)
+    }
+
+    /// Cell indices of q1..qN, which must be present without gaps.
+    fn joint_columns(&self, names: &[String], map: &BTreeMap<usize, usize>) -> Result<Vec<usize>> {
+        if !map.contains_key(&1) {
+            return Err(self.input_err(format!(
+                "no q1 column; the header needs joint columns q1..qN (found: {})",
+                names.join(", ")
+            )));
+        }
+        for (expected, (&k, &col)) in (1..).zip(map) {
+            if k != expected {
+                let msg = format!(
+                    "joint columns must be q1..qN without gaps, but q{expected} is missing; \
+                     add it or renumber"
+                );
+                return Err(self.header_err(Some(&names[col]), msg));
+            }
+        }
+        Ok(map.values().copied().collect())
+    }
+
+    /// Cell indices of dir1..dirN: all present or none.
+    fn dir_columns(
+        &self,
+        names: &[String],
+        map: &BTreeMap<usize, usize>,
+        n: usize,
+    ) -> Result<Option<Vec<usize>>> {
+        if map.is_empty() {
+            return Ok(None);
+        }
+        if let Some((&k, &col)) = map.range(n + 1..).next() {
+            let msg = format!("there is no joint column q{k} for this direction; remove it");
+            return Err(self.header_err(Some(&names[col]), msg));
+        }
+        let missing: Vec<String> = (1..=n)
+            .filter(|k| !map.contains_key(k))
+            .map(|k| format!("dir{k}"))
+            .collect();
+        if !missing.is_empty() {
+            let msg = format!(
+                "missing direction column(s) {}; give dir1..dir{n} for all joints or none",
+                missing.join(", ")
+            );
+            return Err(self.header_err(None, msg));
+        }
+        Ok(Some(map.values().copied().collect()))
+    }
+
+    /// Cell indices of a column triplet such as ex,ey,ez: all three or none.
+    fn triplet(&self, names: &[String], want: [&str; 3]) -> Result<Option<[usize; 3]>> {
+        let found = want.map(|w| names.iter().position(|n| n == w));
+        match found {
+            [Some(a), Some(b), Some(c)] => Ok(Some([a, b, c])),
+            [None, None, None] => Ok(None),
+            _ => {
+                let pick = |present: bool| -> Vec<&str> {
+                    (0..3)
+                        .filter(|&i| found[i].is_some() == present)
+                        .map(|i| want[i])
+                        .collect()
+                };
+                let msg = format!(
+                    "found {} but not {}; give all of {} or none",
+                    pick(true).join(","),
+                    pick(false).join(","),
+                    want.join(",")
+                );
+                Err(self.header_err(None, msg))
+            }
+        }
+    }
+
+    // ----- rows ---------------------------------------------------------
+
+    /// Parse one data row into the collected columns.
+    fn row(&mut self, l: &Layout, rec: &csv::StringRecord, line: u64) -> Result<()> {
+        if rec.len() != l.names.len() {
+            let msg = format!(
+                "row has {} cells but the header has {}; fix the missing or extra commas",
+                rec.len(),
+                l.names.len()
+            );
+            return Err(self.cell_err(line, None, msg));
+        }
+        let cell = |i: usize| rec.get(i).unwrap_or("");
+        let get = |i: usize, parse: CellParser| {
+            parse(cell(i)).map_err(|m| self.cell_err(line, Some(&l.names[i]), m))
+        };
+        let xyz = |cols: [usize; 3]| -> Result<[f64; 3]> {
+            let [a, b, c] = cols.map(|i| get(i, number));
+            Ok([a?, b?, c?])
+        };
+        let q: Vec<f64> = l.q.iter().map(|&i| get(i, number)).collect::<Result<_>>()?;
+        let dir = l
+            .dir
+            .as_ref()
+            .map(|cols| cols.iter().map(|&i| get(i, direction)).collect());
+        let dir: Option<Vec<f64>> = dir.transpose()?;
+        let errors = l.errors.map(xyz).transpose()?;
+        let positions = l.positions.map(xyz).transpose()?;
+        self.q.push(q);
+        self.dir.extend(dir);
+        self.errors.extend(errors);
+        self.positions.extend(positions);
+        self.ids.extend(l.id.map(|i| cell(i).to_string()));
+        for (store, &i) in self.other.iter_mut().zip(&l.other) {
+            store.push(cell(i).to_string());
+        }
+        Ok(())
+    }
+
+    // ----- result -------------------------------------------------------
+
+    /// Assemble the dataset once all rows are in.
+    fn finish(self, l: &Layout) -> Dataset {
+        let (dir, dir_source) = if l.dir.is_some() {
+            (self.dir, DirSource::Given)
+        } else {
+            (derive_directions(&self.q, None), DirSource::Derived)
+        };
+        let mut covariates = Vec::new();
+        let mut text = Vec::new();
+        for (cells, &i) in self.other.into_iter().zip(&l.other) {
+            let name = l.names[i].clone();
+            match numeric_column(&cells) {
+                Some((values, missing)) => covariates.push(Covariate {
+                    name,
+                    values,
+                    missing,
+                }),
+                None => text.push(TextColumn {
+                    name,
+                    values: cells,
+                }),
+            }
+        }
+        Dataset {
+            source: self.src,
+            q: self.q,
+            dir,
+            dir_source,
+            errors: l.errors.map(|_| self.errors),
+            positions: l.positions.map(|_| self.positions),
+            ids: l.id.map(|_| self.ids),
+            covariates,
+            text,
+        }
+    }
+
+    // ----- errors -------------------------------------------------------
+
+    fn input_err(&self, message: impl Into<String>) -> Error {
+        Error::Input {
+            source_name: self.src.clone(),
+            message: message.into(),
+        }
+    }
+
+    fn cell_err(&self, line: u64, column: Option<&str>, message: impl Into<String>) -> Error {
+        Error::Csv {
+            file: self.src.clone(),
+            line,
+            column: column.map(str::to_string),
+            message: message.into(),
+        }
+    }
+
+    fn header_err(&self, column: Option<&str>, message: impl Into<String>) -> Error {
+        self.cell_err(self.header_line, column, message)
+    }
+
+    /// Translate an error of the `csv` crate (bad UTF-8, I/O) into ours.
+    fn csv_lib_err(&self, e: &csv::Error, lines: &mut LineCounter) -> Error {
+        match e.kind() {
+            csv::ErrorKind::Utf8 { pos: Some(pos), .. } => self.cell_err(
+                lines.line_at(pos.byte()),
+                None,
+                "text is not valid UTF-8; save the file as UTF-8",
+            ),
+            _ => self.input_err(format!("cannot parse as CSV: {e}")),
+        }
+    }
+}
+
+/// Finds the 1-based line a record starts on.
+///
+/// The `csv` crate's own line numbers go wrong after skipped blank lines and
+/// with CRLF endings, so lines are counted here from the records' byte offsets.
+struct LineCounter<'a> {
+    body: &'a [u8],
+    offset: usize,
+    line: u64,
+}
+
+impl LineCounter<'_> {
+    /// Line of `rec`; records must be passed in file order.
+    fn line_of(&mut self, rec: &csv::StringRecord) -> u64 {
+        self.line_at(rec.position().map_or(0, csv::Position::byte))
+    }
+
+    /// Line of the record the `csv` crate says starts at `byte` (it may
+    /// point at line breaks before the record).
+    fn line_at(&mut self, byte: u64) -> u64 {
+        let mut start = usize::try_from(byte).map_or(self.body.len(), |b| b.min(self.body.len()));
+        start = start.max(self.offset);
+        while self
+            .body
+            .get(start)
+            .is_some_and(|b| matches!(b, b'\r' | b'\n'))
+        {
+            start += 1;
+        }
+        let skipped = &self.body[self.offset..start];
+        let breaks = skipped
+            .iter()
+            .enumerate()
+            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && skipped.get(i + 1) != Some(&b'\n')));
+        self.line += breaks.count() as u64;
+        self.offset = start;
+        self.line
+    }
+}
+
+/// A line holding nothing but whitespace (the csv crate already skips empty lines).
+fn is_blank(rec: &csv::StringRecord) -> bool {
+    rec.len() == 1 && rec.get(0).is_some_and(str::is_empty)
+}

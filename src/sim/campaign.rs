@@ -1,0 +1,535 @@
+//! Campaign designs and their measurement on a [`TrueRobot`].
+//!
+//! - `lhs`: Latin-hypercube poses in the joint ranges (default: the robot's
+//!   `work_ranges`, seed 004 Table 2 for the COMAU), visited in the order drawn,
+//!   so directions λ come from the sequence (seed 003 §IV.B).
+//! - `verify`: independent uniformly random poses (seed 003 §IV.C: 30).
+//! - `indexing`: single-axis indexing tests (seed 000 §2.3): each revolute joint
+//!   in turn is indexed over a grid forward then backward, `cycles` times, the
+//!   other joints at rest; every grid point is approached from both sides.
+//! - `circle`: a Ø100 mm circle of commanded TCP points at fixed orientation
+//!   around the robot's home TCP (seed 004 §IV.B.3); not measured.
+
+use super::{Effect, PoseContext, TrueRobot, gaussian, rng_for};
+use crate::dataset::{Covariate, Dataset, DirSource};
+use crate::kinematics::{IkOptions, IkTarget, JointKind, Robot};
+use crate::space::{MOVE_EPS, derive_directions};
+use crate::trajectory::Trajectory;
+use crate::{Error, Result};
+use nalgebra::{Isometry3, Translation3, Vector3};
+use rand::{Rng, RngExt};
+use serde::{Deserialize, Serialize};
+
+/// What to simulate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CampaignKind {
+    Lhs,
+    Verify,
+    Indexing,
+    Circle,
+}
+
+impl CampaignKind {
+    /// Default number of poses / trajectory points.
+    pub fn default_poses(self) -> usize {
+        match self {
+            CampaignKind::Lhs => 300,
+            CampaignKind::Verify => 30,
+            CampaignKind::Indexing => 0,
+            CampaignKind::Circle => 72,
+        }
+    }
+}
+
+/// Campaign parameters; `CampaignSpec::new(kind, seed)` gives the defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CampaignSpec {
+    pub kind: CampaignKind,
+    /// Seed of the true robot *and* of the campaign's random draws. The same
+    /// seed gives the same true robot for every kind.
+    pub seed: u64,
+    /// Poses (lhs, verify) or trajectory points (circle); ignored by indexing.
+    pub poses: usize,
+    pub effects: Vec<Effect>,
+    /// Joint ranges overriding the robot's `work_ranges`.
+    pub ranges: Option<Vec<(f64, f64)>>,
+    /// Mean time per measured pose, s.
+    pub seconds_per_pose: f64,
+    pub circle_diameter_mm: f64,
+    pub indexing_cycles: usize,
+}
+
+impl CampaignSpec {
+    /// Defaults for `kind`.
+    pub fn new(kind: CampaignKind, seed: u64) -> Self {
+        CampaignSpec {
+            kind,
+            seed,
+            poses: kind.default_poses(),
+            effects: Vec::new(),
+            ranges: None,
+            seconds_per_pose: 12.0,
+            circle_diameter_mm: 100.0,
+            indexing_cycles: 3,
+        }
+    }
+}
+
+/// The simulator's ground truth, written beside the data (never into it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    pub format: String,
+    pub version: u32,
+    pub spec: CampaignSpec,
+    pub robot: TrueRobot,
+    /// RMS over the measured rows of the per-axis noise σ (tracker +
+    /// repeatability), mm: the best CV RMSE any model can reach.
+    pub noise_floor_mm: Option<[f64; 3]>,
+    /// Noise-free direction spread: mean over the poses of |δ(λ=+1) − δ(λ=−1)|
+    /// per axis, mm (all joints approached from the same side).
+    pub direction_spread_mm: Option<[f64; 3]>,
+}
+
+/// Truth format tag and version.
+pub const TRUTH_FORMAT: &str = "robokrige-sim-truth";
+pub const TRUTH_VERSION: u32 = 1;
+
+/// A campaign's result.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimOutput {
+    Measurements(Dataset),
+    Trajectory(Trajectory),
+}
+
+/// Simulate `spec` on a true robot drawn around `nominal`.
+pub fn simulate(nominal: &Robot, spec: &CampaignSpec) -> Result<(SimOutput, Truth)> {
+    let profile = super::ErrorProfile::for_robot(nominal);
+    let robot = TrueRobot::draw(nominal, &profile, spec.seed);
+    simulate_on(&robot, spec)
+}
+
+/// Simulate `spec` on a given true robot (e.g. one loaded from a truth file).
+pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput, Truth)> {
+    let nominal = &robot.nominal;
+    for e in &spec.effects {
+        e.check_joints(nominal.dof())?;
+    }
+    let ranges = spec
+        .ranges
+        .clone()
+        .unwrap_or_else(|| nominal.work_ranges.clone());
+    check_ranges(nominal, &ranges)?;
+    let mut rng = rng_for(spec.seed, kind_stream(spec.kind));
+    let mut truth = Truth {
+        format: TRUTH_FORMAT.into(),
+        version: TRUTH_VERSION,
+        spec: spec.clone(),
+        robot: robot.clone(),
+        noise_floor_mm: None,
+        direction_spread_mm: None,
+    };
+    let visits = match spec.kind {
+        CampaignKind::Lhs => measured(lhs(&ranges, spec.poses, &mut rng)),
+        CampaignKind::Verify => measured(uniform(&ranges, spec.poses, &mut rng)),
+        CampaignKind::Indexing => indexing(nominal, &ranges, spec.indexing_cycles),
+        CampaignKind::Circle => {
+            let traj = circle(nominal, spec.circle_diameter_mm, spec.poses)?;
+            return Ok((SimOutput::Trajectory(traj), truth));
+        }
+    };
+    if visits.iter().all(|v| !v.measured) {
+        return Err(Error::InvalidParameter(
+            "campaign has no poses (use --poses > 0)".into(),
+        ));
+    }
+    let data = measure(robot, spec, &visits, &mut rng)?;
+    truth.noise_floor_mm = Some(noise_floor(robot, &data.q));
+    truth.direction_spread_mm = Some(direction_spread(robot, &data.q));
+    Ok((SimOutput::Measurements(data), truth))
+}
+
+fn kind_stream(kind: CampaignKind) -> &'static str {
+    match kind {
+        CampaignKind::Lhs => "campaign-lhs",
+        CampaignKind::Verify => "campaign-verify",
+        CampaignKind::Indexing => "campaign-indexing",
+        CampaignKind::Circle => "campaign-circle",
+    }
+}
+
+fn check_ranges(robot: &Robot, ranges: &[(f64, f64)]) -> Result<()> {
+    if ranges.len() != robot.dof() {
+        return Err(Error::JointCount {
+            expected: robot.dof(),
+            got: ranges.len(),
+        });
+    }
+    for (i, ((lo, hi), (llo, lhi))) in ranges.iter().zip(&robot.limits).enumerate() {
+        if !(lo <= hi) || *lo < *llo || *hi > *lhi {
+            return Err(Error::InvalidParameter(format!(
+                "range of joint {} ({lo}, {hi}) must be ordered and inside the limits ({llo}, {lhi})",
+                i + 1
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One pose the robot goes to; only `measured` ones become rows.
+#[derive(Debug, Clone, PartialEq)]
+struct Visit {
+    q: Vec<f64>,
+    measured: bool,
+    /// (indexed joint, cycle) for indexing tests.
+    tag: Option<(usize, usize)>,
+}
+
+fn measured(poses: Vec<Vec<f64>>) -> Vec<Visit> {
+    poses
+        .into_iter()
+        .map(|q| Visit {
+            q,
+            measured: true,
+            tag: None,
+        })
+        .collect()
+}
+
+/// Latin-hypercube sample of `m` points: each joint's range cut into `m`
+/// strata, one point per stratum, strata paired by independent permutations.
+pub fn lhs(ranges: &[(f64, f64)], m: usize, rng: &mut impl Rng) -> Vec<Vec<f64>> {
+    let mut cols: Vec<Vec<f64>> = Vec::with_capacity(ranges.len());
+    for (lo, hi) in ranges {
+        let mut perm: Vec<usize> = (0..m).collect();
+        for i in (1..m).rev() {
+            let j = rng.random_range(0..=i);
+            perm.swap(i, j);
+        }
+        cols.push(
+            perm.iter()
+                .map(|&s| lo + (hi - lo) * (s as f64 + rng.random::<f64>()) / m as f64)
+                .collect(),
+        );
+    }
+    (0..m)
+        .map(|k| cols.iter().map(|c| c[k]).collect())
+        .collect()
+}
+
+/// `m` independent uniform points in the ranges.
+pub fn uniform(ranges: &[(f64, f64)], m: usize, rng: &mut impl Rng) -> Vec<Vec<f64>> {
+    (0..m)
+        .map(|_| {
+            ranges
+                .iter()
+                .map(|(lo, hi)| lo + (hi - lo) * rng.random::<f64>())
+                .collect()
+        })
+        .collect()
+}
+
+/// Indexing grid of seed 000 eqs 15–16: the range ends plus every multiple of
+/// the step inside (10° for ranges ≥ 100°, else a tenth of the range).
+pub fn indexing_grid(lo: f64, hi: f64) -> Vec<f64> {
+    let span = hi - lo;
+    let step = if span >= 100.0 { 10.0 } else { span / 10.0 };
+    let mut g = vec![lo];
+    let mut v = (lo / step).floor() * step + step;
+    while v < hi - 1e-9 {
+        if v > lo + 1e-9 {
+            g.push(v);
+        }
+        v += step;
+    }
+    g.push(hi);
+    g
+}
+
+fn rest_pose(ranges: &[(f64, f64)]) -> Vec<f64> {
+    ranges
+        .iter()
+        .map(|(lo, hi)| {
+            if *lo <= 0.0 && 0.0 <= *hi {
+                0.0
+            } else {
+                0.5 * (lo + hi)
+            }
+        })
+        .collect()
+}
+
+fn indexing(robot: &Robot, ranges: &[(f64, f64)], cycles: usize) -> Vec<Visit> {
+    let rest = rest_pose(ranges);
+    let mut visits = Vec::new();
+    for (j, link) in robot.links.iter().enumerate() {
+        let (lo, hi) = ranges[j];
+        if link.kind != JointKind::Revolute || hi - lo < 1e-6 {
+            continue;
+        }
+        let grid = indexing_grid(lo, hi);
+        let step = grid[1] - grid[0];
+        let over_lo = (0.5 * step).min(lo - robot.limits[j].0);
+        let over_hi = (0.5 * step).min(robot.limits[j].1 - hi);
+        let mut go = |v: f64, measured: bool, cycle: usize| {
+            let mut q = rest.clone();
+            q[j] = v;
+            visits.push(Visit {
+                q,
+                measured,
+                tag: Some((j + 1, cycle + 1)),
+            });
+        };
+        for c in 0..cycles {
+            if over_lo > MOVE_EPS {
+                go(lo - over_lo, false, c);
+            }
+            for &v in &grid {
+                go(v, true, c);
+            }
+            if over_hi > MOVE_EPS {
+                go(hi + over_hi, false, c);
+            }
+            for &v in grid.iter().rev() {
+                go(v, true, c);
+            }
+        }
+    }
+    visits
+}
+
+/// Ø`diameter` circle of `points` commanded TCP poses in the base XY plane
+/// around the home TCP, orientation fixed at home's; every point checked
+/// reachable by IK along the path.
+pub fn circle(robot: &Robot, diameter: f64, points: usize) -> Result<Trajectory> {
+    if points < 3 || !(diameter > 0.0) {
+        return Err(Error::InvalidParameter(
+            "circle needs at least 3 points and a positive diameter".into(),
+        ));
+    }
+    let home = robot.fk(&robot.home)?;
+    let c = home.translation.vector;
+    let r = 0.5 * diameter;
+    let mut q = robot.home.clone();
+    let mut poses = Vec::with_capacity(points);
+    for k in 0..points {
+        let phi = std::f64::consts::TAU * k as f64 / points as f64;
+        let p = c + Vector3::new(r * phi.cos(), r * phi.sin(), 0.0);
+        let pose = Isometry3::from_parts(Translation3::from(p), home.rotation);
+        q = robot.ik(&IkTarget::pose(&pose), &q, &IkOptions::default())?;
+        poses.push(pose);
+    }
+    Ok(Trajectory::new(poses))
+}
+
+fn measure(
+    robot: &TrueRobot,
+    spec: &CampaignSpec,
+    visits: &[Visit],
+    rng: &mut impl Rng,
+) -> Result<Dataset> {
+    let all_q: Vec<Vec<f64>> = visits.iter().map(|v| v.q.clone()).collect();
+    let all_dir = derive_directions(&all_q, Some(&robot.nominal.home));
+    let rows: Vec<usize> = (0..visits.len()).filter(|&i| visits[i].measured).collect();
+    let m = rows.len();
+    let env = Environment::draw(spec, m, rng);
+    let mut q = Vec::with_capacity(m);
+    let mut dir = Vec::with_capacity(m);
+    let mut errors = Vec::with_capacity(m);
+    let mut positions = Vec::with_capacity(m);
+    for (k, &i) in rows.iter().enumerate() {
+        let (qk, dk) = (&all_q[i], &all_dir[i]);
+        let ctx = env.context(k);
+        let mut qa = robot.actual_joints(qk, dk, &ctx);
+        let mut extra = vec![0.0; qk.len()];
+        for e in &spec.effects {
+            e.joint_deviation(qk, &mut extra);
+        }
+        for (a, x) in qa.iter_mut().zip(&extra) {
+            *a += x + gaussian(rng, robot.noise.repeatability_sigma_deg);
+        }
+        let mut p = robot.tcp(&qa, &ctx);
+        let sigma = robot.noise.tracker_sigma(&p);
+        p += Vector3::from_fn(|_, _| gaussian(rng, sigma)) + env.tracker_offset(k);
+        let nominal = robot.nominal.fk_unchecked(qk).translation.vector;
+        errors.push((p - nominal).into());
+        positions.push(p.into());
+        q.push(qk.clone());
+        dir.push(dk.clone());
+    }
+    let mut covariates = vec![
+        covariate("time_s", env.time_s.clone()),
+        covariate("temp_c", env.temp_sensor_c.clone()),
+    ];
+    if env.payload_column {
+        covariates.push(covariate("payload_kg", env.payload_kg.clone()));
+    }
+    if spec.kind == CampaignKind::Indexing {
+        let tags: Vec<(usize, usize)> = rows
+            .iter()
+            .map(|&i| visits[i].tag.unwrap_or((0, 0)))
+            .collect();
+        covariates.push(covariate("axis", tags.iter().map(|t| t.0 as f64).collect()));
+        covariates.push(covariate(
+            "cycle",
+            tags.iter().map(|t| t.1 as f64).collect(),
+        ));
+    }
+    Ok(Dataset {
+        source: "<simulated>".into(),
+        q,
+        dir,
+        dir_source: DirSource::Given,
+        errors: Some(errors),
+        positions: Some(positions),
+        ids: Some((0..m).map(|k| k.to_string()).collect()),
+        covariates,
+        text: Vec::new(),
+    })
+}
+
+fn covariate(name: &str, values: Vec<f64>) -> Covariate {
+    Covariate {
+        name: name.into(),
+        values,
+        missing: 0,
+    }
+}
+
+/// Time, temperature, payload and tracker set-up along a campaign.
+struct Environment {
+    time_s: Vec<f64>,
+    temp_true_c: Vec<f64>,
+    temp_sensor_c: Vec<f64>,
+    temp_ref_c: f64,
+    expansion_per_k: f64,
+    payload_kg: Vec<f64>,
+    payload_column: bool,
+    step: Option<(usize, [f64; 3])>,
+}
+
+impl Environment {
+    fn draw(spec: &CampaignSpec, m: usize, rng: &mut impl Rng) -> Self {
+        let mut time_s = Vec::with_capacity(m);
+        let mut t = 0.0;
+        for _ in 0..m {
+            time_s.push((t * 10.0_f64).round() / 10.0);
+            t += spec.seconds_per_pose * rng.random_range(0.8..1.2);
+        }
+        let temp_ref_c = 20.0 + rng.random_range(-1.0..2.0);
+        let mut env = Environment {
+            temp_true_c: Vec::with_capacity(m),
+            temp_sensor_c: Vec::with_capacity(m),
+            temp_ref_c,
+            expansion_per_k: 0.0,
+            payload_kg: vec![0.0; m],
+            payload_column: false,
+            step: None,
+            time_s,
+        };
+        // ambient wander without influence unless the temperature effect is on
+        let mut wander = 0.0_f64;
+        let drift = spec.effects.iter().find_map(|e| match e {
+            Effect::Temperature {
+                delta_k,
+                tau_s,
+                expansion_per_k,
+            } => Some((*delta_k, *tau_s, *expansion_per_k)),
+            _ => None,
+        });
+        for k in 0..m {
+            wander = (wander + gaussian(rng, 0.01)).clamp(-0.3, 0.3);
+            let rise = drift.map_or(0.0, |(dk, tau, _)| {
+                dk * (1.0 - (-env.time_s[k] / tau).exp())
+            });
+            let temp = temp_ref_c + wander + rise;
+            env.temp_true_c.push(temp);
+            let sensed = temp + gaussian(rng, 0.02);
+            env.temp_sensor_c.push((sensed * 100.0).round() / 100.0);
+        }
+        env.expansion_per_k = drift.map_or(0.0, |d| d.2);
+        for e in &spec.effects {
+            match e {
+                Effect::Payload { levels_kg } => {
+                    env.payload_column = true;
+                    let blocks = levels_kg.len();
+                    for (k, p) in env.payload_kg.iter_mut().enumerate() {
+                        *p = levels_kg[(k * blocks / m.max(1)).min(blocks - 1)];
+                    }
+                }
+                Effect::TrackerStep { row, offset_mm } => env.step = Some((*row, *offset_mm)),
+                _ => {}
+            }
+        }
+        env
+    }
+
+    fn context(&self, k: usize) -> PoseContext {
+        PoseContext {
+            payload_kg: self.payload_kg[k],
+            length_scale: 1.0 + self.expansion_per_k * (self.temp_true_c[k] - self.temp_ref_c),
+        }
+    }
+
+    fn tracker_offset(&self, k: usize) -> Vector3<f64> {
+        match self.step {
+            Some((row, off)) if k >= row => Vector3::from(off),
+            _ => Vector3::zeros(),
+        }
+    }
+}
+
+/// RMS over poses of the per-axis measurement noise σ (tracker + repeatability).
+pub fn noise_floor(robot: &TrueRobot, q: &[Vec<f64>]) -> [f64; 3] {
+    let mut acc = [0.0; 3];
+    for qk in q {
+        let s = robot.noise_sigma(qk);
+        for a in 0..3 {
+            acc[a] += s[a] * s[a];
+        }
+    }
+    acc.map(|v| (v / q.len().max(1) as f64).sqrt())
+}
+
+/// Mean over poses of |δ(λ=+1) − δ(λ=−1)| per axis, noise-free, no effects.
+pub fn direction_spread(robot: &TrueRobot, q: &[Vec<f64>]) -> [f64; 3] {
+    let ctx = PoseContext::default();
+    let mut acc = [0.0; 3];
+    for qk in q {
+        let plus = vec![1.0; qk.len()];
+        let minus = vec![-1.0; qk.len()];
+        let d = robot.error(qk, &plus, &ctx) - robot.error(qk, &minus, &ctx);
+        for a in 0..3 {
+            acc[a] += d[a].abs();
+        }
+    }
+    acc.map(|v| v / q.len().max(1) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::rng_for;
+
+    #[test]
+    fn lhs_has_one_point_per_stratum() {
+        let ranges = [(-20.0, 20.0), (0.0, 1.0)];
+        let pts = lhs(&ranges, 50, &mut rng_for(3, "t"));
+        for (j, (lo, hi)) in ranges.iter().enumerate() {
+            let mut strata: Vec<usize> = pts
+                .iter()
+                .map(|p| ((p[j] - lo) / (hi - lo) * 50.0).floor() as usize)
+                .collect();
+            strata.sort_unstable();
+            assert_eq!(strata, (0..50).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn paper_grids() {
+        let g2 = indexing_grid(-143.0, 143.0);
+        assert_eq!(g2.len(), 31);
+        assert_eq!(&g2[..3], &[-143.0, -140.0, -130.0]);
+        assert_eq!(indexing_grid(-165.0, 165.0).len(), 35);
+    }
+}

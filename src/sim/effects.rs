@@ -1,0 +1,259 @@
+//! Undeclared effects: physics the Kriging model is not told about, switched on
+//! per campaign. They reach the data only through the columns a real campaign
+//! would have (`time_s`, `temp_c`, `payload_kg`) or through no column at all
+//! (a tracker bump). Their parameters go to the truth sidecar only.
+//!
+//! Command-line syntax: `NAME[:key=value,key=value…]`, e.g.
+//! `temperature:delta_k=6,tau_s=1800`, `payload:kg=0/25/50`,
+//! `harmonic:joint=2,period_deg=7.5,amp_deg=0.004`,
+//! `tracker-step:row=150,dx=0.15,dy=0,dz=-0.1`,
+//! `crosstalk:joint=1,from=2,gain_deg=0.004`.
+
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::f64::consts::TAU;
+
+/// One undeclared effect and its parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Effect {
+    /// Warm-up drift: `T(t) = T0 + ΔT·(1 − e^(−t/τ))`; every length of the
+    /// true robot scales by `1 + κ·(T − T0)`. Written as `temp_c` (sensor
+    /// noise 0.02 K) next to `time_s`.
+    Temperature {
+        delta_k: f64,
+        tau_s: f64,
+        expansion_per_k: f64,
+    },
+    /// Payload changes in equal blocks of rows through the given levels;
+    /// compliance bends the arm more under load. Written as `payload_kg`.
+    Payload { levels_kg: Vec<f64> },
+    /// An extra gear harmonic `A·sin(2π·q/P + φ)` on one joint (1-based).
+    Harmonic {
+        joint: usize,
+        period_deg: f64,
+        amp_deg: f64,
+        phase_rad: f64,
+    },
+    /// The tracker set-up is bumped before row `row` (0-based): every later
+    /// measurement is offset by `offset_mm`. No column records it.
+    TrackerStep { row: usize, offset_mm: [f64; 3] },
+    /// Cross-talk: joint `joint` deviates by `gain·sin(q_from)` (both 1-based).
+    Crosstalk {
+        joint: usize,
+        from: usize,
+        gain_deg: f64,
+    },
+}
+
+/// Names accepted by [`Effect::parse`].
+pub const EFFECT_NAMES: [&str; 5] = [
+    "temperature",
+    "payload",
+    "harmonic",
+    "tracker-step",
+    "crosstalk",
+];
+
+impl Effect {
+    /// Parse `NAME[:key=value,…]` (see module docs); missing keys take defaults.
+    pub fn parse(spec: &str) -> Result<Effect> {
+        let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
+        let mut kv = Params::parse(spec, rest)?;
+        let effect = match name.trim() {
+            "temperature" => Effect::Temperature {
+                delta_k: kv.f("delta_k", 6.0)?,
+                tau_s: kv.f("tau_s", 1200.0)?,
+                expansion_per_k: kv.f("expansion_per_k", 4.0e-5)?,
+            },
+            "payload" => Effect::Payload {
+                levels_kg: kv.list("kg", &[0.0, 60.0, 120.0])?,
+            },
+            "harmonic" => Effect::Harmonic {
+                joint: kv.joint("joint", 2)?,
+                period_deg: kv.f("period_deg", 7.5)?,
+                amp_deg: kv.f("amp_deg", 0.004)?,
+                phase_rad: kv.f("phase_rad", 0.0)?,
+            },
+            "tracker-step" => Effect::TrackerStep {
+                row: kv.f("row", 150.0)? as usize,
+                offset_mm: [kv.f("dx", 0.15)?, kv.f("dy", -0.1)?, kv.f("dz", 0.1)?],
+            },
+            "crosstalk" => Effect::Crosstalk {
+                joint: kv.joint("joint", 1)?,
+                from: kv.joint("from", 2)?,
+                gain_deg: kv.f("gain_deg", 0.01)?,
+            },
+            other => {
+                return Err(Error::InvalidParameter(format!(
+                    "unknown effect '{other}' in '{spec}' (known: {})",
+                    EFFECT_NAMES.join(", ")
+                )));
+            }
+        };
+        kv.finish()?;
+        effect.validate()?;
+        Ok(effect)
+    }
+
+    /// Check parameter ranges.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidParameter(m));
+        match self {
+            Effect::Temperature { tau_s, .. } if *tau_s <= 0.0 => {
+                bad(format!("temperature: tau_s must be > 0, got {tau_s}"))
+            }
+            Effect::Payload { levels_kg }
+                if levels_kg.is_empty() || levels_kg.iter().any(|m| *m < 0.0 || !m.is_finite()) =>
+            {
+                bad("payload: kg must be a '/'-separated list of masses ≥ 0".into())
+            }
+            Effect::Harmonic { period_deg, .. } if *period_deg <= 0.0 => bad(format!(
+                "harmonic: period_deg must be > 0, got {period_deg}"
+            )),
+            Effect::Crosstalk { joint, from, .. } if joint == from => {
+                bad("crosstalk: joint and from must differ".into())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Check joint indices against a robot with `dof` joints.
+    pub fn check_joints(&self, dof: usize) -> Result<()> {
+        let check = |j: usize| {
+            if j >= 1 && j <= dof {
+                Ok(())
+            } else {
+                Err(Error::InvalidParameter(format!(
+                    "effect joint {j} outside 1..={dof}"
+                )))
+            }
+        };
+        match self {
+            Effect::Harmonic { joint, .. } => check(*joint),
+            Effect::Crosstalk { joint, from, .. } => check(*joint).and(check(*from)),
+            _ => Ok(()),
+        }
+    }
+
+    /// Extra joint deviation (API units) this effect adds at commanded `q`.
+    pub fn joint_deviation(&self, q: &[f64], out: &mut [f64]) {
+        match self {
+            Effect::Harmonic {
+                joint,
+                period_deg,
+                amp_deg,
+                phase_rad,
+            } => out[joint - 1] += amp_deg * (TAU * q[joint - 1] / period_deg + phase_rad).sin(),
+            Effect::Crosstalk {
+                joint,
+                from,
+                gain_deg,
+            } => out[joint - 1] += gain_deg * q[from - 1].to_radians().sin(),
+            _ => {}
+        }
+    }
+}
+
+/// `key=value` pairs of one effect spec, consumed as they are read so that a
+/// misspelt key is an error, not silently ignored.
+struct Params<'a> {
+    spec: &'a str,
+    map: BTreeMap<&'a str, &'a str>,
+}
+
+impl<'a> Params<'a> {
+    fn parse(spec: &'a str, rest: &'a str) -> Result<Self> {
+        let mut map = BTreeMap::new();
+        for part in rest.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (k, v) = part.split_once('=').ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "effect '{spec}': expected key=value, found '{part}'"
+                ))
+            })?;
+            map.insert(k.trim(), v.trim());
+        }
+        Ok(Params { spec, map })
+    }
+
+    fn f(&mut self, key: &str, default: f64) -> Result<f64> {
+        match self.map.remove(key) {
+            None => Ok(default),
+            Some(v) => v
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    Error::InvalidParameter(format!(
+                        "effect '{}': {key}={v} is not a finite number",
+                        self.spec
+                    ))
+                }),
+        }
+    }
+
+    fn joint(&mut self, key: &str, default: usize) -> Result<usize> {
+        let v = self.f(key, default as f64)?;
+        if v >= 1.0 && v.fract() == 0.0 {
+            Ok(v as usize)
+        } else {
+            Err(Error::InvalidParameter(format!(
+                "effect '{}': {key} must be a joint number ≥ 1",
+                self.spec
+            )))
+        }
+    }
+
+    fn list(&mut self, key: &str, default: &[f64]) -> Result<Vec<f64>> {
+        match self.map.remove(key) {
+            None => Ok(default.to_vec()),
+            Some(v) => v
+                .split('/')
+                .map(|x| x.trim().parse::<f64>())
+                .collect::<std::result::Result<Vec<_>, _>>()
+                .map_err(|_| {
+                    Error::InvalidParameter(format!(
+                        "effect '{}': {key}={v} is not a '/'-separated list of numbers",
+                        self.spec
+                    ))
+                }),
+        }
+    }
+
+    fn finish(self) -> Result<()> {
+        match self.map.keys().next() {
+            None => Ok(()),
+            Some(k) => Err(Error::InvalidParameter(format!(
+                "effect '{}': unknown key '{k}'",
+                self.spec
+            ))),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_defaults_and_overrides() {
+        let e = Effect::parse("harmonic:joint=3,period_deg=10").unwrap();
+        assert_eq!(
+            e,
+            Effect::Harmonic {
+                joint: 3,
+                period_deg: 10.0,
+                amp_deg: 0.004,
+                phase_rad: 0.0
+            }
+        );
+        assert!(
+            matches!(Effect::parse("payload:kg=0/10").unwrap(), Effect::Payload { levels_kg } if levels_kg == vec![0.0, 10.0])
+        );
+        assert!(Effect::parse("harmonic:jiont=3").is_err());
+        assert!(Effect::parse("warp-drive").is_err());
+        assert!(Effect::parse("temperature:tau_s=-1").is_err());
+        assert!(Effect::parse("crosstalk:joint=2,from=2").is_err());
+    }
+}
