@@ -130,22 +130,39 @@ fn fk_matches_independent_fixtures() {
     }
 }
 
-/// Joint-space distance to the nearest kinematic singularity of the presets'
-/// work ranges that would make the joint-space round trip ill-posed (several
-/// solutions within the ±3° seed perturbation, or q4/q6 only determined as a
-/// sum): wrist (θ5 = 0) for the 6-axis arms, elbow (θ3 = 0, UR10; θ2 = 0, SCARA).
-fn near_singular(name: &str, q: &[f64]) -> bool {
+/// Whether `q` is too close to a kinematic singularity for a joint-space round
+/// trip to be well posed with the default tolerances.
+///
+/// * Several solutions within the ±3° seed perturbation (or q4/q6 only
+///   determined as a sum): wrist θ5 ≈ 0 for the 6-axis arms, elbow θ3 ≈ 0 for
+///   the UR10, θ2 ≈ 0 for the SCARA — margin 8°.
+/// * Ill conditioning: IK stops once the weighted task residual is below
+///   ~1e-7 mm, so the joint error can reach ~1.4e-7 / σ_min rad, where σ_min is
+///   the smallest singular value of the IK's weighted Jacobian (orientation rows
+///   × `orientation_weight_mm`). σ_min ≥ 20 mm/rad keeps that below 1e-6°.
+///   (Example that would fail otherwise: UR10 q = (92.58, −115.80, 41.20,
+///   −23.17, 68.75, 16.39)°, near the shoulder singularity, σ_min = 0.149:
+///   IK meets its tolerance with 1.2e-8 mm residual but |Δq6| = 2.7e-6°.)
+fn near_singular(robot: &Robot, q: &[f64], opts: &IkOptions) -> bool {
     let margin = 8.0;
     let near = |v: f64| {
         let w = v.rem_euclid(180.0);
         w < margin || w > 180.0 - margin
     };
-    match name {
+    let by_geometry = match robot.name.as_str() {
         "comau-nj220" | "kuka-kr30ha" => near(q[4]),
         "ur10" => near(q[2]) || near(q[4]),
         "scara-rh3frh5515" => near(q[1]),
         _ => false,
+    };
+    let mut jw = robot.jacobian(q).unwrap();
+    for c in 0..robot.dof() {
+        for r in 3..6 {
+            jw[(r, c)] *= opts.orientation_weight_mm;
+        }
     }
+    let sigma_min = jw.singular_values().min();
+    by_geometry || sigma_min < 20.0
 }
 
 #[test]
@@ -154,13 +171,9 @@ fn ik_round_trip() {
     let opts = IkOptions::default();
     for name in PRESET_NAMES {
         let robot = preset(name).unwrap();
-        let mut done = 0;
-        let mut worst_q = 0.0f64;
+        let (mut done, mut skipped) = (0, 0);
         while done < 50 {
             let q = random_q(&mut rng, &robot.work_ranges);
-            if near_singular(name, &q) {
-                continue;
-            }
             let target_pose = robot.fk(&q).unwrap();
             let seed: Vec<f64> = q.iter().map(|v| v + rng.random_range(-3.0..3.0)).collect();
             let sol = robot
@@ -169,24 +182,37 @@ fn ik_round_trip() {
                     panic!("{name}: IK failed for q = {q:?}, seed = {seed:?}: {e}")
                 });
             assert_eq!(sol.len(), q.len());
+            // The pose is always reached, singular or not.
+            let reached = robot.fk(&sol).unwrap();
+            let dp = (reached.translation.vector - target_pose.translation.vector).norm();
+            let dr = reached.rotation.angle_to(&target_pose.rotation);
+            assert!(
+                dp < 1e-6,
+                "{name}: position residual {dp:e} mm at q = {q:?}"
+            );
+            assert!(
+                dr < 1e-9,
+                "{name}: orientation residual {dr:e} rad at q = {q:?}"
+            );
+            assert!(robot.within_limits(&sol));
+            if near_singular(&robot, &q, &opts) {
+                skipped += 1;
+                continue;
+            }
             let err = sol
                 .iter()
                 .zip(&q)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            worst_q = worst_q.max(err);
             assert!(
                 err < 1e-6,
                 "{name}: |q_ik − q| = {err:e} for q = {q:?}, seed = {seed:?}, q_ik = {sol:?}"
             );
-            let reached = robot.fk(&sol).unwrap();
-            let dp = (reached.translation.vector - target_pose.translation.vector).norm();
-            let dr = reached.rotation.angle_to(&target_pose.rotation);
-            assert!(dp < 1e-6, "{name}: position residual {dp:e} mm");
-            assert!(dr < 1e-9, "{name}: orientation residual {dr:e} rad");
             done += 1;
         }
-        assert!(worst_q < 1e-6, "{name}: {worst_q:e}");
+        // The singular neighbourhoods are a small part of the work ranges.
+        eprintln!("{name}: {skipped} near-singular draws");
+        assert!(skipped < 50, "{name}: {skipped} near-singular draws");
     }
 }
 
@@ -339,59 +365,4 @@ fn comau_home_wrist_centre() {
         .translation
         .vector;
     assert!(tilt.z < expected.z - 100.0);
-}
-
-#[test]
-fn zz_debug() {
-    let robot = preset("ur10").unwrap();
-    let q = [
-        92.580430695301,
-        -115.80110132301064,
-        41.19949991073997,
-        -23.17282793764329,
-        68.74789197311614,
-        16.386451317766983,
-    ];
-    let seed = [
-        92.78697122149029,
-        -118.27326816406836,
-        41.0395373514428,
-        -22.2230711720557,
-        71.15178853837347,
-        13.851460699636897,
-    ];
-    let t = robot.fk(&q).unwrap();
-    let sol = robot
-        .ik(&IkTarget::pose(&t), &seed, &IkOptions::default())
-        .unwrap();
-    let r = robot.fk(&sol).unwrap();
-    println!(
-        "dp {:e} dr {:e}",
-        (r.translation.vector - t.translation.vector).norm(),
-        r.rotation.angle_to(&t.rotation)
-    );
-    let j = robot.jacobian(&q).unwrap();
-    let mut jw = j.clone();
-    for c in 0..6 {
-        for rr in 3..6 {
-            jw[(rr, c)] *= 1000.0;
-        }
-    }
-    println!("sv {:?}", jw.svd(false, false).singular_values);
-    println!(
-        "dq {:?}",
-        sol.iter().zip(&q).map(|(a, b)| a - b).collect::<Vec<_>>()
-    );
-    for tol in [1e-7, 1e-9] {
-        let o = IkOptions {
-            tol_mm: tol,
-            tol_rad: tol * 1e-3,
-            ..IkOptions::default()
-        };
-        let s2 = robot.ik(&IkTarget::pose(&t), &seed, &o);
-        println!(
-            "tol {tol}: {:?}",
-            s2.map(|s| s.iter().zip(&q).map(|(a, b)| a - b).collect::<Vec<_>>())
-        );
-    }
 }

@@ -101,6 +101,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     spec.circle_diameter_mm = a.diameter;
     spec.indexing_cycles = a.cycles;
     let (out, truth) = simulate(&robot, &spec)?;
+    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
     write_truth(&truth_path, &truth)?;
     let summary = match &out {
@@ -134,7 +137,7 @@ fn print_summary(s: &serde_json::Value) {
     let f = |v: &serde_json::Value| v.as_f64().map_or("-".into(), |x| format!("{x:.4}"));
     let v3 = |v: &serde_json::Value| {
         v.as_array().map_or("-".into(), |a| {
-            a.iter().map(|x| f(x)).collect::<Vec<_>>().join(" / ")
+            a.iter().map(&f).collect::<Vec<_>>().join(" / ")
         })
     };
     println!(

@@ -166,7 +166,12 @@ fn check_ranges(robot: &Robot, ranges: &[(f64, f64)]) -> Result<()> {
         });
     }
     for (i, ((lo, hi), (llo, lhi))) in ranges.iter().zip(&robot.limits).enumerate() {
-        if !(lo <= hi) || *lo < *llo || *hi > *lhi {
+        if lo.partial_cmp(hi) == Some(std::cmp::Ordering::Greater)
+            || lo.is_nan()
+            || hi.is_nan()
+            || *lo < *llo
+            || *hi > *lhi
+        {
             return Err(Error::InvalidParameter(format!(
                 "range of joint {} ({lo}, {hi}) must be ordered and inside the limits ({llo}, {lhi})",
                 i + 1
@@ -302,7 +307,7 @@ fn indexing(robot: &Robot, ranges: &[(f64, f64)], cycles: usize) -> Vec<Visit> {
 /// around the home TCP, orientation fixed at home's; every point checked
 /// reachable by IK along the path.
 pub fn circle(robot: &Robot, diameter: f64, points: usize) -> Result<Trajectory> {
-    if points < 3 || !(diameter > 0.0) {
+    if points < 3 || diameter.is_nan() || diameter <= 0.0 {
         return Err(Error::InvalidParameter(
             "circle needs at least 3 points and a positive diameter".into(),
         ));
