@@ -17,7 +17,10 @@
 
 pub mod dataset;
 pub mod error;
+pub mod kriging;
+pub mod optim;
 pub mod kinematics;
+pub mod model;
 pub mod sim;
 pub mod space;
 pub mod stats;

@@ -1,5 +1,9 @@
 //! Joint space and extended joint space.
 //!
+//! JS = `[θ1..θn]`; EJS = `[θ1..θn, λ1..λn]` (seed 003 §II.B). Inputs and
+//! outputs are z-scored before modelling (seed 003 §III.A) with a
+//! [`Normalizer`] that the fitted model keeps.
+//!
 //! The direction coefficient of seed 003 eq 5: `λi = +1` for forward motion,
 //! `−1` for backward motion of joint i into the pose. For a visited sequence
 //! `θ(k)` (DESIGN.md §3):
@@ -40,6 +44,107 @@ pub fn derive_directions(q: &[Vec<f64>], start: Option<&[f64]>) -> Vec<Vec<f64>>
     out
 }
 
+
+use serde::{Deserialize, Serialize};
+
+/// Which input space a model uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Space {
+    /// Joint space `[θ1..θn]`.
+    Js,
+    /// Extended joint space `[θ1..θn, λ1..λn]`.
+    Ejs,
+}
+
+impl Space {
+    /// Input dimension for `n` joints.
+    pub fn dim(self, n: usize) -> usize {
+        match self {
+            Space::Js => n,
+            Space::Ejs => 2 * n,
+        }
+    }
+
+    /// Names of the input columns (`q1..qn`, then `dir1..dirn` for EJS).
+    pub fn names(self, n: usize) -> Vec<String> {
+        let mut v: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
+        if self == Space::Ejs {
+            v.extend((1..=n).map(|i| format!("dir{i}")));
+        }
+        v
+    }
+
+    /// One feature row `s` from joint values and directions.
+    pub fn row(self, q: &[f64], dir: &[f64]) -> Vec<f64> {
+        let mut s = q.to_vec();
+        if self == Space::Ejs {
+            s.extend_from_slice(dir);
+        }
+        s
+    }
+
+    /// Feature rows for a sequence of poses.
+    pub fn rows(self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        q.iter().zip(dir).map(|(a, b)| self.row(a, b)).collect()
+    }
+}
+
+/// Column-wise z-score `(x − μ)/σ` with the sample standard deviation
+/// (ddof = 1, as DACE and SMT). A constant column (σ ≤ 1e-12·max(1, |μ|))
+/// gets σ = 1 so it maps to 0 instead of dividing by zero.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Normalizer {
+    pub mean: Vec<f64>,
+    pub std: Vec<f64>,
+}
+
+impl Normalizer {
+    /// Fit on rows (all of equal length; at least one row).
+    pub fn fit(rows: &[Vec<f64>]) -> Self {
+        let d = rows.first().map_or(0, Vec::len);
+        let m = rows.len() as f64;
+        let mut mean = vec![0.0; d];
+        for r in rows {
+            for (a, v) in mean.iter_mut().zip(r) {
+                *a += v / m;
+            }
+        }
+        let mut std = vec![0.0; d];
+        for r in rows {
+            for ((s, v), mu) in std.iter_mut().zip(r).zip(&mean) {
+                *s += (v - mu) * (v - mu);
+            }
+        }
+        for (s, mu) in std.iter_mut().zip(&mean) {
+            *s = (*s / (m - 1.0).max(1.0)).sqrt();
+            if !(*s > 1e-12 * mu.abs().max(1.0)) {
+                *s = 1.0;
+            }
+        }
+        Normalizer { mean, std }
+    }
+
+    /// Fit on one column of values.
+    pub fn fit_column(values: &[f64]) -> Self {
+        let rows: Vec<Vec<f64>> = values.iter().map(|v| vec![*v]).collect();
+        Normalizer::fit(&rows)
+    }
+
+    /// Normalised copy of a row.
+    pub fn apply(&self, row: &[f64]) -> Vec<f64> {
+        row.iter()
+            .zip(self.mean.iter().zip(&self.std))
+            .map(|(v, (mu, s))| (v - mu) / s)
+            .collect()
+    }
+
+    /// Normalised copies of rows.
+    pub fn apply_rows(&self, rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        rows.iter().map(|r| self.apply(r)).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -59,5 +164,17 @@ mod tests {
         assert_eq!(d[3], vec![-1.0, 1.0]);
         let d = derive_directions(&q, None);
         assert_eq!(d[0], vec![1.0, 1.0]);
+    }
+
+    #[test]
+    fn normalizer_uses_sample_std_and_survives_constant_columns() {
+        let rows = vec![vec![1.0, 5.0], vec![3.0, 5.0]];
+        let n = Normalizer::fit(&rows);
+        assert_eq!(n.mean, vec![2.0, 5.0]);
+        assert!((n.std[0] - 2f64.sqrt()).abs() < 1e-15);
+        assert_eq!(n.std[1], 1.0);
+        assert_eq!(n.apply(&[3.0, 5.0])[1], 0.0);
+        assert_eq!(Space::Ejs.row(&[1.0], &[-1.0]), vec![1.0, -1.0]);
+        assert_eq!(Space::Ejs.names(2), vec!["q1", "q2", "dir1", "dir2"]);
     }
 }

@@ -137,12 +137,15 @@ fn fk_matches_independent_fixtures() {
 ///   determined as a sum): wrist θ5 ≈ 0 for the 6-axis arms, elbow θ3 ≈ 0 for
 ///   the UR10, θ2 ≈ 0 for the SCARA — margin 8°.
 /// * Ill conditioning: IK stops once the weighted task residual is below
-///   ~1e-7 mm, so the joint error can reach ~1.4e-7 / σ_min rad, where σ_min is
-///   the smallest singular value of the IK's weighted Jacobian (orientation rows
-///   × `orientation_weight_mm`). σ_min ≥ 20 mm/rad keeps that below 1e-6°.
+///   ~1.4e-7 mm (position 1e-7 mm, orientation 1e-10 rad × 1000 mm/rad), so the
+///   joint error can reach ~1.4e-7 / σ_min, where σ_min is the smallest
+///   singular value of the IK's weighted Jacobian (orientation rows ×
+///   `orientation_weight_mm`) with columns per API unit (degree or mm).
+///   σ_min ≥ 0.35 mm/unit (20 mm/rad) keeps that below 1e-6° / 1e-6 mm.
 ///   (Example that would fail otherwise: UR10 q = (92.58, −115.80, 41.20,
-///   −23.17, 68.75, 16.39)°, near the shoulder singularity, σ_min = 0.149:
-///   IK meets its tolerance with 1.2e-8 mm residual but |Δq6| = 2.7e-6°.)
+///   −23.17, 68.75, 16.39)°, near the shoulder singularity, σ_min = 0.149
+///   mm/rad: IK meets its tolerance with a 1.2e-8 mm residual but
+///   |Δq6| = 2.7e-6°.)
 fn near_singular(robot: &Robot, q: &[f64], opts: &IkOptions) -> bool {
     let margin = 8.0;
     let near = |v: f64| {
@@ -160,9 +163,11 @@ fn near_singular(robot: &Robot, q: &[f64], opts: &IkOptions) -> bool {
         for r in 3..6 {
             jw[(r, c)] *= opts.orientation_weight_mm;
         }
+        let scale = robot.unit_scale(c);
+        jw.column_mut(c).scale_mut(scale);
     }
     let sigma_min = jw.singular_values().min();
-    by_geometry || sigma_min < 20.0
+    by_geometry || sigma_min < 0.35
 }
 
 #[test]
@@ -173,6 +178,7 @@ fn ik_round_trip() {
         let robot = preset(name).unwrap();
         let (mut done, mut skipped) = (0, 0);
         while done < 50 {
+            assert!(skipped < 50, "{name}: {skipped} near-singular draws");
             let q = random_q(&mut rng, &robot.work_ranges);
             let target_pose = robot.fk(&q).unwrap();
             let seed: Vec<f64> = q.iter().map(|v| v + rng.random_range(-3.0..3.0)).collect();
@@ -210,9 +216,6 @@ fn ik_round_trip() {
             );
             done += 1;
         }
-        // The singular neighbourhoods are a small part of the work ranges.
-        eprintln!("{name}: {skipped} near-singular draws");
-        assert!(skipped < 50, "{name}: {skipped} near-singular draws");
     }
 }
 

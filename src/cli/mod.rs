@@ -1,6 +1,7 @@
 //! Subcommands. Exit codes: 0 ok, 1 failed (bad data, numerical failure),
 //! 2 bad usage (clap).
 
+mod fit;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -19,11 +20,17 @@ pub enum Command {
     /// Simulate a laser-tracker campaign on a "true robot" (geometric errors,
     /// backlash, compliance, noise, optional undeclared effects).
     Simulate(simulate::SimulateArgs),
+    /// Fit a universal-Kriging TCP error model over JS or EJS.
+    Fit(fit::FitArgs),
+    /// Predict TCP errors with a fitted model.
+    Predict(fit::PredictArgs),
 }
 
 /// Run a parsed command.
 pub fn run(cli: Cli) -> robokrige::Result<()> {
     match cli.command {
         Command::Simulate(a) => simulate::run(a),
+        Command::Fit(a) => fit::run_fit(a),
+        Command::Predict(a) => fit::run_predict(a),
     }
 }

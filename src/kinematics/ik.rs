@@ -76,7 +76,9 @@ impl Robot {
         self.clamp(&mut q);
         let mut e = self.ik_error(&q, target, opts);
         let mut mu = opts.damping;
+        let mut iterations = 0;
         for _ in 0..opts.max_iter {
+            iterations += 1;
             if self.ik_done(&e, target, opts) {
                 return Ok(q);
             }
@@ -114,7 +116,7 @@ impl Robot {
             0.0
         };
         Err(Error::IkNotConverged {
-            iterations: opts.max_iter,
+            iterations,
             position_mm: pos,
             orientation_rad: ori,
         })

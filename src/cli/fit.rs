@@ -1,0 +1,173 @@
+//! `robokrige fit` and `robokrige predict`.
+
+use clap::{Args, ValueEnum};
+use robokrige::dataset::read_csv;
+use robokrige::kriging::{KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::model::{AXES, ErrorModel};
+use robokrige::space::Space;
+use robokrige::{Error, Result};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum SpaceArg {
+    /// Extended joint space [θ, λ] (seed 003 §II.B).
+    Ejs,
+    /// Joint space [θ].
+    Js,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum TrendArg {
+    Constant,
+    Linear,
+    Quadratic,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum OptimizerArg {
+    /// Generalised pattern search from several LHS starts.
+    Gps,
+    /// Hooke–Jeeves from the centre of the box.
+    Hj,
+}
+
+/// Fit a universal-Kriging error model (one per axis ex, ey, ez) to a campaign.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige fit datasets/comau_lhs.csv --space ejs --trend constant --optimizer gps -o model.json")]
+pub struct FitArgs {
+    /// Measurement CSV with q1..qN, optional dir1..dirN, and ex,ey,ez.
+    data: PathBuf,
+    #[arg(long, value_enum, default_value = "ejs")]
+    space: SpaceArg,
+    #[arg(long, value_enum, default_value = "constant")]
+    trend: TrendArg,
+    #[arg(long, value_enum, default_value = "gps")]
+    optimizer: OptimizerArg,
+    /// Estimate a nugget (measurement noise) with the correlation parameters.
+    #[arg(long)]
+    nugget: bool,
+    /// GPS starts (box centre + LHS points).
+    #[arg(long, default_value_t = 4)]
+    starts: usize,
+    /// Seed of the GPS starts.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output model JSON.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Print the fit report as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run_fit(a: FitArgs) -> Result<()> {
+    let data = read_csv(&a.data)?;
+    let opts = KrigingOptions {
+        trend: match a.trend {
+            TrendArg::Constant => TrendKind::Constant,
+            TrendArg::Linear => TrendKind::Linear,
+            TrendArg::Quadratic => TrendKind::Quadratic,
+        },
+        optimizer: match a.optimizer {
+            OptimizerArg::Gps => OptimizerKind::Gps,
+            OptimizerArg::Hj => OptimizerKind::HookeJeeves,
+        },
+        nugget: a.nugget,
+        starts: a.starts,
+        seed: a.seed,
+        ..KrigingOptions::default()
+    };
+    let space = match a.space {
+        SpaceArg::Ejs => Space::Ejs,
+        SpaceArg::Js => Space::Js,
+    };
+    let t0 = std::time::Instant::now();
+    let model = ErrorModel::fit(&data, space, &opts)?;
+    let secs = t0.elapsed().as_secs_f64();
+    model.save(&a.output)?;
+    if a.json {
+        let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs, "outputs": model.reports});
+        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        return Ok(());
+    }
+    println!("fitted {} rows in {:?} space in {secs:.2} s -> {}", data.len(), space, a.output.display());
+    for (ax, r) in AXES.iter().zip(&model.reports) {
+        let lt: Vec<String> = r.theta.iter().map(|t| format!("{:.2}", t.log10())).collect();
+        println!(
+            "  {ax}: ln ψ {:.4}  σ² {:.4}  nugget {:.2e}  trend terms {} (dropped {})  evals {}  {:.2} s\n      log10 ξ = [{}]",
+            r.ln_psi,
+            r.sigma2,
+            r.nugget,
+            r.trend_terms.len(),
+            r.dropped_terms.len(),
+            r.evals,
+            r.seconds,
+            lt.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// Predict TCP errors (mean and standard deviation per axis) at poses.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige predict model.json datasets/comau_verify.csv -o predicted.csv")]
+pub struct PredictArgs {
+    /// Model JSON written by `robokrige fit`.
+    model: PathBuf,
+    /// Poses CSV (q1..qN, optional dir1..dirN; errors, if present, are compared).
+    poses: PathBuf,
+    /// Output CSV: id, q, dir, pred_ex.., std_ex.. (and the measured ex.. if given).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+pub fn run_predict(a: PredictArgs) -> Result<()> {
+    let model = ErrorModel::load(&a.model)?;
+    let data = read_csv(&a.poses)?;
+    if data.n_joints() != model.n_joints {
+        return Err(Error::Input {
+            source_name: a.poses.display().to_string(),
+            message: format!("has {} joints but the model was fitted on {}", data.n_joints(), model.n_joints),
+        });
+    }
+    let pred = model.predict_dataset(&data)?;
+    let file = std::fs::File::create(&a.output).map_err(|e| Error::io(&a.output, e))?;
+    let mut w = std::io::BufWriter::new(file);
+    let n = data.n_joints();
+    let mut header = vec!["id".to_string()];
+    header.extend((1..=n).map(|i| format!("q{i}")));
+    header.extend((1..=n).map(|i| format!("dir{i}")));
+    header.extend(AXES.iter().map(|a| format!("pred_{a}")));
+    header.extend(AXES.iter().map(|a| format!("std_{a}")));
+    if data.errors.is_some() {
+        header.extend(AXES.iter().map(|a| a.to_string()));
+    }
+    let io = |e| Error::io(&a.output, e);
+    writeln!(w, "{}", header.join(",")).map_err(io)?;
+    for k in 0..data.len() {
+        let id = data.ids.as_ref().map_or(k.to_string(), |v| v[k].clone());
+        let mut row = vec![id];
+        row.extend(data.q[k].iter().map(f64::to_string));
+        row.extend(data.dir[k].iter().map(|d| format!("{d}")));
+        row.extend(pred.mean[k].iter().map(f64::to_string));
+        row.extend(pred.std[k].iter().map(f64::to_string));
+        if let Some(e) = &data.errors {
+            row.extend(e[k].iter().map(f64::to_string));
+        }
+        writeln!(w, "{}", row.join(",")).map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    if let Some(e) = &data.errors {
+        let resid: Vec<[f64; 3]> = e.iter().zip(&pred.mean).map(|(m, p)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]]).collect();
+        let before = robokrige::stats::summarize(e);
+        let after = robokrige::stats::summarize(&resid);
+        println!("{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})", data.len(), before.mean_3d_mm, after.mean_3d_mm, before.max_3d_mm, after.max_3d_mm);
+    }
+    println!("wrote {}", a.output.display());
+    Ok(())
+}

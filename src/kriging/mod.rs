@@ -1,0 +1,253 @@
+//! Universal Kriging (seed 003 eqs 6–14; seed 004 eqs 6–14; DACE).
+//!
+//! - [`trend`]: trend models `f(s)` ([`TrendModel`], [`Monomials`]).
+//! - [`corr`]: correlation models ([`CorrelationModel`], [`Gaussian`], eq 8).
+//! - [`problem`]: ψ(ξ) and the solve at fixed ξ — the whole algorithm on a page.
+//! - [`model`]: the fitted predictor and its MSE (eqs 10, 12).
+//!
+//! [`fit_output`] fits one output: drop linearly dependent trend columns,
+//! minimise ln ψ over `log10 ξ` (and `log10 ν` with an estimated nugget) with
+//! Hooke–Jeeves or multistart GPS, then solve at the optimum.
+
+pub mod corr;
+mod fastexp;
+pub mod model;
+pub mod problem;
+pub mod trend;
+
+pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
+pub use model::{KrigingModel, KrigingModelData, Pred};
+pub use problem::{KrigingProblem, PsiValue, Solution, Workspace};
+pub use trend::{Monomials, TrendModel, independent_columns, trend_matrix};
+
+use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
+use crate::space::Normalizer;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Built-in trends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TrendKind {
+    Constant,
+    Linear,
+    Quadratic,
+}
+
+impl TrendKind {
+    /// The monomials of this trend in `dim` variables.
+    pub fn monomials(self, dim: usize) -> Monomials {
+        match self {
+            TrendKind::Constant => Monomials::constant(dim),
+            TrendKind::Linear => Monomials::linear(dim),
+            TrendKind::Quadratic => Monomials::quadratic(dim),
+        }
+    }
+}
+
+/// Hyperparameter optimiser.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OptimizerKind {
+    /// Generalised pattern search from several LHS starts (seed 003 §III.B).
+    Gps,
+    /// Hooke–Jeeves from the box centre (the JS&HJ / EJS&HJ baseline).
+    HookeJeeves,
+}
+
+/// Fitting options (plain data, `Default` = the paper's EJS&GPS set-up with a
+/// constant trend).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KrigingOptions {
+    pub trend: TrendKind,
+    pub optimizer: OptimizerKind,
+    /// Estimate a nugget ν (noise-to-signal variance ratio) with ξ.
+    pub nugget: bool,
+    /// Box for `log10 ξ_k`.
+    pub log10_theta: (f64, f64),
+    /// Box for `log10 ν` when the nugget is estimated.
+    pub log10_nugget: (f64, f64),
+    /// GPS starts (the box centre plus LHS points).
+    pub starts: usize,
+    /// Seed of the LHS starts.
+    pub seed: u64,
+    /// Objective evaluations per start.
+    pub max_evals: usize,
+    /// GPS mesh tolerance / HJ step tolerance, in log10 units.
+    pub tol: f64,
+}
+
+impl Default for KrigingOptions {
+    fn default() -> Self {
+        KrigingOptions {
+            trend: TrendKind::Constant,
+            optimizer: OptimizerKind::Gps,
+            nugget: false,
+            log10_theta: (-4.0, 1.5),
+            log10_nugget: (-8.0, -0.5),
+            starts: 4,
+            seed: 1,
+            max_evals: 2_000,
+            tol: 0.01,
+        }
+    }
+}
+
+impl KrigingOptions {
+    /// Check ranges once, before fitting.
+    pub fn validate(&self) -> Result<()> {
+        let ok_box = |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a < b;
+        if !ok_box(self.log10_theta) || !ok_box(self.log10_nugget) {
+            return Err(Error::InvalidParameter("log10 bounds must be finite with lo < hi".into()));
+        }
+        if self.starts == 0 || self.max_evals == 0 || !(self.tol > 0.0) {
+            return Err(Error::InvalidParameter("starts, max_evals and tol must be positive".into()));
+        }
+        Ok(())
+    }
+}
+
+/// How one output's fit went.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    pub theta: Vec<f64>,
+    pub nugget: f64,
+    pub ln_psi: f64,
+    pub sigma2: f64,
+    pub jitter: f64,
+    /// Trend terms used, and those dropped as linearly dependent.
+    pub trend_terms: Vec<String>,
+    pub dropped_terms: Vec<String>,
+    pub optimizer: OptimizerKind,
+    pub starts: usize,
+    pub evals: usize,
+    pub seconds: f64,
+}
+
+/// One output's data prepared for fitting: dependent trend terms dropped,
+/// response z-scored.
+struct Prepared {
+    trend: Monomials,
+    f: faer::Mat<f64>,
+    y_norm: Vec<f64>,
+    y_mean: f64,
+    y_std: f64,
+    trend_terms: Vec<String>,
+    dropped_terms: Vec<String>,
+}
+
+fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Monomials, names: &[String]) -> Result<Prepared> {
+    let m = x.len();
+    if y.len() != m {
+        return Err(Error::InvalidParameter(format!("{} inputs but {} responses", m, y.len())));
+    }
+    if y.iter().any(|v| !v.is_finite()) {
+        return Err(Error::InvalidParameter("response has non-finite values".into()));
+    }
+    let (kept, dropped) = independent_columns(&trend_matrix(trend, x), 1e-9);
+    if kept.len() >= m {
+        return Err(Error::InvalidParameter(format!(
+            "{} independent trend terms need more than {m} rows",
+            kept.len()
+        )));
+    }
+    let trend_kept = trend.subset(&kept);
+    let yn = Normalizer::fit_column(y);
+    Ok(Prepared {
+        f: trend_matrix(&trend_kept, x),
+        y_norm: y.iter().map(|v| (v - yn.mean[0]) / yn.std[0]).collect(),
+        y_mean: yn.mean[0],
+        y_std: yn.std[0],
+        trend_terms: (0..trend_kept.len()).map(|j| trend_kept.term_name(j, names)).collect(),
+        dropped_terms: dropped.iter().map(|&j| trend.term_name(j, names)).collect(),
+        trend: trend_kept,
+    })
+}
+
+/// Fit one output at a **given** ξ and nugget ν (no optimisation): normalised
+/// inputs `x`, response `y` in original units, trend candidates `trend`.
+pub fn fit_output_at(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Monomials, theta: &[f64], nugget: f64) -> Result<KrigingModel> {
+    let names: Vec<String> = (1..=theta.len()).map(|k| format!("s{k}")).collect();
+    let p = prepare(x, y, trend, &names)?;
+    if theta.len() != inputs.d || theta.iter().any(|t| !(*t >= 0.0) || !t.is_finite()) || !(nugget >= 0.0) {
+        return Err(Error::InvalidParameter("theta must be d finite values ≥ 0 and the nugget ≥ 0".into()));
+    }
+    let problem = KrigingProblem { corr: &Gaussian, inputs, f: &p.f, y: &p.y_norm };
+    let sol = problem.solve(theta, nugget)?;
+    KrigingModel::from_solution(sol, p.trend, theta.to_vec(), nugget, x.to_vec(), p.y_mean, p.y_std)
+}
+
+/// Fit one output at normalised inputs `x` (m rows) on response `y` (original
+/// units), with the trend candidates `trend` (dependent ones are dropped),
+/// choosing ξ (and ν) by minimising ln ψ. `inputs` is `x` prepared for the
+/// correlation fill; `names` name the inputs.
+pub fn fit_output(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Monomials, names: &[String], opts: &KrigingOptions) -> Result<(KrigingModel, FitReport)> {
+    opts.validate()?;
+    let t0 = Instant::now();
+    let d = inputs.d;
+    let p = prepare(x, y, trend, names)?;
+    let problem = KrigingProblem { corr: &Gaussian, inputs, f: &p.f, y: &p.y_norm };
+    let mut bounds = Bounds::uniform(d, opts.log10_theta.0, opts.log10_theta.1);
+    if opts.nugget {
+        bounds.lo.push(opts.log10_nugget.0);
+        bounds.hi.push(opts.log10_nugget.1);
+    }
+    let unpack = |z: &[f64]| -> (Vec<f64>, f64) {
+        let theta = z[..d].iter().map(|v| 10f64.powf(*v)).collect();
+        let nugget = if opts.nugget { 10f64.powf(z[d]) } else { 0.0 };
+        (theta, nugget)
+    };
+    // a constant response has nothing to learn: any ξ reproduces it exactly
+    let constant_response = p.y_norm.iter().all(|v| *v == 0.0);
+    let (best_x, evals, starts) = if constant_response {
+        (bounds.center(), 0, 0)
+    } else {
+        let (best, starts) = optimise(&problem, &bounds, &unpack, opts);
+        if !best.f.is_finite() {
+            return Err(Error::Numerical("no hyperparameter in the box gave a finite likelihood".into()));
+        }
+        (best.x, best.evals, starts)
+    };
+    let (theta, nugget) = unpack(&best_x);
+    let sol = problem.solve(&theta, nugget)?;
+    let report = FitReport {
+        theta: theta.clone(),
+        nugget,
+        ln_psi: sol.value.ln_psi,
+        sigma2: sol.value.sigma2,
+        jitter: sol.value.jitter,
+        trend_terms: p.trend_terms,
+        dropped_terms: p.dropped_terms,
+        optimizer: opts.optimizer,
+        starts,
+        evals,
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    let model = KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?;
+    Ok((model, report))
+}
+
+/// Minimise ln ψ; returns the best result (evals summed over starts) and the
+/// number of starts.
+fn optimise(problem: &KrigingProblem, bounds: &Bounds, unpack: &(dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync), opts: &KrigingOptions) -> (OptimResult, usize) {
+    let (m, p) = (problem.m(), problem.f.ncols());
+    let local = |x0: &[f64]| {
+        let mut ws = Workspace::new(m, p);
+        let obj = |z: &[f64]| {
+            let (theta, nugget) = unpack(z);
+            problem.psi(&theta, nugget, &mut ws).map_or(f64::INFINITY, |v| v.ln_psi)
+        };
+        match opts.optimizer {
+            OptimizerKind::Gps => optim::gps(obj, x0, bounds, &GpsOptions { mesh_tol: opts.tol, max_evals: opts.max_evals, ..GpsOptions::default() }),
+            OptimizerKind::HookeJeeves => optim::hooke_jeeves(obj, x0, bounds, &HjOptions { tol: opts.tol, max_evals: opts.max_evals, ..HjOptions::default() }),
+        }
+    };
+    let starts = match opts.optimizer {
+        OptimizerKind::Gps => optim::lhs_starts(bounds, opts.starts, opts.seed),
+        OptimizerKind::HookeJeeves => vec![bounds.center()],
+    };
+    let (mut best, all) = optim::multistart(&starts, local);
+    best.evals = all.iter().map(|r| r.evals).sum();
+    (best, starts.len())
+}

@@ -1,0 +1,236 @@
+//! A fitted single-output universal-Kriging model: the predictor (seed 003
+//! eq 10) and its mean squared error (eq 12).
+//!
+//! `ŷ(s) = f(s)ᵀβ + r(s)ᵀγ`, `γ = R⁻¹(y − Fβ)`;
+//! `φ(s) = σ²[1 − r̃ᵀr̃ + vᵀv]` with `r̃ = C⁻¹r`, `u = F̃ᵀr̃ − f(s)`, `v = G⁻ᵀu`
+//! (DACE's form of eq 12), all in normalised units and scaled back by the
+//! output's mean and standard deviation.
+
+use super::corr::{CorrelationModel, Gaussian, corr_vector};
+use super::problem::Solution;
+use super::trend::{Monomials, TrendModel, trend_matrix};
+use crate::{Error, Result};
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::{Mat, Par};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Points per block in batched prediction.
+const BLOCK: usize = 128;
+
+/// What is saved of a model: enough to predict bit-identically.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KrigingModelData {
+    pub trend: Monomials,
+    /// Correlation parameters ξ, one per input dimension (normalised inputs).
+    pub theta: Vec<f64>,
+    /// Nugget ν added to R's diagonal (0: interpolation).
+    pub nugget: f64,
+    /// Numerical jitter ε added to R's diagonal.
+    pub jitter: f64,
+    /// Normalised training inputs, m rows.
+    pub x_train: Vec<Vec<f64>>,
+    pub y_mean: f64,
+    pub y_std: f64,
+    pub beta: Vec<f64>,
+    pub gamma: Vec<f64>,
+    /// Process variance σ² (normalised units, eq 13).
+    pub sigma2: f64,
+    /// ln ψ at ξ (eq 14).
+    pub ln_psi: f64,
+    /// Lower Cholesky factor of R, packed by rows (`i ≥ j`).
+    pub chol_lower: Vec<f64>,
+    /// QR factor G of F̃, packed by rows (`i ≤ j`).
+    pub g_upper: Vec<f64>,
+}
+
+/// A fitted model with its factors unpacked for prediction.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(try_from = "KrigingModelData", into = "KrigingModelData")]
+pub struct KrigingModel {
+    pub data: KrigingModelData,
+    c: Mat<f64>,
+    g: Mat<f64>,
+    ftilde: Mat<f64>,
+}
+
+impl PartialEq for KrigingModel {
+    fn eq(&self, other: &Self) -> bool {
+        self.data == other.data
+    }
+}
+
+impl From<KrigingModel> for KrigingModelData {
+    fn from(m: KrigingModel) -> Self {
+        m.data
+    }
+}
+
+impl TryFrom<KrigingModelData> for KrigingModel {
+    type Error = Error;
+
+    fn try_from(data: KrigingModelData) -> Result<Self> {
+        let m = data.x_train.len();
+        let p = data.trend.len();
+        let d = data.theta.len();
+        let bad = |what: &str| Err(Error::InvalidParameter(format!("Kriging model: {what}")));
+        if data.gamma.len() != m || data.chol_lower.len() != m * (m + 1) / 2 {
+            return bad("training size and factors disagree");
+        }
+        if data.beta.len() != p || data.g_upper.len() != p * (p + 1) / 2 || data.trend.dim != d {
+            return bad("trend size and coefficients disagree");
+        }
+        if data.x_train.iter().any(|r| r.len() != d) {
+            return bad("training rows have the wrong dimension");
+        }
+        let finite = data.theta.iter().chain(&data.beta).chain(&data.gamma).chain(&data.chol_lower).chain(&data.g_upper).all(|v| v.is_finite());
+        if !finite || !data.sigma2.is_finite() || !(data.y_std > 0.0) || !data.y_mean.is_finite() {
+            return bad("non-finite or invalid values");
+        }
+        let c = unpack_lower(&data.chol_lower, m);
+        let g = unpack_upper(&data.g_upper, p);
+        let ftilde = ftilde(&c, &data.trend, &data.x_train);
+        Ok(KrigingModel { data, c, g, ftilde })
+    }
+}
+
+/// `F̃ = C⁻¹ F`.
+fn ftilde(c: &Mat<f64>, trend: &Monomials, x: &[Vec<f64>]) -> Mat<f64> {
+    let mut f = trend_matrix(trend, x);
+    solve_lower_triangular_in_place(c.as_ref(), f.as_mut(), Par::Seq);
+    f
+}
+
+fn unpack_lower(v: &[f64], n: usize) -> Mat<f64> {
+    let mut m = Mat::zeros(n, n);
+    let mut k = 0;
+    for i in 0..n {
+        for j in 0..=i {
+            m[(i, j)] = v[k];
+            k += 1;
+        }
+    }
+    m
+}
+
+fn unpack_upper(v: &[f64], n: usize) -> Mat<f64> {
+    let mut m = Mat::zeros(n, n);
+    let mut k = 0;
+    for i in 0..n {
+        for j in i..n {
+            m[(i, j)] = v[k];
+            k += 1;
+        }
+    }
+    m
+}
+
+/// Mean and MSE of one predicted output, original units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pred {
+    pub mean: f64,
+    /// Mean squared error φ (eq 12), units².
+    pub mse: f64,
+}
+
+impl KrigingModel {
+    /// Assemble from a solution at ξ.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_solution(sol: Solution, trend: Monomials, theta: Vec<f64>, nugget: f64, x_train: Vec<Vec<f64>>, y_mean: f64, y_std: f64) -> Result<Self> {
+        let m = x_train.len();
+        let p = trend.len();
+        let mut chol_lower = Vec::with_capacity(m * (m + 1) / 2);
+        for i in 0..m {
+            for j in 0..=i {
+                chol_lower.push(sol.c[(i, j)]);
+            }
+        }
+        let mut g_upper = Vec::with_capacity(p * (p + 1) / 2);
+        for i in 0..p {
+            for j in i..p {
+                g_upper.push(sol.g[(i, j)]);
+            }
+        }
+        KrigingModel::try_from(KrigingModelData {
+            trend,
+            theta,
+            nugget,
+            jitter: sol.value.jitter,
+            x_train,
+            y_mean,
+            y_std,
+            beta: sol.beta,
+            gamma: sol.gamma,
+            sigma2: sol.value.sigma2,
+            ln_psi: sol.value.ln_psi,
+            chol_lower,
+            g_upper,
+        })
+    }
+
+    /// Input dimension.
+    pub fn dim(&self) -> usize {
+        self.data.theta.len()
+    }
+
+    /// Predict at normalised inputs (mean and MSE in original units).
+    /// Blocks of points run in parallel; each point's result does not depend
+    /// on the others.
+    pub fn predict(&self, s: &[Vec<f64>]) -> Vec<Pred> {
+        s.par_chunks(BLOCK).flat_map_iter(|blk| self.predict_block(blk)).collect()
+    }
+
+    fn predict_block(&self, s: &[Vec<f64>]) -> Vec<Pred> {
+        let d = &self.data;
+        let (m, p, b) = (d.x_train.len(), d.trend.len(), s.len());
+        let mut r = Mat::<f64>::zeros(m, b);
+        let mut fs = vec![0.0; p];
+        let mut col = vec![0.0; m];
+        let mut means = Vec::with_capacity(b);
+        for (k, x) in s.iter().enumerate() {
+            corr_vector(&Gaussian as &dyn CorrelationModel, &d.theta, x, &d.x_train, &mut col);
+            d.trend.eval_into(x, &mut fs);
+            let mean = dot(&fs, &d.beta) + dot(&col, &d.gamma);
+            means.push(mean);
+            for (i, v) in col.iter().enumerate() {
+                r[(i, k)] = *v;
+            }
+        }
+        // r̃ = C⁻¹ r for all points at once
+        solve_lower_triangular_in_place(self.c.as_ref(), r.as_mut(), Par::Seq);
+        let mut u = vec![0.0; p];
+        (0..b)
+            .map(|k| {
+                d.trend.eval_into(&s[k], &mut fs);
+                let rt = r.col(k);
+                let rr: f64 = rt.iter().map(|v| v * v).sum();
+                for (j, uj) in u.iter_mut().enumerate() {
+                    *uj = self.ftilde.col(j).iter().zip(rt.iter()).map(|(a, b)| a * b).sum::<f64>() - fs[j];
+                }
+                let vv = solve_gt(&self.g, &mut u);
+                let mse = (d.sigma2 * (1.0 - rr + vv)).max(0.0);
+                Pred {
+                    mean: d.y_mean + d.y_std * means[k],
+                    mse: mse * d.y_std * d.y_std,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Solve `Gᵀ v = u` in place (forward substitution, G upper) and return `vᵀv`.
+fn solve_gt(g: &Mat<f64>, u: &mut [f64]) -> f64 {
+    let p = u.len();
+    for i in 0..p {
+        let mut s = u[i];
+        for k in 0..i {
+            s -= g[(k, i)] * u[k];
+        }
+        u[i] = s / g[(i, i)];
+    }
+    u.iter().map(|v| v * v).sum()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

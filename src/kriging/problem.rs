@@ -1,0 +1,224 @@
+//! One universal-Kriging problem at fixed data: evaluating the concentrated
+//! objective ψ(ξ) and solving for β, σ², γ (seed 003 eqs 10–14; DACE).
+//!
+//! With `R = C Cᵀ` (Cholesky), `F̃ = C⁻¹F`, `ỹ = C⁻¹y` and the thin QR
+//! `[F̃ ỹ] = Q [[G, b], [0, ρ]]`:
+//!
+//! - `β = G⁻¹ b` (GLS estimate, eq 11, by QR — never normal equations),
+//! - `σ² = ρ²/m` (eq 13: `ρ = ‖ỹ − F̃β‖`),
+//! - `ln ψ = (2/m) Σ ln C_ii + ln σ²` (eq 14: `ψ = |R|^(1/m) σ²`),
+//! - `γ = C⁻ᵀ(ỹ − F̃β) = R⁻¹(y − Fβ)` for the predictor (eq 10).
+//!
+//! `R` gets `1 + ν + ε` on its diagonal: ν the nugget (noise-to-signal ratio,
+//! 0 for interpolation) and ε a jitter: the smallest of the ladder
+//! `ε_k = (10 + m)·eps·10^k` (k = 0 is DACE's choice) for which the Cholesky
+//! succeeds, up to [`MAX_JITTER`]. The Gaussian correlation is numerically
+//! singular for small ξ, so the search starts one rung below the rung that
+//! worked last time (found by walking down/up): two factorisations in the
+//! common case instead of up to nine, and ε still a function of ξ alone.
+
+use super::corr::{CorrelationModel, TrainingInputs};
+use crate::{Error, Result};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::{LltRegularization, cholesky_in_place, cholesky_in_place_scratch};
+use faer::linalg::qr::no_pivoting::factor::{qr_in_place, qr_in_place_scratch, recommended_block_size};
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::{Mat, Par};
+
+/// Largest jitter tried before a Cholesky failure is reported.
+pub const MAX_JITTER: f64 = 1e-6;
+
+/// Training data of one output, normalised, with its trend matrix.
+pub struct KrigingProblem<'a> {
+    pub corr: &'a dyn CorrelationModel,
+    pub inputs: &'a TrainingInputs,
+    /// m × p trend matrix with linearly independent columns.
+    pub f: &'a Mat<f64>,
+    /// Normalised response, length m.
+    pub y: &'a [f64],
+}
+
+/// Reusable buffers for ψ evaluations (one per thread).
+pub struct Workspace {
+    /// R without jitter (lower triangle), kept across jitter attempts.
+    base: Mat<f64>,
+    r: Mat<f64>,
+    /// Jitter rung that worked last.
+    rung: usize,
+    aug: Mat<f64>,
+    qcoef: Mat<f64>,
+    mem: MemBuffer,
+}
+
+impl Workspace {
+    /// Buffers for `m` rows and `p` trend terms.
+    pub fn new(m: usize, p: usize) -> Self {
+        let bs = recommended_block_size::<f64>(m, p + 1);
+        let req = StackReq::any_of(&[
+            cholesky_in_place_scratch::<f64>(m, Par::Seq, Default::default()),
+            qr_in_place_scratch::<f64>(m, p + 1, bs, Par::Seq, Default::default()),
+        ]);
+        Workspace {
+            base: Mat::zeros(m, m),
+            r: Mat::zeros(m, m),
+            rung: 0,
+            aug: Mat::zeros(m, p + 1),
+            qcoef: Mat::zeros(bs, (p + 1).min(m)),
+            mem: MemBuffer::new(req),
+        }
+    }
+}
+
+/// Value of the concentrated objective at one ξ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PsiValue {
+    /// ln ψ (what the optimisers minimise).
+    pub ln_psi: f64,
+    pub sigma2: f64,
+    /// ln |R|.
+    pub ln_det_r: f64,
+    /// Jitter ε that made R factorisable.
+    pub jitter: f64,
+}
+
+/// Everything prediction needs, at one ξ.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    pub value: PsiValue,
+    /// Lower Cholesky factor C of R (upper triangle zero).
+    pub c: Mat<f64>,
+    /// Upper-triangular QR factor G of F̃ (p × p).
+    pub g: Mat<f64>,
+    pub beta: Vec<f64>,
+    pub gamma: Vec<f64>,
+}
+
+impl KrigingProblem<'_> {
+    /// Number of training rows.
+    pub fn m(&self) -> usize {
+        self.y.len()
+    }
+
+    /// Fill R and factorise it in `ws.r` with the smallest working jitter rung.
+    fn factor_r(&self, theta: &[f64], nugget: f64, ws: &mut Workspace) -> Result<f64> {
+        let m = self.m();
+        let eps0 = (10.0 + m as f64) * f64::EPSILON;
+        let jitter = |k: usize| eps0 * 10f64.powi(k as i32);
+        let max_rung = (MAX_JITTER / eps0).log10().floor() as usize;
+        self.inputs.fill_lower(self.corr, theta, nugget, ws.base.as_mut());
+        let try_rung = |ws: &mut Workspace, k: usize| {
+            ws.r.copy_from(&ws.base);
+            for i in 0..m {
+                ws.r[(i, i)] += jitter(k);
+            }
+            let stack = MemStack::new(&mut ws.mem);
+            cholesky_in_place(ws.r.as_mut(), LltRegularization::default(), Par::Seq, stack, Default::default()).is_ok()
+        };
+        let mut k = ws.rung.saturating_sub(1);
+        if try_rung(ws, k) {
+            while k > 0 {
+                if try_rung(ws, k - 1) {
+                    k -= 1;
+                } else {
+                    // the failed attempt overwrote the factor: redo rung k
+                    if !try_rung(ws, k) {
+                        break;
+                    }
+                    ws.rung = k;
+                    return Ok(jitter(k));
+                }
+            }
+            if k == 0 {
+                ws.rung = 0;
+                return Ok(jitter(0));
+            }
+        }
+        loop {
+            k += 1;
+            if k > max_rung {
+                return Err(Error::Numerical(format!(
+                    "correlation matrix not positive definite even with jitter {MAX_JITTER:e} (duplicate poses? try a nugget)"
+                )));
+            }
+            if try_rung(ws, k) {
+                ws.rung = k;
+                return Ok(jitter(k));
+            }
+        }
+    }
+
+    /// ln ψ(ξ) and σ² (eq 14): one Cholesky, one triangular solve with p + 1
+    /// right-hand sides, one QR of [F̃ ỹ]. No allocation. An error when R
+    /// cannot be factorised or the likelihood is degenerate (σ² = 0).
+    pub fn psi(&self, theta: &[f64], nugget: f64, ws: &mut Workspace) -> Result<PsiValue> {
+        let v = self.evaluate(theta, nugget, ws)?;
+        if v.sigma2 > 0.0 && v.ln_psi.is_finite() {
+            Ok(v)
+        } else {
+            Err(Error::Numerical(format!(
+                "degenerate likelihood (σ² = {:e}, ln|R| = {:e})",
+                v.sigma2, v.ln_det_r
+            )))
+        }
+    }
+
+    fn evaluate(&self, theta: &[f64], nugget: f64, ws: &mut Workspace) -> Result<PsiValue> {
+        let m = self.m();
+        let p = self.f.ncols();
+        let jitter = self.factor_r(theta, nugget, ws)?;
+        let ln_det_r = 2.0 * (0..m).map(|i| ws.r[(i, i)].ln()).sum::<f64>();
+        ws.aug.as_mut().subcols_mut(0, p).copy_from(self.f.as_ref());
+        for (i, v) in self.y.iter().enumerate() {
+            ws.aug[(i, p)] = *v;
+        }
+        solve_lower_triangular_in_place(ws.r.as_ref(), ws.aug.as_mut(), Par::Seq);
+        let stack = MemStack::new(&mut ws.mem);
+        qr_in_place(ws.aug.as_mut(), ws.qcoef.as_mut(), Par::Seq, stack, Default::default());
+        let rho = ws.aug[(p, p)];
+        let sigma2 = rho * rho / m as f64;
+        Ok(PsiValue {
+            ln_psi: ln_det_r / m as f64 + sigma2.ln(),
+            sigma2,
+            ln_det_r,
+            jitter,
+        })
+    }
+
+    /// Full solution at ξ: C, G, β, γ (eqs 10–13). Unlike [`Self::psi`] it
+    /// accepts σ² = 0 (a response the trend reproduces exactly).
+    pub fn solve(&self, theta: &[f64], nugget: f64) -> Result<Solution> {
+        let m = self.m();
+        let p = self.f.ncols();
+        let mut ws = Workspace::new(m, p);
+        let value = self.evaluate(theta, nugget, &mut ws)?;
+        let mut c = ws.r.clone();
+        for j in 0..m {
+            for i in 0..j {
+                c[(i, j)] = 0.0;
+            }
+        }
+        // G and b from the QR of [F̃ ỹ]; β = G⁻¹ b
+        let mut g = Mat::<f64>::zeros(p, p);
+        let mut beta = vec![0.0; p];
+        for j in 0..p {
+            for i in 0..=j {
+                g[(i, j)] = ws.aug[(i, j)];
+            }
+            beta[j] = ws.aug[(j, p)];
+        }
+        let mut b = faer::Col::from_fn(p, |i| beta[i]);
+        solve_upper_triangular_in_place(g.as_ref(), b.as_mat_mut(), Par::Seq);
+        let beta: Vec<f64> = b.iter().copied().collect();
+        // γ = C⁻ᵀ C⁻¹ (y − Fβ)
+        let mut resid = faer::Col::from_fn(m, |i| self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>());
+        solve_lower_triangular_in_place(c.as_ref(), resid.as_mat_mut(), Par::Seq);
+        solve_upper_triangular_in_place(c.transpose(), resid.as_mat_mut(), Par::Seq);
+        Ok(Solution {
+            value,
+            c,
+            g,
+            beta,
+            gamma: resid.iter().copied().collect(),
+        })
+    }
+}

@@ -1,0 +1,187 @@
+//! Trend (regression) models `f(s)ᵀβ` of universal Kriging (seed 003 eq 6).
+//!
+//! A trend is a [`TrendModel`]: a fixed list of basis functions of the
+//! normalised inputs. The built-in [`Monomials`] covers the constant, linear
+//! and full quadratic trends and every candidate set of seed 003 eq 15 (all
+//! monomials of total degree ≤ η, `C(d+η, η)` of them).
+
+use serde::{Deserialize, Serialize};
+
+/// A set of basis functions of the normalised input `s` (length `dim`).
+pub trait TrendModel: Send + Sync {
+    /// Number of basis functions p.
+    fn len(&self) -> usize;
+    /// Whether there is no basis function (ordinary Kriging needs ≥ 1).
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Input dimension d.
+    fn dim(&self) -> usize;
+    /// `out[j] = f_j(s)`, `out.len() == self.len()`.
+    fn eval_into(&self, s: &[f64], out: &mut [f64]);
+    /// Human-readable name of basis function j given the input names.
+    fn term_name(&self, j: usize, inputs: &[String]) -> String;
+}
+
+/// Monomials `Π_k s_k^{e_k}`, one exponent vector per basis function.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Monomials {
+    pub dim: usize,
+    pub exponents: Vec<Vec<u8>>,
+}
+
+impl Monomials {
+    /// All monomials of total degree ≤ `degree` in `dim` variables, ordered by
+    /// degree, then lexicographically (1, s1, …, sd, s1², s1s2, …, sd²):
+    /// `C(dim + degree, degree)` terms (seed 003 eq 15).
+    pub fn full(dim: usize, degree: u8) -> Self {
+        let mut exponents = Vec::new();
+        for deg in 0..=degree {
+            let mut e = vec![0u8; dim];
+            push_degree(&mut exponents, &mut e, 0, deg);
+        }
+        Monomials { dim, exponents }
+    }
+
+    /// `[1]` (ordinary Kriging with unknown mean).
+    pub fn constant(dim: usize) -> Self {
+        Monomials::full(dim, 0)
+    }
+
+    /// `[1, s1, …, sd]`.
+    pub fn linear(dim: usize) -> Self {
+        Monomials::full(dim, 1)
+    }
+
+    /// All monomials of degree ≤ 2: `(d+1)(d+2)/2` terms (91 for d = 12).
+    pub fn quadratic(dim: usize) -> Self {
+        Monomials::full(dim, 2)
+    }
+
+    /// The subset of terms at `keep` (in that order).
+    pub fn subset(&self, keep: &[usize]) -> Self {
+        Monomials {
+            dim: self.dim,
+            exponents: keep.iter().map(|&j| self.exponents[j].clone()).collect(),
+        }
+    }
+}
+
+fn push_degree(out: &mut Vec<Vec<u8>>, e: &mut [u8], from: usize, left: u8) {
+    if left == 0 {
+        out.push(e.to_vec());
+        return;
+    }
+    for k in from..e.len() {
+        e[k] += 1;
+        push_degree(out, e, k, left - 1);
+        e[k] -= 1;
+    }
+}
+
+impl TrendModel for Monomials {
+    fn len(&self) -> usize {
+        self.exponents.len()
+    }
+
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    fn eval_into(&self, s: &[f64], out: &mut [f64]) {
+        for (o, e) in out.iter_mut().zip(&self.exponents) {
+            let mut v = 1.0;
+            for (x, &p) in s.iter().zip(e) {
+                for _ in 0..p {
+                    v *= x;
+                }
+            }
+            *o = v;
+        }
+    }
+
+    fn term_name(&self, j: usize, inputs: &[String]) -> String {
+        let parts: Vec<String> = self.exponents[j]
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| **p > 0)
+            .map(|(k, p)| {
+                let name = inputs.get(k).cloned().unwrap_or_else(|| format!("s{}", k + 1));
+                if *p == 1 { name } else { format!("{name}^{p}") }
+            })
+            .collect();
+        if parts.is_empty() { "1".into() } else { parts.join("*") }
+    }
+}
+
+/// The m × p trend matrix `F` (row-major rows of `f(s_i)ᵀ`).
+pub fn trend_matrix(trend: &dyn TrendModel, rows: &[Vec<f64>]) -> faer::Mat<f64> {
+    let p = trend.len();
+    let mut buf = vec![0.0; p];
+    let mut f = faer::Mat::zeros(rows.len(), p);
+    for (i, r) in rows.iter().enumerate() {
+        trend.eval_into(r, &mut buf);
+        for (j, v) in buf.iter().enumerate() {
+            f[(i, j)] = *v;
+        }
+    }
+    f
+}
+
+/// Greedy rank revelation in column order (modified Gram–Schmidt with one
+/// re-orthogonalisation): column j is kept when its component orthogonal to
+/// the kept columns has norm > `rel_tol`·‖F_j‖ (and ‖F_j‖ > 0). Earlier
+/// (lower-degree) columns win, so e.g. `λ²` (≡ affine in λ) is dropped, not `1`.
+/// Returns `(kept, dropped)` column indices.
+pub fn independent_columns(f: &faer::Mat<f64>, rel_tol: f64) -> (Vec<usize>, Vec<usize>) {
+    let m = f.nrows();
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let (mut kept, mut dropped) = (Vec::new(), Vec::new());
+    for j in 0..f.ncols() {
+        let mut v: Vec<f64> = (0..m).map(|i| f[(i, j)]).collect();
+        let norm0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for b in &basis {
+                let dot: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= dot * y);
+            }
+        }
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm0 > 0.0 && norm > rel_tol * norm0 {
+            v.iter_mut().for_each(|x| *x /= norm);
+            basis.push(v);
+            kept.push(j);
+        } else {
+            dropped.push(j);
+        }
+    }
+    (kept, dropped)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidate_counts_match_seed_003_eq_15() {
+        assert_eq!(Monomials::quadratic(12).len(), 91);
+        assert_eq!(Monomials::full(12, 3).len(), 455);
+        assert_eq!(Monomials::linear(6).len(), 7);
+        let q = Monomials::quadratic(2);
+        let names: Vec<String> = (0..q.len()).map(|j| q.term_name(j, &["a".into(), "b".into()])).collect();
+        assert_eq!(names, ["1", "a", "b", "a^2", "a*b", "b^2"]);
+        let mut out = vec![0.0; 6];
+        q.eval_into(&[2.0, 3.0], &mut out);
+        assert_eq!(out, [1.0, 2.0, 3.0, 4.0, 6.0, 9.0]);
+    }
+
+    #[test]
+    fn binary_squares_are_detected_as_dependent() {
+        // s2 is binary, so s2² is affine in (1, s2)
+        let rows: Vec<Vec<f64>> = (0..20).map(|i| vec![i as f64 * 0.1, if i % 3 == 0 { 0.7 } else { -1.3 }]).collect();
+        let f = trend_matrix(&Monomials::quadratic(2), &rows);
+        let (kept, dropped) = independent_columns(&f, 1e-10);
+        assert_eq!(kept, vec![0, 1, 2, 3, 4]);
+        assert_eq!(dropped, vec![5]);
+    }
+}

@@ -1,0 +1,170 @@
+//! The TCP error model: one universal-Kriging model per output axis
+//! (ex, ey, ez), each with its own ξ and trend (DESIGN.md §3), over JS or EJS
+//! inputs z-scored by one shared [`Normalizer`].
+//!
+//! `fit` returns a model, `predict` is pure; `save`/`load` write a versioned
+//! JSON that predicts bit-identically after loading.
+
+use crate::dataset::Dataset;
+use crate::kriging::{FitReport, KrigingModel, KrigingOptions, TrainingInputs, Pred, fit_output};
+use crate::space::{Normalizer, Space};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Format tag and version of saved models.
+pub const MODEL_FORMAT: &str = "robokrige-error-model";
+pub const MODEL_VERSION: u32 = 1;
+
+/// Output axis names.
+pub const AXES: [&str; 3] = ["ex", "ey", "ez"];
+
+/// A fitted TCP error model δ̂(s) = (δ̂x, δ̂y, δ̂z).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ErrorModel {
+    pub format: String,
+    pub version: u32,
+    pub space: Space,
+    pub n_joints: usize,
+    pub input_names: Vec<String>,
+    pub input_norm: Normalizer,
+    pub options: KrigingOptions,
+    /// One model per axis, in [`AXES`] order.
+    pub outputs: Vec<KrigingModel>,
+    pub reports: Vec<FitReport>,
+}
+
+/// Predicted errors with their standard deviations (√MSE), mm.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    pub mean: Vec<[f64; 3]>,
+    pub std: Vec<[f64; 3]>,
+}
+
+impl ErrorModel {
+    /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
+    /// with the given options' trend. Outputs and starts run in parallel.
+    pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
+        let trend = opts.trend.monomials(space.dim(data.n_joints()));
+        Self::fit_with_trend(data, space, opts, &[trend.clone(), trend.clone(), trend])
+    }
+
+    /// Fit with a (possibly different) trend candidate set per output.
+    pub fn fit_with_trend(data: &Dataset, space: Space, opts: &KrigingOptions, trends: &[crate::kriging::Monomials; 3]) -> Result<Self> {
+        opts.validate()?;
+        let errors = data.errors_or_err()?;
+        if data.len() < 3 {
+            return Err(Error::Input {
+                source_name: data.source.clone(),
+                message: format!("{} rows are too few to fit a model (need at least 3)", data.len()),
+            });
+        }
+        let n = data.n_joints();
+        let rows = space.rows(&data.q, &data.dir);
+        let input_norm = Normalizer::fit(&rows);
+        let x = input_norm.apply_rows(&rows);
+        let inputs = TrainingInputs::new(&x);
+        let names = space.names(n);
+        let fits: Vec<Result<(KrigingModel, FitReport)>> = (0..3)
+            .into_par_iter()
+            .map(|a| {
+                let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+                fit_output(&x, &inputs, &y, &trends[a], &names, opts)
+            })
+            .collect();
+        let mut outputs = Vec::with_capacity(3);
+        let mut reports = Vec::with_capacity(3);
+        for (a, f) in fits.into_iter().enumerate() {
+            let (m, r) = f.map_err(|e| Error::Numerical(format!("output {}: {e}", AXES[a])))?;
+            outputs.push(m);
+            reports.push(r);
+        }
+        Ok(ErrorModel {
+            format: MODEL_FORMAT.into(),
+            version: MODEL_VERSION,
+            space,
+            n_joints: n,
+            input_names: names,
+            input_norm,
+            options: opts.clone(),
+            outputs,
+            reports,
+        })
+    }
+
+    /// Predict at poses `q` approached in directions `dir` (ignored in JS).
+    pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
+        if q.len() != dir.len() {
+            return Err(Error::InvalidParameter("q and dir have different row counts".into()));
+        }
+        for r in q.iter().chain(dir) {
+            if r.len() != self.n_joints {
+                return Err(Error::JointCount {
+                    expected: self.n_joints,
+                    got: r.len(),
+                });
+            }
+        }
+        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
+        let per_axis: Vec<Vec<Pred>> = self.outputs.par_iter().map(|m| m.predict(&s)).collect();
+        let mut mean = vec![[0.0; 3]; q.len()];
+        let mut std = vec![[0.0; 3]; q.len()];
+        for (a, preds) in per_axis.iter().enumerate() {
+            for (k, p) in preds.iter().enumerate() {
+                mean[k][a] = p.mean;
+                std[k][a] = p.mse.sqrt();
+            }
+        }
+        Ok(Prediction { mean, std })
+    }
+
+    /// Predict for every row of a dataset.
+    pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
+        self.predict(&data.q, &data.dir)
+    }
+
+    /// Write as JSON.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = serde_json::to_string(self).map_err(|e| Error::Json {
+            context: format!("saving {}", path.display()),
+            source: e,
+        })?;
+        std::fs::write(path, text).map_err(|e| Error::io(path, e))
+    }
+
+    /// Read a model saved by [`ErrorModel::save`], checking format and version.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parse a saved model from JSON text (`source_name` for messages).
+    pub fn from_json(text: &str, source_name: &str) -> Result<Self> {
+        let head: serde_json::Value = serde_json::from_str(text).map_err(|e| Error::Json {
+            context: source_name.into(),
+            source: e,
+        })?;
+        let format = head.get("format").and_then(|v| v.as_str()).unwrap_or("");
+        let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
+        if format != MODEL_FORMAT || version != u64::from(MODEL_VERSION) {
+            return Err(Error::Input {
+                source_name: source_name.into(),
+                message: format!(
+                    "not a robokrige error model of version {MODEL_VERSION} (found format '{format}', version {version}); refit it with this version"
+                ),
+            });
+        }
+        let model: ErrorModel = serde_json::from_value(head).map_err(|e| Error::Json {
+            context: source_name.into(),
+            source: e,
+        })?;
+        if model.outputs.len() != 3 || model.input_norm.mean.len() != model.space.dim(model.n_joints) {
+            return Err(Error::Input {
+                source_name: source_name.into(),
+                message: "model file is inconsistent (outputs or input dimension)".into(),
+            });
+        }
+        Ok(model)
+    }
+}
