@@ -20,7 +20,7 @@ rows use the js space [q1..q6] (6 dims, 28 basis functions) instead.
 Libraries and settings (all defaults unless said):
   * SMT 2.15 KRG(poly=..., corr="squar_exp"): TNC multistart (n_start=10 ->
     12 starts), theta0=1e-2, theta_bounds=[1e-6, 20]. SMT quadratic (js) only
-    with --smt-quadratic (~2-3 min per output).
+    with --smt-quadratic (20-45 s per output here; the js problem is small).
   * egobox 1.0 Gpx.builder(regr_spec=CONSTANT|LINEAR|QUADRATIC,
     corr_spec=SQUARED_EXPONENTIAL, seed=42): COBYLA multistart
     (theta_n_start=10, theta_max_eval=50), theta_init=0.1, bounds [1e-2, 10].
@@ -54,6 +54,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, ".."))
+sys.dont_write_bytecode = True   # no __pycache__ in tests/fixtures
 sys.path.insert(0, os.path.join(ROOT, "tests", "fixtures"))
 from gen_kriging_fixtures import (  # noqa: E402  (numpy DACE reference)
     NumpyUK, SPACES, TRAIN_CSV, design, load_csv, zscore_params)
@@ -125,7 +126,7 @@ def cpu_model():
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--smt-quadratic", action="store_true",
-                    help="also time SMT KRG quadratic (js space, ~2-3 min/output)")
+                    help="also time SMT KRG quadratic (js space, 20-45 s/output)")
     ap.add_argument("--only", default="smt,egobox,sklearn")
     ap.add_argument("--outputs", default="ex,ey,ez")
     ap.add_argument("--json", default=None, help="also dump the rows as JSON")

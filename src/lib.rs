@@ -15,12 +15,13 @@
 //! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
 //! | [`stats`] | summaries of error sets |
 
+pub mod cv;
 pub mod dataset;
 pub mod error;
-pub mod kriging;
-pub mod optim;
 pub mod kinematics;
+pub mod kriging;
 pub mod model;
+pub mod optim;
 pub mod sim;
 pub mod space;
 pub mod stats;

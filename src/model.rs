@@ -6,7 +6,7 @@
 //! JSON that predicts bit-identically after loading.
 
 use crate::dataset::Dataset;
-use crate::kriging::{FitReport, KrigingModel, KrigingOptions, TrainingInputs, Pred, fit_output};
+use crate::kriging::{FitReport, KrigingModel, KrigingOptions, Pred, TrainingInputs, fit_output};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -51,13 +51,21 @@ impl ErrorModel {
     }
 
     /// Fit with a (possibly different) trend candidate set per output.
-    pub fn fit_with_trend(data: &Dataset, space: Space, opts: &KrigingOptions, trends: &[crate::kriging::Monomials; 3]) -> Result<Self> {
+    pub fn fit_with_trend(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        trends: &[crate::kriging::Monomials; 3],
+    ) -> Result<Self> {
         opts.validate()?;
         let errors = data.errors_or_err()?;
         if data.len() < 3 {
             return Err(Error::Input {
                 source_name: data.source.clone(),
-                message: format!("{} rows are too few to fit a model (need at least 3)", data.len()),
+                message: format!(
+                    "{} rows are too few to fit a model (need at least 3)",
+                    data.len()
+                ),
             });
         }
         let n = data.n_joints();
@@ -96,7 +104,9 @@ impl ErrorModel {
     /// Predict at poses `q` approached in directions `dir` (ignored in JS).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         if q.len() != dir.len() {
-            return Err(Error::InvalidParameter("q and dir have different row counts".into()));
+            return Err(Error::InvalidParameter(
+                "q and dir have different row counts".into(),
+            ));
         }
         for r in q.iter().chain(dir) {
             if r.len() != self.n_joints {
@@ -159,7 +169,9 @@ impl ErrorModel {
             context: source_name.into(),
             source: e,
         })?;
-        if model.outputs.len() != 3 || model.input_norm.mean.len() != model.space.dim(model.n_joints) {
+        if model.outputs.len() != 3
+            || model.input_norm.mean.len() != model.space.dim(model.n_joints)
+        {
             return Err(Error::Input {
                 source_name: source_name.into(),
                 message: "model file is inconsistent (outputs or input dimension)".into(),

@@ -44,7 +44,6 @@ pub fn derive_directions(q: &[Vec<f64>], start: Option<&[f64]>) -> Vec<Vec<f64>>
     out
 }
 
-
 use serde::{Deserialize, Serialize};
 
 /// Which input space a model uses.
@@ -118,7 +117,7 @@ impl Normalizer {
         }
         for (s, mu) in std.iter_mut().zip(&mean) {
             *s = (*s / (m - 1.0).max(1.0)).sqrt();
-            if !(*s > 1e-12 * mu.abs().max(1.0)) {
+            if s.is_nan() || *s <= 1e-12 * mu.abs().max(1.0) {
                 *s = 1.0;
             }
         }

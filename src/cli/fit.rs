@@ -32,14 +32,9 @@ pub enum OptimizerArg {
     Hj,
 }
 
-/// Fit a universal-Kriging error model (one per axis ex, ey, ez) to a campaign.
+/// Model choices shared by `fit` and `cv`.
 #[derive(Debug, Args)]
-#[command(after_help = "\
-Example:
-  robokrige fit datasets/comau_lhs.csv --space ejs --trend constant --optimizer gps -o model.json")]
-pub struct FitArgs {
-    /// Measurement CSV with q1..qN, optional dir1..dirN, and ex,ey,ez.
-    data: PathBuf,
+pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "ejs")]
     space: SpaceArg,
     #[arg(long, value_enum, default_value = "constant")]
@@ -55,6 +50,44 @@ pub struct FitArgs {
     /// Seed of the GPS starts.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+impl ModelArgs {
+    /// The space and fitting options these arguments select.
+    pub fn options(&self) -> (Space, KrigingOptions) {
+        let opts = KrigingOptions {
+            trend: match self.trend {
+                TrendArg::Constant => TrendKind::Constant,
+                TrendArg::Linear => TrendKind::Linear,
+                TrendArg::Quadratic => TrendKind::Quadratic,
+            },
+            optimizer: match self.optimizer {
+                OptimizerArg::Gps => OptimizerKind::Gps,
+                OptimizerArg::Hj => OptimizerKind::HookeJeeves,
+            },
+            nugget: self.nugget,
+            starts: self.starts,
+            seed: self.seed,
+            ..KrigingOptions::default()
+        };
+        let space = match self.space {
+            SpaceArg::Ejs => Space::Ejs,
+            SpaceArg::Js => Space::Js,
+        };
+        (space, opts)
+    }
+}
+
+/// Fit a universal-Kriging error model (one per axis ex, ey, ez) to a campaign.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige fit datasets/comau_lhs.csv --space ejs --trend constant --optimizer gps -o model.json")]
+pub struct FitArgs {
+    /// Measurement CSV with q1..qN, optional dir1..dirN, and ex,ey,ez.
+    data: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Output model JSON.
     #[arg(short, long)]
     output: PathBuf,
@@ -65,25 +98,7 @@ pub struct FitArgs {
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = read_csv(&a.data)?;
-    let opts = KrigingOptions {
-        trend: match a.trend {
-            TrendArg::Constant => TrendKind::Constant,
-            TrendArg::Linear => TrendKind::Linear,
-            TrendArg::Quadratic => TrendKind::Quadratic,
-        },
-        optimizer: match a.optimizer {
-            OptimizerArg::Gps => OptimizerKind::Gps,
-            OptimizerArg::Hj => OptimizerKind::HookeJeeves,
-        },
-        nugget: a.nugget,
-        starts: a.starts,
-        seed: a.seed,
-        ..KrigingOptions::default()
-    };
-    let space = match a.space {
-        SpaceArg::Ejs => Space::Ejs,
-        SpaceArg::Js => Space::Js,
-    };
+    let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
     let model = ErrorModel::fit(&data, space, &opts)?;
     let secs = t0.elapsed().as_secs_f64();
@@ -93,9 +108,18 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
         return Ok(());
     }
-    println!("fitted {} rows in {:?} space in {secs:.2} s -> {}", data.len(), space, a.output.display());
+    println!(
+        "fitted {} rows in {:?} space in {secs:.2} s -> {}",
+        data.len(),
+        space,
+        a.output.display()
+    );
     for (ax, r) in AXES.iter().zip(&model.reports) {
-        let lt: Vec<String> = r.theta.iter().map(|t| format!("{:.2}", t.log10())).collect();
+        let lt: Vec<String> = r
+            .theta
+            .iter()
+            .map(|t| format!("{:.2}", t.log10()))
+            .collect();
         println!(
             "  {ax}: ln ψ {:.4}  σ² {:.4}  nugget {:.2e}  trend terms {} (dropped {})  evals {}  {:.2} s\n      log10 ξ = [{}]",
             r.ln_psi,
@@ -132,7 +156,11 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     if data.n_joints() != model.n_joints {
         return Err(Error::Input {
             source_name: a.poses.display().to_string(),
-            message: format!("has {} joints but the model was fitted on {}", data.n_joints(), model.n_joints),
+            message: format!(
+                "has {} joints but the model was fitted on {}",
+                data.n_joints(),
+                model.n_joints
+            ),
         });
     }
     let pred = model.predict_dataset(&data)?;
@@ -163,10 +191,21 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     }
     w.flush().map_err(io)?;
     if let Some(e) = &data.errors {
-        let resid: Vec<[f64; 3]> = e.iter().zip(&pred.mean).map(|(m, p)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]]).collect();
+        let resid: Vec<[f64; 3]> = e
+            .iter()
+            .zip(&pred.mean)
+            .map(|(m, p)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]])
+            .collect();
         let before = robokrige::stats::summarize(e);
         let after = robokrige::stats::summarize(&resid);
-        println!("{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})", data.len(), before.mean_3d_mm, after.mean_3d_mm, before.max_3d_mm, after.max_3d_mm);
+        println!(
+            "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
+            data.len(),
+            before.mean_3d_mm,
+            after.mean_3d_mm,
+            before.max_3d_mm,
+            after.max_3d_mm
+        );
     }
     println!("wrote {}", a.output.display());
     Ok(())

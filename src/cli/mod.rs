@@ -1,6 +1,7 @@
 //! Subcommands. Exit codes: 0 ok, 1 failed (bad data, numerical failure),
 //! 2 bad usage (clap).
 
+mod cv;
 mod fit;
 mod simulate;
 
@@ -24,6 +25,8 @@ pub enum Command {
     Fit(fit::FitArgs),
     /// Predict TCP errors with a fitted model.
     Predict(fit::PredictArgs),
+    /// K-fold cross-validation of a model choice.
+    Cv(cv::CvArgs),
 }
 
 /// Run a parsed command.
@@ -32,5 +35,6 @@ pub fn run(cli: Cli) -> robokrige::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),
         Command::Predict(a) => fit::run_predict(a),
+        Command::Cv(a) => cv::run(a),
     }
 }

@@ -171,6 +171,44 @@ impl Dataset {
             .ok_or_else(|| self.input_err("has no ex,ey,ez columns; add the measured TCP errors"))
     }
 
+    /// The rows at `rows` (in that order), every column kept. Directions are
+    /// copied, not re-derived: a row keeps the λ it was measured with.
+    pub fn select(&self, rows: &[usize]) -> Dataset {
+        let pick = |v: &Vec<[f64; 3]>| rows.iter().map(|&i| v[i]).collect();
+        Dataset {
+            source: self.source.clone(),
+            q: rows.iter().map(|&i| self.q[i].clone()).collect(),
+            dir: rows.iter().map(|&i| self.dir[i].clone()).collect(),
+            dir_source: self.dir_source,
+            errors: self.errors.as_ref().map(pick),
+            positions: self.positions.as_ref().map(pick),
+            ids: self
+                .ids
+                .as_ref()
+                .map(|v| rows.iter().map(|&i| v[i].clone()).collect()),
+            covariates: self
+                .covariates
+                .iter()
+                .map(|c| {
+                    let values: Vec<f64> = rows.iter().map(|&i| c.values[i]).collect();
+                    Covariate {
+                        name: c.name.clone(),
+                        missing: values.iter().filter(|v| v.is_nan()).count(),
+                        values,
+                    }
+                })
+                .collect(),
+            text: self
+                .text
+                .iter()
+                .map(|t| TextColumn {
+                    name: t.name.clone(),
+                    values: rows.iter().map(|&i| t.values[i].clone()).collect(),
+                })
+                .collect(),
+        }
+    }
+
     /// Check internal consistency, for datasets built or edited in memory.
     ///
     /// Requires at least one pose and one joint; every row of `q` and `dir`

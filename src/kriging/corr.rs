@@ -26,7 +26,11 @@ pub struct Gaussian;
 impl CorrelationModel for Gaussian {
     #[inline]
     fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
-        let s: f64 = theta.iter().zip(a.iter().zip(b)).map(|(t, (x, y))| t * (x - y) * (x - y)).sum();
+        let s: f64 = theta
+            .iter()
+            .zip(a.iter().zip(b))
+            .map(|(t, (x, y))| t * (x - y) * (x - y))
+            .sum();
         (-s).exp()
     }
 
@@ -81,19 +85,34 @@ impl TrainingInputs {
 
     /// Fill the m × m correlation matrix (lower triangle and diagonal only:
     /// that is all the Cholesky reads) with `1 + diag` on the diagonal.
-    pub fn fill_lower(&self, corr: &dyn CorrelationModel, theta: &[f64], diag: f64, r: faer::MatMut<'_, f64>) {
+    pub fn fill_lower(
+        &self,
+        corr: &dyn CorrelationModel,
+        theta: &[f64],
+        diag: f64,
+        r: faer::MatMut<'_, f64>,
+    ) {
         let mut r = r;
         for i in 0..self.m {
             let mut col = r.as_mut().col_mut(i);
             col[i] = 1.0 + diag;
-            let slice = col.try_as_col_major_mut().expect("contiguous column").as_slice_mut();
+            let slice = col
+                .try_as_col_major_mut()
+                .expect("contiguous column")
+                .as_slice_mut();
             corr.fill_column(theta, self, i, &mut slice[i + 1..]);
         }
     }
 }
 
 /// Correlation vector `r(s) = [R(s, s_1) … R(s, s_m)]` into `out`.
-pub fn corr_vector(corr: &dyn CorrelationModel, theta: &[f64], s: &[f64], train: &[Vec<f64>], out: &mut [f64]) {
+pub fn corr_vector(
+    corr: &dyn CorrelationModel,
+    theta: &[f64],
+    s: &[f64],
+    train: &[Vec<f64>],
+    out: &mut [f64],
+) {
     for (o, t) in out.iter_mut().zip(train) {
         *o = corr.corr(theta, s, t);
     }
@@ -105,7 +124,15 @@ mod tests {
 
     #[test]
     fn vectorised_fill_matches_scalar_definition() {
-        let rows: Vec<Vec<f64>> = (0..37).map(|i| vec![(i as f64 * 0.37).sin(), (i as f64 * 1.3).cos(), if i % 2 == 0 { 1.0 } else { -1.0 }]).collect();
+        let rows: Vec<Vec<f64>> = (0..37)
+            .map(|i| {
+                vec![
+                    (i as f64 * 0.37).sin(),
+                    (i as f64 * 1.3).cos(),
+                    if i % 2 == 0 { 1.0 } else { -1.0 },
+                ]
+            })
+            .collect();
         let x = TrainingInputs::new(&rows);
         let theta = [0.7, 0.05, 2.0];
         let mut r = faer::Mat::<f64>::zeros(37, 37);

@@ -74,8 +74,11 @@ pub struct KrigingOptions {
     pub seed: u64,
     /// Objective evaluations per start.
     pub max_evals: usize,
-    /// GPS mesh tolerance / HJ step tolerance, in log10 units.
+    /// GPS mesh tolerance, in log10 units (Hooke–Jeeves, the cheap baseline,
+    /// stops at its own coarser step, `HjOptions::default().tol`).
     pub tol: f64,
+    /// Smallest diagonal jitter ε tried (`None`: DACE's `(10 + m)·eps`).
+    pub min_jitter: Option<f64>,
 }
 
 impl Default for KrigingOptions {
@@ -84,12 +87,13 @@ impl Default for KrigingOptions {
             trend: TrendKind::Constant,
             optimizer: OptimizerKind::Gps,
             nugget: false,
-            log10_theta: (-4.0, 1.5),
+            log10_theta: (-6.0, 2.0),
             log10_nugget: (-8.0, -0.5),
             starts: 4,
             seed: 1,
             max_evals: 2_000,
-            tol: 0.01,
+            tol: 1e-3,
+            min_jitter: None,
         }
     }
 }
@@ -99,10 +103,19 @@ impl KrigingOptions {
     pub fn validate(&self) -> Result<()> {
         let ok_box = |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a < b;
         if !ok_box(self.log10_theta) || !ok_box(self.log10_nugget) {
-            return Err(Error::InvalidParameter("log10 bounds must be finite with lo < hi".into()));
+            return Err(Error::InvalidParameter(
+                "log10 bounds must be finite with lo < hi".into(),
+            ));
         }
-        if self.starts == 0 || self.max_evals == 0 || !(self.tol > 0.0) {
-            return Err(Error::InvalidParameter("starts, max_evals and tol must be positive".into()));
+        if self.min_jitter.is_some_and(|j| !(j > 0.0 && j < 1e-6)) {
+            return Err(Error::InvalidParameter(
+                "min_jitter must be in (0, 1e-6)".into(),
+            ));
+        }
+        if self.starts == 0 || self.max_evals == 0 || self.tol.is_nan() || self.tol <= 0.0 {
+            return Err(Error::InvalidParameter(
+                "starts, max_evals and tol must be positive".into(),
+            ));
         }
         Ok(())
     }
@@ -140,10 +153,16 @@ struct Prepared {
 fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Monomials, names: &[String]) -> Result<Prepared> {
     let m = x.len();
     if y.len() != m {
-        return Err(Error::InvalidParameter(format!("{} inputs but {} responses", m, y.len())));
+        return Err(Error::InvalidParameter(format!(
+            "{} inputs but {} responses",
+            m,
+            y.len()
+        )));
     }
     if y.iter().any(|v| !v.is_finite()) {
-        return Err(Error::InvalidParameter("response has non-finite values".into()));
+        return Err(Error::InvalidParameter(
+            "response has non-finite values".into(),
+        ));
     }
     let (kept, dropped) = independent_columns(&trend_matrix(trend, x), 1e-9);
     if kept.len() >= m {
@@ -153,41 +172,91 @@ fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Monomials, names: &[String]) -> Re
         )));
     }
     let trend_kept = trend.subset(&kept);
-    let yn = Normalizer::fit_column(y);
+    // a constant response is represented exactly (mean = the value, y_norm = 0)
+    let (y_mean, y_std) = if y.iter().all(|v| *v == y[0]) {
+        (y[0], 1.0)
+    } else {
+        let yn = Normalizer::fit_column(y);
+        (yn.mean[0], yn.std[0])
+    };
     Ok(Prepared {
         f: trend_matrix(&trend_kept, x),
-        y_norm: y.iter().map(|v| (v - yn.mean[0]) / yn.std[0]).collect(),
-        y_mean: yn.mean[0],
-        y_std: yn.std[0],
-        trend_terms: (0..trend_kept.len()).map(|j| trend_kept.term_name(j, names)).collect(),
+        y_norm: y.iter().map(|v| (v - y_mean) / y_std).collect(),
+        y_mean,
+        y_std,
+        trend_terms: (0..trend_kept.len())
+            .map(|j| trend_kept.term_name(j, names))
+            .collect(),
         dropped_terms: dropped.iter().map(|&j| trend.term_name(j, names)).collect(),
         trend: trend_kept,
     })
 }
 
 /// Fit one output at a **given** ξ and nugget ν (no optimisation): normalised
-/// inputs `x`, response `y` in original units, trend candidates `trend`.
-pub fn fit_output_at(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Monomials, theta: &[f64], nugget: f64) -> Result<KrigingModel> {
+/// inputs `x`, response `y` in original units, trend candidates `trend`;
+/// `min_jitter` as in [`KrigingOptions`].
+pub fn fit_output_at(
+    x: &[Vec<f64>],
+    inputs: &TrainingInputs,
+    y: &[f64],
+    trend: &Monomials,
+    theta: &[f64],
+    nugget: f64,
+    min_jitter: Option<f64>,
+) -> Result<KrigingModel> {
     let names: Vec<String> = (1..=theta.len()).map(|k| format!("s{k}")).collect();
     let p = prepare(x, y, trend, &names)?;
-    if theta.len() != inputs.d || theta.iter().any(|t| !(*t >= 0.0) || !t.is_finite()) || !(nugget >= 0.0) {
-        return Err(Error::InvalidParameter("theta must be d finite values ≥ 0 and the nugget ≥ 0".into()));
+    if theta.len() != inputs.d
+        || theta.iter().any(|t| !t.is_finite() || *t < 0.0)
+        || nugget.is_nan()
+        || nugget < 0.0
+    {
+        return Err(Error::InvalidParameter(
+            "theta must be d finite values ≥ 0 and the nugget ≥ 0".into(),
+        ));
     }
-    let problem = KrigingProblem { corr: &Gaussian, inputs, f: &p.f, y: &p.y_norm };
+    let problem = KrigingProblem {
+        min_jitter,
+        corr: &Gaussian,
+        inputs,
+        f: &p.f,
+        y: &p.y_norm,
+    };
     let sol = problem.solve(theta, nugget)?;
-    KrigingModel::from_solution(sol, p.trend, theta.to_vec(), nugget, x.to_vec(), p.y_mean, p.y_std)
+    KrigingModel::from_solution(
+        sol,
+        p.trend,
+        theta.to_vec(),
+        nugget,
+        x.to_vec(),
+        p.y_mean,
+        p.y_std,
+    )
 }
 
 /// Fit one output at normalised inputs `x` (m rows) on response `y` (original
 /// units), with the trend candidates `trend` (dependent ones are dropped),
 /// choosing ξ (and ν) by minimising ln ψ. `inputs` is `x` prepared for the
 /// correlation fill; `names` name the inputs.
-pub fn fit_output(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Monomials, names: &[String], opts: &KrigingOptions) -> Result<(KrigingModel, FitReport)> {
+pub fn fit_output(
+    x: &[Vec<f64>],
+    inputs: &TrainingInputs,
+    y: &[f64],
+    trend: &Monomials,
+    names: &[String],
+    opts: &KrigingOptions,
+) -> Result<(KrigingModel, FitReport)> {
     opts.validate()?;
     let t0 = Instant::now();
     let d = inputs.d;
     let p = prepare(x, y, trend, names)?;
-    let problem = KrigingProblem { corr: &Gaussian, inputs, f: &p.f, y: &p.y_norm };
+    let problem = KrigingProblem {
+        min_jitter: opts.min_jitter,
+        corr: &Gaussian,
+        inputs,
+        f: &p.f,
+        y: &p.y_norm,
+    };
     let mut bounds = Bounds::uniform(d, opts.log10_theta.0, opts.log10_theta.1);
     if opts.nugget {
         bounds.lo.push(opts.log10_nugget.0);
@@ -205,7 +274,9 @@ pub fn fit_output(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Mo
     } else {
         let (best, starts) = optimise(&problem, &bounds, &unpack, opts);
         if !best.f.is_finite() {
-            return Err(Error::Numerical("no hyperparameter in the box gave a finite likelihood".into()));
+            return Err(Error::Numerical(
+                "no hyperparameter in the box gave a finite likelihood".into(),
+            ));
         }
         (best.x, best.evals, starts)
     };
@@ -224,30 +295,92 @@ pub fn fit_output(x: &[Vec<f64>], inputs: &TrainingInputs, y: &[f64], trend: &Mo
         evals,
         seconds: t0.elapsed().as_secs_f64(),
     };
-    let model = KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?;
+    let model =
+        KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?;
     Ok((model, report))
 }
 
-/// Minimise ln ψ; returns the best result (evals summed over starts) and the
+/// Maps an optimiser point (log10 ξ, and log10 ν with a nugget) to (ξ, ν).
+type Unpack<'a> = dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync + 'a;
+
+/// Mesh size at which every GPS start stops before the first selection.
+const SCREEN_MESH: f64 = 0.25;
+
+/// Minimise ln ψ; returns the best result (evals summed over all runs) and the
 /// number of starts.
-fn optimise(problem: &KrigingProblem, bounds: &Bounds, unpack: &(dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync), opts: &KrigingOptions) -> (OptimResult, usize) {
+///
+/// GPS uses successive halving over its starts: every start runs (in
+/// parallel) to a mesh of [`SCREEN_MESH`]; the better half continues to a mesh
+/// four times finer, and so on until one remains, which is polished to
+/// `opts.tol`. Losing starts stop early, and the choice between the last
+/// candidates is made on nearly converged values.
+fn optimise(
+    problem: &KrigingProblem,
+    bounds: &Bounds,
+    unpack: &Unpack<'_>,
+    opts: &KrigingOptions,
+) -> (OptimResult, usize) {
     let (m, p) = (problem.m(), problem.f.ncols());
-    let local = |x0: &[f64]| {
+    let run = |x0: &[f64], initial_mesh: f64, tol: f64| {
         let mut ws = Workspace::new(m, p);
         let obj = |z: &[f64]| {
             let (theta, nugget) = unpack(z);
-            problem.psi(&theta, nugget, &mut ws).map_or(f64::INFINITY, |v| v.ln_psi)
+            problem
+                .psi(&theta, nugget, &mut ws)
+                .map_or(f64::INFINITY, |v| v.ln_psi)
         };
         match opts.optimizer {
-            OptimizerKind::Gps => optim::gps(obj, x0, bounds, &GpsOptions { mesh_tol: opts.tol, max_evals: opts.max_evals, ..GpsOptions::default() }),
-            OptimizerKind::HookeJeeves => optim::hooke_jeeves(obj, x0, bounds, &HjOptions { tol: opts.tol, max_evals: opts.max_evals, ..HjOptions::default() }),
+            OptimizerKind::Gps => optim::gps(
+                obj,
+                x0,
+                bounds,
+                &GpsOptions {
+                    initial_mesh,
+                    mesh_tol: tol,
+                    max_evals: opts.max_evals,
+                    ..GpsOptions::default()
+                },
+            ),
+            OptimizerKind::HookeJeeves => optim::hooke_jeeves(
+                obj,
+                x0,
+                bounds,
+                &HjOptions {
+                    max_evals: opts.max_evals,
+                    ..HjOptions::default()
+                },
+            ),
         }
     };
-    let starts = match opts.optimizer {
-        OptimizerKind::Gps => optim::lhs_starts(bounds, opts.starts, opts.seed),
-        OptimizerKind::HookeJeeves => vec![bounds.center()],
-    };
-    let (mut best, all) = optim::multistart(&starts, local);
-    best.evals = all.iter().map(|r| r.evals).sum();
+    if opts.optimizer == OptimizerKind::HookeJeeves {
+        return (run(&bounds.center(), 0.5, opts.tol), 1);
+    }
+    let starts = optim::lhs_starts(bounds, opts.starts, opts.seed);
+    let mut mesh = SCREEN_MESH.max(opts.tol);
+    let (_, mut pool) = optim::multistart(&starts, |x0| run(x0, 0.5, mesh));
+    let mut evals: usize = pool.iter().map(|r| r.evals).sum();
+    loop {
+        // stable sort: ties keep start order, so the result is deterministic
+        pool.sort_by(|a, b| a.f.total_cmp(&b.f));
+        pool.truncate(pool.len().div_ceil(2));
+        if pool.len() == 1 && mesh <= opts.tol {
+            break;
+        }
+        let next = if pool.len() == 1 {
+            opts.tol
+        } else {
+            (mesh / 4.0).max(opts.tol)
+        };
+        let (_, refined) = optim::multistart(
+            &pool.iter().map(|r| r.x.clone()).collect::<Vec<_>>(),
+            |x0| run(x0, mesh, next),
+        );
+        evals += refined.iter().map(|r| r.evals).sum::<usize>();
+        // a refinement never returns a worse point than it started from
+        pool = refined;
+        mesh = next;
+    }
+    let mut best = pool.swap_remove(0);
+    best.evals = evals;
     (best, starts.len())
 }

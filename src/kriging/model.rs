@@ -10,8 +10,9 @@ use super::corr::{CorrelationModel, Gaussian, corr_vector};
 use super::problem::Solution;
 use super::trend::{Monomials, TrendModel, trend_matrix};
 use crate::{Error, Result};
+use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
-use faer::{Mat, Par};
+use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -83,8 +84,20 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.x_train.iter().any(|r| r.len() != d) {
             return bad("training rows have the wrong dimension");
         }
-        let finite = data.theta.iter().chain(&data.beta).chain(&data.gamma).chain(&data.chol_lower).chain(&data.g_upper).all(|v| v.is_finite());
-        if !finite || !data.sigma2.is_finite() || !(data.y_std > 0.0) || !data.y_mean.is_finite() {
+        let finite = data
+            .theta
+            .iter()
+            .chain(&data.beta)
+            .chain(&data.gamma)
+            .chain(&data.chol_lower)
+            .chain(&data.g_upper)
+            .all(|v| v.is_finite());
+        if !finite
+            || !data.sigma2.is_finite()
+            || data.y_std.is_nan()
+            || data.y_std <= 0.0
+            || !data.y_mean.is_finite()
+        {
             return bad("non-finite or invalid values");
         }
         let c = unpack_lower(&data.chol_lower, m);
@@ -136,7 +149,15 @@ pub struct Pred {
 impl KrigingModel {
     /// Assemble from a solution at ξ.
     #[allow(clippy::too_many_arguments)]
-    pub fn from_solution(sol: Solution, trend: Monomials, theta: Vec<f64>, nugget: f64, x_train: Vec<Vec<f64>>, y_mean: f64, y_std: f64) -> Result<Self> {
+    pub fn from_solution(
+        sol: Solution,
+        trend: Monomials,
+        theta: Vec<f64>,
+        nugget: f64,
+        x_train: Vec<Vec<f64>>,
+        y_mean: f64,
+        y_std: f64,
+    ) -> Result<Self> {
         let m = x_train.len();
         let p = trend.len();
         let mut chol_lower = Vec::with_capacity(m * (m + 1) / 2);
@@ -177,7 +198,9 @@ impl KrigingModel {
     /// Blocks of points run in parallel; each point's result does not depend
     /// on the others.
     pub fn predict(&self, s: &[Vec<f64>]) -> Vec<Pred> {
-        s.par_chunks(BLOCK).flat_map_iter(|blk| self.predict_block(blk)).collect()
+        s.par_chunks(BLOCK)
+            .flat_map_iter(|blk| self.predict_block(blk))
+            .collect()
     }
 
     fn predict_block(&self, s: &[Vec<f64>]) -> Vec<Pred> {
@@ -188,7 +211,13 @@ impl KrigingModel {
         let mut col = vec![0.0; m];
         let mut means = Vec::with_capacity(b);
         for (k, x) in s.iter().enumerate() {
-            corr_vector(&Gaussian as &dyn CorrelationModel, &d.theta, x, &d.x_train, &mut col);
+            corr_vector(
+                &Gaussian as &dyn CorrelationModel,
+                &d.theta,
+                x,
+                &d.x_train,
+                &mut col,
+            );
             d.trend.eval_into(x, &mut fs);
             let mean = dot(&fs, &d.beta) + dot(&col, &d.gamma);
             means.push(mean);
@@ -196,16 +225,24 @@ impl KrigingModel {
                 r[(i, k)] = *v;
             }
         }
-        // r̃ = C⁻¹ r for all points at once
+        // r̃ = C⁻¹ r and U = F̃ᵀ r̃ for all points of the block at once
         solve_lower_triangular_in_place(self.c.as_ref(), r.as_mut(), Par::Seq);
+        let mut uu = Mat::<f64>::zeros(p, b);
+        matmul(
+            uu.as_mut(),
+            Accum::Replace,
+            self.ftilde.transpose(),
+            r.as_ref(),
+            1.0,
+            Par::Seq,
+        );
         let mut u = vec![0.0; p];
         (0..b)
             .map(|k| {
                 d.trend.eval_into(&s[k], &mut fs);
-                let rt = r.col(k);
-                let rr: f64 = rt.iter().map(|v| v * v).sum();
+                let rr: f64 = r.col(k).iter().map(|v| v * v).sum();
                 for (j, uj) in u.iter_mut().enumerate() {
-                    *uj = self.ftilde.col(j).iter().zip(rt.iter()).map(|(a, b)| a * b).sum::<f64>() - fs[j];
+                    *uj = uu[(j, k)] - fs[j];
                 }
                 let vv = solve_gt(&self.g, &mut u);
                 let mse = (d.sigma2 * (1.0 - rr + vv)).max(0.0);

@@ -20,9 +20,15 @@
 use super::corr::{CorrelationModel, TrainingInputs};
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::{LltRegularization, cholesky_in_place, cholesky_in_place_scratch};
-use faer::linalg::qr::no_pivoting::factor::{qr_in_place, qr_in_place_scratch, recommended_block_size};
-use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::linalg::cholesky::llt::factor::{
+    LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+};
+use faer::linalg::qr::no_pivoting::factor::{
+    qr_in_place, qr_in_place_scratch, recommended_block_size,
+};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
 use faer::{Mat, Par};
 
 /// Largest jitter tried before a Cholesky failure is reported.
@@ -30,6 +36,8 @@ pub const MAX_JITTER: f64 = 1e-6;
 
 /// Training data of one output, normalised, with its trend matrix.
 pub struct KrigingProblem<'a> {
+    /// First rung of the jitter ladder; `None` = DACE's `(10 + m)·eps`.
+    pub min_jitter: Option<f64>,
     pub corr: &'a dyn CorrelationModel,
     pub inputs: &'a TrainingInputs,
     /// m × p trend matrix with linearly independent columns.
@@ -102,17 +110,25 @@ impl KrigingProblem<'_> {
     /// Fill R and factorise it in `ws.r` with the smallest working jitter rung.
     fn factor_r(&self, theta: &[f64], nugget: f64, ws: &mut Workspace) -> Result<f64> {
         let m = self.m();
-        let eps0 = (10.0 + m as f64) * f64::EPSILON;
+        let eps0 = self.min_jitter.unwrap_or((10.0 + m as f64) * f64::EPSILON);
         let jitter = |k: usize| eps0 * 10f64.powi(k as i32);
         let max_rung = (MAX_JITTER / eps0).log10().floor() as usize;
-        self.inputs.fill_lower(self.corr, theta, nugget, ws.base.as_mut());
+        self.inputs
+            .fill_lower(self.corr, theta, nugget, ws.base.as_mut());
         let try_rung = |ws: &mut Workspace, k: usize| {
             ws.r.copy_from(&ws.base);
             for i in 0..m {
                 ws.r[(i, i)] += jitter(k);
             }
             let stack = MemStack::new(&mut ws.mem);
-            cholesky_in_place(ws.r.as_mut(), LltRegularization::default(), Par::Seq, stack, Default::default()).is_ok()
+            cholesky_in_place(
+                ws.r.as_mut(),
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            )
+            .is_ok()
         };
         let mut k = ws.rung.saturating_sub(1);
         if try_rung(ws, k) {
@@ -173,7 +189,13 @@ impl KrigingProblem<'_> {
         }
         solve_lower_triangular_in_place(ws.r.as_ref(), ws.aug.as_mut(), Par::Seq);
         let stack = MemStack::new(&mut ws.mem);
-        qr_in_place(ws.aug.as_mut(), ws.qcoef.as_mut(), Par::Seq, stack, Default::default());
+        qr_in_place(
+            ws.aug.as_mut(),
+            ws.qcoef.as_mut(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
         let rho = ws.aug[(p, p)];
         let sigma2 = rho * rho / m as f64;
         Ok(PsiValue {
@@ -210,7 +232,9 @@ impl KrigingProblem<'_> {
         solve_upper_triangular_in_place(g.as_ref(), b.as_mat_mut(), Par::Seq);
         let beta: Vec<f64> = b.iter().copied().collect();
         // γ = C⁻ᵀ C⁻¹ (y − Fβ)
-        let mut resid = faer::Col::from_fn(m, |i| self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>());
+        let mut resid = faer::Col::from_fn(m, |i| {
+            self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>()
+        });
         solve_lower_triangular_in_place(c.as_ref(), resid.as_mat_mut(), Par::Seq);
         solve_upper_triangular_in_place(c.transpose(), resid.as_mat_mut(), Par::Seq);
         Ok(Solution {

@@ -106,11 +106,18 @@ impl TrendModel for Monomials {
             .enumerate()
             .filter(|(_, p)| **p > 0)
             .map(|(k, p)| {
-                let name = inputs.get(k).cloned().unwrap_or_else(|| format!("s{}", k + 1));
+                let name = inputs
+                    .get(k)
+                    .cloned()
+                    .unwrap_or_else(|| format!("s{}", k + 1));
                 if *p == 1 { name } else { format!("{name}^{p}") }
             })
             .collect();
-        if parts.is_empty() { "1".into() } else { parts.join("*") }
+        if parts.is_empty() {
+            "1".into()
+        } else {
+            parts.join("*")
+        }
     }
 }
 
@@ -168,7 +175,9 @@ mod tests {
         assert_eq!(Monomials::full(12, 3).len(), 455);
         assert_eq!(Monomials::linear(6).len(), 7);
         let q = Monomials::quadratic(2);
-        let names: Vec<String> = (0..q.len()).map(|j| q.term_name(j, &["a".into(), "b".into()])).collect();
+        let names: Vec<String> = (0..q.len())
+            .map(|j| q.term_name(j, &["a".into(), "b".into()]))
+            .collect();
         assert_eq!(names, ["1", "a", "b", "a^2", "a*b", "b^2"]);
         let mut out = vec![0.0; 6];
         q.eval_into(&[2.0, 3.0], &mut out);
@@ -178,7 +187,9 @@ mod tests {
     #[test]
     fn binary_squares_are_detected_as_dependent() {
         // s2 is binary, so s2² is affine in (1, s2)
-        let rows: Vec<Vec<f64>> = (0..20).map(|i| vec![i as f64 * 0.1, if i % 3 == 0 { 0.7 } else { -1.3 }]).collect();
+        let rows: Vec<Vec<f64>> = (0..20)
+            .map(|i| vec![i as f64 * 0.1, if i % 3 == 0 { 0.7 } else { -1.3 }])
+            .collect();
         let f = trend_matrix(&Monomials::quadratic(2), &rows);
         let (kept, dropped) = independent_columns(&f, 1e-10);
         assert_eq!(kept, vec![0, 1, 2, 3, 4]);

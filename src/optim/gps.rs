@@ -49,7 +49,12 @@ impl Default for GpsOptions {
 /// On the COMAU campaign's likelihood (12 dims) classic expansion after every
 /// success needed ~2 000 evaluations per start, `expand_after = 2` ~500, for
 /// the same optimum (`benches/kriging.rs`).
-pub fn gps<F: FnMut(&[f64]) -> f64>(f: F, x0: &[f64], bounds: &Bounds, opts: &GpsOptions) -> OptimResult {
+pub fn gps<F: FnMut(&[f64]) -> f64>(
+    f: F,
+    x0: &[f64],
+    bounds: &Bounds,
+    opts: &GpsOptions,
+) -> OptimResult {
     let d = x0.len();
     let mut t = Tracker::new(f, opts.max_evals.max(1));
     let mut x = bounds.clamp(x0);
@@ -67,7 +72,7 @@ pub fn gps<F: FnMut(&[f64]) -> f64>(f: F, x0: &[f64], bounds: &Bounds, opts: &Gp
         let mut improved = None;
         for k in 0..2 * d {
             let dir = (first_dir + k) % (2 * d);
-            let (i, sign) = (dir / 2, if dir % 2 == 0 { 1.0 } else { -1.0 });
+            let (i, sign) = (dir / 2, if dir.is_multiple_of(2) { 1.0 } else { -1.0 });
             trial.copy_from_slice(&x);
             trial[i] += sign * mesh;
             if trial[i] < bounds.lo[i] || trial[i] > bounds.hi[i] {

@@ -32,7 +32,12 @@ impl Default for HjOptions {
 /// improvement (points clamped into the box). If the sweep improved on the
 /// base point, make the pattern move `x_new + (x_new − x_base)` and explore
 /// around it, keeping it if it beats the new base; otherwise `h ← shrink·h`.
-pub fn hooke_jeeves<F: FnMut(&[f64]) -> f64>(f: F, x0: &[f64], bounds: &Bounds, opts: &HjOptions) -> OptimResult {
+pub fn hooke_jeeves<F: FnMut(&[f64]) -> f64>(
+    f: F,
+    x0: &[f64],
+    bounds: &Bounds,
+    opts: &HjOptions,
+) -> OptimResult {
     let mut t = Tracker::new(f, opts.max_evals.max(1));
     let mut base = bounds.clamp(x0);
     let mut f_base = t.eval(&base).unwrap_or(f64::INFINITY);
@@ -73,7 +78,13 @@ pub fn hooke_jeeves<F: FnMut(&[f64]) -> f64>(f: F, x0: &[f64], bounds: &Bounds, 
     }
 }
 
-fn explore<F: FnMut(&[f64]) -> f64>(t: &mut Tracker<F>, x0: &[f64], f0: f64, h: f64, bounds: &Bounds) -> (Vec<f64>, f64) {
+fn explore<F: FnMut(&[f64]) -> f64>(
+    t: &mut Tracker<F>,
+    x0: &[f64],
+    f0: f64,
+    h: f64,
+    bounds: &Bounds,
+) -> (Vec<f64>, f64) {
     let mut x = x0.to_vec();
     let mut fx = f0;
     for i in 0..x.len() {

@@ -44,17 +44,26 @@ impl Bounds {
 
     /// Whether `x` lies in the box.
     pub fn contains(&self, x: &[f64]) -> bool {
-        x.iter().zip(self.lo.iter().zip(&self.hi)).all(|(v, (l, h))| v >= l && v <= h)
+        x.iter()
+            .zip(self.lo.iter().zip(&self.hi))
+            .all(|(v, (l, h))| v >= l && v <= h)
     }
 
     /// `x` clamped into the box.
     pub fn clamp(&self, x: &[f64]) -> Vec<f64> {
-        x.iter().zip(self.lo.iter().zip(&self.hi)).map(|(v, (l, h))| v.clamp(*l, *h)).collect()
+        x.iter()
+            .zip(self.lo.iter().zip(&self.hi))
+            .map(|(v, (l, h))| v.clamp(*l, *h))
+            .collect()
     }
 
     /// Centre of the box.
     pub fn center(&self) -> Vec<f64> {
-        self.lo.iter().zip(&self.hi).map(|(l, h)| 0.5 * (l + h)).collect()
+        self.lo
+            .iter()
+            .zip(&self.hi)
+            .map(|(l, h)| 0.5 * (l + h))
+            .collect()
     }
 }
 
@@ -92,7 +101,11 @@ pub(crate) struct Tracker<F> {
 
 impl<F: FnMut(&[f64]) -> f64> Tracker<F> {
     pub fn new(f: F, budget: usize) -> Self {
-        Tracker { f, evals: 0, budget }
+        Tracker {
+            f,
+            evals: 0,
+            budget,
+        }
     }
 
     /// `f(x)`, with NaN mapped to +∞; `None` once the budget is spent.
@@ -115,7 +128,12 @@ pub fn lhs_starts(bounds: &Bounds, n: usize, seed: u64) -> Vec<Vec<f64>> {
         return out;
     }
     let mut rng = crate::sim::rng_for(seed, "optim-lhs-starts");
-    let ranges: Vec<(f64, f64)> = bounds.lo.iter().copied().zip(bounds.hi.iter().copied()).collect();
+    let ranges: Vec<(f64, f64)> = bounds
+        .lo
+        .iter()
+        .copied()
+        .zip(bounds.hi.iter().copied())
+        .collect();
     let k = n - 1;
     let mut cols: Vec<Vec<f64>> = Vec::new();
     for (lo, hi) in &ranges {
@@ -123,7 +141,11 @@ pub fn lhs_starts(bounds: &Bounds, n: usize, seed: u64) -> Vec<Vec<f64>> {
         for i in (1..k).rev() {
             perm.swap(i, rng.random_range(0..=i));
         }
-        cols.push(perm.iter().map(|&s| lo + (hi - lo) * (s as f64 + rng.random::<f64>()) / k as f64).collect());
+        cols.push(
+            perm.iter()
+                .map(|&s| lo + (hi - lo) * (s as f64 + rng.random::<f64>()) / k as f64)
+                .collect(),
+        );
     }
     out.extend((0..k).map(|i| cols.iter().map(|c| c[i]).collect()));
     out
@@ -155,14 +177,36 @@ mod tests {
     fn both_methods_find_smooth_minima() {
         let b = Bounds::uniform(6, -3.0, 3.0);
         let target = [0.3, -1.2, 2.0, 0.0, -0.5, 1.1];
-        let quad = |x: &[f64]| x.iter().zip(&target).map(|(a, t)| (a - t) * (a - t) * 3.0).sum::<f64>();
+        let quad = |x: &[f64]| {
+            x.iter()
+                .zip(&target)
+                .map(|(a, t)| (a - t) * (a - t) * 3.0)
+                .sum::<f64>()
+        };
         let r = gps(quad, &b.center(), &b, &GpsOptions::default());
         assert!(r.f < 1e-5, "gps {r:?}");
-        let r = hooke_jeeves(quad, &b.center(), &b, &HjOptions { tol: 1e-4, ..HjOptions::default() });
+        let r = hooke_jeeves(
+            quad,
+            &b.center(),
+            &b,
+            &HjOptions {
+                tol: 1e-4,
+                ..HjOptions::default()
+            },
+        );
         assert!(r.f < 1e-6, "hj {r:?}");
         let b2 = Bounds::uniform(2, -2.0, 2.0);
         let rosen = |x: &[f64]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
-        let r = gps(rosen, &[-1.0, 1.0], &b2, &GpsOptions { mesh_tol: 1e-7, max_evals: 100_000, ..GpsOptions::default() });
+        let r = gps(
+            rosen,
+            &[-1.0, 1.0],
+            &b2,
+            &GpsOptions {
+                mesh_tol: 1e-7,
+                max_evals: 100_000,
+                ..GpsOptions::default()
+            },
+        );
         assert!(r.f < 1e-4, "gps rosenbrock {r:?}");
     }
 
@@ -170,12 +214,23 @@ mod tests {
     fn minimisers_stay_in_the_box_and_respect_budget() {
         let b = Bounds::uniform(3, 0.0, 1.0);
         let lin = |x: &[f64]| {
-            assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "left the box: {x:?}");
+            assert!(
+                x.iter().all(|v| (0.0..=1.0).contains(v)),
+                "left the box: {x:?}"
+            );
             -x.iter().sum::<f64>()
         };
         let r = gps(lin, &[0.5; 3], &b, &GpsOptions::default());
         assert!((r.f + 3.0).abs() < 1e-9);
-        let r = gps(lin, &[0.5; 3], &b, &GpsOptions { max_evals: 5, ..GpsOptions::default() });
+        let r = gps(
+            lin,
+            &[0.5; 3],
+            &b,
+            &GpsOptions {
+                max_evals: 5,
+                ..GpsOptions::default()
+            },
+        );
         assert_eq!(r.evals, 5);
         assert_eq!(r.stop, StopReason::Budget);
         let r = hooke_jeeves(lin, &[0.5; 3], &b, &HjOptions::default());

@@ -1,0 +1,66 @@
+//! `robokrige cv`.
+
+use super::fit::ModelArgs;
+use clap::Args;
+use robokrige::cv::cross_validate_refit;
+use robokrige::dataset::read_csv;
+use robokrige::model::ErrorModel;
+use robokrige::{Error, Result};
+use std::path::PathBuf;
+
+/// K-fold cross-validation of a model choice (refit on every training fold).
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige cv datasets/comau_lhs.csv --space ejs --folds 10 --seed 1
+  robokrige cv datasets/comau_lhs.csv --space js --folds 10 --seed 1 --json js.json")]
+pub struct CvArgs {
+    /// Measurement CSV with q1..qN, optional dir1..dirN, and ex,ey,ez.
+    data: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Number of folds K.
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
+    /// Seed of the fold partition.
+    #[arg(long = "cv-seed", default_value_t = 1)]
+    cv_seed: u64,
+    /// Write the result (residuals, statistics) as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+pub fn run(a: CvArgs) -> Result<()> {
+    let data = read_csv(&a.data)?;
+    let (space, opts) = a.model.options();
+    let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
+        ErrorModel::fit(train, space, &opts)
+    })?;
+    let s = &res.summary;
+    println!(
+        "{}-fold CV ({}) of {:?} {:?} {:?} on {} rows, {:.1} s",
+        a.folds,
+        res.mode,
+        space,
+        opts.trend,
+        opts.optimizer,
+        data.len(),
+        res.seconds
+    );
+    println!(
+        "  RMSE x / y / z (mm): {:.4} / {:.4} / {:.4}",
+        s.rms_mm[0], s.rms_mm[1], s.rms_mm[2]
+    );
+    println!(
+        "  3D error (mm): mean {:.4}  std {:.4}  range [{:.4}, {:.4}]",
+        s.mean_3d_mm, s.std_3d_mm, s.min_3d_mm, s.max_3d_mm
+    );
+    if let Some(path) = &a.json {
+        let text = serde_json::to_string_pretty(&res).map_err(|e| Error::Json {
+            context: "cv result".into(),
+            source: e,
+        })?;
+        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+    }
+    Ok(())
+}

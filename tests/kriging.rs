@@ -1,0 +1,260 @@
+//! Universal Kriging invariants: interpolation, MSE ≥ 0 and ≈ 0 at training
+//! points, row-order independence, dependent trend terms dropped, save/load
+//! bit-identical, optimiser ≤ fixed starting points.
+
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::kriging::{
+    KrigingOptions, Monomials, OptimizerKind, TrainingInputs, TrendKind, fit_output_at,
+};
+use robokrige::model::ErrorModel;
+use robokrige::space::{Normalizer, Space};
+use std::path::Path;
+
+fn campaign(rows: usize) -> Dataset {
+    let mut d = read_csv(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_lhs.csv"
+    )))
+    .unwrap();
+    d.q.truncate(rows);
+    d.dir.truncate(rows);
+    d.errors.as_mut().unwrap().truncate(rows);
+    d.positions = None;
+    d.ids = None;
+    d.covariates.clear();
+    d
+}
+
+fn normalised(d: &Dataset, space: Space) -> Vec<Vec<f64>> {
+    let rows = space.rows(&d.q, &d.dir);
+    Normalizer::fit(&rows).apply_rows(&rows)
+}
+
+fn axis(d: &Dataset, a: usize) -> Vec<f64> {
+    d.errors.as_ref().unwrap().iter().map(|e| e[a]).collect()
+}
+
+const THETA: [f64; 12] = [0.3, 0.5, 0.4, 0.2, 0.3, 0.1, 0.5, 0.3, 0.2, 0.1, 0.1, 0.1];
+
+#[test]
+fn interpolates_training_points_with_zero_mse_and_nonnegative_mse_elsewhere() {
+    let d = campaign(120);
+    let x = normalised(&d, Space::Ejs);
+    let inputs = TrainingInputs::new(&x);
+    for trend in [
+        Monomials::constant(12),
+        Monomials::linear(12),
+        Monomials::quadratic(12),
+    ] {
+        let y = axis(&d, 1);
+        let m = fit_output_at(&x, &inputs, &y, &trend, &THETA, 0.0, None).unwrap();
+        let p = m.predict(&x);
+        for (pi, yi) in p.iter().zip(&y) {
+            assert!((pi.mean - yi).abs() < 1e-7, "{} vs {}", pi.mean, yi);
+            assert!(
+                pi.mse >= 0.0 && pi.mse < 1e-9,
+                "mse at a training point {}",
+                pi.mse
+            );
+        }
+        // elsewhere: between training points
+        let mid: Vec<Vec<f64>> = x
+            .windows(2)
+            .map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| 0.5 * (a + b)).collect())
+            .collect();
+        assert!(
+            m.predict(&mid)
+                .iter()
+                .all(|p| p.mse >= 0.0 && p.mse.is_finite() && p.mean.is_finite())
+        );
+    }
+}
+
+#[test]
+fn with_a_nugget_the_model_smooths_instead_of_interpolating() {
+    let d = campaign(80);
+    let x = normalised(&d, Space::Ejs);
+    let y = axis(&d, 0);
+    let m = fit_output_at(
+        &x,
+        &TrainingInputs::new(&x),
+        &y,
+        &Monomials::constant(12),
+        &THETA,
+        0.05,
+        None,
+    )
+    .unwrap();
+    let worst = m
+        .predict(&x)
+        .iter()
+        .zip(&y)
+        .map(|(p, v)| (p.mean - v).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst > 1e-4,
+        "a nugget of 0.05 should not interpolate (worst residual {worst})"
+    );
+}
+
+#[test]
+fn row_order_does_not_change_predictions() {
+    let d = campaign(90);
+    let x = normalised(&d, Space::Ejs);
+    let y = axis(&d, 2);
+    let perm: Vec<usize> = (0..90).map(|i| (i * 37) % 90).collect();
+    let xp: Vec<Vec<f64>> = perm.iter().map(|&i| x[i].clone()).collect();
+    let yp: Vec<f64> = perm.iter().map(|&i| y[i]).collect();
+    let trend = Monomials::linear(12);
+    let a = fit_output_at(&x, &TrainingInputs::new(&x), &y, &trend, &THETA, 0.0, None).unwrap();
+    let b = fit_output_at(
+        &xp,
+        &TrainingInputs::new(&xp),
+        &yp,
+        &trend,
+        &THETA,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let probe: Vec<Vec<f64>> = x
+        .iter()
+        .map(|r| r.iter().map(|v| v + 0.05).collect())
+        .collect();
+    for (pa, pb) in a.predict(&probe).iter().zip(b.predict(&probe)) {
+        assert!((pa.mean - pb.mean).abs() < 1e-9 * (1.0 + pa.mean.abs()));
+        assert!((pa.mse - pb.mse).abs() < 1e-9 * (1e-6 + pa.mse));
+    }
+    assert!((a.data.ln_psi - b.data.ln_psi).abs() < 1e-10);
+}
+
+#[test]
+fn quadratic_trend_over_ejs_drops_the_direction_squares() {
+    let d = campaign(150);
+    let opts = KrigingOptions {
+        trend: TrendKind::Quadratic,
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 60,
+        ..KrigingOptions::default()
+    };
+    let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    for r in &model.reports {
+        assert_eq!(r.trend_terms.len() + r.dropped_terms.len(), 91);
+        // dir_k² is affine in dir_k: the six squares go (nothing else in this design)
+        assert_eq!(
+            r.dropped_terms,
+            (1..=6).map(|k| format!("dir{k}^2")).collect::<Vec<_>>()
+        );
+    }
+}
+
+#[test]
+fn save_load_predicts_bit_identically_and_rejects_other_formats() {
+    let d = campaign(60);
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 80,
+        ..KrigingOptions::default()
+    };
+    let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    let path = std::env::temp_dir().join(format!("robokrige-model-{}.json", std::process::id()));
+    model.save(&path).unwrap();
+    let back = ErrorModel::load(&path).unwrap();
+    assert_eq!(back, model);
+    let probe_q: Vec<Vec<f64>> =
+        d.q.iter()
+            .map(|q| q.iter().map(|v| v + 0.7).collect())
+            .collect();
+    let (a, b) = (
+        model.predict(&probe_q, &d.dir).unwrap(),
+        back.predict(&probe_q, &d.dir).unwrap(),
+    );
+    for (x, y) in a
+        .mean
+        .iter()
+        .flatten()
+        .chain(a.std.iter().flatten())
+        .zip(b.mean.iter().flatten().chain(b.std.iter().flatten()))
+    {
+        assert_eq!(x.to_bits(), y.to_bits());
+    }
+    let text =
+        std::fs::read_to_string(&path)
+            .unwrap()
+            .replacen("\"version\":1", "\"version\":99", 1);
+    let err = ErrorModel::from_json(&text, "old.json")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("version"), "{err}");
+    // wrong joint count at prediction
+    assert!(model.predict(&[vec![0.0; 5]], &[vec![1.0; 5]]).is_err());
+    std::fs::remove_file(path).ok();
+}
+
+#[test]
+fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
+    let d = campaign(100);
+    let hj = ErrorModel::fit(
+        &d,
+        Space::Ejs,
+        &KrigingOptions {
+            optimizer: OptimizerKind::HookeJeeves,
+            ..KrigingOptions::default()
+        },
+    )
+    .unwrap();
+    let gps = ErrorModel::fit(
+        &d,
+        Space::Ejs,
+        &KrigingOptions {
+            starts: 3,
+            ..KrigingOptions::default()
+        },
+    )
+    .unwrap();
+    let x = normalised(&d, Space::Ejs);
+    let inputs = TrainingInputs::new(&x);
+    for a in 0..3 {
+        // the box centre (HJ's start) is worse than what both methods found
+        let centre = vec![10f64.powf(-2.0); 12];
+        let at_centre = fit_output_at(
+            &x,
+            &inputs,
+            &axis(&d, a),
+            &Monomials::constant(12),
+            &centre,
+            0.0,
+            None,
+        )
+        .unwrap();
+        assert!(hj.reports[a].ln_psi < at_centre.data.ln_psi);
+        // GPS starts from the centre too, and more places
+        assert!(
+            gps.reports[a].ln_psi <= hj.reports[a].ln_psi + 1e-3,
+            "axis {a}: gps {} hj {}",
+            gps.reports[a].ln_psi,
+            hj.reports[a].ln_psi
+        );
+    }
+}
+
+#[test]
+fn constant_response_fits_and_predicts_the_constant() {
+    let mut d = campaign(40);
+    for e in d.errors.as_mut().unwrap() {
+        e[1] = 0.25;
+    }
+    let model = ErrorModel::fit(
+        &d,
+        Space::Ejs,
+        &KrigingOptions {
+            optimizer: OptimizerKind::HookeJeeves,
+            max_evals: 50,
+            ..KrigingOptions::default()
+        },
+    )
+    .unwrap();
+    let p = model.predict(&d.q, &d.dir).unwrap();
+    assert!(p.mean.iter().all(|m| (m[1] - 0.25).abs() < 1e-12));
+    assert!(p.std.iter().all(|s| s[1] == 0.0));
+}
