@@ -3,8 +3,10 @@
 //! (GPS, 4 starts), and prediction of 10 000 points, for the constant, linear
 //! and quadratic trends. Run: `cargo bench --bench kriging`.
 
+mod common;
+
+use common::{campaign, probe_10k};
 use criterion::{Criterion, criterion_group, criterion_main};
-use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kriging::{
     Gaussian, KrigingOptions, KrigingProblem, TrainingInputs, TrendKind, Workspace,
     independent_columns, trend_matrix,
@@ -12,18 +14,9 @@ use robokrige::kriging::{
 use robokrige::model::ErrorModel;
 use robokrige::space::{Normalizer, Space};
 use std::hint::black_box;
-use std::path::Path;
 use std::time::Duration;
 
 const TRENDS: [TrendKind; 3] = [TrendKind::Constant, TrendKind::Linear, TrendKind::Quadratic];
-
-fn campaign() -> Dataset {
-    read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .expect("shipped dataset")
-}
 
 fn psi_eval(c: &mut Criterion) {
     let data = campaign();
@@ -72,17 +65,7 @@ fn full_fit(c: &mut Criterion) {
 
 fn predict_10k(c: &mut Criterion) {
     let data = campaign();
-    let q: Vec<Vec<f64>> = (0..10_000)
-        .map(|k| {
-            data.q[k % data.len()]
-                .iter()
-                .map(|v| v + 0.1 * (k / data.len()) as f64)
-                .collect()
-        })
-        .collect();
-    let dir: Vec<Vec<f64>> = (0..10_000)
-        .map(|k| data.dir[k % data.len()].clone())
-        .collect();
+    let (q, dir) = probe_10k(&data);
     let mut g = c.benchmark_group("predict_10000_points_3_outputs");
     g.sample_size(20);
     for kind in TRENDS {

@@ -64,6 +64,19 @@ fn setup(space: Space, fx: &Value) -> Setup {
     }
 }
 
+impl Setup {
+    /// Training response of output `axis` (mm).
+    fn axis(&self, axis: usize) -> Vec<f64> {
+        self.train
+            .errors
+            .as_ref()
+            .unwrap()
+            .iter()
+            .map(|e| e[axis])
+            .collect()
+    }
+}
+
 fn parse_case(c: &Value) -> (Space, TrendKind, usize) {
     let space = if c["space"] == "ejs" {
         Space::Ejs
@@ -95,14 +108,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
     for c in cases {
         let (space, trend, axis) = parse_case(c);
         let s = setup(space, &fx);
-        let y: Vec<f64> = s
-            .train
-            .errors
-            .as_ref()
-            .unwrap()
-            .iter()
-            .map(|e| e[axis])
-            .collect();
+        let y = s.axis(axis);
         let theta = f64s(&c["theta"]);
         let d = space.dim(6);
         // the same R as the reference: its diagonal is 1 + SMT's nugget (100·eps)
@@ -193,14 +199,7 @@ fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
     for c in fx["optimum"]["cases"].as_array().unwrap() {
         let (space, trend, axis) = parse_case(c);
         let s = setup(space, &fx);
-        let y: Vec<f64> = s
-            .train
-            .errors
-            .as_ref()
-            .unwrap()
-            .iter()
-            .map(|e| e[axis])
-            .collect();
+        let y = s.axis(axis);
         let inputs = TrainingInputs::new(&s.x);
         let monos = trend.monomials(space.dim(6));
         let psi_smt = c["psi"].as_f64().unwrap();
