@@ -258,3 +258,66 @@ fn constant_response_fits_and_predicts_the_constant() {
     assert!(p.mean.iter().all(|m| (m[1] - 0.25).abs() < 1e-12));
     assert!(p.std.iter().all(|s| s[1] == 0.0));
 }
+
+#[test]
+fn estimated_nugget_is_positive_on_noisy_data_and_small_on_clean_data() {
+    // a smooth function of the inputs, with and without 5 % noise
+    let d = campaign(120);
+    let x = normalised(&d, Space::Js);
+    let clean: Vec<f64> = x
+        .iter()
+        .map(|r| (r[0] + 0.5 * r[1]).sin() + 0.3 * r[2] * r[3])
+        .collect();
+    let mut rng = 12345u64;
+    let mut noise = || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.35
+    };
+    let noisy: Vec<f64> = clean.iter().map(|v| v + noise()).collect();
+    let inputs = TrainingInputs::new(&x);
+    let names = Space::Js.names(6);
+    let opts = KrigingOptions {
+        nugget: true,
+        starts: 2,
+        ..KrigingOptions::default()
+    };
+    let (_, r_noisy) =
+        robokrige::kriging::fit_output(&x, &inputs, &noisy, &Monomials::constant(6), &names, &opts)
+            .unwrap();
+    let (_, r_clean) =
+        robokrige::kriging::fit_output(&x, &inputs, &clean, &Monomials::constant(6), &names, &opts)
+            .unwrap();
+    assert!(
+        r_noisy.nugget > 1e-3,
+        "noisy data: nugget {}",
+        r_noisy.nugget
+    );
+    assert!(
+        r_clean.nugget < r_noisy.nugget / 100.0,
+        "clean {} vs noisy {}",
+        r_clean.nugget,
+        r_noisy.nugget
+    );
+}
+
+#[test]
+fn cross_validation_predicts_every_row_once_out_of_fold() {
+    let d = campaign(60);
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 60,
+        ..KrigingOptions::default()
+    };
+    let cv = robokrige::cv::cross_validate_refit(&d, 5, 3, |train| {
+        assert_eq!(train.len(), 48);
+        ErrorModel::fit(train, Space::Ejs, &opts)
+    })
+    .unwrap();
+    assert_eq!(cv.residuals.len(), 60);
+    assert_eq!(cv.fold, robokrige::cv::kfold_partition(60, 5, 3).unwrap());
+    // out-of-fold residuals are much smaller than the errors themselves, but not zero
+    let raw = robokrige::stats::summarize(d.errors.as_ref().unwrap());
+    assert!(cv.summary.mean_3d_mm < 0.5 * raw.mean_3d_mm && cv.summary.mean_3d_mm > 0.0);
+}
