@@ -79,6 +79,9 @@ pub struct KrigingOptions {
     pub tol: f64,
     /// Smallest diagonal jitter ε tried (`None`: DACE's `(10 + m)·eps`).
     pub min_jitter: Option<f64>,
+    /// Finish GPS with a finite-difference BFGS polish of the winning start
+    /// (ψ to gradient-method precision; ~30 % more evaluations).
+    pub polish: bool,
 }
 
 impl Default for KrigingOptions {
@@ -92,8 +95,9 @@ impl Default for KrigingOptions {
             starts: 4,
             seed: 1,
             max_evals: 2_000,
-            tol: 1e-3,
+            tol: 1e-2,
             min_jitter: None,
+            polish: true,
         }
     }
 }
@@ -313,7 +317,11 @@ const SCREEN_MESH: f64 = 0.25;
 /// parallel) to a mesh of [`SCREEN_MESH`]; the better half continues to a mesh
 /// four times finer, and so on until one remains, which is polished to
 /// `opts.tol`. Losing starts stop early, and the choice between the last
-/// candidates is made on nearly converged values.
+/// candidates is made on nearly converged values. With `opts.polish` the
+/// winner then gets finite-difference BFGS steps ([`optim::bfgs`]): ψ is
+/// smooth there, and this reaches the last digits a pattern search would need
+/// thousands of evaluations for (on the COMAU campaign ψ drops by another
+/// ~1e-6 relative, to the precision of SMT's gradient-based optimiser).
 fn optimise(
     problem: &KrigingProblem,
     bounds: &Bounds,
@@ -381,6 +389,18 @@ fn optimise(
         mesh = next;
     }
     let mut best = pool.swap_remove(0);
-    best.evals = evals;
-    (best, starts.len())
+    if !opts.polish {
+        best.evals = evals;
+        return (best, starts.len());
+    }
+    let mut ws = Workspace::new(m, p);
+    let obj = |z: &[f64]| {
+        let (theta, nugget) = unpack(z);
+        problem
+            .psi(&theta, nugget, &mut ws)
+            .map_or(f64::INFINITY, |v| v.ln_psi)
+    };
+    let mut polished = optim::bfgs(obj, &best.x, bounds, &optim::BfgsOptions::default());
+    polished.evals += evals;
+    (polished, starts.len())
 }

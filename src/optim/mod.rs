@@ -8,12 +8,16 @@
 //!   polls the positive spanning set `{±e_i}` on a mesh, expands the mesh on a
 //!   successful poll and contracts it on a failed one, until the mesh size is
 //!   below a tolerance or the evaluation budget is spent.
+//! - [`bfgs`]: box-constrained BFGS with finite-difference gradients, to
+//!   polish a smooth minimum found by a pattern search.
 //! - [`multistart`]: runs a local method from several starts in parallel (rayon)
 //!   and keeps the best; [`lhs_starts`] draws the starts.
 
+mod bfgs;
 mod gps;
 mod hooke_jeeves;
 
+pub use bfgs::{BfgsOptions, bfgs};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
 
@@ -208,6 +212,37 @@ mod tests {
             },
         );
         assert!(r.f < 1e-4, "gps rosenbrock {r:?}");
+    }
+
+    #[test]
+    fn bfgs_polishes_an_ill_scaled_quadratic_and_respects_bounds() {
+        let b = Bounds::uniform(4, -2.0, 2.0);
+        // minimum at (0.3, −0.7, 1.1, 2.5) → the last coordinate ends on its bound
+        let f = |x: &[f64]| {
+            let t = [0.3, -0.7, 1.1, 2.5];
+            let w = [1.0, 30.0, 0.2, 5.0];
+            (0..4).map(|i| w[i] * (x[i] - t[i]).powi(2)).sum::<f64>()
+                + 0.5 * (x[0] - t[0]) * (x[1] - t[1])
+        };
+        let r = bfgs(
+            f,
+            &[0.0; 4],
+            &b,
+            &BfgsOptions {
+                max_iter: 50,
+                max_evals: 5000,
+                gtol: 1e-9,
+                ..BfgsOptions::default()
+            },
+        );
+        assert!(
+            (r.x[0] - 0.3).abs() < 1e-5
+                && (r.x[1] + 0.7).abs() < 1e-5
+                && (r.x[2] - 1.1).abs() < 1e-4,
+            "{r:?}"
+        );
+        assert_eq!(r.x[3], 2.0);
+        assert!(r.f <= f(&[0.0; 4]));
     }
 
     #[test]
