@@ -307,6 +307,21 @@ pub fn fit_output(
 /// Maps an optimiser point (log10 ξ, and log10 ν with a nugget) to (ξ, ν).
 type Unpack<'a> = dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync + 'a;
 
+/// `z ↦ ln ψ(unpack(z))` with its own workspace; +∞ where R cannot be
+/// factorised or the likelihood is degenerate.
+fn ln_psi_objective<'a>(
+    problem: &'a KrigingProblem,
+    unpack: &'a Unpack<'_>,
+) -> impl FnMut(&[f64]) -> f64 + 'a {
+    let mut ws = Workspace::new(problem.m(), problem.f.ncols());
+    move |z: &[f64]| {
+        let (theta, nugget) = unpack(z);
+        problem
+            .psi(&theta, nugget, &mut ws)
+            .map_or(f64::INFINITY, |v| v.ln_psi)
+    }
+}
+
 /// Mesh size at which every GPS start stops before the first selection.
 const SCREEN_MESH: f64 = 0.25;
 
@@ -328,15 +343,8 @@ fn optimise(
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
 ) -> (OptimResult, usize) {
-    let (m, p) = (problem.m(), problem.f.ncols());
     let run = |x0: &[f64], initial_mesh: f64, tol: f64| {
-        let mut ws = Workspace::new(m, p);
-        let obj = |z: &[f64]| {
-            let (theta, nugget) = unpack(z);
-            problem
-                .psi(&theta, nugget, &mut ws)
-                .map_or(f64::INFINITY, |v| v.ln_psi)
-        };
+        let obj = ln_psi_objective(problem, unpack);
         match opts.optimizer {
             OptimizerKind::Gps => optim::gps(
                 obj,
@@ -393,13 +401,7 @@ fn optimise(
         best.evals = evals;
         return (best, starts.len());
     }
-    let mut ws = Workspace::new(m, p);
-    let obj = |z: &[f64]| {
-        let (theta, nugget) = unpack(z);
-        problem
-            .psi(&theta, nugget, &mut ws)
-            .map_or(f64::INFINITY, |v| v.ln_psi)
-    };
+    let obj = ln_psi_objective(problem, unpack);
     let mut polished = optim::bfgs(obj, &best.x, bounds, &optim::BfgsOptions::default());
     polished.evals += evals;
     (polished, starts.len())
