@@ -1,9 +1,17 @@
 //! K-fold cross-validation (seed 003 eq 21; seed 004 eq 16).
 //!
-//! A seeded random partition of the rows into K folds of (nearly) equal size;
-//! for each fold the model is refitted on the other K − 1 folds and predicts
-//! the held-out fold. The out-of-fold residuals `e_cv = δ − δ̂` are returned in
-//! measurement order, with their statistics.
+//! A seeded random partition of the rows into K folds of (nearly) equal size.
+//! Two modes, named in every result:
+//!
+//! - *refit*: for each fold the model is refitted (hyperparameters
+//!   re-optimised) on the other K − 1 folds and predicts the held-out fold;
+//! - *closed-form*: ξ, the input normalisation and the nugget are those of one
+//!   fit on all rows; each fold's residuals come from the bordered-system
+//!   identity of [`KrigingModel::held_out_residuals`](crate::kriging::KrigingModel::held_out_residuals)
+//!   (Dubrule 1983) — one factorisation instead of K fits.
+//!
+//! The out-of-fold residuals `e_cv = δ − δ̂` are returned in measurement order,
+//! with their statistics.
 
 use crate::dataset::Dataset;
 use crate::model::ErrorModel;
@@ -74,6 +82,47 @@ where
         folds: k,
         seed,
         mode: "refit".into(),
+        summary: summarize(&residuals),
+        fold,
+        residuals,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// K-fold CV in closed form at the hyperparameters of `model`, which must
+/// have been fitted on exactly the rows of `data`, in order.
+pub fn cross_validate_closed_form(
+    data: &Dataset,
+    model: &ErrorModel,
+    k: usize,
+    seed: u64,
+) -> Result<CvResult> {
+    let t0 = Instant::now();
+    data.errors_or_err()?;
+    let m = data.len();
+    let x = model
+        .input_norm
+        .apply_rows(&model.space.rows(&data.q, &data.dir));
+    if model.outputs.iter().any(|o| o.data.x_train != x) {
+        return Err(Error::InvalidParameter(format!(
+            "closed-form CV needs the model fitted on exactly these {m} rows, in order"
+        )));
+    }
+    let fold = kfold_partition(m, k, seed)?;
+    let blocks: Vec<Vec<usize>> = (0..k)
+        .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
+        .collect();
+    let mut residuals = vec![[0.0; 3]; m];
+    for (a, out) in model.outputs.iter().enumerate() {
+        let e = out.held_out_residuals(&blocks)?;
+        for (r, v) in residuals.iter_mut().zip(e) {
+            r[a] = v;
+        }
+    }
+    Ok(CvResult {
+        folds: k,
+        seed,
+        mode: "closed-form".into(),
         summary: summarize(&residuals),
         fold,
         residuals,

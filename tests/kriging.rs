@@ -321,3 +321,76 @@ fn cross_validation_predicts_every_row_once_out_of_fold() {
     let raw = robokrige::stats::summarize(d.errors.as_ref().unwrap());
     assert!(cv.summary.mean_3d_mm < 0.5 * raw.mean_3d_mm && cv.summary.mean_3d_mm > 0.0);
 }
+
+#[test]
+fn closed_form_cv_equals_refit_at_fixed_theta() {
+    let d = campaign(120);
+    let x = normalised(&d, Space::Ejs);
+    let fold = robokrige::cv::kfold_partition(120, 10, 7).unwrap();
+    let blocks: Vec<Vec<usize>> = (0..10)
+        .map(|f| (0..120).filter(|&i| fold[i] == f).collect())
+        .collect();
+    let mut worst: f64 = 0.0;
+    for (trend, nugget, a) in [
+        (Monomials::constant(12), 0.0, 0),
+        (Monomials::linear(12), 0.0, 1),
+        (Monomials::linear(12), 0.01, 2),
+    ] {
+        let y = axis(&d, a);
+        let full = fit_output_at(
+            &x,
+            &TrainingInputs::new(&x),
+            &y,
+            &trend,
+            &THETA,
+            nugget,
+            None,
+        )
+        .unwrap();
+        let closed = full.held_out_residuals(&blocks).unwrap();
+        for block in &blocks {
+            let train: Vec<usize> = (0..120).filter(|i| !block.contains(i)).collect();
+            let xt: Vec<Vec<f64>> = train.iter().map(|&i| x[i].clone()).collect();
+            let yt: Vec<f64> = train.iter().map(|&i| y[i]).collect();
+            let refit = fit_output_at(
+                &xt,
+                &TrainingInputs::new(&xt),
+                &yt,
+                &trend,
+                &THETA,
+                nugget,
+                None,
+            )
+            .unwrap();
+            let xh: Vec<Vec<f64>> = block.iter().map(|&i| x[i].clone()).collect();
+            for (p, &i) in refit.predict(&xh).iter().zip(block) {
+                let e = y[i] - p.mean;
+                let diff = (closed[i] - e).abs() / e.abs().max(1e-3);
+                worst = worst.max(diff);
+                assert!(
+                    diff < 1e-8,
+                    "row {i}: closed form {} vs refit {e}",
+                    closed[i]
+                );
+            }
+        }
+    }
+    eprintln!("closed-form vs refit at fixed ξ: worst relative difference {worst:.1e}");
+}
+
+#[test]
+fn closed_form_cv_of_an_error_model_matches_its_outputs_and_rejects_other_data() {
+    let d = campaign(80);
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 60,
+        ..KrigingOptions::default()
+    };
+    let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    let cv = robokrige::cv::cross_validate_closed_form(&d, &model, 8, 2).unwrap();
+    assert_eq!(cv.mode, "closed-form");
+    assert_eq!(cv.residuals.len(), 80);
+    assert!(cv.residuals.iter().flatten().all(|v| v.is_finite()));
+    let other = campaign(81);
+    assert!(robokrige::cv::cross_validate_closed_form(&other, &model, 8, 2).is_err());
+}

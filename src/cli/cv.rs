@@ -2,7 +2,8 @@
 
 use super::fit::ModelArgs;
 use clap::Args;
-use robokrige::cv::cross_validate_refit;
+use clap::ValueEnum;
+use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
 use robokrige::dataset::read_csv;
 use robokrige::model::ErrorModel;
 use robokrige::{Error, Result};
@@ -22,6 +23,10 @@ pub struct CvArgs {
     /// Number of folds K.
     #[arg(long, default_value_t = 10)]
     folds: usize,
+    /// refit: re-optimise ξ on every training fold; closed-form: ξ from one fit
+    /// on all rows, fold residuals from the bordered system (fast).
+    #[arg(long, value_enum, default_value = "refit")]
+    mode: Mode,
     /// Seed of the fold partition.
     #[arg(long = "cv-seed", default_value_t = 1)]
     cv_seed: u64,
@@ -30,12 +35,26 @@ pub struct CvArgs {
     json: Option<PathBuf>,
 }
 
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Mode {
+    Refit,
+    ClosedForm,
+}
+
 pub fn run(a: CvArgs) -> Result<()> {
     let data = read_csv(&a.data)?;
     let (space, opts) = a.model.options();
-    let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-        ErrorModel::fit(train, space, &opts)
-    })?;
+    let t0 = std::time::Instant::now();
+    let mut res = match a.mode {
+        Mode::Refit => cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
+            ErrorModel::fit(train, space, &opts)
+        })?,
+        Mode::ClosedForm => {
+            let model = ErrorModel::fit(&data, space, &opts)?;
+            cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
+        }
+    };
+    res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
     println!(
         "{}-fold CV ({}) of {:?} {:?} {:?} on {} rows, {:.1} s",
