@@ -15,6 +15,7 @@
 //! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
 //! | [`stats`] | summaries of error sets |
 
+pub mod basis;
 pub mod cv;
 pub mod dataset;
 pub mod error;

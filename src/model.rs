@@ -46,8 +46,45 @@ impl ErrorModel {
     /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
     /// with the given options' trend. Outputs and starts run in parallel.
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
-        let trend = opts.trend.monomials(space.dim(data.n_joints()));
+        let trend = opts.trend.trend(space.dim(data.n_joints()));
         Self::fit_with_trend(data, space, opts, &[trend.clone(), trend.clone(), trend])
+    }
+
+    /// EJS&PCA of seed 003: for each output, PCC + PCA fusion
+    /// ([`crate::basis::pcc_pca`]) of the monomials of degree ≤ 2 in the
+    /// normalised inputs, selected on `data` only (so inside each training fold
+    /// when used in a refit CV), then the fit with that trend.
+    pub fn fit_pcc_pca(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        threshold: f64,
+        variance_share: f64,
+    ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
+        let errors = data.errors_or_err()?;
+        let d = space.dim(data.n_joints());
+        let rows = space.rows(&data.q, &data.dir);
+        let x = Normalizer::fit(&rows).apply_rows(&rows);
+        let names = space.names(data.n_joints());
+        let candidates = crate::kriging::Monomials::quadratic(d);
+        let mut trends = Vec::with_capacity(3);
+        let mut reports = Vec::with_capacity(3);
+        for a in 0..3 {
+            let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+            let (basis, report) = crate::basis::pcc_pca(
+                &candidates,
+                &x,
+                &y,
+                threshold,
+                variance_share,
+                data.len() / 2,
+                &names,
+            )?;
+            trends.push(crate::kriging::Trend::Fused(basis));
+            reports.push(report);
+        }
+        let trends: [crate::kriging::Trend; 3] = trends.try_into().expect("three outputs");
+        Ok((Self::fit_with_trend(data, space, opts, &trends)?, reports))
     }
 
     /// Fit with a (possibly different) trend candidate set per output.
@@ -55,7 +92,7 @@ impl ErrorModel {
         data: &Dataset,
         space: Space,
         opts: &KrigingOptions,
-        trends: &[crate::kriging::Monomials; 3],
+        trends: &[crate::kriging::Trend; 3],
     ) -> Result<Self> {
         opts.validate()?;
         let errors = data.errors_or_err()?;

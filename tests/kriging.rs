@@ -4,7 +4,7 @@
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kriging::{
-    KrigingOptions, Monomials, OptimizerKind, TrainingInputs, TrendKind, fit_output_at,
+    KrigingOptions, Monomials, OptimizerKind, TrainingInputs, Trend, TrendKind, fit_output_at,
 };
 use robokrige::model::ErrorModel;
 use robokrige::space::{Normalizer, Space};
@@ -42,9 +42,9 @@ fn interpolates_training_points_with_zero_mse_and_nonnegative_mse_elsewhere() {
     let x = normalised(&d, Space::Ejs);
     let inputs = TrainingInputs::new(&x);
     for trend in [
-        Monomials::constant(12),
-        Monomials::linear(12),
-        Monomials::quadratic(12),
+        Trend::from(Monomials::constant(12)),
+        Trend::from(Monomials::linear(12)),
+        Trend::from(Monomials::quadratic(12)),
     ] {
         let y = axis(&d, 1);
         let m = fit_output_at(&x, &inputs, &y, &trend, &THETA, 0.0, None).unwrap();
@@ -79,7 +79,7 @@ fn with_a_nugget_the_model_smooths_instead_of_interpolating() {
         &x,
         &TrainingInputs::new(&x),
         &y,
-        &Monomials::constant(12),
+        &Trend::from(Monomials::constant(12)),
         &THETA,
         0.05,
         None,
@@ -105,7 +105,7 @@ fn row_order_does_not_change_predictions() {
     let perm: Vec<usize> = (0..90).map(|i| (i * 37) % 90).collect();
     let xp: Vec<Vec<f64>> = perm.iter().map(|&i| x[i].clone()).collect();
     let yp: Vec<f64> = perm.iter().map(|&i| y[i]).collect();
-    let trend = Monomials::linear(12);
+    let trend = Trend::from(Monomials::linear(12));
     let a = fit_output_at(&x, &TrainingInputs::new(&x), &y, &trend, &THETA, 0.0, None).unwrap();
     let b = fit_output_at(
         &xp,
@@ -221,7 +221,7 @@ fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
             &x,
             &inputs,
             &axis(&d, a),
-            &Monomials::constant(12),
+            &Trend::from(Monomials::constant(12)),
             &centre,
             0.0,
             None,
@@ -283,12 +283,24 @@ fn estimated_nugget_is_positive_on_noisy_data_and_small_on_clean_data() {
         starts: 2,
         ..KrigingOptions::default()
     };
-    let (_, r_noisy) =
-        robokrige::kriging::fit_output(&x, &inputs, &noisy, &Monomials::constant(6), &names, &opts)
-            .unwrap();
-    let (_, r_clean) =
-        robokrige::kriging::fit_output(&x, &inputs, &clean, &Monomials::constant(6), &names, &opts)
-            .unwrap();
+    let (_, r_noisy) = robokrige::kriging::fit_output(
+        &x,
+        &inputs,
+        &noisy,
+        &Trend::from(Monomials::constant(6)),
+        &names,
+        &opts,
+    )
+    .unwrap();
+    let (_, r_clean) = robokrige::kriging::fit_output(
+        &x,
+        &inputs,
+        &clean,
+        &Trend::from(Monomials::constant(6)),
+        &names,
+        &opts,
+    )
+    .unwrap();
     assert!(
         r_noisy.nugget > 1e-3,
         "noisy data: nugget {}",
@@ -332,9 +344,9 @@ fn closed_form_cv_equals_refit_at_fixed_theta() {
         .collect();
     let mut worst: f64 = 0.0;
     for (trend, nugget, a) in [
-        (Monomials::constant(12), 0.0, 0),
-        (Monomials::linear(12), 0.0, 1),
-        (Monomials::linear(12), 0.01, 2),
+        (Trend::from(Monomials::constant(12)), 0.0, 0),
+        (Trend::from(Monomials::linear(12)), 0.0, 1),
+        (Trend::from(Monomials::linear(12)), 0.01, 2),
     ] {
         let y = axis(&d, a);
         let full = fit_output_at(

@@ -115,7 +115,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
             &s.x,
             &TrainingInputs::new(&s.x),
             &y,
-            &trend.monomials(d),
+            &trend.trend(d),
             &theta,
             0.0,
             Some(ref_nugget(&fx)),
@@ -200,7 +200,7 @@ fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
         let s = setup(space, &fx);
         let y = s.axis(axis);
         let inputs = TrainingInputs::new(&s.x);
-        let monos = trend.monomials(space.dim(6));
+        let monos = trend.trend(space.dim(6));
         let psi_smt = c["psi"].as_f64().unwrap();
         // our ψ at SMT's ξ is SMT's ψ
         let at_smt = fit_output_at(

@@ -18,7 +18,7 @@ pub mod trend;
 pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
 pub use model::{KrigingModel, KrigingModelData, Pred};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace};
-pub use trend::{Monomials, TrendModel, independent_columns, trend_matrix};
+pub use trend::{Monomials, Trend, TrendModel, independent_columns, trend_matrix};
 
 use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
 use crate::space::Normalizer;
@@ -36,6 +36,11 @@ pub enum TrendKind {
 }
 
 impl TrendKind {
+    /// This trend in `dim` variables, as a [`Trend`].
+    pub fn trend(self, dim: usize) -> Trend {
+        self.monomials(dim).into()
+    }
+
     /// The monomials of this trend in `dim` variables.
     pub fn monomials(self, dim: usize) -> Monomials {
         match self {
@@ -145,7 +150,7 @@ pub struct FitReport {
 /// One output's data prepared for fitting: dependent trend terms dropped,
 /// response z-scored.
 struct Prepared {
-    trend: Monomials,
+    trend: Trend,
     f: faer::Mat<f64>,
     y_norm: Vec<f64>,
     y_mean: f64,
@@ -154,7 +159,7 @@ struct Prepared {
     dropped_terms: Vec<String>,
 }
 
-fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Monomials, names: &[String]) -> Result<Prepared> {
+fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Trend, names: &[String]) -> Result<Prepared> {
     let m = x.len();
     if y.len() != m {
         return Err(Error::InvalidParameter(format!(
@@ -203,7 +208,7 @@ pub fn fit_output_at(
     x: &[Vec<f64>],
     inputs: &TrainingInputs,
     y: &[f64],
-    trend: &Monomials,
+    trend: &Trend,
     theta: &[f64],
     nugget: f64,
     min_jitter: Option<f64>,
@@ -246,7 +251,7 @@ pub fn fit_output(
     x: &[Vec<f64>],
     inputs: &TrainingInputs,
     y: &[f64],
-    trend: &Monomials,
+    trend: &Trend,
     names: &[String],
     opts: &KrigingOptions,
 ) -> Result<(KrigingModel, FitReport)> {

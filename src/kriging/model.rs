@@ -8,7 +8,7 @@
 
 use super::corr::{CorrelationModel, Gaussian, corr_vector};
 use super::problem::Solution;
-use super::trend::{Monomials, TrendModel, trend_matrix};
+use super::trend::{Trend, TrendModel, trend_matrix};
 use crate::{Error, Result};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
@@ -22,7 +22,7 @@ const BLOCK: usize = 128;
 /// What is saved of a model: enough to predict bit-identically.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingModelData {
-    pub trend: Monomials,
+    pub trend: Trend,
     /// Correlation parameters ξ, one per input dimension (normalised inputs).
     pub theta: Vec<f64>,
     /// Nugget ν added to R's diagonal (0: interpolation).
@@ -78,7 +78,7 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.gamma.len() != m || data.chol_lower.len() != m * (m + 1) / 2 {
             return bad("training size and factors disagree");
         }
-        if data.beta.len() != p || data.g_upper.len() != p * (p + 1) / 2 || data.trend.dim != d {
+        if data.beta.len() != p || data.g_upper.len() != p * (p + 1) / 2 || data.trend.dim() != d {
             return bad("trend size and coefficients disagree");
         }
         if data.x_train.iter().any(|r| r.len() != d) {
@@ -108,7 +108,7 @@ impl TryFrom<KrigingModelData> for KrigingModel {
 }
 
 /// `F̃ = C⁻¹ F`.
-fn ftilde(c: &Mat<f64>, trend: &Monomials, x: &[Vec<f64>]) -> Mat<f64> {
+fn ftilde(c: &Mat<f64>, trend: &Trend, x: &[Vec<f64>]) -> Mat<f64> {
     let mut f = trend_matrix(trend, x);
     solve_lower_triangular_in_place(c.as_ref(), f.as_mut(), Par::Seq);
     f
@@ -151,7 +151,7 @@ impl KrigingModel {
     #[allow(clippy::too_many_arguments)]
     pub fn from_solution(
         sol: Solution,
-        trend: Monomials,
+        trend: Trend,
         theta: Vec<f64>,
         nugget: f64,
         x_train: Vec<Vec<f64>>,

@@ -121,6 +121,56 @@ impl TrendModel for Monomials {
     }
 }
 
+/// A trend a fitted model can carry: plain monomials, or a PCC+PCA fused
+/// basis ([`crate::basis`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Trend {
+    Monomials(Monomials),
+    Fused(crate::basis::FusedBasis),
+}
+
+impl From<Monomials> for Trend {
+    fn from(m: Monomials) -> Self {
+        Trend::Monomials(m)
+    }
+}
+
+impl Trend {
+    /// The trend with only the terms at `keep`.
+    pub fn subset(&self, keep: &[usize]) -> Self {
+        match self {
+            Trend::Monomials(m) => Trend::Monomials(m.subset(keep)),
+            Trend::Fused(f) => Trend::Fused(f.subset(keep)),
+        }
+    }
+
+    fn inner(&self) -> &dyn TrendModel {
+        match self {
+            Trend::Monomials(m) => m,
+            Trend::Fused(f) => f,
+        }
+    }
+}
+
+impl TrendModel for Trend {
+    fn len(&self) -> usize {
+        self.inner().len()
+    }
+
+    fn dim(&self) -> usize {
+        self.inner().dim()
+    }
+
+    fn eval_into(&self, s: &[f64], out: &mut [f64]) {
+        self.inner().eval_into(s, out)
+    }
+
+    fn term_name(&self, j: usize, inputs: &[String]) -> String {
+        self.inner().term_name(j, inputs)
+    }
+}
+
 /// The m × p trend matrix `F` (row-major rows of `f(s_i)ᵀ`).
 pub fn trend_matrix(trend: &dyn TrendModel, rows: &[Vec<f64>]) -> faer::Mat<f64> {
     let p = trend.len();

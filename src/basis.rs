@@ -1,0 +1,191 @@
+//! Basis (trend) selection for universal Kriging.
+//!
+//! Candidates: all monomials of degree ≤ η in the 2n normalised EJS variables
+//! (seed 003 eq 15; [`Monomials::full`]), linearly dependent ones removed
+//! ([`independent_columns`]).
+//!
+//! **PCC + PCA fusion** (seed 003 eqs 16–20), per output: rank the candidates
+//! by |Pearson r| with the response (eq 16), keep those above a threshold T,
+//! z-score them, eigen-decompose their covariance (eq 17), and keep the
+//! leading principal components up to a cumulative variance share (eq 19):
+//! the fused basis is `w_i = uᵀe_i` (eqs 18, 20), evaluable at new points
+//! through the stored means, standard deviations and eigenvectors. A constant
+//! term is kept in front (the components have zero training mean, and the
+//! Kriging mean still needs one).
+
+use crate::kriging::{Monomials, TrendModel, independent_columns, trend_matrix};
+use crate::{Error, Result};
+use faer::{Mat, Side};
+use serde::{Deserialize, Serialize};
+
+/// A fused trend basis `[1, w_1, …, w_k]`, `w_i = ((u(s) − μ)/σ)ᵀ e_i`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FusedBasis {
+    /// The selected candidates u (PCC above threshold).
+    pub candidates: Monomials,
+    pub mean: Vec<f64>,
+    pub std: Vec<f64>,
+    /// Principal directions e_i (each of length `candidates.len()`), by
+    /// decreasing variance.
+    pub components: Vec<Vec<f64>>,
+}
+
+impl TrendModel for FusedBasis {
+    fn len(&self) -> usize {
+        1 + self.components.len()
+    }
+
+    fn dim(&self) -> usize {
+        self.candidates.dim
+    }
+
+    fn eval_into(&self, s: &[f64], out: &mut [f64]) {
+        let mut u = vec![0.0; self.candidates.len()];
+        self.candidates.eval_into(s, &mut u);
+        for ((v, m), sd) in u.iter_mut().zip(&self.mean).zip(&self.std) {
+            *v = (*v - m) / sd;
+        }
+        out[0] = 1.0;
+        for (o, e) in out[1..].iter_mut().zip(&self.components) {
+            *o = u.iter().zip(e).map(|(a, b)| a * b).sum();
+        }
+    }
+
+    fn term_name(&self, j: usize, _inputs: &[String]) -> String {
+        if j == 0 { "1".into() } else { format!("pc{j}") }
+    }
+}
+
+impl FusedBasis {
+    /// The same basis with only the terms at `keep` (index 0 = the constant).
+    pub fn subset(&self, keep: &[usize]) -> Self {
+        let mut out = self.clone();
+        out.components = keep
+            .iter()
+            .filter(|&&j| j > 0)
+            .map(|&j| self.components[j - 1].clone())
+            .collect();
+        out
+    }
+}
+
+/// What PCC + PCA did, for the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PccPcaReport {
+    /// (candidate name, Pearson r) of every candidate with non-zero variance,
+    /// by decreasing |r|.
+    pub ranking: Vec<(String, f64)>,
+    pub threshold: f64,
+    /// Candidates kept (|r| > threshold), n2.
+    pub selected: usize,
+    /// Eigenvalues of the z-scored selection's covariance, decreasing.
+    pub eigenvalues: Vec<f64>,
+    /// Components kept, n3, and their cumulative variance share (eq 19).
+    pub components: usize,
+    pub explained: f64,
+}
+
+/// PCC + PCA fusion of `candidates` (evaluated at normalised inputs `x`) for
+/// response `y`: threshold `t` on |r| (paper: 0.1), cumulative variance share
+/// `cum` (paper: 0.99). At most `max_terms` − 1 components are kept (the
+/// basis must leave room in the training folds).
+pub fn pcc_pca(
+    candidates: &Monomials,
+    x: &[Vec<f64>],
+    y: &[f64],
+    t: f64,
+    cum: f64,
+    max_terms: usize,
+    names: &[String],
+) -> Result<(FusedBasis, PccPcaReport)> {
+    if !(0.0..1.0).contains(&t) || !(cum > 0.0 && cum <= 1.0) || max_terms < 1 {
+        return Err(Error::InvalidParameter(
+            "PCC threshold must be in [0, 1), variance share in (0, 1], max_terms ≥ 1".into(),
+        ));
+    }
+    let m = x.len();
+    let f = trend_matrix(candidates, x);
+    let (independent, _) = independent_columns(&f, 1e-9);
+    let ym = y.iter().sum::<f64>() / m as f64;
+    let yv: f64 = y.iter().map(|v| (v - ym) * (v - ym)).sum();
+    // eq 16 for every candidate with variance
+    let mut scored: Vec<(usize, f64, f64, f64)> = Vec::new(); // (column, r, mean, std)
+    for &j in &independent {
+        let col: Vec<f64> = (0..m).map(|i| f[(i, j)]).collect();
+        let mu = col.iter().sum::<f64>() / m as f64;
+        let var: f64 = col.iter().map(|v| (v - mu) * (v - mu)).sum();
+        if var <= 1e-20 * m as f64 || yv <= 0.0 {
+            continue;
+        }
+        let cov: f64 = col.iter().zip(y).map(|(a, b)| (a - mu) * (b - ym)).sum();
+        scored.push((
+            j,
+            cov / (var * yv).sqrt(),
+            mu,
+            (var / (m as f64 - 1.0)).sqrt(),
+        ));
+    }
+    scored.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
+    let ranking = scored
+        .iter()
+        .map(|s| (candidates.term_name(s.0, names), s.1))
+        .collect();
+    let sel: Vec<&(usize, f64, f64, f64)> = scored.iter().filter(|s| s.1.abs() > t).collect();
+    let n2 = sel.len();
+    let selected = candidates.subset(&sel.iter().map(|s| s.0).collect::<Vec<_>>());
+    let (mean, std): (Vec<f64>, Vec<f64>) = sel.iter().map(|s| (s.2, s.3)).unzip();
+    if n2 == 0 {
+        let basis = FusedBasis {
+            candidates: selected,
+            mean,
+            std,
+            components: Vec::new(),
+        };
+        return Ok((
+            basis,
+            PccPcaReport {
+                ranking,
+                threshold: t,
+                selected: 0,
+                eigenvalues: Vec::new(),
+                components: 0,
+                explained: 0.0,
+            },
+        ));
+    }
+    // eq 17: covariance of the z-scored selection
+    let z = Mat::<f64>::from_fn(m, n2, |i, k| (f[(i, sel[k].0)] - mean[k]) / std[k]);
+    let cov = Mat::<f64>::from_fn(n2, n2, |a, b| {
+        (0..m).map(|i| z[(i, a)] * z[(i, b)]).sum::<f64>() / (m as f64 - 1.0)
+    });
+    let evd = cov
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::Numerical(format!("PCA eigen-decomposition: {e:?}")))?;
+    // faer sorts ascending; eqs 18–19 want descending
+    let eigenvalues: Vec<f64> = (0..n2).rev().map(|k| evd.S()[k].max(0.0)).collect();
+    let total: f64 = eigenvalues.iter().sum();
+    let mut n3 = 0;
+    let mut acc = 0.0;
+    while n3 < n2 && n3 + 1 < max_terms && (n3 == 0 || acc < cum * total) {
+        acc += eigenvalues[n3];
+        n3 += 1;
+    }
+    let components = (0..n3)
+        .map(|c| (0..n2).map(|k| evd.U()[(k, n2 - 1 - c)]).collect())
+        .collect();
+    let basis = FusedBasis {
+        candidates: selected,
+        mean,
+        std,
+        components,
+    };
+    let report = PccPcaReport {
+        ranking,
+        threshold: t,
+        selected: n2,
+        explained: if total > 0.0 { acc / total } else { 0.0 },
+        eigenvalues,
+        components: n3,
+    };
+    Ok((basis, report))
+}
