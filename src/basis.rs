@@ -98,7 +98,8 @@ pub fn pcc_pca(
     max_terms: usize,
     names: &[String],
 ) -> Result<(FusedBasis, PccPcaReport)> {
-    if !(0.0..1.0).contains(&t) || !(cum > 0.0 && cum <= 1.0) || max_terms < 1 {
+    let valid = (0.0..1.0).contains(&t) && cum > 0.0 && cum <= 1.0 && max_terms >= 1;
+    if !valid {
         return Err(Error::InvalidParameter(
             "PCC threshold must be in [0, 1), variance share in (0, 1], max_terms ≥ 1".into(),
         ));
