@@ -10,14 +10,17 @@
 //!   below a tolerance or the evaluation budget is spent.
 //! - [`bfgs`]: box-constrained BFGS with finite-difference gradients, to
 //!   polish a smooth minimum found by a pattern search.
+//! - [`ga`]: genetic algorithm over bit strings (basis selection, seed 004).
 //! - [`multistart`]: runs a local method from several starts in parallel (rayon)
 //!   and keeps the best; [`lhs_starts`] draws the starts.
 
 mod bfgs;
+mod ga;
 mod gps;
 mod hooke_jeeves;
 
 pub use bfgs::{BfgsOptions, bfgs};
+pub use ga::{GaOptions, GaResult, ga};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
 
