@@ -126,11 +126,11 @@ where
             let a = tournament(&scores, opts.tournament, &mut rng);
             let b = tournament(&scores, opts.tournament, &mut rng);
             let mut child = Vec::with_capacity(bits);
-            for k in 0..bits {
+            for (&va, &vb) in pop[a].iter().zip(&pop[b]) {
                 let v = if rng.random::<f64>() < opts.crossover_bias {
-                    pop[a][k]
+                    va
                 } else {
-                    pop[b][k]
+                    vb
                 };
                 child.push(if rng.random::<f64>() < pm { !v } else { v });
             }
