@@ -21,6 +21,7 @@ pub mod dataset;
 pub mod error;
 pub mod kinematics;
 pub mod kriging;
+pub mod methods;
 pub mod model;
 pub mod optim;
 pub mod sim;

@@ -1,0 +1,153 @@
+//! The model variants compared in seeds 003 (Table 2, Fig 9) and 004 (Fig 8),
+//! by the papers' names. Every method's `fit` does all of its selection on
+//! the rows it is given, so inside each training fold of a refit CV.
+//!
+//! | name | space | trend | hyperparameters |
+//! |---|---|---|---|
+//! | `js-hj` | JS | constant | Hooke–Jeeves |
+//! | `ejs-hj` | EJS | constant | Hooke–Jeeves |
+//! | `ejs-gps` | EJS | constant | GPS |
+//! | `ejs-pca` | EJS | PCC + PCA fusion of the quadratic candidates (T = 0.1, 99 %) | GPS |
+//! | `ejs-ga` | EJS | GA subset of the quadratic candidates, fitness = closed-form K-fold CV RMSE at the constant-trend ξ | GPS |
+
+use crate::cv::kfold_partition;
+use crate::dataset::Dataset;
+use crate::kriging::{
+    KrigingOptions, Monomials, OptimizerKind, TrainingInputs, Trend, TrendKind, TrendModel,
+    fit_output, fit_output_at,
+};
+use crate::model::ErrorModel;
+use crate::optim::{GaOptions, ga};
+use crate::space::{Normalizer, Space};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// A named model variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    JsHj,
+    EjsHj,
+    EjsGps,
+    EjsPca,
+    EjsGa,
+}
+
+/// All methods, in the papers' order.
+pub const ALL_METHODS: [Method; 5] = [
+    Method::JsHj,
+    Method::EjsHj,
+    Method::EjsGps,
+    Method::EjsPca,
+    Method::EjsGa,
+];
+
+impl Method {
+    /// The paper-style name (`ejs-gps`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::JsHj => "js-hj",
+            Method::EjsHj => "ejs-hj",
+            Method::EjsGps => "ejs-gps",
+            Method::EjsPca => "ejs-pca",
+            Method::EjsGa => "ejs-ga",
+        }
+    }
+
+    /// Parse a name; `all` is handled by [`parse_methods`].
+    pub fn parse(name: &str) -> Result<Method> {
+        ALL_METHODS
+            .iter()
+            .copied()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "unknown method '{name}' (known: {}, all)",
+                    ALL_METHODS.map(Method::name).join(", ")
+                ))
+            })
+    }
+
+    /// Fit this method on `data` (all selection on `data` only).
+    pub fn fit(self, data: &Dataset, seed: u64) -> Result<ErrorModel> {
+        let gps = KrigingOptions {
+            seed,
+            ..KrigingOptions::default()
+        };
+        let hj = KrigingOptions {
+            optimizer: OptimizerKind::HookeJeeves,
+            ..gps.clone()
+        };
+        match self {
+            Method::JsHj => ErrorModel::fit(data, Space::Js, &hj),
+            Method::EjsHj => ErrorModel::fit(data, Space::Ejs, &hj),
+            Method::EjsGps => ErrorModel::fit(data, Space::Ejs, &gps),
+            Method::EjsPca => {
+                ErrorModel::fit_pcc_pca(data, Space::Ejs, &gps, 0.1, 0.99).map(|r| r.0)
+            }
+            Method::EjsGa => fit_ga(data, &gps, 10, seed),
+        }
+    }
+}
+
+/// `all` or a comma-separated list of method names.
+pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
+    if s.trim() == "all" {
+        return Ok(ALL_METHODS.to_vec());
+    }
+    s.split(',').map(|n| Method::parse(n.trim())).collect()
+}
+
+/// EJS&GA+GPS (seed 004): per output, ξ from a constant-trend GPS fit; a GA
+/// over the quadratic candidates (the constant always kept) minimising the
+/// closed-form `k`-fold CV RMSE (eq 17) at that ξ, with the size cap
+/// C ≤ (k−1)m/k; then a GPS fit with the selected trend.
+pub fn fit_ga(data: &Dataset, opts: &KrigingOptions, k: usize, seed: u64) -> Result<ErrorModel> {
+    let errors = data.errors_or_err()?;
+    let m = data.len();
+    let d = Space::Ejs.dim(data.n_joints());
+    let rows = Space::Ejs.rows(&data.q, &data.dir);
+    let x = Normalizer::fit(&rows).apply_rows(&rows);
+    let inputs = TrainingInputs::new(&x);
+    let names = Space::Ejs.names(data.n_joints());
+    let fold = kfold_partition(m, k, seed)?;
+    let blocks: Vec<Vec<usize>> = (0..k)
+        .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
+        .collect();
+    let cand = Monomials::quadratic(d);
+    let cap = (k - 1) * m / k;
+    let constant = TrendKind::Constant.trend(d);
+    let mut trends = Vec::with_capacity(3);
+    for a in 0..3 {
+        let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+        let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
+        let rmse = |bits: &[bool]| {
+            let keep: Vec<usize> = (0..cand.len()).filter(|&j| j == 0 || bits[j]).collect();
+            fit_output_at(
+                &x,
+                &inputs,
+                &y,
+                &Trend::from(cand.subset(&keep)),
+                &base.theta,
+                base.nugget,
+                opts.min_jitter,
+            )
+            .and_then(|model| model.held_out_residuals(&blocks))
+            .map_or(f64::INFINITY, |e| {
+                (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
+            })
+        };
+        let ga_opts = GaOptions {
+            max_ones: cap.saturating_sub(1),
+            seed: seed.wrapping_add(a as u64),
+            ..GaOptions::default()
+        };
+        let best = ga(cand.len(), rmse, &ga_opts, |_, _| {});
+        let keep: Vec<usize> = (0..cand.len())
+            .filter(|&j| j == 0 || best.best[j])
+            .collect();
+        trends.push(Trend::from(cand.subset(&keep)));
+    }
+    let trends: [Trend; 3] = trends.try_into().expect("three outputs");
+    ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)
+}
