@@ -18,6 +18,57 @@ pub struct ErrorSummary {
     pub mean_mm: [f64; 3],
     /// Per-axis root mean square.
     pub rms_mm: [f64; 3],
+    /// Box-plot statistics of |δ|.
+    pub box_3d_mm: BoxStats,
+}
+
+/// Quartiles (linear interpolation between order statistics) and Tukey
+/// whiskers: the most extreme values within 1.5·IQR of the box; values beyond
+/// are outliers.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BoxStats {
+    pub q1: f64,
+    pub median: f64,
+    pub q3: f64,
+    pub whisker_lo: f64,
+    pub whisker_hi: f64,
+    pub outliers: usize,
+}
+
+/// Box-plot statistics of `v` (zeros for an empty set).
+pub fn box_stats(v: &[f64]) -> BoxStats {
+    if v.is_empty() {
+        return BoxStats {
+            q1: 0.0,
+            median: 0.0,
+            q3: 0.0,
+            whisker_lo: 0.0,
+            whisker_hi: 0.0,
+            outliers: 0,
+        };
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let q = |p: f64| {
+        let h = p * (s.len() - 1) as f64;
+        let (i, f) = (h.floor() as usize, h - h.floor());
+        if i + 1 < s.len() {
+            s[i] + f * (s[i + 1] - s[i])
+        } else {
+            s[i]
+        }
+    };
+    let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
+    let (lo, hi) = (q1 - 1.5 * (q3 - q1), q3 + 1.5 * (q3 - q1));
+    let inside: Vec<f64> = s.iter().copied().filter(|x| *x >= lo && *x <= hi).collect();
+    BoxStats {
+        q1,
+        median,
+        q3,
+        whisker_lo: inside.first().copied().unwrap_or(q1),
+        whisker_hi: inside.last().copied().unwrap_or(q3),
+        outliers: s.len() - inside.len(),
+    }
 }
 
 /// Summarise errors; an empty set gives zeros with `n = 0`.
@@ -32,6 +83,7 @@ pub fn summarize(errors: &[[f64; 3]]) -> ErrorSummary {
             max_3d_mm: 0.0,
             mean_mm: [0.0; 3],
             rms_mm: [0.0; 3],
+            box_3d_mm: box_stats(&[]),
         };
     }
     let nf = n as f64;
@@ -55,6 +107,7 @@ pub fn summarize(errors: &[[f64; 3]]) -> ErrorSummary {
         max_3d_mm: norms.iter().copied().fold(0.0, f64::max),
         mean_mm,
         rms_mm,
+        box_3d_mm: box_stats(&norms),
     }
 }
 
@@ -72,5 +125,13 @@ mod tests {
         assert_eq!(s.min_3d_mm, 1.0);
         assert!((s.rms_mm[0] - (4.5f64).sqrt()).abs() < 1e-12);
         assert_eq!(s.mean_mm, [1.5, 2.0, 0.5]);
+    }
+
+    #[test]
+    fn box_stats_quartiles_whiskers_and_outliers() {
+        let b = box_stats(&[1.0, 2.0, 3.0, 4.0, 5.0, 100.0]);
+        assert_eq!((b.q1, b.median, b.q3), (2.25, 3.5, 4.75));
+        assert_eq!((b.whisker_lo, b.whisker_hi, b.outliers), (1.0, 5.0, 1));
+        assert_eq!(box_stats(&[7.0]).median, 7.0);
     }
 }

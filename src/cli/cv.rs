@@ -126,7 +126,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         rows.push(serde_json::json!({
             "name": m.name(), "cv_mode": res.mode, "cv_rmse_mm": s.rms_mm,
             "mean_3d_mm": s.mean_3d_mm, "max_3d_mm": s.max_3d_mm, "std_3d_mm": s.std_3d_mm,
-            "min_3d_mm": s.min_3d_mm, "seconds": res.seconds,
+            "min_3d_mm": s.min_3d_mm, "box_3d_mm": s.box_3d_mm, "seconds": res.seconds,
         }));
     }
     if let Some(path) = &a.json {

@@ -88,6 +88,10 @@ pub struct FitArgs {
     data: PathBuf,
     #[command(flatten)]
     model: ModelArgs,
+    /// Fit a named method instead (js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga);
+    /// overrides --space/--trend/--optimizer.
+    #[arg(long)]
+    method: Option<String>,
     /// Output model JSON.
     #[arg(short, long)]
     output: PathBuf,
@@ -100,7 +104,11 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = read_csv(&a.data)?;
     let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
-    let model = ErrorModel::fit(&data, space, &opts)?;
+    let model = match &a.method {
+        Some(name) => robokrige::methods::Method::parse(name)?.fit(&data, opts.seed)?,
+        None => ErrorModel::fit(&data, space, &opts)?,
+    };
+    let space = model.space;
     let secs = t0.elapsed().as_secs_f64();
     model.save(&a.output)?;
     if a.json {
