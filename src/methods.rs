@@ -17,7 +17,7 @@ use crate::kriging::{
     fit_output, fit_output_at,
 };
 use crate::model::ErrorModel;
-use crate::optim::{GaOptions, ga};
+use crate::optim::{GaOptions, GaResult, ga};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -85,7 +85,7 @@ impl Method {
             Method::EjsPca => {
                 ErrorModel::fit_pcc_pca(data, Space::Ejs, &gps, 0.1, 0.99).map(|r| r.0)
             }
-            Method::EjsGa => fit_ga(data, &gps, 10, seed),
+            Method::EjsGa => fit_ga(data, &gps, 10, seed).map(|r| r.0),
         }
     }
 }
@@ -101,8 +101,14 @@ pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
 /// EJS&GA+GPS (seed 004): per output, ξ from a constant-trend GPS fit; a GA
 /// over the quadratic candidates (the constant always kept) minimising the
 /// closed-form `k`-fold CV RMSE (eq 17) at that ξ, with the size cap
-/// C ≤ (k−1)m/k; then a GPS fit with the selected trend.
-pub fn fit_ga(data: &Dataset, opts: &KrigingOptions, k: usize, seed: u64) -> Result<ErrorModel> {
+/// C ≤ (k−1)m/k; then a GPS fit with the selected trend. Also returns each
+/// output's GA result (its fitness history is seed 004 Fig 10).
+pub fn fit_ga(
+    data: &Dataset,
+    opts: &KrigingOptions,
+    k: usize,
+    seed: u64,
+) -> Result<(ErrorModel, Vec<GaResult>)> {
     let errors = data.errors_or_err()?;
     let m = data.len();
     let d = Space::Ejs.dim(data.n_joints());
@@ -118,6 +124,7 @@ pub fn fit_ga(data: &Dataset, opts: &KrigingOptions, k: usize, seed: u64) -> Res
     let cap = (k - 1) * m / k;
     let constant = TrendKind::Constant.trend(d);
     let mut trends = Vec::with_capacity(3);
+    let mut results = Vec::with_capacity(3);
     for a in 0..3 {
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
@@ -147,7 +154,11 @@ pub fn fit_ga(data: &Dataset, opts: &KrigingOptions, k: usize, seed: u64) -> Res
             .filter(|&j| j == 0 || best.best[j])
             .collect();
         trends.push(Trend::from(cand.subset(&keep)));
+        results.push(best);
     }
     let trends: [Trend; 3] = trends.try_into().expect("three outputs");
-    ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)
+    Ok((
+        ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)?,
+        results,
+    ))
 }
