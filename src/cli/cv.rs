@@ -3,10 +3,10 @@
 use super::fit::ModelArgs;
 use clap::Args;
 use clap::ValueEnum;
+use robokrige::Result;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
 use robokrige::dataset::read_csv;
 use robokrige::model::ErrorModel;
-use robokrige::{Error, Result};
 use std::path::PathBuf;
 
 /// K-fold cross-validation of a model choice (refit on every training fold).
@@ -83,11 +83,7 @@ pub fn run(a: CvArgs) -> Result<()> {
         s.mean_3d_mm, s.std_3d_mm, s.min_3d_mm, s.max_3d_mm
     );
     if let Some(path) = &a.json {
-        let text = serde_json::to_string_pretty(&res).map_err(|e| Error::Json {
-            context: "cv result".into(),
-            source: e,
-        })?;
-        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+        super::write_json(path, &res, "cv result")?;
     }
     Ok(())
 }
@@ -131,11 +127,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     }
     if let Some(path) = &a.json {
         let v = serde_json::json!({"data": a.data, "folds": a.folds, "seed": a.cv_seed, "methods": rows});
-        let text = serde_json::to_string_pretty(&v).map_err(|e| Error::Json {
-            context: "cv result".into(),
-            source: e,
-        })?;
-        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+        super::write_json(path, &v, "cv result")?;
     }
     Ok(())
 }

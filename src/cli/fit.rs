@@ -113,7 +113,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     model.save(&a.output)?;
     if a.json {
         let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs, "outputs": model.reports});
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        println!("{}", super::to_json(&v, "fit report")?);
         return Ok(());
     }
     println!(

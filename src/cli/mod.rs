@@ -6,6 +6,9 @@ mod fit;
 mod simulate;
 
 use clap::{Parser, Subcommand};
+use robokrige::{Error, Result};
+use serde::Serialize;
+use std::path::Path;
 
 /// robokrige: Kriging error models over the extended joint space [θ, λ] for
 /// industrial robot accuracy.
@@ -30,11 +33,25 @@ pub enum Command {
 }
 
 /// Run a parsed command.
-pub fn run(cli: Cli) -> robokrige::Result<()> {
+pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),
         Command::Predict(a) => fit::run_predict(a),
         Command::Cv(a) => cv::run(a),
     }
+}
+
+/// Pretty JSON of `value`; `context` names it in the error.
+pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
+    serde_json::to_string_pretty(value).map_err(|e| Error::Json {
+        context: context.into(),
+        source: e,
+    })
+}
+
+/// Write `value` as pretty JSON (with a final newline) to `path`.
+pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
+    let text = to_json(value, context)? + "\n";
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }

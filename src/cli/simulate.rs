@@ -1,7 +1,7 @@
 //! `robokrige simulate`.
 
 use clap::{Args, ValueEnum};
-use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, Truth, simulate};
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
 use robokrige::stats::summarize;
 use robokrige::{Error, Result, dataset, kinematics};
 use std::path::{Path, PathBuf};
@@ -105,7 +105,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
-    write_truth(&truth_path, &truth)?;
+    super::write_json(&truth_path, &truth, "truth")?;
     let summary = match &out {
         SimOutput::Measurements(d) => {
             dataset::write_csv(&a.output, d)?;
@@ -123,10 +123,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         }
     };
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&summary).map_err(|e| json_err("summary", e))?
-        );
+        println!("{}", super::to_json(&summary, "summary")?);
     } else {
         print_summary(&summary);
     }
@@ -174,18 +171,6 @@ fn print_summary(s: &serde_json::Value) {
 /// `a.csv` → `a.truth.json`.
 pub fn truth_path_for(output: &Path) -> PathBuf {
     output.with_extension("truth.json")
-}
-
-fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
-    let text = serde_json::to_string_pretty(truth).map_err(|e| json_err("truth", e))?;
-    std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
-}
-
-fn json_err(context: &str, source: serde_json::Error) -> Error {
-    Error::Json {
-        context: context.into(),
-        source,
-    }
 }
 
 fn parse_ranges(s: &str) -> Result<Vec<(f64, f64)>> {
