@@ -5,6 +5,7 @@
 
 mod common;
 
+use robokrige::basis::Selection;
 use robokrige::kriging::KrigingOptions;
 use robokrige::methods::fit_ga;
 use std::time::Instant;
@@ -12,10 +13,13 @@ use std::time::Instant;
 fn main() {
     let data = common::campaign();
     let t0 = Instant::now();
-    let (model, ga) = fit_ga(&data, &KrigingOptions::default(), 10, 1).expect("GA fit");
+    let model = fit_ga(&data, &KrigingOptions::default(), 10, 1, &|_, _, _| {}).expect("GA fit");
+    let Some(Selection::Ga { outputs: ga }) = &model.selection else {
+        panic!("the GA fit records its selection");
+    };
     let secs = t0.elapsed().as_secs_f64();
     println!("EJS&GA selection + fit of ex, ey, ez: {secs:.2} s");
-    for ((axis, r), out) in ["ex", "ey", "ez"].iter().zip(&ga).zip(&model.reports) {
+    for ((axis, r), out) in ["ex", "ey", "ez"].iter().zip(ga).zip(&model.reports) {
         let hist: Vec<String> = r
             .history
             .iter()
@@ -23,9 +27,11 @@ fn main() {
             .map(|v| format!("{v:.4}"))
             .collect();
         println!(
-            "  {axis}: {} terms, CV-RMSE {:.4} mm after {} generations ({} chromosomes); best every 5 generations: {}",
+            "  {axis}: {} terms of {} ({} dropped as dependent), CV-RMSE {:.4} mm after {} generations ({} chromosomes); best every 5 generations: {}",
             out.trend_terms.len(),
-            r.fitness,
+            r.candidates,
+            r.dropped.len(),
+            r.cv_rmse_mm,
             r.generations,
             r.evaluations,
             hist.join(" ")

@@ -15,8 +15,112 @@
 
 use crate::kriging::{Monomials, TrendModel, independent_columns, trend_matrix};
 use crate::{Error, Result};
+use faer::linalg::solvers::SolveLstsq;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
+
+/// A candidate removed before selection, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Dropped {
+    pub term: String,
+    pub reason: String,
+}
+
+/// The candidates that survive screening on the training inputs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScreen {
+    /// Number of candidates before screening (91 for 12 inputs, η = 2).
+    pub total: usize,
+    /// Indices (into the candidate list) of the linearly independent ones.
+    #[serde(skip)]
+    pub kept: Vec<usize>,
+    pub dropped: Vec<Dropped>,
+}
+
+/// Screen `candidates` at the training inputs `x`: in candidate order, a term
+/// is dropped when its column is an exact duplicate of a kept one, or lies
+/// (to relative tolerance 1e-9) in the span of the kept columns — e.g. `λ²`,
+/// which is affine in `λ` because λ = ±1 (seed 003 eq 15 discussion). The
+/// reason names the terms it depends on.
+pub fn screen_candidates(
+    candidates: &Monomials,
+    x: &[Vec<f64>],
+    names: &[String],
+) -> CandidateScreen {
+    let f = trend_matrix(candidates, x);
+    let (kept, dropped_idx) = independent_columns(&f, 1e-9);
+    let m = f.nrows();
+    let col = |j: usize| (0..m).map(|i| f[(i, j)]).collect::<Vec<f64>>();
+    let name = |j: usize| candidates.term_name(j, names);
+    let basis = Mat::<f64>::from_fn(m, kept.len(), |i, k| f[(i, kept[k])]);
+    let qr = (!kept.is_empty()).then(|| basis.qr());
+    let dropped = dropped_idx
+        .into_iter()
+        .map(|j| {
+            let cj = col(j);
+            let reason = if let Some(&k) = kept.iter().find(|&&k| col(k) == cj) {
+                format!("exact duplicate of {}", name(k))
+            } else if cj.iter().all(|v| *v == 0.0) {
+                "zero on every training row".to_string()
+            } else if let Some(qr) = &qr {
+                let rhs = Mat::<f64>::from_fn(m, 1, |i, _| cj[i]);
+                let coef = qr.solve_lstsq(&rhs);
+                let big = (0..kept.len())
+                    .map(|k| coef[(k, 0)].abs())
+                    .fold(0.0, f64::max);
+                let support: Vec<String> = (0..kept.len())
+                    .filter(|&k| coef[(k, 0)].abs() > 1e-6 * big)
+                    .map(|k| name(kept[k]))
+                    .collect();
+                let shown = support
+                    .iter()
+                    .take(4)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                let more = if support.len() > 4 { ", …" } else { "" };
+                format!("linear combination of {shown}{more} on the training rows")
+            } else {
+                "no independent terms to compare with".to_string()
+            };
+            Dropped {
+                term: name(j),
+                reason,
+            }
+        })
+        .collect();
+    CandidateScreen {
+        total: candidates.len(),
+        kept,
+        dropped,
+    }
+}
+
+/// GA basis selection for one output (seed 004 §III.B).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GaSelection {
+    /// Candidates before screening, and those removed as dependent.
+    pub candidates: usize,
+    pub dropped: Vec<Dropped>,
+    /// Size cap C ≤ (K−1)m/K on the selected terms.
+    pub size_cap: usize,
+    /// Selected terms (the constant always first).
+    pub selected: Vec<String>,
+    /// Best fitness: closed-form K-fold CV RMSE (mm, seed 004 eq 17).
+    pub cv_rmse_mm: f64,
+    /// Best fitness after each generation (seed 004 Fig 10).
+    pub history: Vec<f64>,
+    pub generations: usize,
+    pub evaluations: usize,
+}
+
+/// What a method's basis selection did, per output axis; saved with the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Selection {
+    PccPca { outputs: Vec<PccPcaReport> },
+    Ga { outputs: Vec<GaSelection> },
+}
 
 /// A fused trend basis `[1, w_1, …, w_k]`, `w_i = ((u(s) − μ)/σ)ᵀ e_i`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -72,6 +176,10 @@ impl FusedBasis {
 /// What PCC + PCA did, for the report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PccPcaReport {
+    /// Candidates removed before ranking (linear dependence), with reasons.
+    pub dropped: Vec<Dropped>,
+    /// Candidates with zero variance on the training rows (the constant).
+    pub no_variance: Vec<String>,
     /// (candidate name, Pearson r) of every candidate with non-zero variance,
     /// by decreasing |r|.
     pub ranking: Vec<(String, f64)>,
@@ -106,7 +214,9 @@ pub fn pcc_pca(
     }
     let m = x.len();
     let f = trend_matrix(candidates, x);
-    let (independent, _) = independent_columns(&f, 1e-9);
+    let screen = screen_candidates(candidates, x, names);
+    let independent = screen.kept;
+    let mut no_variance = Vec::new();
     let ym = y.iter().sum::<f64>() / m as f64;
     let yv: f64 = y.iter().map(|v| (v - ym) * (v - ym)).sum();
     // eq 16 for every candidate with variance
@@ -115,8 +225,12 @@ pub fn pcc_pca(
         let col: Vec<f64> = (0..m).map(|i| f[(i, j)]).collect();
         let mu = col.iter().sum::<f64>() / m as f64;
         let var: f64 = col.iter().map(|v| (v - mu) * (v - mu)).sum();
-        if var <= 1e-20 * m as f64 || yv <= 0.0 {
+        if var <= 1e-20 * m as f64 {
+            no_variance.push(candidates.term_name(j, names));
             continue;
+        }
+        if yv <= 0.0 {
+            continue; // constant response: no candidate correlates
         }
         let cov: f64 = col.iter().zip(y).map(|(a, b)| (a - mu) * (b - ym)).sum();
         scored.push((
@@ -145,6 +259,8 @@ pub fn pcc_pca(
         return Ok((
             basis,
             PccPcaReport {
+                dropped: screen.dropped,
+                no_variance,
                 ranking,
                 threshold: t,
                 selected: 0,
@@ -181,6 +297,8 @@ pub fn pcc_pca(
         components,
     };
     let report = PccPcaReport {
+        dropped: screen.dropped,
+        no_variance,
         ranking,
         threshold: t,
         selected: n2,

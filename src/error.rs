@@ -64,6 +64,20 @@ pub enum Error {
         orientation_rad: f64,
     },
 
+    /// Trajectory points that inverse kinematics could not reach (0-based
+    /// indices, in order) and the first failure's message.
+    #[error(
+        "{} trajectory point(s) unreachable (0-based indices {}): first failure: {first}",
+        indices.len(),
+        indices.iter().take(20).map(|i| i.to_string()).collect::<Vec<_>>().join(", ")
+            + if indices.len() > 20 { ", …" } else { "" }
+    )]
+    Unreachable { indices: Vec<usize>, first: String },
+
+    /// Drawing a plot failed.
+    #[error("{}: plot: {message}", path.display())]
+    Plot { path: PathBuf, message: String },
+
     /// A linear-algebra step failed (e.g. a matrix that stays singular).
     #[error("numerical failure: {0}")]
     Numerical(String),

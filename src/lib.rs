@@ -14,8 +14,12 @@
 //! | [`dataset`] | the measurement CSV: read, validate, write |
 //! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
 //! | [`stats`] | summaries of error sets |
+//! | [`kriging`] | universal Kriging: trend, correlation, fit, predict |
+//! | [`basis`], [`methods`], [`cv`] | trend selection, the papers' model variants, K-fold CV |
+//! | [`plot`] | SVG charts (box plots, x–y plots) |
 
 pub mod basis;
+pub mod compensate;
 pub mod cv;
 pub mod dataset;
 pub mod error;
@@ -24,6 +28,7 @@ pub mod kriging;
 pub mod methods;
 pub mod model;
 pub mod optim;
+pub mod plot;
 pub mod sim;
 pub mod space;
 pub mod stats;

@@ -10,6 +10,7 @@
 //! | `ejs-pca` | EJS | PCC + PCA fusion of the quadratic candidates (T = 0.1, 99 %) | GPS |
 //! | `ejs-ga` | EJS | GA subset of the quadratic candidates, fitness = closed-form K-fold CV RMSE at the constant-trend ξ | GPS |
 
+use crate::basis::{GaSelection, Selection, screen_candidates};
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 use crate::kriging::{
@@ -17,7 +18,7 @@ use crate::kriging::{
     fit_output, fit_output_at,
 };
 use crate::model::ErrorModel;
-use crate::optim::{GaOptions, GaResult, ga};
+use crate::optim::{GaOptions, ga};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -70,6 +71,16 @@ impl Method {
 
     /// Fit this method on `data` (all selection on `data` only).
     pub fn fit(self, data: &Dataset, seed: u64) -> Result<ErrorModel> {
+        self.fit_with_progress(data, seed, &|_, _, _| {})
+    }
+
+    /// [`Method::fit`], reporting GA generations to `progress`.
+    pub fn fit_with_progress(
+        self,
+        data: &Dataset,
+        seed: u64,
+        progress: GaProgress,
+    ) -> Result<ErrorModel> {
         let gps = KrigingOptions {
             seed,
             ..KrigingOptions::default()
@@ -85,7 +96,7 @@ impl Method {
             Method::EjsPca => {
                 ErrorModel::fit_pcc_pca(data, Space::Ejs, &gps, 0.1, 0.99).map(|r| r.0)
             }
-            Method::EjsGa => fit_ga(data, &gps, 10, seed).map(|r| r.0),
+            Method::EjsGa => fit_ga(data, &gps, 10, seed, progress),
         }
     }
 }
@@ -98,17 +109,23 @@ pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
     s.split(',').map(|n| Method::parse(n.trim())).collect()
 }
 
-/// EJS&GA+GPS (seed 004): per output, ξ from a constant-trend GPS fit; a GA
-/// over the quadratic candidates (the constant always kept) minimising the
-/// closed-form `k`-fold CV RMSE (eq 17) at that ξ, with the size cap
-/// C ≤ (k−1)m/k; then a GPS fit with the selected trend. Also returns each
-/// output's GA result (its fitness history is seed 004 Fig 10).
+/// Progress of a GA selection: `(output axis, generation, best CV RMSE mm)`.
+pub type GaProgress<'a> = &'a (dyn Fn(usize, usize, f64) + Sync);
+
+/// EJS&GA+GPS (seed 004): per output, ξ from a constant-trend GPS fit; the
+/// quadratic candidates screened for linear dependence
+/// ([`screen_candidates`]); a GA over the survivors (the constant always
+/// kept) minimising the closed-form `k`-fold CV RMSE (eq 17) at that ξ, with
+/// the size cap C ≤ (k−1)m/k; then a GPS fit with the selected trend. The
+/// model's `selection` holds each output's [`GaSelection`] (its fitness
+/// history is seed 004 Fig 10); `progress` is called after every generation.
 pub fn fit_ga(
     data: &Dataset,
     opts: &KrigingOptions,
     k: usize,
     seed: u64,
-) -> Result<(ErrorModel, Vec<GaResult>)> {
+    progress: GaProgress,
+) -> Result<ErrorModel> {
     let errors = data.errors_or_err()?;
     let m = data.len();
     let d = Space::Ejs.dim(data.n_joints());
@@ -120,11 +137,13 @@ pub fn fit_ga(
     let blocks: Vec<Vec<usize>> = (0..k)
         .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
         .collect();
-    let cand = Monomials::quadratic(d);
+    let all = Monomials::quadratic(d);
+    let screen = screen_candidates(&all, &x, &names);
+    let cand = all.subset(&screen.kept);
     let cap = (k - 1) * m / k;
     let constant = TrendKind::Constant.trend(d);
     let mut trends = Vec::with_capacity(3);
-    let mut results = Vec::with_capacity(3);
+    let mut reports = Vec::with_capacity(3);
     for a in 0..3 {
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
@@ -149,16 +168,27 @@ pub fn fit_ga(
             seed: seed.wrapping_add(a as u64),
             ..GaOptions::default()
         };
-        let best = ga(cand.len(), rmse, &ga_opts, |_, _| {});
+        let best = ga(cand.len(), rmse, &ga_opts, |g, f| progress(a, g, f));
         let keep: Vec<usize> = (0..cand.len())
             .filter(|&j| j == 0 || best.best[j])
             .collect();
-        trends.push(Trend::from(cand.subset(&keep)));
-        results.push(best);
+        let trend = cand.subset(&keep);
+        reports.push(GaSelection {
+            candidates: screen.total,
+            dropped: screen.dropped.clone(),
+            size_cap: cap,
+            selected: (0..trend.len())
+                .map(|j| trend.term_name(j, &names))
+                .collect(),
+            cv_rmse_mm: best.fitness,
+            history: best.history,
+            generations: best.generations,
+            evaluations: best.evaluations,
+        });
+        trends.push(Trend::from(trend));
     }
     let trends: [Trend; 3] = trends.try_into().expect("three outputs");
-    Ok((
-        ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)?,
-        results,
-    ))
+    let mut model = ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)?;
+    model.selection = Some(Selection::Ga { outputs: reports });
+    Ok(model)
 }

@@ -33,6 +33,9 @@ pub struct ErrorModel {
     /// One model per axis, in [`AXES`] order.
     pub outputs: Vec<KrigingModel>,
     pub reports: Vec<FitReport>,
+    /// Basis selection that chose the trends (PCC+PCA or GA), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selection: Option<crate::basis::Selection>,
 }
 
 /// Predicted errors with their standard deviations (√MSE), mm.
@@ -84,7 +87,11 @@ impl ErrorModel {
             reports.push(report);
         }
         let trends: [crate::kriging::Trend; 3] = trends.try_into().expect("three outputs");
-        Ok((Self::fit_with_trend(data, space, opts, &trends)?, reports))
+        let mut model = Self::fit_with_trend(data, space, opts, &trends)?;
+        model.selection = Some(crate::basis::Selection::PccPca {
+            outputs: reports.clone(),
+        });
+        Ok((model, reports))
     }
 
     /// Fit with a (possibly different) trend candidate set per output.
@@ -135,6 +142,7 @@ impl ErrorModel {
             options: opts.clone(),
             outputs,
             reports,
+            selection: None,
         })
     }
 

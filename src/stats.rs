@@ -71,6 +71,73 @@ pub fn box_stats(v: &[f64]) -> BoxStats {
     }
 }
 
+/// Mean, population standard deviation, minimum and maximum of one quantity.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    pub mean: f64,
+    pub std: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// `Spread` of `v` (zeros for an empty set).
+pub fn spread(v: &[f64]) -> Spread {
+    if v.is_empty() {
+        return Spread {
+            mean: 0.0,
+            std: 0.0,
+            min: 0.0,
+            max: 0.0,
+        };
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    Spread {
+        mean,
+        std: (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt(),
+        min: v.iter().copied().fold(f64::INFINITY, f64::min),
+        max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    }
+}
+
+/// The layout of seed 004 Table 3: per-axis signed error and the absolute
+/// (3D) error, each as mean / std / min / max, with the JSON names the CLI
+/// promises (`mean_abs_mm`, `max_abs_mm`, `std_abs_mm`, `mean_mm`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PositionErrorTable {
+    pub n: usize,
+    pub mean_abs_mm: f64,
+    pub std_abs_mm: f64,
+    pub min_abs_mm: f64,
+    pub max_abs_mm: f64,
+    pub mean_mm: [f64; 3],
+    pub std_mm: [f64; 3],
+    pub min_mm: [f64; 3],
+    pub max_mm: [f64; 3],
+}
+
+/// Seed 004 Table 3 statistics of a set of errors.
+pub fn position_error_table(errors: &[[f64; 3]]) -> PositionErrorTable {
+    let abs: Vec<f64> = errors
+        .iter()
+        .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
+        .collect();
+    let axis: [Spread; 3] =
+        std::array::from_fn(|a| spread(&errors.iter().map(|e| e[a]).collect::<Vec<_>>()));
+    let s = spread(&abs);
+    PositionErrorTable {
+        n: errors.len(),
+        mean_abs_mm: s.mean,
+        std_abs_mm: s.std,
+        min_abs_mm: s.min,
+        max_abs_mm: s.max,
+        mean_mm: axis.map(|x| x.mean),
+        std_mm: axis.map(|x| x.std),
+        min_mm: axis.map(|x| x.min),
+        max_mm: axis.map(|x| x.max),
+    }
+}
+
 /// Summarise errors; an empty set gives zeros with `n = 0`.
 pub fn summarize(errors: &[[f64; 3]]) -> ErrorSummary {
     let n = errors.len();
@@ -125,6 +192,16 @@ mod tests {
         assert_eq!(s.min_3d_mm, 1.0);
         assert!((s.rms_mm[0] - (4.5f64).sqrt()).abs() < 1e-12);
         assert_eq!(s.mean_mm, [1.5, 2.0, 0.5]);
+    }
+
+    #[test]
+    fn position_error_table_of_known_set() {
+        let t = position_error_table(&[[3.0, 4.0, 0.0], [0.0, 0.0, -1.0]]);
+        assert_eq!((t.n, t.mean_abs_mm, t.std_abs_mm), (2, 3.0, 2.0));
+        assert_eq!((t.min_abs_mm, t.max_abs_mm), (1.0, 5.0));
+        assert_eq!(t.mean_mm, [1.5, 2.0, -0.5]);
+        assert_eq!(t.std_mm, [1.5, 2.0, 0.5]);
+        assert_eq!((t.min_mm[2], t.max_mm[2]), (-1.0, 0.0));
     }
 
     #[test]

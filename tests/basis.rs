@@ -1,6 +1,6 @@
 //! PCC + PCA basis fusion (seed 003 eqs 16–20).
 
-use robokrige::basis::pcc_pca;
+use robokrige::basis::{pcc_pca, screen_candidates};
 use robokrige::dataset::read_csv;
 use robokrige::kriging::{KrigingOptions, Monomials, OptimizerKind, TrendModel, trend_matrix};
 use robokrige::model::ErrorModel;
@@ -109,4 +109,32 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
     // a constant response correlates with nothing: only the constant term remains
     let (basis, report) = pcc_pca(&Monomials::linear(4), &x, &y, 0.1, 0.99, 10, &[]).unwrap();
     assert_eq!((basis.len(), report.selected), (1, 0));
+}
+
+#[test]
+fn screening_drops_dependent_candidates_and_says_why() {
+    // inputs a, b, d (d binary, like λ) and a column c = a exactly
+    let x: Vec<Vec<f64>> = inputs(60)
+        .into_iter()
+        .map(|r| vec![r[0], r[1], r[0], r[3]])
+        .collect();
+    let names: Vec<String> = ["a", "b", "c", "d"].map(String::from).to_vec();
+    let s = screen_candidates(&Monomials::quadratic(4), &x, &names);
+    assert_eq!(s.total, 15);
+    let reason = |t: &str| {
+        s.dropped
+            .iter()
+            .find(|d| d.term == t)
+            .map(|d| d.reason.clone())
+            .unwrap_or_else(|| panic!("{t} not dropped: {:?}", s.dropped))
+    };
+    assert_eq!(reason("c"), "exact duplicate of a");
+    assert_eq!(reason("a*c"), "exact duplicate of a^2");
+    // d² is affine in d because d takes two values
+    assert_eq!(
+        reason("d^2"),
+        "linear combination of 1, d on the training rows"
+    );
+    assert_eq!(s.kept.len() + s.dropped.len(), 15);
+    assert!(!s.kept.contains(&3));
 }

@@ -1,5 +1,6 @@
 //! The method registry: names, parsing, and the GA method's selection.
 
+use robokrige::basis::Selection;
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kriging::TrendModel;
 use robokrige::methods::{ALL_METHODS, Method, parse_methods};
@@ -43,4 +44,38 @@ fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
         );
         assert_eq!(report.trend_terms[0], "1");
     }
+    // the selection is recorded with the model: dependent candidates dropped
+    // with a reason, the fitness history non-increasing (elitism), and the
+    // selected names are the fitted trend's terms
+    let Some(Selection::Ga { outputs }) = &a.selection else {
+        panic!("GA selection not recorded: {:?}", a.selection);
+    };
+    for (sel, report) in outputs.iter().zip(&a.reports) {
+        assert_eq!(sel.candidates, 91);
+        // 50 rows: at most 50 independent columns, and every λ² is affine in λ
+        assert!(sel.dropped.len() >= 91 - 50, "{}", sel.dropped.len());
+        for k in 1..=6 {
+            let term = format!("dir{k}^2");
+            let d = sel
+                .dropped
+                .iter()
+                .find(|d| d.term == term)
+                .expect("λ² dropped");
+            assert!(
+                d.reason.starts_with("linear combination of 1"),
+                "{}",
+                d.reason
+            );
+        }
+        assert!(
+            sel.selected
+                .iter()
+                .all(|t| !sel.dropped.iter().any(|d| &d.term == t))
+        );
+        assert_eq!(sel.selected, report.trend_terms);
+        assert!(sel.history.windows(2).all(|w| w[1] <= w[0]));
+        assert_eq!(sel.history.last().copied(), Some(sel.cv_rmse_mm));
+    }
+    let text = serde_json::to_string(&a).unwrap();
+    assert!(text.contains("\"selection\":{\"kind\":\"ga\""));
 }

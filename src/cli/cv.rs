@@ -1,18 +1,21 @@
 //! `robokrige cv`.
 
 use super::fit::ModelArgs;
+use super::progress::bar;
 use clap::Args;
 use clap::ValueEnum;
 use robokrige::Result;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
 use robokrige::dataset::read_csv;
 use robokrige::model::ErrorModel;
+use robokrige::plot::box_plot;
 use std::path::PathBuf;
 
 /// K-fold cross-validation of a model choice (refit on every training fold).
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
+  robokrige cv datasets/comau_lhs.csv --methods all --folds 10 --json cv.json --plot cv.svg
   robokrige cv datasets/comau_lhs.csv --space ejs --folds 10 --seed 1
   robokrige cv datasets/comau_lhs.csv --space js --folds 10 --seed 1 --json js.json")]
 pub struct CvArgs {
@@ -38,6 +41,9 @@ pub struct CvArgs {
     /// Write the result (residuals, statistics) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Draw box plots of the out-of-fold 3D errors (SVG).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -54,9 +60,16 @@ pub fn run(a: CvArgs) -> Result<()> {
     let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
-        Mode::Refit => cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-            ErrorModel::fit(train, space, &opts)
-        })?,
+        Mode::Refit => {
+            let pb = bar(a.folds as u64, "folds");
+            let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
+                let m = ErrorModel::fit(train, space, &opts);
+                pb.inc(1);
+                m
+            });
+            pb.finish_and_clear();
+            res?
+        }
         Mode::ClosedForm => {
             let model = ErrorModel::fit(&data, space, &opts)?;
             cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
@@ -85,7 +98,28 @@ pub fn run(a: CvArgs) -> Result<()> {
     if let Some(path) = &a.json {
         super::write_json(path, &res, "cv result")?;
     }
+    if let Some(path) = &a.plot {
+        let axis = |k: usize| res.residuals.iter().map(|e| e[k].abs()).collect();
+        let groups = vec![
+            ("|ex|".to_string(), axis(0)),
+            ("|ey|".to_string(), axis(1)),
+            ("|ez|".to_string(), axis(2)),
+            ("3D".to_string(), norms(&res.residuals)),
+        ];
+        let title = format!(
+            "{}-fold CV ({}) out-of-fold errors, {:?}",
+            a.folds, res.mode, space
+        );
+        box_plot(path, &title, "error (mm)", &groups)?;
+        println!("plot: {}", path.display());
+    }
     Ok(())
+}
+
+fn norms(e: &[[f64; 3]]) -> Vec<f64> {
+    e.iter()
+        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+        .collect()
 }
 
 /// `cv --methods`: the table of seed 003 Table 2 (range, mean, std of the 3D
@@ -104,8 +138,23 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         "method", "range (mm)", "mean", "std", "RMSE x / y / z (mm)", "time"
     );
     let mut rows = Vec::new();
+    let mut groups = Vec::new();
     for m in methods {
-        let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| m.fit(train, a.cv_seed))?;
+        let pb = bar(a.folds as u64, m.name());
+        let ga_progress = |axis: usize, generation: usize, best: f64| {
+            pb.set_message(format!(
+                "GA {} generation {generation}: best CV RMSE {best:.4} mm",
+                ["ex", "ey", "ez"][axis]
+            ))
+        };
+        let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
+            let model = m.fit_with_progress(train, a.cv_seed, &ga_progress);
+            pb.inc(1);
+            model
+        });
+        pb.finish_and_clear();
+        let res = res?;
+        groups.push((m.name().to_string(), norms(&res.residuals)));
         let s = &res.summary;
         println!(
             "{:<8} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
@@ -128,6 +177,11 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     if let Some(path) = &a.json {
         let v = serde_json::json!({"data": a.data, "folds": a.folds, "seed": a.cv_seed, "methods": rows});
         super::write_json(path, &v, "cv result")?;
+    }
+    if let Some(path) = &a.plot {
+        let title = format!("{}-fold CV (refit) 3D error by method", a.folds);
+        box_plot(path, &title, "out-of-fold 3D error (mm)", &groups)?;
+        println!("plot: {}", path.display());
     }
     Ok(())
 }

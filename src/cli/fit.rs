@@ -105,14 +105,27 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
     let model = match &a.method {
-        Some(name) => robokrige::methods::Method::parse(name)?.fit(&data, opts.seed)?,
+        Some(name) => {
+            let method = robokrige::methods::Method::parse(name)?;
+            let pb = super::progress::spinner(method.name());
+            let progress = |axis: usize, generation: usize, best: f64| {
+                pb.set_message(format!(
+                    "GA {} generation {generation}: best CV RMSE {best:.4} mm",
+                    AXES[axis]
+                ));
+            };
+            let model = method.fit_with_progress(&data, opts.seed, &progress);
+            pb.finish_and_clear();
+            model?
+        }
         None => ErrorModel::fit(&data, space, &opts)?,
     };
     let space = model.space;
     let secs = t0.elapsed().as_secs_f64();
     model.save(&a.output)?;
     if a.json {
-        let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs, "outputs": model.reports});
+        let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs,
+            "outputs": model.reports, "selection": model.selection});
         println!("{}", super::to_json(&v, "fit report")?);
         return Ok(());
     }
@@ -140,7 +153,42 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             lt.join(", ")
         );
     }
+    print_selection(&model);
     Ok(())
+}
+
+/// One line per output of what PCC+PCA or the GA selected.
+fn print_selection(model: &ErrorModel) {
+    use robokrige::basis::Selection;
+    match &model.selection {
+        Some(Selection::PccPca { outputs }) => {
+            for (ax, r) in AXES.iter().zip(outputs) {
+                println!(
+                    "  {ax} PCC+PCA: {} candidates ranked ({} dependent dropped), {} with |r| > {}, {} components ({:.1} % of variance)",
+                    r.ranking.len(),
+                    r.dropped.len(),
+                    r.selected,
+                    r.threshold,
+                    r.components,
+                    100.0 * r.explained
+                );
+            }
+        }
+        Some(Selection::Ga { outputs }) => {
+            for (ax, r) in AXES.iter().zip(outputs) {
+                println!(
+                    "  {ax} GA: {} of {} candidates ({} dependent dropped), CV RMSE {:.4} mm after {} generations: {}",
+                    r.selected.len(),
+                    r.candidates,
+                    r.dropped.len(),
+                    r.cv_rmse_mm,
+                    r.generations,
+                    r.selected.join(" ")
+                );
+            }
+        }
+        None => {}
+    }
 }
 
 /// Predict TCP errors (mean and standard deviation per axis) at poses.

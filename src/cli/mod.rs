@@ -1,8 +1,10 @@
 //! Subcommands. Exit codes: 0 ok, 1 failed (bad data, numerical failure),
 //! 2 bad usage (clap).
 
+mod compensate;
 mod cv;
 mod fit;
+mod progress;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -30,6 +32,10 @@ pub enum Command {
     Predict(fit::PredictArgs),
     /// K-fold cross-validation of a model choice.
     Cv(cv::CvArgs),
+    /// Pre-compensate a trajectory with a fitted model (single-step or iterative).
+    Compensate(compensate::CompensateArgs),
+    /// Run target and compensated trajectories on a simulated robot and compare.
+    Evaluate(compensate::EvaluateArgs),
 }
 
 /// Run a parsed command.
@@ -39,6 +45,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Fit(a) => fit::run_fit(a),
         Command::Predict(a) => fit::run_predict(a),
         Command::Cv(a) => cv::run(a),
+        Command::Compensate(a) => compensate::run_compensate(a),
+        Command::Evaluate(a) => compensate::run_evaluate(a),
     }
 }
 

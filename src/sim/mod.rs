@@ -16,10 +16,12 @@
 
 pub mod campaign;
 mod effects;
+pub mod execute;
 mod true_robot;
 
 pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, simulate};
 pub use effects::{EFFECT_NAMES, Effect};
+pub use execute::{Execution, execute};
 pub use true_robot::{
     Compliance, ErrorProfile, Harmonic, JointDeviation, NoiseModel, PoseContext, TrueRobot,
 };

@@ -1,0 +1,267 @@
+//! Feed-forward trajectory compensation with a fitted error model.
+//!
+//! The robot reaches `P + δ(s(P))` when commanded to `P`, where `s(P)` is the
+//! extended joint vector `[θ, λ]` of the command: θ from the *nominal* inverse
+//! kinematics (what the controller computes), λ from the visiting order
+//! (`λ_i = sign(θ_i − θ_{i−1})`, seed 004 eq 19; a joint that does not move
+//! keeps its λ; the first point's λ comes from the start pose).
+//!
+//! - **Single-step** (seed 003 eq 22): `Pm = Pd − δ̂(s(Pd))`.
+//! - **Iterative** (seed 004 eqs 18–22): starting from `Pm_0 = Pd`,
+//!   `θ_k = IK(Pm_{k−1})` (eq 18), `s_k = [θ_k, λ_k]` (eq 19),
+//!   `δ̂_k = Kr(s_k)` (eq 20), `Pm_k = Pd − δ̂_k`, which is eq 22
+//!   `Pm_k = Pm_{k−1} + ε_k` with `ε_k = δ̂_{k−1} − δ̂_k`. It stops when the
+//!   trajectory RMSE of the change, `R_k = √(Σ_i |ε_{i,k}|² / n)` (eq 21 per
+//!   point), is below a tolerance or after a maximum number of iterations.
+//!   Single-step is the first iteration.
+//!
+//! **Direction reversals.** Where a joint reverses inside the path its steps
+//! are tiny, and the correction itself can flip the sign of the step, hence λ,
+//! hence δ̂ (by the backlash), which flips the correction back: the plain
+//! fixed-point map has no fixed point there and iterates in a 2-cycle. So a
+//! point whose λ changes between two iterations has its step size halved
+//! (`Pm_k = Pm_{k−1} + α_i ε_k`, α_i ← α_i/2 at every flip): a bisection that
+//! converges to the switching boundary, where either λ leaves about half the
+//! backlash jump instead of all of it. Each iteration reports how many points
+//! flipped.
+//!
+//! Only positions are corrected; each command keeps its target's orientation.
+//! Points the IK cannot reach are reported by index ([`Error::Unreachable`]),
+//! never passed through uncorrected.
+
+use crate::kinematics::{IkOptions, IkTarget, Robot};
+use crate::model::ErrorModel;
+use crate::space::derive_directions;
+use crate::trajectory::Trajectory;
+use crate::{Error, Result};
+use nalgebra::{Isometry3, Translation3, Vector3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Options of [`compensate`]; `Default` is iterative, 1 µm, 10 iterations,
+/// starting from the robot's home pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompensationOptions {
+    /// Iterate (seed 004) or stop after the single step (seed 003).
+    pub iterative: bool,
+    /// Stop when the RMSE of the change falls below this, mm.
+    pub tol_mm: f64,
+    /// Maximum iterations (the single step counts as one).
+    pub max_iter: usize,
+    /// Joint values the robot starts from (λ of the first point); `None` = home.
+    pub start: Option<Vec<f64>>,
+    pub ik: IkOptions,
+}
+
+impl Default for CompensationOptions {
+    fn default() -> Self {
+        CompensationOptions {
+            iterative: true,
+            tol_mm: 1e-3,
+            max_iter: 10,
+            start: None,
+            ik: IkOptions::default(),
+        }
+    }
+}
+
+impl CompensationOptions {
+    fn validate(&self) -> Result<()> {
+        if self.tol_mm.is_nan() || self.tol_mm <= 0.0 || self.max_iter == 0 {
+            return Err(Error::InvalidParameter(format!(
+                "compensation needs tol > 0 and max-iter ≥ 1 (got tol {} mm, max-iter {})",
+                self.tol_mm, self.max_iter
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// One iteration of the loop.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Iteration {
+    /// 1 = the single step.
+    pub iteration: usize,
+    /// `R_k`, RMSE over the points of the change of the command, mm (eq 21).
+    pub rmse_change_mm: f64,
+    /// Largest change of one point, mm.
+    pub max_change_mm: f64,
+    /// Mean predicted |δ̂| at the commands of this iteration, mm.
+    pub mean_predicted_mm: f64,
+    /// Points whose λ changed since the previous iteration (step halved).
+    pub direction_flips: usize,
+}
+
+/// A compensated trajectory and how it was reached.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Compensated {
+    /// The corrected commands `Pm` (target orientation kept).
+    pub commands: Trajectory,
+    /// Nominal IK joints of the last evaluated commands, and their λ.
+    pub joints: Vec<Vec<f64>>,
+    pub dir: Vec<Vec<f64>>,
+    /// Predicted error δ̂ at those joints, mm.
+    pub predicted: Vec<[f64; 3]>,
+    pub history: Vec<Iteration>,
+    /// Whether the change fell below the tolerance (always true for single-step).
+    pub converged: bool,
+}
+
+fn target(t: &Trajectory, p: &Isometry3<f64>) -> IkTarget {
+    if t.has_orientation {
+        IkTarget::pose(p)
+    } else {
+        IkTarget::position(p.translation.vector)
+    }
+}
+
+/// Nominal IK of every command. The first pass (`previous` = None) seeds each
+/// point from the previous point's solution (sequential, the paper's rule);
+/// later passes seed each point from its own previous solution (the commands
+/// moved by a fraction of a millimetre), in parallel. Failures are collected
+/// by index.
+fn solve_joints(
+    robot: &Robot,
+    traj: &Trajectory,
+    poses: &[Isometry3<f64>],
+    start: &[f64],
+    previous: Option<&[Vec<f64>]>,
+    opts: &IkOptions,
+) -> Result<Vec<Vec<f64>>> {
+    let results: Vec<Result<Vec<f64>>> = match previous {
+        None => {
+            let mut seed = start.to_vec();
+            poses
+                .iter()
+                .map(|p| {
+                    let r = robot.ik(&target(traj, p), &seed, opts);
+                    if let Ok(q) = &r {
+                        seed.clone_from(q);
+                    }
+                    r
+                })
+                .collect()
+        }
+        Some(prev) => poses
+            .par_iter()
+            .zip(prev)
+            .map(|(p, q0)| robot.ik(&target(traj, p), q0, opts))
+            .collect(),
+    };
+    let mut joints = Vec::with_capacity(poses.len());
+    let mut failed = Vec::new();
+    let mut first = String::new();
+    for (i, r) in results.into_iter().enumerate() {
+        match r {
+            Ok(q) => joints.push(q),
+            Err(e) => {
+                if failed.is_empty() {
+                    first = e.to_string();
+                }
+                failed.push(i);
+            }
+        }
+    }
+    if failed.is_empty() {
+        Ok(joints)
+    } else {
+        Err(Error::Unreachable {
+            indices: failed,
+            first,
+        })
+    }
+}
+
+/// Compensate the target trajectory `targets` for `robot` with `model`.
+pub fn compensate(
+    robot: &Robot,
+    model: &ErrorModel,
+    targets: &Trajectory,
+    opts: &CompensationOptions,
+) -> Result<Compensated> {
+    opts.validate()?;
+    if targets.is_empty() {
+        return Err(Error::InvalidParameter(
+            "the trajectory has no points".into(),
+        ));
+    }
+    if model.n_joints != robot.dof() {
+        return Err(Error::JointCount {
+            expected: robot.dof(),
+            got: model.n_joints,
+        });
+    }
+    let start = opts.start.clone().unwrap_or_else(|| robot.home.clone());
+    robot.check_len(&start)?;
+    let n = targets.len();
+    let mut commands: Vec<Isometry3<f64>> = targets.poses.clone();
+    let mut joints: Option<Vec<Vec<f64>>> = None;
+    let mut history = Vec::new();
+    let mut step = vec![1.0f64; n];
+    let mut prev_dir: Option<Vec<Vec<f64>>> = None;
+    let max_iter = if opts.iterative { opts.max_iter } else { 1 };
+    loop {
+        let q = solve_joints(
+            robot,
+            targets,
+            &commands,
+            &start,
+            joints.as_deref(),
+            &opts.ik,
+        )?;
+        let dir = derive_directions(&q, Some(&start));
+        let pred = model.predict(&q, &dir)?.mean;
+        let mut flips = 0;
+        if let Some(pd) = &prev_dir {
+            for (i, (a, b)) in dir.iter().zip(pd).enumerate() {
+                if a != b {
+                    step[i] *= 0.5;
+                    flips += 1;
+                }
+            }
+        }
+        let (mut sum2, mut max, mut mean_pred) = (0.0f64, 0.0f64, 0.0);
+        let next: Vec<Isometry3<f64>> = (0..n)
+            .map(|i| {
+                let pd = &targets.poses[i];
+                let d = Vector3::from(pred[i]);
+                let old = commands[i].translation.vector;
+                let change = (pd.translation.vector - d - old) * step[i];
+                let c = change.norm();
+                sum2 += c * c;
+                max = max.max(c);
+                mean_pred += d.norm() / n as f64;
+                Isometry3::from_parts(Translation3::from(old + change), pd.rotation)
+            })
+            .collect();
+        let rmse = (sum2 / n as f64).sqrt();
+        history.push(Iteration {
+            iteration: history.len() + 1,
+            rmse_change_mm: rmse,
+            max_change_mm: max,
+            mean_predicted_mm: mean_pred,
+            direction_flips: flips,
+        });
+        let converged = !opts.iterative || rmse < opts.tol_mm;
+        if converged || history.len() >= max_iter {
+            // the final commands are `next`; their joints are solved for the report
+            let q_final = solve_joints(robot, targets, &next, &start, Some(&q), &opts.ik)?;
+            let dir_final = derive_directions(&q_final, Some(&start));
+            let predicted = model.predict(&q_final, &dir_final)?.mean;
+            return Ok(Compensated {
+                commands: Trajectory {
+                    poses: next,
+                    has_orientation: targets.has_orientation,
+                },
+                joints: q_final,
+                dir: dir_final,
+                predicted,
+                history,
+                converged,
+            });
+        }
+        commands = next;
+        joints = Some(q);
+        prev_dir = Some(dir);
+    }
+}

@@ -1,0 +1,86 @@
+//! Running a commanded trajectory on the true robot and measuring it, as the
+//! check of a compensation (seed 004 §IV.B.3): the controller solves the
+//! *nominal* inverse kinematics of every command (seeded from the previous
+//! point), the joints reach their actual values (angular deviation with the
+//! λ of the visiting order, compliance) plus repeatability noise, and the
+//! tracker adds its noise to the true TCP position.
+
+use super::{TrueRobot, gaussian};
+use crate::kinematics::{IkOptions, IkTarget};
+use crate::space::derive_directions;
+use crate::trajectory::Trajectory;
+use crate::{Error, Result};
+use nalgebra::Vector3;
+use rand::Rng;
+
+/// What a run of a trajectory produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Execution {
+    /// Nominal IK joints of the commands and their λ.
+    pub joints: Vec<Vec<f64>>,
+    pub dir: Vec<Vec<f64>>,
+    /// Measured TCP positions (with noise), mm.
+    pub measured: Vec<[f64; 3]>,
+}
+
+/// Execute `commands` on `robot` starting from joints `start`, without
+/// undeclared effects (default pose context), drawing the noise from `rng`.
+pub fn execute(
+    robot: &TrueRobot,
+    commands: &Trajectory,
+    start: &[f64],
+    rng: &mut impl Rng,
+) -> Result<Execution> {
+    let nominal = &robot.nominal;
+    nominal.check_len(start)?;
+    let opts = IkOptions::default();
+    let mut seed = start.to_vec();
+    let mut joints = Vec::with_capacity(commands.len());
+    let mut failed = Vec::new();
+    let mut first = String::new();
+    for (i, p) in commands.poses.iter().enumerate() {
+        let t = if commands.has_orientation {
+            IkTarget::pose(p)
+        } else {
+            IkTarget::position(p.translation.vector)
+        };
+        match nominal.ik(&t, &seed, &opts) {
+            Ok(q) => {
+                seed.clone_from(&q);
+                joints.push(q);
+            }
+            Err(e) => {
+                if failed.is_empty() {
+                    first = e.to_string();
+                }
+                failed.push(i);
+            }
+        }
+    }
+    if !failed.is_empty() {
+        return Err(Error::Unreachable {
+            indices: failed,
+            first,
+        });
+    }
+    let dir = derive_directions(&joints, Some(start));
+    let ctx = Default::default();
+    let measured = joints
+        .iter()
+        .zip(&dir)
+        .map(|(q, d)| {
+            let mut qa = robot.actual_joints(q, d, &ctx);
+            for a in &mut qa {
+                *a += gaussian(rng, robot.noise.repeatability_sigma_deg);
+            }
+            let p = robot.tcp(&qa, &ctx);
+            let sigma = robot.noise.tracker_sigma(&p);
+            (p + Vector3::from_fn(|_, _| gaussian(rng, sigma))).into()
+        })
+        .collect();
+    Ok(Execution {
+        joints,
+        dir,
+        measured,
+    })
+}
