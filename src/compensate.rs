@@ -22,8 +22,12 @@
 //! point whose λ changes between two iterations has its step size halved
 //! (`Pm_k = Pm_{k−1} + α_i ε_k`, α_i ← α_i/2 at every flip): a bisection that
 //! converges to the switching boundary, where either λ leaves about half the
-//! backlash jump instead of all of it. Each iteration reports how many points
-//! flipped.
+//! backlash jump instead of all of it. On a dense path the switch point itself
+//! creeps forward one point per iteration (the consistent command would hold
+//! the joint still over several points), so the loop also stops when the
+//! RMSE of the change has stalled (less than 10 % lower than two iterations
+//! before) and reports it ([`Stop::Stalled`]) with the points whose λ
+//! changed in the last iteration.
 //!
 //! Only positions are corrected; each command keeps its target's orientation.
 //! Points the IK cannot reach are reported by index ([`Error::Unreachable`]),
@@ -50,6 +54,10 @@ pub struct CompensationOptions {
     pub max_iter: usize,
     /// Joint values the robot starts from (λ of the first point); `None` = home.
     pub start: Option<Vec<f64>>,
+    /// IK seed per point for the first pass, e.g. the joints a pose list was
+    /// taught with (keeps each pose on its own branch). Without hints each
+    /// point is seeded from the previous point's solution, then from home.
+    pub hints: Option<Vec<Vec<f64>>>,
     pub ik: IkOptions,
 }
 
@@ -60,6 +68,7 @@ impl Default for CompensationOptions {
             tol_mm: 1e-3,
             max_iter: 10,
             start: None,
+            hints: None,
             ik: IkOptions::default(),
         }
     }
@@ -92,6 +101,20 @@ pub struct Iteration {
     pub direction_flips: usize,
 }
 
+/// Why the compensation loop stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stop {
+    /// Single-step mode.
+    SingleStep,
+    /// The RMSE of the change fell below the tolerance.
+    Converged,
+    /// The RMSE of the change stopped decreasing (direction reversals).
+    Stalled,
+    /// The iteration limit was reached.
+    MaxIterations,
+}
+
 /// A compensated trajectory and how it was reached.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Compensated {
@@ -105,6 +128,11 @@ pub struct Compensated {
     pub history: Vec<Iteration>,
     /// Whether the change fell below the tolerance (always true for single-step).
     pub converged: bool,
+    /// Why the loop stopped.
+    pub stop: Stop,
+    /// Points whose λ changed in the last iteration (direction reversals the
+    /// feed-forward loop cannot settle), in order.
+    pub unsettled: Vec<usize>,
 }
 
 fn target(t: &Trajectory, p: &Isometry3<f64>) -> IkTarget {
@@ -115,33 +143,21 @@ fn target(t: &Trajectory, p: &Isometry3<f64>) -> IkTarget {
     }
 }
 
-/// Nominal IK of every command. The first pass (`previous` = None) seeds each
-/// point from the previous point's solution (sequential, the paper's rule);
-/// later passes seed each point from its own previous solution (the commands
-/// moved by a fraction of a millimetre), in parallel. Failures are collected
-/// by index.
+/// Nominal IK of every command (see [`first_pass_joints`] for the first
+/// pass); later passes seed each point from its own previous solution (the
+/// commands moved by a fraction of a millimetre), in parallel. Failures are
+/// collected by index.
 fn solve_joints(
     robot: &Robot,
     traj: &Trajectory,
     poses: &[Isometry3<f64>],
     start: &[f64],
     previous: Option<&[Vec<f64>]>,
+    hints: Option<&[Vec<f64>]>,
     opts: &IkOptions,
 ) -> Result<Vec<Vec<f64>>> {
     let results: Vec<Result<Vec<f64>>> = match previous {
-        None => {
-            let mut seed = start.to_vec();
-            poses
-                .iter()
-                .map(|p| {
-                    let r = robot.ik(&target(traj, p), &seed, opts);
-                    if let Ok(q) = &r {
-                        seed.clone_from(q);
-                    }
-                    r
-                })
-                .collect()
-        }
+        None => first_pass_joints(robot, traj, poses, start, hints, opts),
         Some(prev) => poses
             .par_iter()
             .zip(prev)
@@ -172,6 +188,37 @@ fn solve_joints(
     }
 }
 
+/// Sequential IK along `poses`: each point seeded from its hint (if given),
+/// then from the previous point's solution (the paper's rule), then from the
+/// start pose.
+pub fn first_pass_joints(
+    robot: &Robot,
+    traj: &Trajectory,
+    poses: &[Isometry3<f64>],
+    start: &[f64],
+    hints: Option<&[Vec<f64>]>,
+    opts: &IkOptions,
+) -> Vec<Result<Vec<f64>>> {
+    let mut prev = start.to_vec();
+    poses
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut seeds: Vec<&[f64]> = Vec::with_capacity(3);
+            if let Some(h) = hints.and_then(|h| h.get(i)) {
+                seeds.push(h);
+            }
+            seeds.push(&prev);
+            seeds.push(start);
+            let r = robot.ik_from_any(&target(traj, p), &seeds, opts);
+            if let Ok(q) = &r {
+                prev.clone_from(q);
+            }
+            r
+        })
+        .collect()
+}
+
 /// Compensate the target trajectory `targets` for `robot` with `model`.
 pub fn compensate(
     robot: &Robot,
@@ -194,6 +241,17 @@ pub fn compensate(
     let start = opts.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
     let n = targets.len();
+    if let Some(h) = &opts.hints {
+        if h.len() != n {
+            return Err(Error::InvalidParameter(format!(
+                "{} IK hints for {n} trajectory points",
+                h.len()
+            )));
+        }
+        for q in h {
+            robot.check_len(q)?;
+        }
+    }
     let mut commands: Vec<Isometry3<f64>> = targets.poses.clone();
     let mut joints: Option<Vec<Vec<f64>>> = None;
     let mut history = Vec::new();
@@ -207,16 +265,18 @@ pub fn compensate(
             &commands,
             &start,
             joints.as_deref(),
+            opts.hints.as_deref(),
             &opts.ik,
         )?;
         let dir = derive_directions(&q, Some(&start));
-        let pred = model.predict(&q, &dir)?.mean;
-        let mut flips = 0;
+        let pred = model.predict_mean(&q, &dir)?;
+        let mut flipped = Vec::new();
         if let Some(pd) = &prev_dir {
             for (i, (a, b)) in dir.iter().zip(pd).enumerate() {
                 if a != b {
+                    flipped.push(i);
+                    // bisection toward the λ switching boundary
                     step[i] *= 0.5;
-                    flips += 1;
                 }
             }
         }
@@ -240,14 +300,26 @@ pub fn compensate(
             rmse_change_mm: rmse,
             max_change_mm: max,
             mean_predicted_mm: mean_pred,
-            direction_flips: flips,
+            direction_flips: flipped.len(),
         });
-        let converged = !opts.iterative || rmse < opts.tol_mm;
-        if converged || history.len() >= max_iter {
+        let k = history.len();
+        let stop = if !opts.iterative {
+            Some(Stop::SingleStep)
+        } else if rmse < opts.tol_mm {
+            Some(Stop::Converged)
+        } else if k >= 4 && rmse > 0.9 * history[k - 3].rmse_change_mm {
+            Some(Stop::Stalled)
+        } else if k >= max_iter {
+            Some(Stop::MaxIterations)
+        } else {
+            None
+        };
+        if let Some(stop) = stop {
+            let converged = matches!(stop, Stop::SingleStep | Stop::Converged);
             // the final commands are `next`; their joints are solved for the report
-            let q_final = solve_joints(robot, targets, &next, &start, Some(&q), &opts.ik)?;
+            let q_final = solve_joints(robot, targets, &next, &start, Some(&q), None, &opts.ik)?;
             let dir_final = derive_directions(&q_final, Some(&start));
-            let predicted = model.predict(&q_final, &dir_final)?.mean;
+            let predicted = model.predict_mean(&q_final, &dir_final)?;
             return Ok(Compensated {
                 commands: Trajectory {
                     poses: next,
@@ -258,6 +330,8 @@ pub fn compensate(
                 predicted,
                 history,
                 converged,
+                stop,
+                unsettled: flipped,
             });
         }
         commands = next;

@@ -148,6 +148,36 @@ impl ErrorModel {
 
     /// Predict at poses `q` approached in directions `dir` (ignored in JS).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
+        self.check_rows(q, dir)?;
+        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
+        let per_axis: Vec<Vec<Pred>> = self.outputs.par_iter().map(|m| m.predict(&s)).collect();
+        let mut mean = vec![[0.0; 3]; q.len()];
+        let mut std = vec![[0.0; 3]; q.len()];
+        for (a, preds) in per_axis.iter().enumerate() {
+            for (k, p) in preds.iter().enumerate() {
+                mean[k][a] = p.mean;
+                std[k][a] = p.mse.sqrt();
+            }
+        }
+        Ok(Prediction { mean, std })
+    }
+
+    /// The predicted error only (no standard deviation), mm: the fast path
+    /// for compensation.
+    pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.check_rows(q, dir)?;
+        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
+        let per_axis: Vec<Vec<f64>> = self
+            .outputs
+            .par_iter()
+            .map(|m| m.predict_mean(&s))
+            .collect();
+        Ok((0..q.len())
+            .map(|k| [per_axis[0][k], per_axis[1][k], per_axis[2][k]])
+            .collect())
+    }
+
+    fn check_rows(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<()> {
         if q.len() != dir.len() {
             return Err(Error::InvalidParameter(
                 "q and dir have different row counts".into(),
@@ -161,17 +191,7 @@ impl ErrorModel {
                 });
             }
         }
-        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
-        let per_axis: Vec<Vec<Pred>> = self.outputs.par_iter().map(|m| m.predict(&s)).collect();
-        let mut mean = vec![[0.0; 3]; q.len()];
-        let mut std = vec![[0.0; 3]; q.len()];
-        for (a, preds) in per_axis.iter().enumerate() {
-            for (k, p) in preds.iter().enumerate() {
-                mean[k][a] = p.mean;
-                std[k][a] = p.mse.sqrt();
-            }
-        }
-        Ok(Prediction { mean, std })
+        Ok(())
     }
 
     /// Predict for every row of a dataset.

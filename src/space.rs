@@ -12,8 +12,10 @@
 //! previous λ; the first pose's λ comes from the start pose (and is +1 where the
 //! joint did not move from it, or when no start pose is known).
 
-/// Joint moves smaller than this (degrees or mm) count as "did not move".
-pub const MOVE_EPS: f64 = 1e-9;
+/// Joint moves smaller than this (degrees or mm) count as "did not move":
+/// far above the round-off of an IK solution (~1e-8°), far below an encoder
+/// count (~1e-4°), so a joint held still along an IK-solved path keeps its λ.
+pub const MOVE_EPS: f64 = 1e-6;
 
 /// Direction coefficients (±1) for a sequence of joint vectors visited in order.
 ///

@@ -62,3 +62,102 @@ fn bad_data_exits_1_with_one_line_bad_usage_exits_2() {
     assert_eq!(c, 0);
     assert!(out.contains("Examples:"));
 }
+
+#[test]
+fn compensate_and_evaluate_report_before_and_after() {
+    let dir = std::env::temp_dir().join(format!("robokrige-cli-comp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let (c, _, err) = rk(&[
+        "fit",
+        &ds("comau_lhs.csv"),
+        "--optimizer",
+        "hj",
+        "-o",
+        &p("m.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let (c, out, err) = rk(&[
+        "compensate",
+        "--model",
+        &p("m.json"),
+        "--robot",
+        "comau-nj220",
+        &ds("comau_circle.csv"),
+        "-o",
+        &p("comp.csv"),
+        "--iterative",
+        "--truth",
+        &ds("comau_circle.truth.json"),
+        "--json",
+        &p("comp.json"),
+        "--plot",
+        &p("comp.svg"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("reduction"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("comp.json")).unwrap()).unwrap();
+    let (b, a) = (&v["before"], &v["after"]);
+    for key in ["mean_abs_mm", "max_abs_mm", "std_abs_mm"] {
+        assert!(
+            b[key].as_f64().unwrap() > a[key].as_f64().unwrap(),
+            "{key}: {v}"
+        );
+    }
+    assert_eq!(a["mean_mm"].as_array().unwrap().len(), 3);
+    assert!(v["iterations"].as_array().unwrap().len() >= 2);
+    assert!(
+        std::fs::read_to_string(dir.join("comp.svg"))
+            .unwrap()
+            .contains("<svg")
+    );
+    // the same commands through `evaluate`
+    let (c, _, err) = rk(&[
+        "evaluate",
+        "--truth",
+        &ds("comau_circle.truth.json"),
+        &ds("comau_circle.csv"),
+        &p("comp.csv"),
+        "--json",
+        &p("eval.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("eval.json")).unwrap()).unwrap();
+    // same noise seed; the commands went through a CSV (round-off only)
+    for run in ["before", "after"] {
+        for key in ["mean_abs_mm", "max_abs_mm", "std_abs_mm"] {
+            let (x, y) = (e[run][key].as_f64().unwrap(), v[run][key].as_f64().unwrap());
+            assert!((x - y).abs() < 1e-9, "{run}.{key}: {x} vs {y}");
+        }
+    }
+    // a plot without measurements to draw, and a truth for another robot
+    let (c, _, err) = rk(&[
+        "compensate",
+        "--model",
+        &p("m.json"),
+        "--robot",
+        "comau-nj220",
+        &ds("comau_circle.csv"),
+        "-o",
+        &p("x.csv"),
+        "--plot",
+        &p("x.svg"),
+    ]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("--plot needs --truth"), "{err}");
+    let (c, _, err) = rk(&[
+        "evaluate",
+        "--robot",
+        "ur10",
+        "--truth",
+        &ds("comau_circle.truth.json"),
+        &ds("comau_circle.csv"),
+        &p("comp.csv"),
+    ]);
+    assert_eq!(c, 1);
+    assert!(err.contains("not 'ur10'"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -3,7 +3,7 @@
 use super::progress::spinner;
 use clap::Args;
 use nalgebra::{Isometry3, UnitQuaternion};
-use robokrige::compensate::{Compensated, CompensationOptions, compensate};
+use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
 use robokrige::dataset::read_csv;
 use robokrige::kinematics::{self, Robot};
 use robokrige::model::ErrorModel;
@@ -97,13 +97,19 @@ pub struct EvaluateArgs {
     json: Option<PathBuf>,
 }
 
+/// Target poses, and for a q1..qN pose list the joints as IK hints.
+struct Targets {
+    traj: Trajectory,
+    hints: Option<Vec<Vec<f64>>>,
+}
+
 /// Targets from a trajectory CSV or from the nominal FK of a q1..qN pose list.
 fn read_targets(
     path: &Path,
     robot: &Robot,
     orientation: Option<&[f64]>,
     start: &[f64],
-) -> Result<Trajectory> {
+) -> Result<Targets> {
     let first = std::fs::read_to_string(path)
         .map_err(|e| Error::io(path, e))?
         .lines()
@@ -111,7 +117,9 @@ fn read_targets(
         .unwrap_or_default()
         .to_string();
     let cols: Vec<&str> = first.split(',').map(str::trim).collect();
-    let mut t = if cols.contains(&"q1") && !cols.contains(&"x") {
+    let mut hints = None;
+    // q columns win: in a measurement CSV, x,y,z are the *measured* positions
+    let mut t = if cols.contains(&"q1") {
         let d = read_csv(path)?;
         if d.n_joints() != robot.dof() {
             return Err(Error::JointCount {
@@ -119,7 +127,9 @@ fn read_targets(
                 got: d.n_joints(),
             });
         }
-        Trajectory::new(d.q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?)
+        let t = Trajectory::new(d.q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?);
+        hints = Some(d.q);
+        t
     } else {
         Trajectory::read_csv(path)?
     };
@@ -140,7 +150,7 @@ fn read_targets(
         }
         t.has_orientation = true;
     }
-    Ok(t)
+    Ok(Targets { traj: t, hints })
 }
 
 fn load_truth(path: &Path) -> Result<Truth> {
@@ -162,15 +172,15 @@ fn load_truth(path: &Path) -> Result<Truth> {
 fn run_on(
     truth: &Truth,
     commands: &Trajectory,
-    targets: &Trajectory,
+    targets: &Targets,
     start: &[f64],
     rng: &mut impl rand::Rng,
 ) -> Result<Vec<[f64; 3]>> {
-    let ex = execute(&truth.robot, commands, start, rng)?;
+    let ex = execute(&truth.robot, commands, start, targets.hints.as_deref(), rng)?;
     Ok(ex
         .measured
         .iter()
-        .zip(&targets.poses)
+        .zip(&targets.traj.poses)
         .map(|(m, p)| {
             let t = p.translation.vector;
             [m[0] - t[0], m[1] - t[1], m[2] - t[2]]
@@ -195,20 +205,20 @@ struct Evaluation {
 fn evaluation(
     truth_path: &Path,
     truth: &Truth,
-    targets: &Trajectory,
+    targets: &Targets,
     commands: &Trajectory,
     start: &[f64],
     seed: u64,
 ) -> Result<(Evaluation, Runs)> {
     let mut rng = rng_for(seed, "evaluate");
-    let before = run_on(truth, targets, targets, start, &mut rng)?;
+    let before = run_on(truth, &targets.traj, targets, start, &mut rng)?;
     let after = run_on(truth, commands, targets, start, &mut rng)?;
     let (b, a) = (position_error_table(&before), position_error_table(&after));
     Ok((
         Evaluation {
             truth: truth_path.to_path_buf(),
             seed,
-            points: targets.len(),
+            points: targets.traj.len(),
             reduction_mean_abs_pct: 100.0 * (1.0 - a.mean_abs_mm / b.mean_abs_mm),
             reduction_max_abs_pct: 100.0 * (1.0 - a.max_abs_mm / b.max_abs_mm),
             before: b,
@@ -264,11 +274,12 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         tol_mm: a.tol,
         max_iter: a.max_iter,
         start: Some(start.clone()),
+        hints: targets.hints.clone(),
         ..CompensationOptions::default()
     };
     let pb = spinner("compensate");
     let t0 = std::time::Instant::now();
-    let res = compensate(&robot, &model, &targets, &opts);
+    let res = compensate(&robot, &model, &targets.traj, &opts);
     pb.finish_and_clear();
     let res: Compensated = res?;
     let secs = t0.elapsed().as_secs_f64();
@@ -280,7 +291,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         } else {
             "compensated (single step)"
         },
-        targets.len(),
+        targets.traj.len(),
         model.space,
         a.output.display()
     );
@@ -294,11 +305,17 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
             it.direction_flips
         );
     }
-    if a.iterative && !res.converged {
-        eprintln!(
+    match res.stop {
+        Stop::Stalled => eprintln!(
+            "warning: the change stalled above {} mm at direction reversals; λ still switching at points {}",
+            a.tol,
+            list(&res.unsettled)
+        ),
+        Stop::MaxIterations => eprintln!(
             "warning: the change did not fall below {} mm in {} iterations",
             a.tol, a.max_iter
-        );
+        ),
+        Stop::Converged | Stop::SingleStep => {}
     }
     let mut eval = None;
     if let Some(tp) = &a.truth {
@@ -345,6 +362,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         let mut v = serde_json::json!({
             "targets": a.traj, "output": a.output, "model": a.model, "robot": robot.name,
             "space": model.space, "iterative": a.iterative, "converged": res.converged,
+            "stop": res.stop, "unsettled": res.unsettled,
             "iterations": res.history, "seconds": secs,
         });
         if let Some(ev) = eval {
@@ -355,6 +373,15 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         super::write_json(path, &v, "compensation report")?;
     }
     Ok(())
+}
+
+/// Up to 12 indices, then an ellipsis.
+fn list(v: &[usize]) -> String {
+    let mut s: Vec<String> = v.iter().take(12).map(usize::to_string).collect();
+    if v.len() > 12 {
+        s.push(format!("… ({} in all)", v.len()));
+    }
+    s.join(", ")
 }
 
 fn check_robot(truth: &Truth, name: &str, path: &Path) -> Result<()> {
@@ -387,13 +414,13 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     println!("measured error vs target on the simulated robot (mm):");
     for (k, path) in a.compensated.iter().enumerate() {
         let commands = Trajectory::read_csv(path)?;
-        if commands.len() != targets.len() {
+        if commands.len() != targets.traj.len() {
             return Err(Error::Input {
                 source_name: path.display().to_string(),
                 message: format!(
                     "has {} points but the target trajectory has {}",
                     commands.len(),
-                    targets.len()
+                    targets.traj.len()
                 ),
             });
         }

@@ -122,6 +122,24 @@ impl Robot {
         })
     }
 
+    /// [`Robot::ik`] from each of `seeds` in turn; the first solution wins,
+    /// otherwise the last seed's error is returned.
+    pub fn ik_from_any(
+        &self,
+        target: &IkTarget,
+        seeds: &[&[f64]],
+        opts: &IkOptions,
+    ) -> Result<Vec<f64>> {
+        let mut last = Err(Error::InvalidParameter("no IK seed given".into()));
+        for seed in seeds {
+            last = self.ik(target, seed, opts);
+            if last.is_ok() {
+                break;
+            }
+        }
+        last
+    }
+
     fn clamp(&self, q: &mut [f64]) {
         for (v, (lo, hi)) in q.iter_mut().zip(&self.limits) {
             *v = v.clamp(*lo, *hi);

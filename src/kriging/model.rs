@@ -6,7 +6,8 @@
 //! (DACE's form of eq 12), all in normalised units and scaled back by the
 //! output's mean and standard deviation.
 
-use super::corr::{CorrelationModel, Gaussian, corr_vector};
+use super::corr::{CorrelationModel, Gaussian, TrainingInputs, corr_vector};
+use super::fastexp::exp_in_place;
 use super::problem::Solution;
 use super::trend::{Trend, TrendModel, trend_matrix};
 use crate::{Error, Result};
@@ -53,6 +54,8 @@ pub struct KrigingModel {
     c: Mat<f64>,
     g: Mat<f64>,
     ftilde: Mat<f64>,
+    /// Training inputs, dimension-major (vectorised correlation vectors).
+    xt: TrainingInputs,
 }
 
 impl PartialEq for KrigingModel {
@@ -103,7 +106,14 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         let c = unpack_lower(&data.chol_lower, m);
         let g = unpack_upper(&data.g_upper, p);
         let ftilde = ftilde(&c, &data.trend, &data.x_train);
-        Ok(KrigingModel { data, c, g, ftilde })
+        let xt = TrainingInputs::new(&data.x_train);
+        Ok(KrigingModel {
+            data,
+            c,
+            g,
+            ftilde,
+            xt,
+        })
     }
 }
 
@@ -192,6 +202,36 @@ impl KrigingModel {
     /// Input dimension.
     pub fn dim(&self) -> usize {
         self.data.theta.len()
+    }
+
+    /// The mean only, `ŷ(s) = f(s)ᵀβ + r(s)ᵀγ` (seed 003 eq 9), original
+    /// units: no triangular solves, so several times cheaper than
+    /// [`KrigingModel::predict`] (compensation needs only the mean). The
+    /// correlation vector is accumulated dimension by dimension over the
+    /// contiguous training values, then one vectorised `exp`.
+    pub fn predict_mean(&self, s: &[Vec<f64>]) -> Vec<f64> {
+        let d = &self.data;
+        let m = d.x_train.len();
+        s.par_chunks(BLOCK)
+            .flat_map_iter(|blk| {
+                let mut acc = vec![0.0; m];
+                let mut fs = vec![0.0; d.trend.len()];
+                blk.iter()
+                    .map(|x| {
+                        acc.fill(0.0);
+                        for (k, (&t, &xk)) in d.theta.iter().zip(x).enumerate() {
+                            for (a, v) in acc.iter_mut().zip(self.xt.dim_values(k)) {
+                                let h = xk - v;
+                                *a -= t * h * h;
+                            }
+                        }
+                        exp_in_place(&mut acc);
+                        d.trend.eval_into(x, &mut fs);
+                        d.y_mean + d.y_std * (dot(&fs, &d.beta) + dot(&acc, &d.gamma))
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
     }
 
     /// Predict at normalised inputs (mean and MSE in original units).

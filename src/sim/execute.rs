@@ -6,7 +6,8 @@
 //! tracker adds its noise to the true TCP position.
 
 use super::{TrueRobot, gaussian};
-use crate::kinematics::{IkOptions, IkTarget};
+use crate::compensate::first_pass_joints;
+use crate::kinematics::IkOptions;
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
 use crate::{Error, Result};
@@ -25,30 +26,31 @@ pub struct Execution {
 
 /// Execute `commands` on `robot` starting from joints `start`, without
 /// undeclared effects (default pose context), drawing the noise from `rng`.
+/// The controller's IK seeds each point from `hints` (if given), then from the
+/// previous point ([`first_pass_joints`]).
 pub fn execute(
     robot: &TrueRobot,
     commands: &Trajectory,
     start: &[f64],
+    hints: Option<&[Vec<f64>]>,
     rng: &mut impl Rng,
 ) -> Result<Execution> {
     let nominal = &robot.nominal;
     nominal.check_len(start)?;
-    let opts = IkOptions::default();
-    let mut seed = start.to_vec();
     let mut joints = Vec::with_capacity(commands.len());
     let mut failed = Vec::new();
     let mut first = String::new();
-    for (i, p) in commands.poses.iter().enumerate() {
-        let t = if commands.has_orientation {
-            IkTarget::pose(p)
-        } else {
-            IkTarget::position(p.translation.vector)
-        };
-        match nominal.ik(&t, &seed, &opts) {
-            Ok(q) => {
-                seed.clone_from(&q);
-                joints.push(q);
-            }
+    let solved = first_pass_joints(
+        nominal,
+        commands,
+        &commands.poses,
+        start,
+        hints,
+        &IkOptions::default(),
+    );
+    for (i, r) in solved.into_iter().enumerate() {
+        match r {
+            Ok(q) => joints.push(q),
             Err(e) => {
                 if failed.is_empty() {
                     first = e.to_string();

@@ -1,0 +1,250 @@
+//! Feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22), checked by
+//! running the commands on the simulator's true robot.
+
+use nalgebra::{Translation3, Vector3};
+use robokrige::compensate::{CompensationOptions, Stop, compensate};
+use robokrige::dataset::read_csv;
+use robokrige::kinematics::{self, Robot};
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::ErrorModel;
+use robokrige::sim::{Truth, execute, rng_for};
+use robokrige::space::Space;
+use robokrige::stats::position_error_table;
+use robokrige::trajectory::Trajectory;
+use robokrige::{Error, Result};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+fn shipped(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("datasets")
+        .join(name)
+}
+
+fn robot() -> Robot {
+    kinematics::preset("comau-nj220").unwrap()
+}
+
+/// EJS and JS models of the shipped COMAU campaign, fitted once (a quick
+/// Hooke–Jeeves fit; the CLI's default GPS fit is better still).
+fn models() -> &'static (ErrorModel, ErrorModel) {
+    static M: OnceLock<(ErrorModel, ErrorModel)> = OnceLock::new();
+    M.get_or_init(|| {
+        let data = read_csv(&shipped("comau_lhs.csv")).unwrap();
+        let opts = KrigingOptions {
+            optimizer: OptimizerKind::HookeJeeves,
+            max_evals: 400,
+            starts: 2,
+            ..KrigingOptions::default()
+        };
+        (
+            ErrorModel::fit(&data, Space::Ejs, &opts).unwrap(),
+            ErrorModel::fit(&data, Space::Js, &opts).unwrap(),
+        )
+    })
+}
+
+fn circle() -> Trajectory {
+    Trajectory::read_csv(&shipped("comau_circle.csv")).unwrap()
+}
+
+fn truth() -> Truth {
+    let text = std::fs::read_to_string(shipped("comau_circle.truth.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Measured 3D errors (mean, max) of running `commands` aimed at `targets`.
+fn run(truth: &Truth, commands: &Trajectory, targets: &Trajectory, seed: u64) -> (f64, f64) {
+    let mut rng = rng_for(seed, "test");
+    let ex = execute(
+        &truth.robot,
+        commands,
+        &truth.robot.nominal.home,
+        None,
+        &mut rng,
+    )
+    .unwrap();
+    let e: Vec<[f64; 3]> = ex
+        .measured
+        .iter()
+        .zip(&targets.poses)
+        .map(|(m, p)| {
+            let d = Vector3::from(*m) - p.translation.vector;
+            [d.x, d.y, d.z]
+        })
+        .collect();
+    let t = position_error_table(&e);
+    (t.mean_abs_mm, t.max_abs_mm)
+}
+
+fn comp(model: &ErrorModel, traj: &Trajectory, iterative: bool) -> Result<Trajectory> {
+    let opts = CompensationOptions {
+        iterative,
+        ..CompensationOptions::default()
+    };
+    compensate(&robot(), model, traj, &opts).map(|c| c.commands)
+}
+
+#[test]
+fn ejs_iterative_compensation_of_the_circle_meets_the_targets_and_beats_js() {
+    let (ejs, js) = models();
+    let (targets, truth) = (circle(), truth());
+    let before = run(&truth, &targets, &targets, 1);
+    let after_ejs = run(&truth, &comp(ejs, &targets, true).unwrap(), &targets, 2);
+    let after_js = run(&truth, &comp(js, &targets, true).unwrap(), &targets, 2);
+    let red = |a: (f64, f64)| (1.0 - a.0 / before.0, 1.0 - a.1 / before.1);
+    let (mean_red, max_red) = red(after_ejs);
+    eprintln!("before {before:?}, EJS {after_ejs:?}, JS {after_js:?}");
+    assert!(mean_red >= 0.80, "mean reduction {mean_red:.3}");
+    assert!(max_red >= 0.60, "max reduction {max_red:.3}");
+    assert!(
+        after_ejs.0 < 0.5 * after_js.0,
+        "EJS {after_ejs:?} vs JS {after_js:?}"
+    );
+}
+
+#[test]
+fn single_step_is_eq_22_and_the_first_iteration() {
+    let (ejs, _) = models();
+    let targets = circle();
+    let single = compensate(
+        &robot(),
+        ejs,
+        &targets,
+        &CompensationOptions {
+            iterative: false,
+            ..CompensationOptions::default()
+        },
+    )
+    .unwrap();
+    let one = compensate(
+        &robot(),
+        ejs,
+        &targets,
+        &CompensationOptions {
+            max_iter: 1,
+            ..CompensationOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(single.commands, one.commands);
+    assert_eq!(single.history.len(), 1);
+    // Pm = Pd − δ̂(s(Pd)): δ̂ at the nominal IK of the targets, λ from the order
+    let r = robot();
+    let mut seed = r.home.clone();
+    let q: Vec<Vec<f64>> = targets
+        .poses
+        .iter()
+        .map(|p| {
+            seed = r
+                .ik(&kinematics::IkTarget::pose(p), &seed, &Default::default())
+                .unwrap();
+            seed.clone()
+        })
+        .collect();
+    let dir = robokrige::space::derive_directions(&q, Some(&r.home));
+    let d = ejs.predict(&q, &dir).unwrap().mean;
+    for ((pm, pd), di) in single.commands.poses.iter().zip(&targets.poses).zip(&d) {
+        let want = pd.translation.vector - Vector3::from(*di);
+        assert!((pm.translation.vector - want).norm() < 1e-9);
+        assert_eq!(pm.rotation, pd.rotation);
+    }
+}
+
+#[test]
+fn iterative_compensation_converges_without_directions_and_settles_with_them() {
+    let (ejs, js) = models();
+    let targets = circle();
+    let opts = CompensationOptions::default();
+    // JS: a smooth map, a contraction — converges in a few iterations
+    let c = compensate(&robot(), js, &targets, &opts).unwrap();
+    assert_eq!(c.stop, Stop::Converged, "{:?}", c.history);
+    assert!(c.converged && c.history.len() <= 3);
+    assert!(c.history.last().unwrap().rmse_change_mm < opts.tol_mm);
+    // EJS: λ switches at the reversals; the loop either converges or stalls
+    // there, and then names the points
+    let c = compensate(&robot(), ejs, &targets, &opts).unwrap();
+    eprintln!("{:?} {:?} {:?}", c.stop, c.unsettled, c.history);
+    match c.stop {
+        Stop::Converged => assert!(c.history.last().unwrap().rmse_change_mm < opts.tol_mm),
+        Stop::Stalled => assert!(!c.unsettled.is_empty()),
+        other => panic!("unexpected stop {other:?}"),
+    }
+    assert!(c.history.len() >= 2 && c.history.len() <= opts.max_iter);
+    // the model predicts the final commands to land on the targets: the
+    // residual Pm + δ̂(s(Pm)) − Pd is small except at the few points where a
+    // joint reverses (bisection at the λ switch leaves part of the backlash)
+    let resid: Vec<f64> = c
+        .commands
+        .poses
+        .iter()
+        .zip(&targets.poses)
+        .zip(&c.predicted)
+        .map(|((pm, pd), d)| {
+            (pm.translation.vector + Vector3::from(*d) - pd.translation.vector).norm()
+        })
+        .collect();
+    let small = resid.iter().filter(|r| **r < 0.01).count();
+    assert!(small >= resid.len() - 6, "{resid:?}");
+}
+
+#[test]
+fn unreachable_points_are_reported_by_index_never_passed_through() {
+    let (ejs, _) = models();
+    let mut targets = circle();
+    for i in [5, 40] {
+        targets.poses[i].translation = Translation3::new(9000.0, 0.0, 0.0);
+    }
+    match compensate(&robot(), ejs, &targets, &CompensationOptions::default()) {
+        Err(Error::Unreachable { indices, first }) => {
+            assert_eq!(indices, vec![5, 40]);
+            assert!(first.contains("did not converge"), "{first}");
+        }
+        other => panic!("expected Unreachable, got {other:?}"),
+    }
+}
+
+#[test]
+fn bad_options_and_mismatched_robots_are_errors() {
+    let (ejs, _) = models();
+    let targets = circle();
+    for opts in [
+        CompensationOptions {
+            tol_mm: 0.0,
+            ..CompensationOptions::default()
+        },
+        CompensationOptions {
+            max_iter: 0,
+            ..CompensationOptions::default()
+        },
+        CompensationOptions {
+            hints: Some(vec![vec![0.0; 6]; 3]),
+            ..CompensationOptions::default()
+        },
+    ] {
+        assert!(matches!(
+            compensate(&robot(), ejs, &targets, &opts),
+            Err(Error::InvalidParameter(_))
+        ));
+    }
+    let scara = kinematics::preset("scara-rh3frh5515").unwrap();
+    assert!(matches!(
+        compensate(&scara, ejs, &targets, &CompensationOptions::default()),
+        Err(Error::JointCount { .. })
+    ));
+    let empty = Trajectory::new(Vec::new());
+    assert!(compensate(&robot(), ejs, &empty, &CompensationOptions::default()).is_err());
+}
+
+#[test]
+fn mean_only_prediction_matches_the_full_prediction() {
+    let (ejs, js) = models();
+    let data = read_csv(&shipped("comau_verify.csv")).unwrap();
+    for m in [ejs, js] {
+        let full = m.predict_dataset(&data).unwrap().mean;
+        let fast = m.predict_mean(&data.q, &data.dir).unwrap();
+        for (a, b) in full.iter().flatten().zip(fast.iter().flatten()) {
+            assert!((a - b).abs() < 1e-9 * (1.0 + a.abs()), "{a} vs {b}");
+        }
+    }
+}
