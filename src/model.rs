@@ -6,6 +6,7 @@
 //! JSON that predicts bit-identically after loading.
 
 use crate::dataset::Dataset;
+use crate::features::{Feature, append_columns};
 use crate::kriging::{FitReport, KrigingModel, KrigingOptions, Pred, TrainingInputs, fit_output};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
@@ -33,6 +34,9 @@ pub struct ErrorModel {
     /// One model per axis, in [`AXES`] order.
     pub outputs: Vec<KrigingModel>,
     pub reports: Vec<FitReport>,
+    /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extras: Vec<Feature>,
     /// Basis selection that chose the trends (PCC+PCA or GA), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub selection: Option<crate::basis::Selection>,
@@ -94,12 +98,47 @@ impl ErrorModel {
         Ok((model, reports))
     }
 
+    /// Fit with extra inputs `extras` after `[θ, λ]`: each is an input
+    /// dimension of the correlation and gets a linear trend term next to the
+    /// options' trend in `[θ, λ]`.
+    pub fn fit_with_extras(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        extras: &[Feature],
+    ) -> Result<Self> {
+        let d0 = space.dim(data.n_joints());
+        let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
+        let mut terms = opts.trend.monomials(d0);
+        terms.dim = d0 + extra_dims;
+        for e in &mut terms.exponents {
+            e.resize(d0 + extra_dims, 0);
+        }
+        for k in 0..extra_dims {
+            let mut e = vec![0u8; d0 + extra_dims];
+            e[d0 + k] = 1;
+            terms.exponents.push(e);
+        }
+        let trend = crate::kriging::Trend::from(terms);
+        Self::fit_inner(data, space, opts, &[trend.clone(), trend.clone(), trend], extras)
+    }
+
     /// Fit with a (possibly different) trend candidate set per output.
     pub fn fit_with_trend(
         data: &Dataset,
         space: Space,
         opts: &KrigingOptions,
         trends: &[crate::kriging::Trend; 3],
+    ) -> Result<Self> {
+        Self::fit_inner(data, space, opts, trends, &[])
+    }
+
+    fn fit_inner(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        trends: &[crate::kriging::Trend; 3],
+        extras: &[Feature],
     ) -> Result<Self> {
         opts.validate()?;
         let errors = data.errors_or_err()?;
@@ -113,11 +152,15 @@ impl ErrorModel {
             });
         }
         let n = data.n_joints();
-        let rows = space.rows(&data.q, &data.dir);
+        let mut rows = space.rows(&data.q, &data.dir);
+        let mut names = space.names(n);
+        for f in extras {
+            append_columns(&mut rows, &f.columns(data)?);
+            names.extend(f.names());
+        }
         let input_norm = Normalizer::fit(&rows);
         let x = input_norm.apply_rows(&rows);
         let inputs = TrainingInputs::new(&x);
-        let names = space.names(n);
         let fits: Vec<Result<(KrigingModel, FitReport)>> = (0..3)
             .into_par_iter()
             .map(|a| {
@@ -142,17 +185,28 @@ impl ErrorModel {
             options: opts.clone(),
             outputs,
             reports,
+            extras: extras.to_vec(),
             selection: None,
         })
     }
 
     /// Predict at poses `q` approached in directions `dir` (ignored in JS).
+    /// Extra inputs are computed from the pose sequence
+    /// ([`Feature::columns_from_poses`]).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
-        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
+        let mut rows = self.space.rows(q, dir);
+        for f in &self.extras {
+            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
+        }
+        self.predict_rows(&rows)
+    }
+
+    fn predict_rows(&self, rows: &[Vec<f64>]) -> Result<Prediction> {
+        let s = self.input_norm.apply_rows(rows);
         let per_axis: Vec<Vec<Pred>> = self.outputs.par_iter().map(|m| m.predict(&s)).collect();
-        let mut mean = vec![[0.0; 3]; q.len()];
-        let mut std = vec![[0.0; 3]; q.len()];
+        let mut mean = vec![[0.0; 3]; rows.len()];
+        let mut std = vec![[0.0; 3]; rows.len()];
         for (a, preds) in per_axis.iter().enumerate() {
             for (k, p) in preds.iter().enumerate() {
                 mean[k][a] = p.mean;
@@ -166,7 +220,11 @@ impl ErrorModel {
     /// for compensation.
     pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.check_rows(q, dir)?;
-        let s = self.input_norm.apply_rows(&self.space.rows(q, dir));
+        let mut rows = self.space.rows(q, dir);
+        for f in &self.extras {
+            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
+        }
+        let s = self.input_norm.apply_rows(&rows);
         let per_axis: Vec<Vec<f64>> = self
             .outputs
             .par_iter()
@@ -194,9 +252,14 @@ impl ErrorModel {
         Ok(())
     }
 
-    /// Predict for every row of a dataset.
+    /// Predict for every row of a dataset (extra inputs from its columns).
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
-        self.predict(&data.q, &data.dir)
+        self.check_rows(&data.q, &data.dir)?;
+        let mut rows = self.space.rows(&data.q, &data.dir);
+        for f in &self.extras {
+            append_columns(&mut rows, &f.columns(data)?);
+        }
+        self.predict_rows(&rows)
     }
 
     /// Write as JSON.
@@ -234,8 +297,13 @@ impl ErrorModel {
             context: source_name.into(),
             source: e,
         })?;
+        let dim = model.space.dim(model.n_joints)
+            + model.extras.iter().map(|f| f.names().len()).sum::<usize>();
+        let extras_ok = model.extras.iter().all(|f| f.validate(model.n_joints).is_ok());
         if model.outputs.len() != 3
-            || model.input_norm.mean.len() != model.space.dim(model.n_joints)
+            || model.input_norm.mean.len() != dim
+            || model.outputs.iter().any(|o| o.dim() != dim)
+            || !extras_ok
         {
             return Err(Error::Input {
                 source_name: source_name.into(),

@@ -30,7 +30,7 @@ fn plot_err(path: &Path) -> impl Fn(String) -> Error + '_ {
 
 /// A tick label without spurious decimals ("10", "0.25", "1e-4").
 fn tick(v: f64) -> String {
-    if v == 0.0 {
+    if v.abs() < 1e-12 {
         return "0".into();
     }
     if v.abs() >= 1e-3 && v.abs() < 1e6 {

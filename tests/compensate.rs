@@ -61,6 +61,7 @@ fn run(truth: &Truth, commands: &Trajectory, targets: &Trajectory, seed: u64) ->
         commands,
         &truth.robot.nominal.home,
         None,
+        &truth.spec.effects,
         &mut rng,
     )
     .unwrap();

@@ -98,13 +98,13 @@ pub struct EvaluateArgs {
 }
 
 /// Target poses, and for a q1..qN pose list the joints as IK hints.
-struct Targets {
-    traj: Trajectory,
-    hints: Option<Vec<Vec<f64>>>,
+pub(super) struct Targets {
+    pub(super) traj: Trajectory,
+    pub(super) hints: Option<Vec<Vec<f64>>>,
 }
 
 /// Targets from a trajectory CSV or from the nominal FK of a q1..qN pose list.
-fn read_targets(
+pub(super) fn read_targets(
     path: &Path,
     robot: &Robot,
     orientation: Option<&[f64]>,
@@ -153,7 +153,7 @@ fn read_targets(
     Ok(Targets { traj: t, hints })
 }
 
-fn load_truth(path: &Path) -> Result<Truth> {
+pub(super) fn load_truth(path: &Path) -> Result<Truth> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let truth: Truth = serde_json::from_str(&text).map_err(|e| Error::Json {
         context: format!("{}: not a simulator truth file", path.display()),
@@ -176,7 +176,14 @@ fn run_on(
     start: &[f64],
     rng: &mut impl rand::Rng,
 ) -> Result<Vec<[f64; 3]>> {
-    let ex = execute(&truth.robot, commands, start, targets.hints.as_deref(), rng)?;
+    let ex = execute(
+        &truth.robot,
+        commands,
+        start,
+        targets.hints.as_deref(),
+        &truth.spec.effects,
+        rng,
+    )?;
     Ok(ex
         .measured
         .iter()
@@ -189,20 +196,20 @@ fn run_on(
 }
 
 /// Measured errors (mm) of the nominal and the compensated runs.
-type Runs = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+pub(super) type Runs = (Vec<[f64; 3]>, Vec<[f64; 3]>);
 
 #[derive(Serialize)]
-struct Evaluation {
+pub(super) struct Evaluation {
     truth: PathBuf,
     seed: u64,
     points: usize,
-    before: PositionErrorTable,
-    after: PositionErrorTable,
+    pub(super) before: PositionErrorTable,
+    pub(super) after: PositionErrorTable,
     reduction_mean_abs_pct: f64,
     reduction_max_abs_pct: f64,
 }
 
-fn evaluation(
+pub(super) fn evaluation(
     truth_path: &Path,
     truth: &Truth,
     targets: &Targets,

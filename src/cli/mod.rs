@@ -3,6 +3,7 @@
 
 mod compensate;
 mod cv;
+mod diagnose;
 mod fit;
 mod progress;
 mod simulate;
@@ -36,6 +37,8 @@ pub enum Command {
     Compensate(compensate::CompensateArgs),
     /// Run target and compensated trajectories on a simulated robot and compare.
     Evaluate(compensate::EvaluateArgs),
+    /// Find what the model misses, trace it to an effect, add it, report before/after.
+    Diagnose(diagnose::DiagnoseArgs),
 }
 
 /// Run a parsed command.
@@ -47,6 +50,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Cv(a) => cv::run(a),
         Command::Compensate(a) => compensate::run_compensate(a),
         Command::Evaluate(a) => compensate::run_evaluate(a),
+        Command::Diagnose(a) => diagnose::run(a),
     }
 }
 

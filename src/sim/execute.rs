@@ -5,7 +5,7 @@
 //! λ of the visiting order, compliance) plus repeatability noise, and the
 //! tracker adds its noise to the true TCP position.
 
-use super::{TrueRobot, gaussian};
+use super::{Effect, TrueRobot, gaussian};
 use crate::compensate::first_pass_joints;
 use crate::kinematics::IkOptions;
 use crate::space::derive_directions;
@@ -24,8 +24,11 @@ pub struct Execution {
     pub measured: Vec<[f64; 3]>,
 }
 
-/// Execute `commands` on `robot` starting from joints `start`, without
-/// undeclared effects (default pose context), drawing the noise from `rng`.
+/// Execute `commands` on `robot` starting from joints `start`, in the state
+/// at the start of a campaign (default pose context: no payload, reference
+/// temperature, no tracker step) but with the joint-side `effects` (gear
+/// harmonic, cross-talk) that act whenever the robot moves, drawing the noise
+/// from `rng`.
 /// The controller's IK seeds each point from `hints` (if given), then from the
 /// previous point ([`first_pass_joints`]).
 pub fn execute(
@@ -33,6 +36,7 @@ pub fn execute(
     commands: &Trajectory,
     start: &[f64],
     hints: Option<&[Vec<f64>]>,
+    effects: &[Effect],
     rng: &mut impl Rng,
 ) -> Result<Execution> {
     let nominal = &robot.nominal;
@@ -72,8 +76,12 @@ pub fn execute(
         .zip(&dir)
         .map(|(q, d)| {
             let mut qa = robot.actual_joints(q, d, &ctx);
-            for a in &mut qa {
-                *a += gaussian(rng, robot.noise.repeatability_sigma_deg);
+            let mut extra = vec![0.0; q.len()];
+            for e in effects {
+                e.joint_deviation(q, &mut extra);
+            }
+            for (a, x) in qa.iter_mut().zip(&extra) {
+                *a += x + gaussian(rng, robot.noise.repeatability_sigma_deg);
             }
             let p = robot.tcp(&qa, &ctx);
             let sigma = robot.noise.tracker_sigma(&p);

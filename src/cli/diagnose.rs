@@ -1,0 +1,386 @@
+//! `robokrige diagnose`.
+
+use super::compensate::{load_truth, read_targets};
+use super::progress::spinner;
+use clap::Args;
+use robokrige::compensate::{CompensationOptions, compensate};
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::diagnose::{CvStats, Diagnosis, DiagnoseOptions, EffectKind, EffectReport, diagnose, with_columns};
+use robokrige::features::Feature;
+use robokrige::kinematics;
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::{AXES, ErrorModel};
+use robokrige::plot::{Labels, Series, xy_plot};
+use robokrige::space::Space;
+use robokrige::stats::PositionErrorTable;
+use robokrige::{Error, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Find what the model still gets wrong, trace it to a missing effect, add it.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Candidates: every numeric covariate column not in the model (alone and × joint
+angles), drift and a change point in the measurement order, harmonics of each
+joint over a scanned period range, cross-joint products, direction history.
+Each is scored by the out-of-fold share of the CV residual it explains, tested
+by permutation (maximum over its parameter scan) with Benjamini–Hochberg
+across candidates; the best significant one is added as a model input and the
+model is cross-validated again, until nothing significant remains.
+
+Example:
+  robokrige diagnose datasets/comau_tracker_step.csv --json diag.json --report diag.md --plots diag/")]
+pub struct DiagnoseArgs {
+    /// Measurement CSV (any extra numeric columns are candidate covariates).
+    data: PathBuf,
+    /// Base model: js-hj, ejs-hj or ejs-gps (constant trend).
+    #[arg(long, default_value = "ejs-hj")]
+    method: String,
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
+    /// Seed of the fold partition, the permutations and the fits.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, default_value_t = 1999)]
+    permutations: usize,
+    /// False-discovery rate (Benjamini–Hochberg).
+    #[arg(long, default_value_t = 0.05)]
+    fdr: f64,
+    #[arg(long, default_value_t = 3)]
+    max_effects: usize,
+    /// Write the result as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write a Markdown report.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Folder for residual-vs-effect plots (SVG) of every accepted effect.
+    #[arg(long)]
+    plots: Option<PathBuf>,
+    /// Save the final model (with the added effects) here.
+    #[arg(long)]
+    model_out: Option<PathBuf>,
+    /// With --traj and --truth: compensate the trajectory with the model
+    /// before and after, on this robot preset, and report the errors.
+    #[arg(long, requires_all = ["traj", "truth"])]
+    robot: Option<String>,
+    #[arg(long, requires = "robot")]
+    traj: Option<PathBuf>,
+    #[arg(long, requires = "robot")]
+    truth: Option<PathBuf>,
+}
+
+fn options(a: &DiagnoseArgs) -> Result<DiagnoseOptions> {
+    let (space, optimizer) = match a.method.as_str() {
+        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
+        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
+        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
+        other => {
+            return Err(Error::InvalidParameter(format!(
+                "diagnose supports --method js-hj, ejs-hj or ejs-gps, not '{other}'"
+            )));
+        }
+    };
+    Ok(DiagnoseOptions {
+        space,
+        kriging: KrigingOptions {
+            optimizer,
+            seed: a.seed,
+            ..KrigingOptions::default()
+        },
+        folds: a.folds,
+        seed: a.seed,
+        permutations: a.permutations,
+        fdr: a.fdr,
+        max_effects: a.max_effects,
+        ..DiagnoseOptions::default()
+    })
+}
+
+fn rmse3(v: &[f64; 3]) -> String {
+    format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2])
+}
+
+pub fn run(a: DiagnoseArgs) -> Result<()> {
+    let data = read_csv(&a.data)?;
+    let opts = options(&a)?;
+    let pb = spinner("diagnose");
+    let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
+    pb.finish_and_clear();
+    let d = d?;
+    print_summary(&a, &d);
+    let mut plots = Vec::new();
+    if let Some(dir) = &a.plots {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        plots = draw_plots(dir, &data, &d)?;
+        for p in &plots {
+            println!("plot: {}", p.display());
+        }
+    }
+    let need_models = a.model_out.is_some() || a.robot.is_some();
+    let mut compensation = None;
+    if need_models {
+        let work = with_columns(&data, &d.extras)?;
+        let after = ErrorModel::fit_with_extras(&work, opts.space, &opts.kriging, &d.extras)?;
+        if let Some(p) = &a.model_out {
+            after.save(p)?;
+            println!("model with the added effects: {}", p.display());
+        }
+        if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
+            let before = ErrorModel::fit_with_extras(&data, opts.space, &opts.kriging, &[])?;
+            compensation = Some(compare_compensation(robot, traj, truth, &before, &after, a.seed)?);
+        }
+    }
+    if let Some(path) = &a.json {
+        let mut v = serde_json::to_value(&d).map_err(|e| Error::Json {
+            context: "diagnosis".into(),
+            source: e,
+        })?;
+        v["data"] = serde_json::json!(a.data);
+        v["method"] = serde_json::json!(a.method);
+        if let Some(c) = &compensation {
+            v["compensation"] = serde_json::json!({"before_model": c.0, "after_model": c.1});
+        }
+        super::write_json(path, &v, "diagnosis")?;
+    }
+    if let Some(path) = &a.report {
+        let text = report(&a, &d, &plots, compensation.as_ref());
+        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+        println!("report: {}", path.display());
+    }
+    Ok(())
+}
+
+fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
+    println!(
+        "{}: {}-fold CV ({}), {} permutations, FDR {}, {:.1} s",
+        a.data.display(),
+        d.folds,
+        a.method,
+        d.permutations,
+        d.fdr,
+        d.seconds
+    );
+    println!("  before: CV RMSE x/y/z {} mm, mean 3D {:.4}", rmse3(&d.before.cv_rmse_mm), d.before.mean_3d_mm);
+    let mut round = 0;
+    for e in &d.effects {
+        if e.round != round {
+            round = e.round;
+            println!("  round {round} (best 5 of {}):", d.effects.iter().filter(|x| x.round == round).count());
+        }
+        let rank = d.effects.iter().filter(|x| x.round == round).position(|x| x == e).unwrap_or(0);
+        if rank < 5 || e.accepted {
+            println!(
+                "    {:<48} score {:>6.3}  p {:.4}  q {:.4}{}{}",
+                describe(e),
+                e.score,
+                e.p_value,
+                e.q_value,
+                if e.accepted { "  ADDED" } else if e.significant { "  significant" } else { "" },
+                e.note.as_deref().map(|n| format!("  ({n})")).unwrap_or_default()
+            );
+        }
+    }
+    for (k, s) in d.steps.iter().enumerate() {
+        println!("  after effect {}: CV RMSE x/y/z {} mm, mean 3D {:.4}", k + 1, rmse3(&s.cv_rmse_mm), s.mean_3d_mm);
+    }
+    if d.steps.is_empty() {
+        println!("  no significant effect: nothing to add");
+    }
+}
+
+fn describe(e: &EffectReport) -> String {
+    let params: Vec<String> = e
+        .params
+        .iter()
+        .map(|(k, v)| match k.as_str() {
+            "period_deg" => format!("period {v:.3}°"),
+            "row" => format!("at row {v:.0}"),
+            _ => format!("{k} {}", fmt_param(*v)),
+        })
+        .collect();
+    if params.is_empty() {
+        e.label.clone()
+    } else {
+        format!("{} ({})", e.label, params.join(", "))
+    }
+}
+
+fn fmt_param(v: f64) -> String {
+    if v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v:.3}") }
+}
+
+/// The variable an effect is traced to, for the x axis of its plot.
+fn trace(e: &EffectReport, data: &Dataset) -> (String, Vec<f64>) {
+    match e.add.first() {
+        Some(Feature::Harmonic { joint, period_deg }) => (
+            format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
+            data.q.iter().map(|r| r[joint - 1].rem_euclid(*period_deg)).collect(),
+        ),
+        Some(Feature::Row | Feature::Step { .. }) => {
+            ("measurement order (row)".into(), (0..data.len()).map(|i| i as f64).collect())
+        }
+        Some(f @ Feature::Covariate { name, .. }) => (
+            name.clone(),
+            f.columns(data).map(|c| c[0].clone()).unwrap_or_default(),
+        ),
+        Some(f) => (
+            f.names()[0].clone(),
+            f.columns_from_poses(&data.q, &data.dir).map(|c| c[0].clone()).unwrap_or_default(),
+        ),
+        None => (String::new(), Vec::new()),
+    }
+}
+
+fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut prev: &CvStats = &d.before;
+    for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
+        let next = &d.steps[k];
+        // the axis whose residual the effect reduced most
+        let gain = |a: usize| {
+            prev.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
+                - next.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
+        };
+        let axis = (0..3).max_by(|x, y| gain(*x).total_cmp(&gain(*y))).unwrap_or(0);
+        let (xlabel, x) = trace(e, data);
+        let pts = |s: &CvStats| x.iter().zip(&s.residuals).map(|(xi, r)| (*xi, r[axis])).collect();
+        let path = dir.join(format!("effect{}_{}.svg", k + 1, kind_name(e.kind)));
+        let title = format!("{}: CV residual before and after", describe(e));
+        let ylabel = format!("out-of-fold residual {} (mm)", AXES[axis]);
+        xy_plot(
+            &path,
+            &Labels { title: &title, x: &xlabel, y: &ylabel },
+            &[Series::points("before", pts(prev)), Series::points("after", pts(next))],
+            false,
+        )?;
+        out.push(path);
+        prev = next;
+    }
+    Ok(out)
+}
+
+fn kind_name(k: EffectKind) -> &'static str {
+    match k {
+        EffectKind::Covariate => "covariate",
+        EffectKind::Order => "order",
+        EffectKind::Harmonic => "harmonic",
+        EffectKind::Interaction => "interaction",
+        EffectKind::DirectionHistory => "direction-history",
+    }
+}
+
+type Comparison = (PositionErrorTable, PositionErrorTable);
+
+/// Iterative compensation of `traj` with the models before and after, both run
+/// on the simulated robot: (error with the before model, with the after model).
+fn compare_compensation(
+    robot: &str,
+    traj: &Path,
+    truth_path: &Path,
+    before: &ErrorModel,
+    after: &ErrorModel,
+    seed: u64,
+) -> Result<(Comparison, Comparison)> {
+    let robot = kinematics::preset(robot)?;
+    let truth = load_truth(truth_path)?;
+    let start = robot.home.clone();
+    let targets = read_targets(traj, &robot, None, &start)?;
+    let run = |m: &ErrorModel| -> Result<Comparison> {
+        let opts = CompensationOptions {
+            iterative: true,
+            hints: targets.hints.clone(),
+            ..CompensationOptions::default()
+        };
+        let c = compensate(&robot, m, &targets.traj, &opts)?;
+        let (ev, _) = super::compensate::evaluation(truth_path, &truth, &targets, &c.commands, &start, seed)?;
+        Ok((ev.before, ev.after))
+    };
+    let (b, a) = (run(before)?, run(after)?);
+    println!(
+        "compensation of {} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
+        traj.display(),
+        b.0.mean_abs_mm,
+        b.1.mean_abs_mm,
+        a.1.mean_abs_mm
+    );
+    Ok((b, a))
+}
+
+fn report(a: &DiagnoseArgs, d: &Diagnosis, plots: &[PathBuf], comp: Option<&(Comparison, Comparison)>) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Diagnosis of `{}`\n", a.data.display());
+    let _ = writeln!(
+        s,
+        "Base model `{}`; out-of-fold residuals of a {}-fold CV refitted on every training fold (fold seed {}); \
+         every candidate tested by {} permutations of the residual rows (maximum over its parameter scan), \
+         Benjamini–Hochberg at FDR {}; an effect is added only if it lowers the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
+        a.method, d.folds, d.seed, d.permutations, d.fdr, d.seconds
+    );
+    let _ = writeln!(s, "| model | extra inputs | CV RMSE x / y / z (mm) | mean 3D (mm) | max 3D (mm) |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    let row = |s: &mut String, name: &str, c: &CvStats| {
+        let ex = if c.extras.is_empty() { "–".to_string() } else { c.extras.join(", ") };
+        let _ = writeln!(s, "| {name} | {ex} | {} | {:.4} | {:.4} |", rmse3(&c.cv_rmse_mm), c.mean_3d_mm, c.max_3d_mm);
+    };
+    row(&mut s, "before", &d.before);
+    for (k, st) in d.steps.iter().enumerate() {
+        row(&mut s, &format!("after effect {}", k + 1), st);
+    }
+    let _ = writeln!(s);
+    if d.steps.is_empty() {
+        let _ = writeln!(s, "**No significant effect**: the residual is not explained by any candidate beyond chance.\n");
+    }
+    let mut round = 0;
+    for e in &d.effects {
+        if e.round != round {
+            round = e.round;
+            let _ = writeln!(s, "\n## Round {round}\n");
+            let _ = writeln!(s, "| rank | kind | source | candidate | score | p | q (BH) | |");
+            let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+        }
+        let rank = d.effects.iter().filter(|x| x.round == round).position(|x| x == e).unwrap_or(0) + 1;
+        if rank <= 10 || e.accepted {
+            let status = if e.accepted {
+                "**added**".to_string()
+            } else if e.significant {
+                e.note.clone().unwrap_or_else(|| "significant".into())
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "| {rank} | {} | {} | {} | {:.3} | {:.4} | {:.4} | {status} |",
+                kind_name(e.kind),
+                e.source.join(", "),
+                describe(e),
+                e.score,
+                e.p_value,
+                e.q_value
+            );
+        }
+    }
+    if let Some(((nb, bb), (_, ab))) = comp {
+        let _ = writeln!(s, "\n## Compensation\n");
+        let _ = writeln!(
+            s,
+            "Iterative compensation of `{}` run on the simulated robot: nominal mean |δ| {:.4} mm (max {:.4}); \
+             with the model before {:.4} mm (max {:.4}); after {:.4} mm (max {:.4}).",
+            a.traj.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+            nb.mean_abs_mm, nb.max_abs_mm, bb.mean_abs_mm, bb.max_abs_mm, ab.mean_abs_mm, ab.max_abs_mm
+        );
+    }
+    if !plots.is_empty() {
+        let _ = writeln!(s, "\n## Plots\n");
+        for p in plots {
+            let _ = writeln!(s, "- `{}`: out-of-fold residual against the traced variable, before and after", p.display());
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nScore: share of the residual variance the candidate explains out of sample (10-fold least squares \
+         against the intercept). p: permutation p-value of the in-sample share, maximised over the candidate's \
+         parameter scan. q: Benjamini–Hochberg adjusted p over all candidates of the round."
+    );
+    s
+}

@@ -1,0 +1,283 @@
+//! Close the loop: find what the model still gets wrong, trace it to an
+//! effect the model lacks, add it, and report before and after.
+//!
+//! 1. **Residuals**: out-of-fold K-fold CV residuals of the current model
+//!    (refit on every training fold), per axis, in measurement order.
+//! 2. **Candidates** ([`scan::families`]): every numeric covariate not in the
+//!    model (alone, and interacting with the joint angles); the measurement
+//!    order (drift, and a change-point scan); harmonics of each joint over a
+//!    scanned period range; cross-joint products; direction history.
+//! 3. **Tracing** ([`scan::test_families`]): each family's best share of
+//!    residual variance explained, a permutation p-value of that maximum,
+//!    Benjamini–Hochberg across families, and an out-of-sample score.
+//! 4. **Adding**: the best-scoring significant family's feature becomes an
+//!    extra model input ([`crate::features::Feature`], one input dimension with
+//!    a linear trend term); the model is refitted and cross-validated again.
+//!    It is kept only if the CV RMSE drops by at least `min_gain`; the loop
+//!    repeats until nothing significant remains or `max_effects`.
+//! 5. **Report**: CV statistics before and after every accepted effect.
+
+pub mod scan;
+
+use crate::cv::{cross_validate_refit, kfold_partition};
+use crate::dataset::{Covariate, Dataset};
+use crate::features::Feature;
+use crate::kriging::KrigingOptions;
+use crate::model::ErrorModel;
+use crate::space::Space;
+use crate::stats::summarize;
+use crate::{Error, Result};
+pub use scan::EffectKind;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Options of [`diagnose`]; `Default` is EJS with Hooke–Jeeves, 10 folds,
+/// 1999 permutations, FDR 5 %, at most 3 effects.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    pub space: Space,
+    pub kriging: KrigingOptions,
+    pub folds: usize,
+    /// Seed of the fold partition and of the permutations.
+    pub seed: u64,
+    pub permutations: usize,
+    /// False-discovery rate for the Benjamini–Hochberg step.
+    pub fdr: f64,
+    pub max_effects: usize,
+    /// Relative drop of the pooled CV RMSE an effect must bring to be kept.
+    pub min_gain: f64,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            space: Space::Ejs,
+            kriging: KrigingOptions {
+                optimizer: crate::kriging::OptimizerKind::HookeJeeves,
+                ..KrigingOptions::default()
+            },
+            folds: 10,
+            seed: 1,
+            permutations: 1999,
+            fdr: 0.05,
+            max_effects: 3,
+            min_gain: 0.02,
+        }
+    }
+}
+
+impl DiagnoseOptions {
+    fn validate(&self) -> Result<()> {
+        if self.permutations < 19 || !(self.fdr > 0.0 && self.fdr < 1.0) || self.min_gain < 0.0 {
+            return Err(Error::InvalidParameter(
+                "diagnose needs ≥ 19 permutations, 0 < fdr < 1 and min_gain ≥ 0".into(),
+            ));
+        }
+        self.kriging.validate()
+    }
+}
+
+/// CV statistics of one model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CvStats {
+    /// Per-axis RMSE of the out-of-fold residuals, mm.
+    pub cv_rmse_mm: [f64; 3],
+    /// RMSE pooled over the axes, mm.
+    pub pooled_rmse_mm: f64,
+    pub mean_3d_mm: f64,
+    pub max_3d_mm: f64,
+    /// Extra inputs of the model.
+    pub extras: Vec<String>,
+    #[serde(skip)]
+    pub residuals: Vec<[f64; 3]>,
+}
+
+fn cv_stats(residuals: Vec<[f64; 3]>, extras: &[Feature]) -> CvStats {
+    let s = summarize(&residuals);
+    CvStats {
+        cv_rmse_mm: s.rms_mm,
+        pooled_rmse_mm: (s.rms_mm.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt(),
+        mean_3d_mm: s.mean_3d_mm,
+        max_3d_mm: s.max_3d_mm,
+        extras: extras.iter().flat_map(Feature::names).collect(),
+        residuals,
+    }
+}
+
+/// One candidate as ranked in one round.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectReport {
+    pub round: usize,
+    pub kind: EffectKind,
+    pub source: Vec<String>,
+    pub label: String,
+    /// Parameters of the best grid point (e.g. `period_deg`, `row`).
+    pub params: BTreeMap<String, f64>,
+    /// Out-of-sample share of the residual variance explained.
+    pub score: f64,
+    /// In-sample share at the best grid point (the test statistic).
+    pub explained: f64,
+    pub p_value: f64,
+    /// Benjamini–Hochberg adjusted p-value.
+    pub q_value: f64,
+    pub significant: bool,
+    /// Added to the model (significant, best of its round, and it lowered the CV RMSE).
+    pub accepted: bool,
+    /// Why a significant best candidate was not kept.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    #[serde(skip)]
+    pub add: Vec<Feature>,
+}
+
+/// The result of [`diagnose`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Diagnosis {
+    pub space: Space,
+    pub folds: usize,
+    pub seed: u64,
+    pub permutations: usize,
+    pub fdr: f64,
+    pub before: CvStats,
+    pub after: CvStats,
+    /// CV statistics after each accepted effect, in order.
+    pub steps: Vec<CvStats>,
+    /// Every candidate of every round, each round ranked by score.
+    pub effects: Vec<EffectReport>,
+    /// Extra inputs of the final model.
+    pub extras: Vec<Feature>,
+    pub seconds: f64,
+}
+
+/// Precompute the columns of `extras` on the whole campaign (named like the
+/// feature, so they keep their values inside CV folds).
+pub fn with_columns(data: &Dataset, extras: &[Feature]) -> Result<Dataset> {
+    let mut work = data.clone();
+    for f in extras {
+        let cols = f.columns(&work)?;
+        for (name, values) in f.names().into_iter().zip(cols) {
+            if work.covariate(&name).is_none() {
+                work.covariates.push(Covariate {
+                    name,
+                    values,
+                    missing: 0,
+                });
+            }
+        }
+    }
+    Ok(work)
+}
+
+fn cross_validated(data: &Dataset, extras: &[Feature], o: &DiagnoseOptions) -> Result<CvStats> {
+    let work = with_columns(data, extras)?;
+    let res = cross_validate_refit(&work, o.folds, o.seed, |train| {
+        ErrorModel::fit_with_extras(train, o.space, &o.kriging, extras)
+    })?;
+    Ok(cv_stats(res.residuals, extras))
+}
+
+/// Run the loop on `data` (which needs `ex,ey,ez`). `progress` receives one
+/// line per step.
+pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
+    o.validate()?;
+    data.errors_or_err()?;
+    let t0 = std::time::Instant::now();
+    let fold = kfold_partition(data.len(), o.folds, o.seed)?;
+    progress("cross-validating the current model");
+    let before = cross_validated(data, &[], o)?;
+    let mut current = before.clone();
+    let mut extras: Vec<Feature> = Vec::new();
+    let mut steps = Vec::new();
+    let mut effects = Vec::new();
+    for round in 1..=o.max_effects + 1 {
+        let used: Vec<String> = extras
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Covariate { name, .. } => Some(name.clone()),
+                _ => None,
+            })
+            .collect();
+        let fams = scan::families(data, &used);
+        progress(&format!(
+            "round {round}: testing {} candidate effects with {} permutations",
+            fams.len(),
+            o.permutations
+        ));
+        let mut tested =
+            scan::test_families(&fams, &current.residuals, o.permutations, o.seed, &fold, o.folds);
+        tested.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.p_value.total_cmp(&b.p_value)));
+        let mut reports: Vec<EffectReport> = tested
+            .iter()
+            .map(|t| {
+                let f = &fams[t.family];
+                let g = &f.grid[t.best];
+                EffectReport {
+                    round,
+                    kind: f.kind,
+                    source: f.source.clone(),
+                    label: f.label.clone(),
+                    params: g.params.clone(),
+                    score: t.score,
+                    explained: t.explained,
+                    p_value: t.p_value,
+                    q_value: t.q_value,
+                    significant: t.q_value <= o.fdr,
+                    accepted: false,
+                    note: None,
+                    add: g.add.clone(),
+                }
+            })
+            .collect();
+        let pick = reports.iter().position(|r| r.significant && r.score > 0.0);
+        let done = match pick {
+            None => true,
+            Some(_) if round > o.max_effects => {
+                let k = pick.expect("some");
+                reports[k].note = Some(format!("not added: the cap of {} effects", o.max_effects));
+                true
+            }
+            Some(k) => {
+                let mut trial = extras.clone();
+                for f in &reports[k].add {
+                    if !trial.contains(f) {
+                        trial.push(f.clone());
+                    }
+                }
+                progress(&format!("adding '{}' and cross-validating again", reports[k].label));
+                let after = cross_validated(data, &trial, o)?;
+                if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
+                    reports[k].accepted = true;
+                    extras = trial;
+                    current = after.clone();
+                    steps.push(after);
+                    false
+                } else {
+                    reports[k].note = Some(format!(
+                        "not added: CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop",
+                        current.pooled_rmse_mm,
+                        after.pooled_rmse_mm,
+                        100.0 * o.min_gain
+                    ));
+                    true
+                }
+            }
+        };
+        effects.extend(reports);
+        if done {
+            break;
+        }
+    }
+    Ok(Diagnosis {
+        space: o.space,
+        folds: o.folds,
+        seed: o.seed,
+        permutations: o.permutations,
+        fdr: o.fdr,
+        before,
+        after: current,
+        steps,
+        effects,
+        extras,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,184 @@
+//! Extra model inputs beyond `[θ, λ]`: the effects `diagnose` can add
+//! (a covariate column, measurement order, a step, a joint harmonic, a
+//! cross-joint interaction, direction history). Each becomes one or two input
+//! dimensions of the Kriging model (with its own correlation length) and a
+//! linear trend term, so the GP can also let the effect vary with the pose.
+//!
+//! Values come from a campaign ([`Feature::columns`]), where a precomputed
+//! covariate column of the same name wins (so a feature keeps the values of the
+//! full campaign inside CV folds), or from a pose sequence alone
+//! ([`Feature::columns_from_poses`]): every campaign-state feature then takes
+//! its value at the start of the campaign (row 0, step 0, a covariate's first
+//! value when the feature records it), so the model predicts the robot in the
+//! state it was in when the campaign began.
+
+use crate::dataset::Dataset;
+use crate::space::MOVE_EPS;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// One extra input (or a pair, for a harmonic).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "feature", rename_all = "kebab-case")]
+pub enum Feature {
+    /// A numeric covariate column (temperature, time, payload, …), with its
+    /// value at the start of the campaign for predictions without the column.
+    Covariate {
+        name: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reference: Option<f64>,
+    },
+    /// Measurement order: the 0-based row index (slow drift).
+    Row,
+    /// 0 before `row`, 1 from it on (an abrupt change, e.g. a tracker bump).
+    Step { row: usize },
+    /// `sin` and `cos` of `2π θ_j / P` (1-based joint j, period P in degrees).
+    Harmonic { joint: usize, period_deg: f64 },
+    /// `θ_a · θ_b` (1-based joints).
+    Interaction { a: usize, b: usize },
+    /// λ_j of the previous row (+1 for the first).
+    PreviousDirection { joint: usize },
+    /// Travel of joint j since its direction last changed (degrees or mm).
+    SinceReversal { joint: usize },
+}
+
+impl Feature {
+    /// Column names, one per input dimension this feature adds.
+    pub fn names(&self) -> Vec<String> {
+        match self {
+            Feature::Covariate { name, .. } => vec![name.clone()],
+            Feature::Row => vec!["row".into()],
+            Feature::Step { row } => vec![format!("step@{row}")],
+            Feature::Harmonic { joint, period_deg } => vec![
+                format!("sin(2π·q{joint}/{period_deg:.4}°)"),
+                format!("cos(2π·q{joint}/{period_deg:.4}°)"),
+            ],
+            Feature::Interaction { a, b } => vec![format!("q{a}*q{b}")],
+            Feature::PreviousDirection { joint } => vec![format!("prev_dir{joint}")],
+            Feature::SinceReversal { joint } => vec![format!("since_reversal{joint}")],
+        }
+    }
+
+    /// Check joint indices against `n` joints.
+    pub fn validate(&self, n: usize) -> Result<()> {
+        let joints: Vec<usize> = match self {
+            Feature::Harmonic { joint, period_deg } => {
+                if period_deg.is_nan() || *period_deg <= 0.0 {
+                    return Err(Error::InvalidParameter(format!(
+                        "harmonic period must be > 0, got {period_deg}"
+                    )));
+                }
+                vec![*joint]
+            }
+            Feature::Interaction { a, b } => vec![*a, *b],
+            Feature::PreviousDirection { joint } | Feature::SinceReversal { joint } => vec![*joint],
+            _ => Vec::new(),
+        };
+        match joints.iter().find(|&&j| j == 0 || j > n) {
+            Some(j) => Err(Error::InvalidParameter(format!(
+                "feature {:?} names joint {j}, but there are {n} joints",
+                self.names()
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// Values on a campaign, in row order. A covariate column with this
+    /// feature's name (precomputed on the full campaign) is used when present.
+    pub fn columns(&self, data: &Dataset) -> Result<Vec<Vec<f64>>> {
+        self.validate(data.n_joints())?;
+        let names = self.names();
+        if let Some(cols) = names
+            .iter()
+            .map(|n| data.covariate(n).map(|c| c.values.clone()))
+            .collect::<Option<Vec<_>>>()
+        {
+            return check_complete(&data.source, &names, cols);
+        }
+        match self {
+            Feature::Covariate { name, .. } => Err(Error::Input {
+                source_name: data.source.clone(),
+                message: format!("the model needs covariate column '{name}', which is missing"),
+            }),
+            Feature::Row => Ok(vec![(0..data.len()).map(|i| i as f64).collect()]),
+            Feature::Step { row } => Ok(vec![
+                (0..data.len())
+                    .map(|i| if i >= *row { 1.0 } else { 0.0 })
+                    .collect(),
+            ]),
+            _ => self.columns_from_poses(&data.q, &data.dir),
+        }
+    }
+
+    /// Values for a pose sequence without covariates: order and step features
+    /// take their reference value 0, a covariate its recorded reference (an
+    /// error without one).
+    pub fn columns_from_poses(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+        let m = q.len();
+        let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
+        Ok(match self {
+            Feature::Covariate {
+                reference: Some(v), ..
+            } => vec![vec![*v; m]],
+            Feature::Covariate { name, .. } => {
+                return Err(Error::InvalidParameter(format!(
+                    "the model uses covariate '{name}': predict from a CSV that has that column"
+                )));
+            }
+            Feature::Row | Feature::Step { .. } => vec![vec![0.0; m]],
+            Feature::Harmonic { joint, period_deg } => {
+                let w = std::f64::consts::TAU / period_deg;
+                vec![
+                    col(&|i| (w * q[i][joint - 1]).sin()),
+                    col(&|i| (w * q[i][joint - 1]).cos()),
+                ]
+            }
+            Feature::Interaction { a, b } => vec![col(&|i| q[i][a - 1] * q[i][b - 1])],
+            Feature::PreviousDirection { joint } => {
+                vec![col(&|i| if i == 0 { 1.0 } else { dir[i - 1][joint - 1] })]
+            }
+            Feature::SinceReversal { joint } => {
+                let j = joint - 1;
+                let mut out = Vec::with_capacity(m);
+                let mut travel = 0.0;
+                for i in 0..m {
+                    if i > 0 {
+                        if dir[i][j] != dir[i - 1][j] {
+                            travel = 0.0;
+                        }
+                        let step = (q[i][j] - q[i - 1][j]).abs();
+                        if step > MOVE_EPS {
+                            travel += step;
+                        }
+                    }
+                    out.push(travel);
+                }
+                vec![out]
+            }
+        })
+    }
+}
+
+fn check_complete(source: &str, names: &[String], cols: Vec<Vec<f64>>) -> Result<Vec<Vec<f64>>> {
+    for (n, c) in names.iter().zip(&cols) {
+        let missing = c.iter().filter(|v| !v.is_finite()).count();
+        if missing > 0 {
+            return Err(Error::Input {
+                source_name: source.into(),
+                message: format!(
+                    "column '{n}' has {missing} missing value(s); a model input needs every row (fill or drop them)"
+                ),
+            });
+        }
+    }
+    Ok(cols)
+}
+
+/// Append the columns of `features` to `rows` (one row per pose).
+pub fn append_columns(rows: &mut [Vec<f64>], cols: &[Vec<f64>]) {
+    for c in cols {
+        for (r, v) in rows.iter_mut().zip(c) {
+            r.push(*v);
+        }
+    }
+}
