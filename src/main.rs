@@ -6,6 +6,20 @@ use std::process::ExitCode;
 mod cli;
 
 fn main() -> ExitCode {
+    // `robokrige … | head`: a closed stdout ends the run quietly instead of
+    // panicking in `println!`.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .unwrap_or_default();
+        if msg.contains("failed printing to stdout") {
+            std::process::exit(0);
+        }
+        default_hook(info);
+    }));
     let args = match cli::Cli::try_parse() {
         Ok(a) => a,
         Err(e) => {

@@ -120,7 +120,13 @@ impl ErrorModel {
             terms.exponents.push(e);
         }
         let trend = crate::kriging::Trend::from(terms);
-        Self::fit_inner(data, space, opts, &[trend.clone(), trend.clone(), trend], extras)
+        Self::fit_inner(
+            data,
+            space,
+            opts,
+            &[trend.clone(), trend.clone(), trend],
+            extras,
+        )
     }
 
     /// Fit with a (possibly different) trend candidate set per output.
@@ -299,7 +305,10 @@ impl ErrorModel {
         })?;
         let dim = model.space.dim(model.n_joints)
             + model.extras.iter().map(|f| f.names().len()).sum::<usize>();
-        let extras_ok = model.extras.iter().all(|f| f.validate(model.n_joints).is_ok());
+        let extras_ok = model
+            .extras
+            .iter()
+            .all(|f| f.validate(model.n_joints).is_ok());
         if model.outputs.len() != 3
             || model.input_norm.mean.len() != dim
             || model.outputs.iter().any(|o| o.dim() != dim)

@@ -41,6 +41,13 @@ fn tick(v: f64) -> String {
     }
 }
 
+/// Caption font size that fits `title` into `width` pixels (sans-serif
+/// glyphs average about 0.55 em).
+fn caption_size(title: &str, width: u32) -> u32 {
+    let chars = title.chars().count().max(1) as f64;
+    ((width as f64 - 24.0) / (0.55 * chars)).clamp(11.0, 20.0) as u32
+}
+
 /// A padded range covering `values` (never empty).
 fn span(values: impl Iterator<Item = f64>, from_zero: bool) -> (f64, f64) {
     let (mut lo, mut hi) = values
@@ -81,7 +88,7 @@ pub fn box_plot(
     let n = groups.len().max(1);
     let names: Vec<String> = groups.iter().map(|g| g.0.clone()).collect();
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, ("sans-serif", caption_size(title, width)))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(64)
@@ -208,7 +215,10 @@ pub fn xy_plot(path: &Path, labels: &Labels, series: &[Series], equal_aspect: bo
         yr = (cy - half, cy + half);
     }
     let mut chart = ChartBuilder::on(&root)
-        .caption(labels.title, ("sans-serif", 20))
+        .caption(
+            labels.title,
+            ("sans-serif", caption_size(labels.title, 640)),
+        )
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(72)

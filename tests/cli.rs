@@ -161,3 +161,57 @@ fn compensate_and_evaluate_report_before_and_after() {
     assert!(err.contains("not 'ur10'"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn diagnose_writes_json_report_and_plots() {
+    let dir = std::env::temp_dir().join(format!("robokrige-cli-diag-{}", std::process::id()));
+    let p = |f: &str| dir.join(f).display().to_string();
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--poses",
+        "120",
+        "--seed",
+        "6",
+        "--effect",
+        "tracker-step:row=60,dx=0.2,dy=-0.2,dz=0.2",
+        "-o",
+        &p("c.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let (c, out, err) = rk(&[
+        "diagnose",
+        &p("c.csv"),
+        "--folds",
+        "5",
+        "--permutations",
+        "199",
+        "--max-effects",
+        "1",
+        "--json",
+        &p("d.json"),
+        "--report",
+        &p("d.md"),
+        "--plots",
+        &p("plots"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("ADDED"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("d.json")).unwrap()).unwrap();
+    assert_eq!(v["before"]["cv_rmse_mm"].as_array().unwrap().len(), 3);
+    assert_eq!(v["after"]["cv_rmse_mm"].as_array().unwrap().len(), 3);
+    let top = &v["effects"][0];
+    assert_eq!(top["kind"], "order");
+    assert_eq!(top["source"], serde_json::json!(["row"]));
+    assert_eq!(top["accepted"], true);
+    for key in ["params", "score", "p_value"] {
+        assert!(!top[key].is_null(), "{key} missing: {top}");
+    }
+    let report = std::fs::read_to_string(dir.join("d.md")).unwrap();
+    assert!(report.contains("**added**"), "{report}");
+    assert!(dir.join("plots/effect1_order.svg").exists());
+    let (c, _, err) = rk(&["diagnose", &p("c.csv"), "--method", "ejs-ga"]);
+    assert_eq!(c, 1);
+    assert!(err.contains("js-hj, ejs-hj or ejs-gps"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

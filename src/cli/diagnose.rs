@@ -5,7 +5,9 @@ use super::progress::spinner;
 use clap::Args;
 use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::dataset::{Dataset, read_csv};
-use robokrige::diagnose::{CvStats, Diagnosis, DiagnoseOptions, EffectKind, EffectReport, diagnose, with_columns};
+use robokrige::diagnose::{
+    CvStats, DiagnoseOptions, Diagnosis, EffectKind, EffectReport, diagnose, with_columns,
+};
 use robokrige::features::Feature;
 use robokrige::kinematics;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
@@ -48,6 +50,9 @@ pub struct DiagnoseArgs {
     fdr: f64,
     #[arg(long, default_value_t = 3)]
     max_effects: usize,
+    /// Use only the first N rows (each CV fit is O(m³): keep m in the hundreds).
+    #[arg(long)]
+    rows: Option<usize>,
     /// Write the result as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -97,12 +102,17 @@ fn options(a: &DiagnoseArgs) -> Result<DiagnoseOptions> {
     })
 }
 
-fn rmse3(v: &[f64; 3]) -> String {
+pub(super) fn rmse3(v: &[f64; 3]) -> String {
     format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2])
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
-    let data = read_csv(&a.data)?;
+    let mut data = read_csv(&a.data)?;
+    if let Some(n) = a.rows {
+        if n < data.len() {
+            data = data.select(&(0..n).collect::<Vec<_>>());
+        }
+    }
     let opts = options(&a)?;
     let pb = spinner("diagnose");
     let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
@@ -128,7 +138,9 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         }
         if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
             let before = ErrorModel::fit_with_extras(&data, opts.space, &opts.kriging, &[])?;
-            compensation = Some(compare_compensation(robot, traj, truth, &before, &after, a.seed)?);
+            compensation = Some(compare_compensation(
+                robot, traj, truth, &before, &after, a.seed,
+            )?);
         }
     }
     if let Some(path) = &a.json {
@@ -153,22 +165,35 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
 
 fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
     println!(
-        "{}: {}-fold CV ({}), {} permutations, FDR {}, {:.1} s",
+        "{} ({} rows): {}-fold CV ({}), {} permutations, FDR {}, {:.1} s",
         a.data.display(),
+        d.before.residuals.len(),
         d.folds,
         a.method,
         d.permutations,
         d.fdr,
         d.seconds
     );
-    println!("  before: CV RMSE x/y/z {} mm, mean 3D {:.4}", rmse3(&d.before.cv_rmse_mm), d.before.mean_3d_mm);
+    println!(
+        "  before: CV RMSE x/y/z {} mm, mean 3D {:.4}",
+        rmse3(&d.before.cv_rmse_mm),
+        d.before.mean_3d_mm
+    );
     let mut round = 0;
     for e in &d.effects {
         if e.round != round {
             round = e.round;
-            println!("  round {round} (best 5 of {}):", d.effects.iter().filter(|x| x.round == round).count());
+            println!(
+                "  round {round} (best 5 of {}):",
+                d.effects.iter().filter(|x| x.round == round).count()
+            );
         }
-        let rank = d.effects.iter().filter(|x| x.round == round).position(|x| x == e).unwrap_or(0);
+        let rank = d
+            .effects
+            .iter()
+            .filter(|x| x.round == round)
+            .position(|x| x == e)
+            .unwrap_or(0);
         if rank < 5 || e.accepted {
             println!(
                 "    {:<48} score {:>6.3}  p {:.4}  q {:.4}{}{}",
@@ -176,20 +201,34 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
                 e.score,
                 e.p_value,
                 e.q_value,
-                if e.accepted { "  ADDED" } else if e.significant { "  significant" } else { "" },
-                e.note.as_deref().map(|n| format!("  ({n})")).unwrap_or_default()
+                if e.accepted {
+                    "  ADDED"
+                } else if e.significant {
+                    "  significant"
+                } else {
+                    ""
+                },
+                e.note
+                    .as_deref()
+                    .map(|n| format!("  ({n})"))
+                    .unwrap_or_default()
             );
         }
     }
     for (k, s) in d.steps.iter().enumerate() {
-        println!("  after effect {}: CV RMSE x/y/z {} mm, mean 3D {:.4}", k + 1, rmse3(&s.cv_rmse_mm), s.mean_3d_mm);
+        println!(
+            "  after effect {}: CV RMSE x/y/z {} mm, mean 3D {:.4}",
+            k + 1,
+            rmse3(&s.cv_rmse_mm),
+            s.mean_3d_mm
+        );
     }
     if d.steps.is_empty() {
         println!("  no significant effect: nothing to add");
     }
 }
 
-fn describe(e: &EffectReport) -> String {
+pub(super) fn describe(e: &EffectReport) -> String {
     let params: Vec<String> = e
         .params
         .iter()
@@ -207,7 +246,11 @@ fn describe(e: &EffectReport) -> String {
 }
 
 fn fmt_param(v: f64) -> String {
-    if v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v:.3}") }
+    if v.fract() == 0.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.3}")
+    }
 }
 
 /// The variable an effect is traced to, for the x axis of its plot.
@@ -215,24 +258,30 @@ fn trace(e: &EffectReport, data: &Dataset) -> (String, Vec<f64>) {
     match e.add.first() {
         Some(Feature::Harmonic { joint, period_deg }) => (
             format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
-            data.q.iter().map(|r| r[joint - 1].rem_euclid(*period_deg)).collect(),
+            data.q
+                .iter()
+                .map(|r| r[joint - 1].rem_euclid(*period_deg))
+                .collect(),
         ),
-        Some(Feature::Row | Feature::Step { .. }) => {
-            ("measurement order (row)".into(), (0..data.len()).map(|i| i as f64).collect())
-        }
+        Some(Feature::Row | Feature::Step { .. }) => (
+            "measurement order (row)".into(),
+            (0..data.len()).map(|i| i as f64).collect(),
+        ),
         Some(f @ Feature::Covariate { name, .. }) => (
             name.clone(),
             f.columns(data).map(|c| c[0].clone()).unwrap_or_default(),
         ),
         Some(f) => (
             f.names()[0].clone(),
-            f.columns_from_poses(&data.q, &data.dir).map(|c| c[0].clone()).unwrap_or_default(),
+            f.columns_from_poses(&data.q, &data.dir)
+                .map(|c| c[0].clone())
+                .unwrap_or_default(),
         ),
         None => (String::new(), Vec::new()),
     }
 }
 
-fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut prev: &CvStats = &d.before;
     for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
@@ -242,16 +291,30 @@ fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>>
             prev.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
                 - next.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
         };
-        let axis = (0..3).max_by(|x, y| gain(*x).total_cmp(&gain(*y))).unwrap_or(0);
+        let axis = (0..3)
+            .max_by(|x, y| gain(*x).total_cmp(&gain(*y)))
+            .unwrap_or(0);
         let (xlabel, x) = trace(e, data);
-        let pts = |s: &CvStats| x.iter().zip(&s.residuals).map(|(xi, r)| (*xi, r[axis])).collect();
+        let pts = |s: &CvStats| {
+            x.iter()
+                .zip(&s.residuals)
+                .map(|(xi, r)| (*xi, r[axis]))
+                .collect()
+        };
         let path = dir.join(format!("effect{}_{}.svg", k + 1, kind_name(e.kind)));
-        let title = format!("{}: CV residual before and after", describe(e));
+        let title = format!("{}: residual before / after", describe(e));
         let ylabel = format!("out-of-fold residual {} (mm)", AXES[axis]);
         xy_plot(
             &path,
-            &Labels { title: &title, x: &xlabel, y: &ylabel },
-            &[Series::points("before", pts(prev)), Series::points("after", pts(next))],
+            &Labels {
+                title: &title,
+                x: &xlabel,
+                y: &ylabel,
+            },
+            &[
+                Series::points("before", pts(prev)),
+                Series::points("after", pts(next)),
+            ],
             false,
         )?;
         out.push(path);
@@ -293,7 +356,8 @@ fn compare_compensation(
             ..CompensationOptions::default()
         };
         let c = compensate(&robot, m, &targets.traj, &opts)?;
-        let (ev, _) = super::compensate::evaluation(truth_path, &truth, &targets, &c.commands, &start, seed)?;
+        let (ev, _) =
+            super::compensate::evaluation(truth_path, &truth, &targets, &c.commands, &start, seed)?;
         Ok((ev.before, ev.after))
     };
     let (b, a) = (run(before)?, run(after)?);
@@ -307,7 +371,12 @@ fn compare_compensation(
     Ok((b, a))
 }
 
-fn report(a: &DiagnoseArgs, d: &Diagnosis, plots: &[PathBuf], comp: Option<&(Comparison, Comparison)>) -> String {
+fn report(
+    a: &DiagnoseArgs,
+    d: &Diagnosis,
+    plots: &[PathBuf],
+    comp: Option<&(Comparison, Comparison)>,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Diagnosis of `{}`\n", a.data.display());
     let _ = writeln!(
@@ -317,11 +386,24 @@ fn report(a: &DiagnoseArgs, d: &Diagnosis, plots: &[PathBuf], comp: Option<&(Com
          Benjamini–Hochberg at FDR {}; an effect is added only if it lowers the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
         a.method, d.folds, d.seed, d.permutations, d.fdr, d.seconds
     );
-    let _ = writeln!(s, "| model | extra inputs | CV RMSE x / y / z (mm) | mean 3D (mm) | max 3D (mm) |");
+    let _ = writeln!(
+        s,
+        "| model | extra inputs | CV RMSE x / y / z (mm) | mean 3D (mm) | max 3D (mm) |"
+    );
     let _ = writeln!(s, "|---|---|---|---|---|");
     let row = |s: &mut String, name: &str, c: &CvStats| {
-        let ex = if c.extras.is_empty() { "–".to_string() } else { c.extras.join(", ") };
-        let _ = writeln!(s, "| {name} | {ex} | {} | {:.4} | {:.4} |", rmse3(&c.cv_rmse_mm), c.mean_3d_mm, c.max_3d_mm);
+        let ex = if c.extras.is_empty() {
+            "–".to_string()
+        } else {
+            c.extras.join(", ")
+        };
+        let _ = writeln!(
+            s,
+            "| {name} | {ex} | {} | {:.4} | {:.4} |",
+            rmse3(&c.cv_rmse_mm),
+            c.mean_3d_mm,
+            c.max_3d_mm
+        );
     };
     row(&mut s, "before", &d.before);
     for (k, st) in d.steps.iter().enumerate() {
@@ -329,17 +411,29 @@ fn report(a: &DiagnoseArgs, d: &Diagnosis, plots: &[PathBuf], comp: Option<&(Com
     }
     let _ = writeln!(s);
     if d.steps.is_empty() {
-        let _ = writeln!(s, "**No significant effect**: the residual is not explained by any candidate beyond chance.\n");
+        let _ = writeln!(
+            s,
+            "**No significant effect**: the residual is not explained by any candidate beyond chance.\n"
+        );
     }
     let mut round = 0;
     for e in &d.effects {
         if e.round != round {
             round = e.round;
             let _ = writeln!(s, "\n## Round {round}\n");
-            let _ = writeln!(s, "| rank | kind | source | candidate | score | p | q (BH) | |");
+            let _ = writeln!(
+                s,
+                "| rank | kind | source | candidate | score | p | q (BH) | |"
+            );
             let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
         }
-        let rank = d.effects.iter().filter(|x| x.round == round).position(|x| x == e).unwrap_or(0) + 1;
+        let rank = d
+            .effects
+            .iter()
+            .filter(|x| x.round == round)
+            .position(|x| x == e)
+            .unwrap_or(0)
+            + 1;
         if rank <= 10 || e.accepted {
             let status = if e.accepted {
                 "**added**".to_string()
@@ -366,14 +460,26 @@ fn report(a: &DiagnoseArgs, d: &Diagnosis, plots: &[PathBuf], comp: Option<&(Com
             s,
             "Iterative compensation of `{}` run on the simulated robot: nominal mean |δ| {:.4} mm (max {:.4}); \
              with the model before {:.4} mm (max {:.4}); after {:.4} mm (max {:.4}).",
-            a.traj.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
-            nb.mean_abs_mm, nb.max_abs_mm, bb.mean_abs_mm, bb.max_abs_mm, ab.mean_abs_mm, ab.max_abs_mm
+            a.traj
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            nb.mean_abs_mm,
+            nb.max_abs_mm,
+            bb.mean_abs_mm,
+            bb.max_abs_mm,
+            ab.mean_abs_mm,
+            ab.max_abs_mm
         );
     }
     if !plots.is_empty() {
         let _ = writeln!(s, "\n## Plots\n");
         for p in plots {
-            let _ = writeln!(s, "- `{}`: out-of-fold residual against the traced variable, before and after", p.display());
+            let _ = writeln!(
+                s,
+                "- `{}`: out-of-fold residual against the traced variable, before and after",
+                p.display()
+            );
         }
     }
     let _ = writeln!(

@@ -204,6 +204,9 @@ pub struct PredictArgs {
     /// Output CSV: id, q, dir, pred_ex.., std_ex.. (and the measured ex.. if given).
     #[arg(short, long)]
     output: PathBuf,
+    /// Write a summary (and, with measured errors, before/after statistics) as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 pub fn run_predict(a: PredictArgs) -> Result<()> {
@@ -254,6 +257,11 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             .collect();
         let before = robokrige::stats::summarize(e);
         let after = robokrige::stats::summarize(&resid);
+        if let Some(path) = &a.json {
+            let v = serde_json::json!({"poses": data.len(), "output": a.output,
+                "measured": before, "after_subtracting_prediction": after});
+            super::write_json(path, &v, "prediction summary")?;
+        }
         println!(
             "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
             data.len(),
@@ -262,6 +270,12 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             before.max_3d_mm,
             after.max_3d_mm
         );
+    }
+    if data.errors.is_none() {
+        if let Some(path) = &a.json {
+            let v = serde_json::json!({"poses": data.len(), "output": a.output});
+            super::write_json(path, &v, "prediction summary")?;
+        }
     }
     println!("wrote {}", a.output.display());
     Ok(())

@@ -3,6 +3,7 @@
 
 mod compensate;
 mod cv;
+mod demo;
 mod diagnose;
 mod fit;
 mod progress;
@@ -24,6 +25,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Run the main job on the default COMAU campaign and write a report.
+    Demo(demo::DemoArgs),
     /// Simulate a laser-tracker campaign on a "true robot" (geometric errors,
     /// backlash, compliance, noise, optional undeclared effects).
     Simulate(simulate::SimulateArgs),
@@ -44,6 +47,7 @@ pub enum Command {
 /// Run a parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Demo(a) => demo::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),
         Command::Predict(a) => fit::run_predict(a),

@@ -203,9 +203,19 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             fams.len(),
             o.permutations
         ));
-        let mut tested =
-            scan::test_families(&fams, &current.residuals, o.permutations, o.seed, &fold, o.folds);
-        tested.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.p_value.total_cmp(&b.p_value)));
+        let mut tested = scan::test_families(
+            &fams,
+            &current.residuals,
+            o.permutations,
+            o.seed,
+            &fold,
+            o.folds,
+        );
+        tested.sort_by(|a, b| {
+            b.score
+                .total_cmp(&a.score)
+                .then(a.p_value.total_cmp(&b.p_value))
+        });
         let mut reports: Vec<EffectReport> = tested
             .iter()
             .map(|t| {
@@ -243,7 +253,10 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                         trial.push(f.clone());
                     }
                 }
-                progress(&format!("adding '{}' and cross-validating again", reports[k].label));
+                progress(&format!(
+                    "adding '{}' and cross-validating again",
+                    reports[k].label
+                ));
                 let after = cross_validated(data, &trial, o)?;
                 if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
                     reports[k].accepted = true;

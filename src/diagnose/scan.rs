@@ -101,7 +101,10 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
             grid: vec![single(BTreeMap::new(), z.clone(), add.clone())],
         });
         let mut cols = vec![z.clone()];
-        cols.extend(u.iter().map(|uj| z.iter().zip(uj).map(|(a, b)| a * b).collect()));
+        cols.extend(
+            u.iter()
+                .map(|uj| z.iter().zip(uj).map(|(a, b)| a * b).collect()),
+        );
         out.push(Family {
             kind: EffectKind::Covariate,
             source: vec![c.name.clone()],
@@ -121,7 +124,10 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
         label: "drift over the measurement order".into(),
         grid: vec![GridPoint {
             params: BTreeMap::new(),
-            columns: vec![row.clone(), zscore(&row.iter().map(|r| r * r).collect::<Vec<_>>())],
+            columns: vec![
+                row.clone(),
+                zscore(&row.iter().map(|r| r * r).collect::<Vec<_>>()),
+            ],
             add: vec![Feature::Row],
         }],
     });
@@ -130,7 +136,7 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
         out.push(Family {
             kind: EffectKind::Order,
             source: vec!["row".into()],
-            label: "step (change point) in the measurement order".into(),
+            label: "step in the measurement order".into(),
             grid: (margin..m - margin)
                 .map(|t| {
                     let col = (0..m).map(|i| if i >= t { 1.0 } else { 0.0 }).collect();
@@ -144,7 +150,9 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
         let (lo, hi) = data
             .q
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| (a.min(r[j]), b.max(r[j])));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r[j]), b.max(r[j]))
+            });
         let range = hi - lo;
         let mut grid = Vec::new();
         let mut cycles = 2.0;
@@ -175,7 +183,13 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
     // cross-joint interactions
     for a in 0..n {
         for b in a + 1..n {
-            let col = zscore(&u[a].iter().zip(&u[b]).map(|(x, y)| x * y).collect::<Vec<_>>());
+            let col = zscore(
+                &u[a]
+                    .iter()
+                    .zip(&u[b])
+                    .map(|(x, y)| x * y)
+                    .collect::<Vec<_>>(),
+            );
             out.push(Family {
                 kind: EffectKind::Interaction,
                 source: vec![format!("q{}", a + 1), format!("q{}", b + 1)],
@@ -194,7 +208,10 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
             Feature::PreviousDirection { joint: j + 1 },
             Feature::SinceReversal { joint: j + 1 },
         ] {
-            let col = zscore(&f.columns_from_poses(&data.q, &data.dir).expect("pose feature")[0]);
+            let col = zscore(
+                &f.columns_from_poses(&data.q, &data.dir)
+                    .expect("pose feature")[0],
+            );
             if col.iter().all(|v| *v == 0.0) {
                 continue;
             }
@@ -293,7 +310,10 @@ pub fn test_families(
         .iter()
         .map(|x| [x[0] - mean[0], x[1] - mean[1], x[2] - mean[2]])
         .collect();
-    let total: f64 = r.iter().map(|x| x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sum();
+    let total: f64 = r
+        .iter()
+        .map(|x| x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        .sum();
     let bases: Vec<Vec<Vec<Vec<f64>>>> = families
         .par_iter()
         .map(|f| f.grid.iter().map(|g| orthonormal(&g.columns)).collect())
@@ -341,7 +361,11 @@ pub fn test_families(
             Tested {
                 family: k,
                 best,
-                explained: if total > 0.0 { observed[k].1 / total } else { 0.0 },
+                explained: if total > 0.0 {
+                    observed[k].1 / total
+                } else {
+                    0.0
+                },
                 p_value: p[k],
                 q_value: q[k],
                 score: cv_score(&f.grid[best].columns, resid, fold, folds),
@@ -366,6 +390,7 @@ pub fn benjamini_hochberg(p: &[f64]) -> Vec<f64> {
 
 /// `1 − SSE_cv / SSE0_cv`: K-fold least squares of the residuals on
 /// `[1, columns]` against the intercept alone, pooled over the three axes.
+#[allow(clippy::needless_range_loop)] // `ax` indexes the axis of every residual row
 pub fn cv_score(columns: &[Vec<f64>], resid: &[[f64; 3]], fold: &[usize], folds: usize) -> f64 {
     let m = resid.len();
     let (mut sse, mut sse0) = (0.0, 0.0);
@@ -398,7 +423,12 @@ pub fn cv_score(columns: &[Vec<f64>], resid: &[[f64; 3]], fold: &[usize], folds:
             let ymu = train.iter().map(|&i| resid[i][ax]).sum::<f64>() / train.len() as f64;
             let rhs: Vec<f64> = tr_cols
                 .iter()
-                .map(|c| c.iter().zip(&train).map(|(x, &i)| x * (resid[i][ax] - ymu)).sum())
+                .map(|c| {
+                    c.iter()
+                        .zip(&train)
+                        .map(|(x, &i)| x * (resid[i][ax] - ymu))
+                        .sum()
+                })
                 .collect();
             let beta = solve_small(&g, &rhs);
             for &i in &test {
@@ -421,7 +451,11 @@ fn solve_small(g: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
     for i in 0..k {
         for j in 0..=i {
             let s: f64 = g[i][j] - (0..j).map(|t| l[i][t] * l[j][t]).sum::<f64>();
-            l[i][j] = if i == j { s.max(1e-300).sqrt() } else { s / l[j][j] };
+            l[i][j] = if i == j {
+                s.max(1e-300).sqrt()
+            } else {
+                s / l[j][j]
+            };
         }
     }
     let mut y = vec![0.0; k];
@@ -454,7 +488,7 @@ mod tests {
         let x: Vec<f64> = (0..m).map(|i| ((i * 37) % 101) as f64 / 101.0).collect();
         let fold: Vec<usize> = (0..m).map(|i| i % 10).collect();
         let r: Vec<[f64; 3]> = x.iter().map(|v| [2.0 * v, -v, 0.5 * v]).collect();
-        assert!(cv_score(&[x.clone()], &r, &fold, 10) > 0.999);
+        assert!(cv_score(std::slice::from_ref(&x), &r, &fold, 10) > 0.999);
         let noise: Vec<[f64; 3]> = (0..m)
             .map(|i| {
                 let t = (i as f64 * 12.9898).sin() * 43758.5453;

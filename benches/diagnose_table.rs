@@ -1,0 +1,146 @@
+//! Bench binary: `diagnose` on simulated COMAU campaigns with one undeclared
+//! effect each, at two magnitudes and two seeds, plus controls without any.
+//! Prints the table of issue 6 (case, effect found, p / q, CV RMSE before and
+//! after, noise floor). Run: `cargo bench --bench diagnose_table`
+//! (about 10 minutes on 2 cores).
+
+use robokrige::diagnose::{DiagnoseOptions, EffectKind, diagnose};
+use robokrige::kinematics;
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
+use std::time::Instant;
+
+/// (case, effect spec or "", is the found effect the true one?)
+type Case = (
+    &'static str,
+    &'static str,
+    fn(&robokrige::diagnose::EffectReport) -> bool,
+);
+
+fn main() {
+    let cases: Vec<Case> = vec![
+        ("control", "", |_| false),
+        ("temperature +3 K", "temperature:delta_k=3", |e| {
+            e.source == ["temp_c"]
+        }),
+        ("temperature +6 K", "temperature:delta_k=6", |e| {
+            e.source == ["temp_c"]
+        }),
+        ("payload 0/30/60 kg", "payload:kg=0/30/60", |e| {
+            e.source == ["payload_kg"]
+        }),
+        ("payload 0/60/120 kg", "payload:kg=0/60/120", |e| {
+            e.source == ["payload_kg"]
+        }),
+        (
+            "harmonic q2 0.002°/7.5°",
+            "harmonic:joint=2,period_deg=7.5,amp_deg=0.002",
+            harmonic_q2,
+        ),
+        (
+            "harmonic q2 0.004°/7.5°",
+            "harmonic:joint=2,period_deg=7.5,amp_deg=0.004",
+            harmonic_q2,
+        ),
+        (
+            "tracker step 0.1 mm @150",
+            "tracker-step:row=150,dx=0.06,dy=-0.05,dz=0.06",
+            step_150,
+        ),
+        (
+            "tracker step 0.2 mm @150",
+            "tracker-step:row=150,dx=0.15,dy=-0.1,dz=0.1",
+            step_150,
+        ),
+        (
+            "crosstalk 0.01°·sin q2 on q1",
+            "crosstalk:joint=1,from=2,gain_deg=0.01",
+            crosstalk,
+        ),
+        (
+            "crosstalk 0.05°·sin q2 on q1",
+            "crosstalk:joint=1,from=2,gain_deg=0.05",
+            crosstalk,
+        ),
+    ];
+    let robot = kinematics::preset("comau-nj220").expect("preset");
+    println!(
+        "| case | seed | found (rank 1) | p | q | true effect first | CV RMSE before x/y/z (mm) | after x/y/z (mm) | noise floor x/y/z (mm) | s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for (name, spec, is_true) in &cases {
+        for seed in [1u64, 2] {
+            let mut c = CampaignSpec::new(CampaignKind::Lhs, seed);
+            if !spec.is_empty() {
+                c.effects = vec![Effect::parse(spec).expect("effect")];
+            }
+            let (out, truth) = simulate(&robot, &c).expect("simulate");
+            let SimOutput::Measurements(data) = out else {
+                unreachable!()
+            };
+            let t0 = Instant::now();
+            let opts = DiagnoseOptions {
+                seed,
+                ..DiagnoseOptions::default()
+            };
+            let d = diagnose(&data, &opts, &|_| {}).expect("diagnose");
+            let top = &d.effects[0];
+            let found = if top.significant {
+                let p: Vec<String> = top
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v:.2}"))
+                    .collect();
+                format!(
+                    "{:?} {} {}{}",
+                    top.kind,
+                    top.source.join("+"),
+                    p.join(","),
+                    if top.accepted { " (added)" } else { "" }
+                )
+            } else {
+                "none significant".into()
+            };
+            let ok = if spec.is_empty() {
+                if d.effects.iter().any(|e| e.significant) {
+                    "FALSE POSITIVE"
+                } else {
+                    "ok (none)"
+                }
+            } else if top.significant && is_true(top) {
+                "yes"
+            } else {
+                "no"
+            };
+            let f = |v: &[f64; 3]| format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2]);
+            println!(
+                "| {name} | {seed} | {found} | {:.4} | {:.4} | {ok} | {} | {} | {} | {:.0} |",
+                top.p_value,
+                top.q_value,
+                f(&d.before.cv_rmse_mm),
+                f(&d.after.cv_rmse_mm),
+                f(&truth.noise_floor_mm.unwrap_or([0.0; 3])),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
+
+fn harmonic_q2(e: &robokrige::diagnose::EffectReport) -> bool {
+    e.kind == EffectKind::Harmonic
+        && e.source == ["q2"]
+        && e.params
+            .get("period_deg")
+            .is_some_and(|p| (p / 7.5 - 1.0).abs() < 0.05)
+}
+
+fn step_150(e: &robokrige::diagnose::EffectReport) -> bool {
+    e.kind == EffectKind::Order
+        && e.params
+            .get("row")
+            .is_some_and(|r| (r - 150.0).abs() <= 3.0)
+}
+
+fn crosstalk(e: &robokrige::diagnose::EffectReport) -> bool {
+    e.kind == EffectKind::Interaction && e.source.iter().any(|s| s == "q2")
+        || e.kind == EffectKind::Harmonic && e.source == ["q2"]
+}

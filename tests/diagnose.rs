@@ -1,0 +1,183 @@
+//! `diagnose`: an undeclared effect is found, ranked first and added; a
+//! control campaign reports nothing significant; features and the statistics
+//! behave.
+
+use robokrige::diagnose::{DiagnoseOptions, EffectKind, diagnose};
+use robokrige::features::Feature;
+use robokrige::kinematics;
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::ErrorModel;
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
+use robokrige::space::Space;
+use robokrige::{Error, dataset::Dataset};
+
+fn campaign(rows: usize, seed: u64, effect: Option<&str>) -> Dataset {
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let mut spec = CampaignSpec::new(CampaignKind::Lhs, seed);
+    spec.poses = rows;
+    spec.effects = effect
+        .map(|e| vec![Effect::parse(e).unwrap()])
+        .unwrap_or_default();
+    match simulate(&robot, &spec).unwrap().0 {
+        SimOutput::Measurements(d) => d,
+        SimOutput::Trajectory(_) => unreachable!(),
+    }
+}
+
+fn quick() -> DiagnoseOptions {
+    DiagnoseOptions {
+        kriging: KrigingOptions {
+            optimizer: OptimizerKind::HookeJeeves,
+            max_evals: 300,
+            starts: 2,
+            ..KrigingOptions::default()
+        },
+        folds: 5,
+        permutations: 399,
+        max_effects: 2,
+        ..DiagnoseOptions::default()
+    }
+}
+
+#[test]
+fn a_tracker_bump_is_found_at_its_row_added_and_removed_from_the_residual() {
+    let data = campaign(160, 4, Some("tracker-step:row=80,dx=0.2,dy=-0.15,dz=0.15"));
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::Order, "{top:?}");
+    let row = top.params["row"];
+    assert!((row - 80.0).abs() <= 2.0, "step found at row {row}");
+    assert!(top.significant && top.accepted && top.p_value < 0.01);
+    assert_eq!(d.extras.len(), 1);
+    assert!(matches!(d.extras[0], Feature::Step { .. }));
+    assert!(
+        d.after.pooled_rmse_mm < 0.7 * d.before.pooled_rmse_mm,
+        "{:?} → {:?}",
+        d.before.cv_rmse_mm,
+        d.after.cv_rmse_mm
+    );
+    // the report is reproducible
+    let again = diagnose(&data, &quick(), &|_| {}).unwrap();
+    assert_eq!(
+        serde_json::to_string(&again.effects).unwrap(),
+        serde_json::to_string(&d.effects).unwrap()
+    );
+}
+
+#[test]
+fn a_control_campaign_reports_no_significant_effect() {
+    let data = campaign(160, 4, None);
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let sig: Vec<_> = d.effects.iter().filter(|e| e.significant).collect();
+    assert!(sig.is_empty(), "{sig:?}");
+    assert!(d.steps.is_empty() && d.extras.is_empty());
+    assert_eq!(d.before, d.after);
+    // every family was tested once, with p-values in (0, 1]
+    assert!(d.effects.len() > 30);
+    assert!(
+        d.effects
+            .iter()
+            .all(|e| e.p_value > 0.0 && e.p_value <= 1.0 && e.round == 1)
+    );
+}
+
+#[test]
+fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
+    let data = campaign(80, 5, Some("payload:kg=0/60/120"));
+    let extras = vec![
+        Feature::Covariate {
+            name: "payload_kg".into(),
+            reference: Some(0.0),
+        },
+        Feature::Harmonic {
+            joint: 2,
+            period_deg: 7.5,
+        },
+        Feature::SinceReversal { joint: 3 },
+    ];
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 200,
+        ..KrigingOptions::default()
+    };
+    let m = ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &extras).unwrap();
+    assert_eq!(m.input_names.len(), 12 + 4);
+    let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
+    assert_eq!(back.extras, extras);
+    // from the dataset the payload column is used; from poses its reference 0
+    let a = m.predict_dataset(&data).unwrap().mean;
+    let b = m.predict(&data.q, &data.dir).unwrap().mean;
+    let first_block = data
+        .covariate("payload_kg")
+        .unwrap()
+        .values
+        .iter()
+        .take_while(|v| **v == 0.0)
+        .count();
+    assert!(first_block > 0);
+    for k in 0..first_block {
+        for ax in 0..3 {
+            assert!((a[k][ax] - b[k][ax]).abs() < 1e-9);
+        }
+    }
+    // a missing covariate without a reference is a clear error
+    let no_ref = vec![Feature::Covariate {
+        name: "payload_kg".into(),
+        reference: None,
+    }];
+    let m2 = ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &no_ref).unwrap();
+    let err = m2.predict(&data.q, &data.dir).unwrap_err();
+    assert!(err.to_string().contains("payload_kg"), "{err}");
+    // a joint out of range is rejected
+    let bad = vec![Feature::Harmonic {
+        joint: 9,
+        period_deg: 5.0,
+    }];
+    assert!(matches!(
+        ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &bad),
+        Err(Error::InvalidParameter(_))
+    ));
+}
+
+#[test]
+fn direction_history_features_follow_the_sequence() {
+    let q = vec![
+        vec![0.0],
+        vec![1.0],
+        vec![3.0],
+        vec![2.0],
+        vec![2.0],
+        vec![5.0],
+    ];
+    let dir = robokrige::space::derive_directions(&q, None);
+    let prev = Feature::PreviousDirection { joint: 1 }
+        .columns_from_poses(&q, &dir)
+        .unwrap();
+    assert_eq!(prev[0], vec![1.0, 1.0, 1.0, 1.0, -1.0, -1.0]);
+    let travel = Feature::SinceReversal { joint: 1 }
+        .columns_from_poses(&q, &dir)
+        .unwrap();
+    // reversal at row 3 (3 → 2) and again at row 5 (2 → 5); row 4 did not move
+    assert_eq!(travel[0], vec![0.0, 1.0, 3.0, 1.0, 1.0, 3.0]);
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let data = campaign(40, 1, None);
+    for o in [
+        DiagnoseOptions {
+            permutations: 5,
+            ..quick()
+        },
+        DiagnoseOptions {
+            fdr: 0.0,
+            ..quick()
+        },
+        DiagnoseOptions {
+            folds: 100,
+            ..quick()
+        },
+    ] {
+        assert!(diagnose(&data, &o, &|_| {}).is_err());
+    }
+}
