@@ -2,7 +2,8 @@
 //! effect each, at two magnitudes and two seeds, plus controls without any.
 //! Prints the table of issue 6 (case, effect found, p / q, CV RMSE before and
 //! after, noise floor). Run: `cargo bench --bench diagnose_table`
-//! (about 10 minutes on 2 cores).
+//! (about 10 minutes on 2 cores). The robot preset is given, so joint
+//! cross-talk candidates (through the Jacobian) are in the scan.
 
 use robokrige::diagnose::{DiagnoseOptions, EffectKind, diagnose};
 use robokrige::kinematics;
@@ -80,6 +81,7 @@ fn main() {
             let t0 = Instant::now();
             let opts = DiagnoseOptions {
                 seed,
+                robot: Some("comau-nj220".into()),
                 ..DiagnoseOptions::default()
             };
             let d = diagnose(&data, &opts, &|_| {}).expect("diagnose");

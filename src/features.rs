@@ -40,6 +40,15 @@ pub enum Feature {
     PreviousDirection { joint: usize },
     /// Travel of joint j since its direction last changed (degrees or mm).
     SinceReversal { joint: usize },
+    /// Joint j deviating with the angle of joint k (cross-talk, seed 000
+    /// §5.2): `∂P/∂θ_j(q) · sin θ_k` and `· cos θ_k`, the TCP displacement a
+    /// deviation `a·sin θ_k + b·cos θ_k` of joint j causes (six columns: x, y, z
+    /// of each). Needs the robot preset for the Jacobian.
+    Crosstalk {
+        robot: String,
+        joint: usize,
+        from: usize,
+    },
 }
 
 impl Feature {
@@ -56,6 +65,10 @@ impl Feature {
             Feature::Interaction { a, b } => vec![format!("q{a}*q{b}")],
             Feature::PreviousDirection { joint } => vec![format!("prev_dir{joint}")],
             Feature::SinceReversal { joint } => vec![format!("since_reversal{joint}")],
+            Feature::Crosstalk { joint, from, .. } => ["sin", "cos"]
+                .iter()
+                .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
+                .collect(),
         }
     }
 
@@ -71,6 +84,7 @@ impl Feature {
                 vec![*joint]
             }
             Feature::Interaction { a, b } => vec![*a, *b],
+            Feature::Crosstalk { joint, from, .. } => vec![*joint, *from],
             Feature::PreviousDirection { joint } | Feature::SinceReversal { joint } => vec![*joint],
             _ => Vec::new(),
         };
@@ -136,6 +150,20 @@ impl Feature {
             Feature::Interaction { a, b } => vec![col(&|i| q[i][a - 1] * q[i][b - 1])],
             Feature::PreviousDirection { joint } => {
                 vec![col(&|i| if i == 0 { 1.0 } else { dir[i - 1][joint - 1] })]
+            }
+            Feature::Crosstalk { robot, joint, from } => {
+                let r = crate::kinematics::preset(robot)?;
+                let mut cols = vec![Vec::with_capacity(m); 6];
+                for qi in q {
+                    let jac = r.position_jacobian(qi)?;
+                    let th = qi[from - 1].to_radians();
+                    for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
+                        for a in 0..3 {
+                            cols[3 * f + a].push(jac[(a, joint - 1)] * v);
+                        }
+                    }
+                }
+                cols
             }
             Feature::SinceReversal { joint } => {
                 let j = joint - 1;

@@ -65,9 +65,10 @@ pub struct DiagnoseArgs {
     /// Save the final model (with the added effects) here.
     #[arg(long)]
     model_out: Option<PathBuf>,
-    /// With --traj and --truth: compensate the trajectory with the model
-    /// before and after, on this robot preset, and report the errors.
-    #[arg(long, requires_all = ["traj", "truth"])]
+    /// Robot preset: adds joint cross-talk candidates (through its Jacobian);
+    /// with --traj and --truth, also compensates the trajectory with the model
+    /// before and after and reports the errors.
+    #[arg(long)]
     robot: Option<String>,
     #[arg(long, requires = "robot")]
     traj: Option<PathBuf>,
@@ -98,6 +99,7 @@ fn options(a: &DiagnoseArgs) -> Result<DiagnoseOptions> {
         permutations: a.permutations,
         fdr: a.fdr,
         max_effects: a.max_effects,
+        robot: a.robot.clone(),
         ..DiagnoseOptions::default()
     })
 }
@@ -127,7 +129,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
             println!("plot: {}", p.display());
         }
     }
-    let need_models = a.model_out.is_some() || a.robot.is_some();
+    let need_models = a.model_out.is_some() || a.traj.is_some();
     let mut compensation = None;
     if need_models {
         let work = with_columns(&data, &d.extras)?;
@@ -137,6 +139,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
             println!("model with the added effects: {}", p.display());
         }
         if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
+            // (--traj and --truth without --robot are rejected by clap)
             let before = ErrorModel::fit_with_extras(&data, opts.space, &opts.kriging, &[])?;
             compensation = Some(compare_compensation(
                 robot, traj, truth, &before, &after, a.seed,
@@ -224,7 +227,11 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         );
     }
     if d.steps.is_empty() {
-        println!("  no significant effect: nothing to add");
+        if d.effects.iter().any(|e| e.significant) {
+            println!("  significant candidates, but none lowered the CV RMSE enough to be added");
+        } else {
+            println!("  no significant effect: nothing to add");
+        }
     }
 }
 
@@ -411,10 +418,12 @@ fn report(
     }
     let _ = writeln!(s);
     if d.steps.is_empty() {
-        let _ = writeln!(
-            s,
-            "**No significant effect**: the residual is not explained by any candidate beyond chance.\n"
-        );
+        let text = if d.effects.iter().any(|e| e.significant) {
+            "**Nothing added**: significant candidates were found (below), but none lowered the CV RMSE enough."
+        } else {
+            "**No significant effect**: the residual is not explained by any candidate beyond chance."
+        };
+        let _ = writeln!(s, "{text}\n");
     }
     let mut round = 0;
     for e in &d.effects {
@@ -441,6 +450,14 @@ fn report(
                 e.note.clone().unwrap_or_else(|| "significant".into())
             } else {
                 String::new()
+            };
+            let status = if e.confounded_with.is_empty() {
+                status
+            } else {
+                format!(
+                    "{status}; indistinguishable here from {}",
+                    e.confounded_with.join("; ")
+                )
             };
             let _ = writeln!(
                 s,

@@ -46,6 +46,8 @@ pub struct DiagnoseOptions {
     pub max_effects: usize,
     /// Relative drop of the pooled CV RMSE an effect must bring to be kept.
     pub min_gain: f64,
+    /// Robot preset name: enables the joint cross-talk candidates (Jacobian).
+    pub robot: Option<String>,
 }
 
 impl Default for DiagnoseOptions {
@@ -62,12 +64,16 @@ impl Default for DiagnoseOptions {
             fdr: 0.05,
             max_effects: 3,
             min_gain: 0.02,
+            robot: None,
         }
     }
 }
 
 impl DiagnoseOptions {
     fn validate(&self) -> Result<()> {
+        if let Some(r) = &self.robot {
+            crate::kinematics::preset(r)?;
+        }
         if self.permutations < 19 || !(self.fdr > 0.0 && self.fdr < 1.0) || self.min_gain < 0.0 {
             return Err(Error::InvalidParameter(
                 "diagnose needs ≥ 19 permutations, 0 < fdr < 1 and min_gain ≥ 0".into(),
@@ -123,6 +129,11 @@ pub struct EffectReport {
     pub significant: bool,
     /// Added to the model (significant, best of its round, and it lowered the CV RMSE).
     pub accepted: bool,
+    /// Other significant candidates of the round that explain nearly the same
+    /// residual component (cosine ≥ 0.9) with a score within 20 % of this
+    /// one: the data cannot tell them apart (e.g. payload blocks and time).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub confounded_with: Vec<String>,
     /// Why a significant best candidate was not kept.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
@@ -197,7 +208,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 _ => None,
             })
             .collect();
-        let fams = scan::families(data, &used);
+        let fams = scan::families(data, &used, o.robot.as_deref());
         progress(&format!(
             "round {round}: testing {} candidate effects with {} permutations",
             fams.len(),
@@ -233,12 +244,29 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                     q_value: t.q_value,
                     significant: t.q_value <= o.fdr,
                     accepted: false,
+                    confounded_with: Vec::new(),
                     note: None,
                     add: g.add.clone(),
                 }
             })
             .collect();
         let pick = reports.iter().position(|r| r.significant && r.score > 0.0);
+        if let Some(k) = pick {
+            // `reports` is in the order of `tested`
+            let cols = |i: usize| &fams[tested[i].family].grid[tested[i].best].columns;
+            let top_fit = scan::fitted(cols(k), &current.residuals);
+            let top_score = reports[k].score;
+            let similar: Vec<String> = (0..reports.len())
+                .filter(|&i| {
+                    i != k && reports[i].significant && reports[i].score >= 0.8 * top_score
+                })
+                .filter(|&i| {
+                    scan::similarity(&top_fit, &scan::fitted(cols(i), &current.residuals)) >= 0.9
+                })
+                .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
+                .collect();
+            reports[k].confounded_with = similar;
+        }
         let done = match pick {
             None => true,
             Some(_) if round > o.max_effects => {

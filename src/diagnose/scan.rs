@@ -69,8 +69,9 @@ fn params(kv: &[(&str, f64)]) -> BTreeMap<String, f64> {
 /// The candidate families a campaign supports. Covariates named in
 /// `exclude` (already in the model) and columns with missing values are left
 /// out; the harmonic periods run from 2° to half the joint's range, in steps
-/// of a quarter cycle over the range.
-pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
+/// of a quarter cycle over the range. With a robot preset (`robot`), joint
+/// cross-talk candidates mapped through its Jacobian are added.
+pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
     let u: Vec<Vec<f64>> = (0..n)
@@ -200,6 +201,31 @@ pub fn families(data: &Dataset, exclude: &[String]) -> Vec<Family> {
                     Feature::Interaction { a: a + 1, b: b + 1 },
                 )],
             });
+        }
+    }
+    // joint cross-talk through the Jacobian (needs the robot)
+    if let Some(name) = robot {
+        for j in 1..=n {
+            for k in (1..=n).filter(|&k| k != j) {
+                let f = Feature::Crosstalk {
+                    robot: name.to_string(),
+                    joint: j,
+                    from: k,
+                };
+                let Ok(cols) = f.columns_from_poses(&data.q, &data.dir) else {
+                    continue;
+                };
+                out.push(Family {
+                    kind: EffectKind::Interaction,
+                    source: vec![format!("q{j}"), format!("q{k}")],
+                    label: format!("q{j} deviating with sin/cos q{k} (via the Jacobian)"),
+                    grid: vec![GridPoint {
+                        params: BTreeMap::new(),
+                        columns: cols.iter().map(|c| zscore(c)).collect(),
+                        add: vec![f],
+                    }],
+                });
+            }
         }
     }
     // direction history
@@ -372,6 +398,36 @@ pub fn test_families(
             }
         })
         .collect()
+}
+
+/// The least-squares fit of the centred residuals on the centred `columns`
+/// (m × 3), for comparing what two candidates explain.
+pub fn fitted(columns: &[Vec<f64>], resid: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let m = resid.len();
+    let mean: [f64; 3] =
+        std::array::from_fn(|a| resid.iter().map(|r| r[a]).sum::<f64>() / m as f64);
+    let mut out = vec![[0.0; 3]; m];
+    for b in orthonormal(columns) {
+        for a in 0..3 {
+            let d: f64 = b.iter().zip(resid).map(|(x, r)| x * (r[a] - mean[a])).sum();
+            for (o, x) in out.iter_mut().zip(&b) {
+                o[a] += d * x;
+            }
+        }
+    }
+    out
+}
+
+/// Cosine similarity of two fitted components (pooled over the axes).
+pub fn similarity(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let dot = |u: &[[f64; 3]], v: &[[f64; 3]]| -> f64 {
+        u.iter()
+            .zip(v)
+            .map(|(x, y)| x[0] * y[0] + x[1] * y[1] + x[2] * y[2])
+            .sum()
+    };
+    let d = (dot(a, a) * dot(b, b)).sqrt();
+    if d > 0.0 { dot(a, b) / d } else { 0.0 }
 }
 
 /// Benjamini–Hochberg adjusted p-values (step-up, monotone).
