@@ -164,7 +164,13 @@ fn solve_joints(
             .map(|(p, q0)| robot.ik(&target(traj, p), q0, opts))
             .collect(),
     };
-    let mut joints = Vec::with_capacity(poses.len());
+    all_reached(results)
+}
+
+/// The joints of every point, or [`Error::Unreachable`] listing the points
+/// whose IK failed (with the first failure's message).
+pub fn all_reached(results: Vec<Result<Vec<f64>>>) -> Result<Vec<Vec<f64>>> {
+    let mut joints = Vec::with_capacity(results.len());
     let mut failed = Vec::new();
     let mut first = String::new();
     for (i, r) in results.into_iter().enumerate() {

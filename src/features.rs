@@ -153,7 +153,7 @@ impl Feature {
             }
             Feature::Crosstalk { robot, joint, from } => {
                 let r = crate::kinematics::preset(robot)?;
-                let mut cols = vec![Vec::with_capacity(m); 6];
+                let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
                 for qi in q {
                     let jac = r.position_jacobian(qi)?;
                     let th = qi[from - 1].to_radians();

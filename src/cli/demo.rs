@@ -75,6 +75,16 @@ struct CompRow {
     iterations: usize,
 }
 
+impl CompRow {
+    /// Reduction of the mean and of the max 3D error, %.
+    fn reduction_pct(&self) -> (f64, f64) {
+        (
+            100.0 * (1.0 - self.after.mean_abs_mm / self.nominal.mean_abs_mm),
+            100.0 * (1.0 - self.after.max_abs_mm / self.nominal.max_abs_mm),
+        )
+    }
+}
+
 pub fn run(a: DemoArgs) -> Result<()> {
     let t0 = Instant::now();
     let out = &a.output;
@@ -356,17 +366,16 @@ fn summary(
         "\nIterative feed-forward compensation, measured on the simulated robot (mean / max 3D error, mm):"
     );
     for c in comp {
+        let (rm, rx) = c.reduction_pct();
         let _ = writeln!(
             s,
-            "  {:<19} {:<4} nominal {:.3} / {:.3}  ->  {:.3} / {:.3}  ({:.0} % / {:.0} % lower, {} iterations)",
+            "  {:<19} {:<4} nominal {:.3} / {:.3}  ->  {:.3} / {:.3}  ({rm:.0} % / {rx:.0} % lower, {} iterations)",
             c.target,
             c.model,
             c.nominal.mean_abs_mm,
             c.nominal.max_abs_mm,
             c.after.mean_abs_mm,
             c.after.max_abs_mm,
-            100.0 * (1.0 - c.after.mean_abs_mm / c.nominal.mean_abs_mm),
-            100.0 * (1.0 - c.after.max_abs_mm / c.nominal.max_abs_mm),
             c.iterations
         );
     }
@@ -450,17 +459,16 @@ fn report(
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|");
     for c in comp {
+        let (rm, rx) = c.reduction_pct();
         let _ = writeln!(
             s,
-            "| {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {:.0} % / {:.0} % | {} |",
+            "| {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {rm:.0} % / {rx:.0} % | {} |",
             c.target,
             c.model,
             c.nominal.mean_abs_mm,
             c.nominal.max_abs_mm,
             c.after.mean_abs_mm,
             c.after.max_abs_mm,
-            100.0 * (1.0 - c.after.mean_abs_mm / c.nominal.mean_abs_mm),
-            100.0 * (1.0 - c.after.max_abs_mm / c.nominal.max_abs_mm),
             c.iterations
         );
     }

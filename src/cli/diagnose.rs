@@ -110,10 +110,8 @@ pub(super) fn rmse3(v: &[f64; 3]) -> String {
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
     let mut data = read_csv(&a.data)?;
-    if let Some(n) = a.rows {
-        if n < data.len() {
-            data = data.select(&(0..n).collect::<Vec<_>>());
-        }
+    if let Some(n) = a.rows.filter(|&n| n < data.len()) {
+        data = data.select(&(0..n).collect::<Vec<_>>());
     }
     let opts = options(&a)?;
     let pb = spinner("diagnose");

@@ -271,11 +271,9 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             after.max_3d_mm
         );
     }
-    if data.errors.is_none() {
-        if let Some(path) = &a.json {
-            let v = serde_json::json!({"poses": data.len(), "output": a.output});
-            super::write_json(path, &v, "prediction summary")?;
-        }
+    if let (None, Some(path)) = (&data.errors, &a.json) {
+        let v = serde_json::json!({"poses": data.len(), "output": a.output});
+        super::write_json(path, &v, "prediction summary")?;
     }
     println!("wrote {}", a.output.display());
     Ok(())

@@ -6,11 +6,11 @@
 //! tracker adds its noise to the true TCP position.
 
 use super::{Effect, TrueRobot, gaussian};
-use crate::compensate::first_pass_joints;
+use crate::Result;
+use crate::compensate::{all_reached, first_pass_joints};
 use crate::kinematics::IkOptions;
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
-use crate::{Error, Result};
 use nalgebra::Vector3;
 use rand::Rng;
 
@@ -41,34 +41,14 @@ pub fn execute(
 ) -> Result<Execution> {
     let nominal = &robot.nominal;
     nominal.check_len(start)?;
-    let mut joints = Vec::with_capacity(commands.len());
-    let mut failed = Vec::new();
-    let mut first = String::new();
-    let solved = first_pass_joints(
+    let joints = all_reached(first_pass_joints(
         nominal,
         commands,
         &commands.poses,
         start,
         hints,
         &IkOptions::default(),
-    );
-    for (i, r) in solved.into_iter().enumerate() {
-        match r {
-            Ok(q) => joints.push(q),
-            Err(e) => {
-                if failed.is_empty() {
-                    first = e.to_string();
-                }
-                failed.push(i);
-            }
-        }
-    }
-    if !failed.is_empty() {
-        return Err(Error::Unreachable {
-            indices: failed,
-            first,
-        });
-    }
+    ))?;
     let dir = derive_directions(&joints, Some(start));
     let ctx = Default::default();
     let measured = joints
