@@ -4,7 +4,6 @@ use super::progress::spinner;
 use clap::Args;
 use nalgebra::{Isometry3, UnitQuaternion};
 use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
-use robokrige::dataset::read_csv;
 use robokrige::kinematics::{self, Robot};
 use robokrige::model::ErrorModel;
 use robokrige::plot::{Labels, Series, xy_plot};
@@ -120,7 +119,7 @@ pub(super) fn read_targets(
     let mut hints = None;
     // q columns win: in a measurement CSV, x,y,z are the *measured* positions
     let mut t = if cols.contains(&"q1") {
-        let d = read_csv(path)?;
+        let d = super::read_data(path)?;
         if d.n_joints() != robot.dof() {
             return Err(Error::JointCount {
                 expected: robot.dof(),

@@ -6,7 +6,6 @@ use clap::Args;
 use clap::ValueEnum;
 use robokrige::Result;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
-use robokrige::dataset::read_csv;
 use robokrige::model::ErrorModel;
 use robokrige::plot::box_plot;
 use std::path::PathBuf;
@@ -56,7 +55,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     if let Some(list) = &a.methods {
         return run_methods(&a, list);
     }
-    let data = read_csv(&a.data)?;
+    let data = super::read_data(&a.data)?;
     let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
@@ -126,7 +125,7 @@ fn norms(e: &[[f64; 3]]) -> Vec<f64> {
 /// error) plus per-axis RMSE, and the JSON `methods` list.
 fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     let methods = robokrige::methods::parse_methods(list)?;
-    let data = read_csv(&a.data)?;
+    let data = super::read_data(&a.data)?;
     println!(
         "{}-fold CV (refit: selection and hyperparameters inside every training fold) on {} rows, fold seed {}",
         a.folds,

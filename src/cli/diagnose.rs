@@ -4,7 +4,7 @@ use super::compensate::{load_truth, read_targets};
 use super::progress::spinner;
 use clap::Args;
 use robokrige::compensate::{CompensationOptions, compensate};
-use robokrige::dataset::{Dataset, read_csv};
+use robokrige::dataset::Dataset;
 use robokrige::diagnose::{
     CvStats, DiagnoseOptions, Diagnosis, EffectKind, EffectReport, diagnose, with_columns,
 };
@@ -109,7 +109,7 @@ pub(super) fn rmse3(v: &[f64; 3]) -> String {
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
-    let mut data = read_csv(&a.data)?;
+    let mut data = super::read_data(&a.data)?;
     if let Some(n) = a.rows.filter(|&n| n < data.len()) {
         data = data.select(&(0..n).collect::<Vec<_>>());
     }

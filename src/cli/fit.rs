@@ -1,7 +1,6 @@
 //! `robokrige fit` and `robokrige predict`.
 
 use clap::{Args, ValueEnum};
-use robokrige::dataset::read_csv;
 use robokrige::kriging::{KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::space::Space;
@@ -101,7 +100,7 @@ pub struct FitArgs {
 }
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
-    let data = read_csv(&a.data)?;
+    let data = super::read_data(&a.data)?;
     let (space, opts) = a.model.options();
     let t0 = std::time::Instant::now();
     let model = match &a.method {
@@ -211,7 +210,7 @@ pub struct PredictArgs {
 
 pub fn run_predict(a: PredictArgs) -> Result<()> {
     let model = ErrorModel::load(&a.model)?;
-    let data = read_csv(&a.poses)?;
+    let data = super::read_data(&a.poses)?;
     if data.n_joints() != model.n_joints {
         return Err(Error::Input {
             source_name: a.poses.display().to_string(),

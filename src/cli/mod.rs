@@ -71,3 +71,12 @@ pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<
     let text = to_json(value, context)? + "\n";
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
+
+/// Read a measurement CSV and print its plausibility warnings on stderr.
+pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
+    let d = robokrige::dataset::read_csv(path)?;
+    for w in d.unit_warnings() {
+        eprintln!("warning: {w}");
+    }
+    Ok(d)
+}

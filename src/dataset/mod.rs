@@ -159,6 +159,35 @@ impl Dataset {
         self.q.is_empty()
     }
 
+    /// Plausibility warnings about units: joint angles are degrees (mm for a
+    /// prismatic joint). When every joint value lies within ±2π and some joint
+    /// moves by more than 0.5, the file probably holds radians.
+    pub fn unit_warnings(&self) -> Vec<String> {
+        let n = self.n_joints();
+        if self.is_empty() || n == 0 {
+            return Vec::new();
+        }
+        let tau = std::f64::consts::TAU + 1e-9;
+        let all_small = self.q.iter().flatten().all(|v| v.abs() <= tau);
+        let moving = (0..n).any(|j| {
+            let (lo, hi) = self
+                .q
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                    (a.min(r[j]), b.max(r[j]))
+                });
+            hi - lo > 0.5
+        });
+        if all_small && moving {
+            vec![format!(
+                "{}: every joint value lies within ±2π; robokrige expects degrees (mm for prismatic joints) — if these are radians, convert them (× 180/π)",
+                self.source
+            )]
+        } else {
+            Vec::new()
+        }
+    }
+
     /// The numeric covariate called `name`, if any.
     pub fn covariate(&self, name: &str) -> Option<&Covariate> {
         self.covariates.iter().find(|c| c.name == name)

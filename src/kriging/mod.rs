@@ -17,7 +17,7 @@ pub mod trend;
 
 pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
 pub use model::{KrigingModel, KrigingModelData, Pred};
-pub use problem::{KrigingProblem, PsiValue, Solution, Workspace};
+pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
 pub use trend::{Monomials, Trend, TrendModel, independent_columns, trend_matrix};
 
 use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
@@ -294,7 +294,7 @@ pub fn fit_output(
     let report = FitReport {
         theta: theta.clone(),
         nugget,
-        ln_psi: sol.value.ln_psi,
+        ln_psi: storable_ln_psi(sol.value.ln_psi),
         sigma2: sol.value.sigma2,
         jitter: sol.value.jitter,
         trend_terms: p.trend_terms,

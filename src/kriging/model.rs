@@ -8,7 +8,7 @@
 
 use super::corr::{CorrelationModel, Gaussian, TrainingInputs, corr_vector};
 use super::fastexp::exp_in_place;
-use super::problem::Solution;
+use super::problem::{Solution, storable_ln_psi};
 use super::trend::{Trend, TrendModel, trend_matrix};
 use crate::{Error, Result};
 use faer::linalg::matmul::matmul;
@@ -38,7 +38,7 @@ pub struct KrigingModelData {
     pub gamma: Vec<f64>,
     /// Process variance σ² (normalised units, eq 13).
     pub sigma2: f64,
-    /// ln ψ at ξ (eq 14).
+    /// ln ψ at ξ (eq 14); `f64::MIN` stands for −∞ (σ² = 0).
     pub ln_psi: f64,
     /// Lower Cholesky factor of R, packed by rows (`i ≥ j`).
     pub chol_lower: Vec<f64>,
@@ -193,7 +193,7 @@ impl KrigingModel {
             beta: sol.beta,
             gamma: sol.gamma,
             sigma2: sol.value.sigma2,
-            ln_psi: sol.value.ln_psi,
+            ln_psi: storable_ln_psi(sol.value.ln_psi),
             chol_lower,
             g_upper,
         })

@@ -246,3 +246,10 @@ impl KrigingProblem<'_> {
         })
     }
 }
+
+/// ln ψ as stored in reports and model files: −∞ (a response the trend
+/// reproduces exactly, σ² = 0) becomes `f64::MIN`, since JSON has no
+/// infinities and a saved model must load back.
+pub fn storable_ln_psi(v: f64) -> f64 {
+    if v.is_finite() { v } else { f64::MIN }
+}
