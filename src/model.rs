@@ -196,6 +196,29 @@ impl ErrorModel {
         })
     }
 
+    /// Warnings about the conditioning of the fit: an output whose correlation
+    /// matrix needed more diagonal jitter than DACE's `(10 + m)·eps` to be
+    /// factorised (near-duplicate poses, very long correlation lengths).
+    pub fn conditioning_warnings(&self) -> Vec<String> {
+        self.reports
+            .iter()
+            .zip(AXES)
+            .filter_map(|(r, ax)| {
+                let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+                let base = self
+                    .options
+                    .min_jitter
+                    .unwrap_or((10.0 + m as f64) * f64::EPSILON);
+                (r.jitter > 1.5 * base).then(|| {
+                    format!(
+                        "{ax}: the correlation matrix was numerically singular (near-duplicate poses?); jitter {:.1e} was added to its diagonal",
+                        r.jitter
+                    )
+                })
+            })
+            .collect()
+    }
+
     /// Predict at poses `q` approached in directions `dir` (ignored in JS).
     /// Extra inputs are computed from the pose sequence
     /// ([`Feature::columns_from_poses`]).

@@ -121,6 +121,9 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     };
     let space = model.space;
     let secs = t0.elapsed().as_secs_f64();
+    for w in model.conditioning_warnings() {
+        eprintln!("warning: {w}");
+    }
     model.save(&a.output)?;
     if a.json {
         let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs,

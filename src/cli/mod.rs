@@ -75,7 +75,7 @@ pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<
 /// Read a measurement CSV and print its plausibility warnings on stderr.
 pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
     let d = robokrige::dataset::read_csv(path)?;
-    for w in d.unit_warnings() {
+    for w in d.warnings() {
         eprintln!("warning: {w}");
     }
     Ok(d)

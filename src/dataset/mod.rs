@@ -159,10 +159,33 @@ impl Dataset {
         self.q.is_empty()
     }
 
-    /// Plausibility warnings about units: joint angles are degrees (mm for a
-    /// prismatic joint). When every joint value lies within ±2π and some joint
-    /// moves by more than 0.5, the file probably holds radians.
-    pub fn unit_warnings(&self) -> Vec<String> {
+    /// Plausibility warnings: units (joint angles are degrees, mm for a
+    /// prismatic joint: when every joint value lies within ±2π and some joint
+    /// moves by more than 0.5, the file probably holds radians), and poses that
+    /// repeat an earlier one exactly (an interpolating model must pass through
+    /// both measurements; `--nugget` lets it average them).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = self.unit_warnings();
+        let mut seen = std::collections::HashSet::new();
+        let repeats = self
+            .q
+            .iter()
+            .zip(&self.dir)
+            .filter(|(q, d)| {
+                let key: Vec<u64> = q.iter().chain(d.iter()).map(|v| v.to_bits()).collect();
+                !seen.insert(key)
+            })
+            .count();
+        if repeats > 0 {
+            out.push(format!(
+                "{}: {repeats} pose(s) repeat an earlier pose exactly; without --nugget the model must interpolate both measurements",
+                self.source
+            ));
+        }
+        out
+    }
+
+    fn unit_warnings(&self) -> Vec<String> {
         let n = self.n_joints();
         if self.is_empty() || n == 0 {
             return Vec::new();

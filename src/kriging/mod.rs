@@ -144,6 +144,9 @@ pub struct FitReport {
     pub optimizer: OptimizerKind,
     pub starts: usize,
     pub evals: usize,
+    /// Wall time of the fit; not saved, so that a model file depends only on
+    /// the data and the options (byte-identical for the same command).
+    #[serde(skip)]
     pub seconds: f64,
 }
 
