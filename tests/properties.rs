@@ -172,3 +172,29 @@ fn the_thread_count_does_not_change_a_fit() {
         .install(|| two.predict_dataset(&data).unwrap());
     assert_eq!(p1, p2);
 }
+
+#[test]
+fn an_unfactorisable_correlation_matrix_escalates_the_jitter() {
+    // 40 points on a line with a very long correlation length: R is PSD in
+    // exact arithmetic but far too ill-conditioned for a Cholesky with a
+    // 1e-30 jitter; the ladder climbs (×10 per rung) until it factorises.
+    let x: Vec<Vec<f64>> = (0..40).map(|i| vec![i as f64 / 39.0]).collect();
+    let y: Vec<f64> = x.iter().map(|r| (3.0 * r[0]).sin()).collect();
+    let m = fit_output_at(
+        &x,
+        &TrainingInputs::new(&x),
+        &y,
+        &TrendKind::Constant.trend(1),
+        &[1e-3],
+        0.0,
+        Some(1e-30),
+    )
+    .unwrap();
+    assert!(
+        m.data.jitter > 1e-29 && m.data.jitter <= 1e-6,
+        "jitter {:e}",
+        m.data.jitter
+    );
+    let p = m.predict(&[vec![0.5], vec![2.0]]);
+    assert!(p.iter().all(|v| v.mean.is_finite() && v.mse.is_finite()));
+}
