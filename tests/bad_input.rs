@@ -4,19 +4,9 @@
 //! (exit 0, with what the user is told). Bad usage exits 2.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn rk(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_robokrige"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use common::rk;
 
 fn dir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("robokrige-bad-{}", std::process::id()));

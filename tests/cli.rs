@@ -1,18 +1,8 @@
 //! The binary: exit codes 0 / 1 / 2, one-line errors, files written.
 
-use std::process::Command;
+mod common;
 
-fn rk(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_robokrige"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use common::rk;
 
 #[test]
 fn simulate_fit_predict_round_trip() {
