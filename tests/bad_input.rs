@@ -87,6 +87,27 @@ fn no_non_finite(path: &str) -> bool {
     !text.replace("\"min_jitter\":null", "").contains("null")
 }
 
+/// A JS model of the shipped campaign, fitted once for the compensation
+/// entries (tests run in parallel threads; the first one fits it).
+fn js_model() -> String {
+    static M: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    M.get_or_init(|| {
+        let m = model_out("js_shared.json");
+        succeeds(&[
+            "fit",
+            &shipped("comau_lhs.csv"),
+            "--space",
+            "js",
+            "--optimizer",
+            "hj",
+            "-o",
+            &m,
+        ]);
+        m
+    })
+    .clone()
+}
+
 fn model_out(name: &str) -> String {
     dir().join(name).display().to_string()
 }
@@ -315,17 +336,7 @@ fn c16_model_for_another_joint_count() {
 
 #[test]
 fn c17_unreachable_trajectory_points_are_listed() {
-    let m = model_out("c17.json");
-    succeeds(&[
-        "fit",
-        &shipped("comau_lhs.csv"),
-        "--space",
-        "js",
-        "--optimizer",
-        "hj",
-        "-o",
-        &m,
-    ]);
+    let m = js_model();
     let t = write(
         "far.csv",
         "x,y,z,roll_deg,pitch_deg,yaw_deg\n1890,0,1024,180,-55,0\n9000,0,0,180,-55,0\n1890,10,1024,180,-55,0\n",
@@ -347,17 +358,7 @@ fn c17_unreachable_trajectory_points_are_listed() {
 
 #[test]
 fn c18_single_point_trajectory_is_compensated() {
-    let m = model_out("c18.json");
-    succeeds(&[
-        "fit",
-        &shipped("comau_lhs.csv"),
-        "--space",
-        "js",
-        "--optimizer",
-        "hj",
-        "-o",
-        &m,
-    ]);
+    let m = js_model();
     let t = write(
         "one.csv",
         "x,y,z,roll_deg,pitch_deg,yaw_deg\n1890,0,1024,180,-55,0\n",
@@ -449,17 +450,7 @@ fn c21_bad_usage_exits_2() {
 #[test]
 fn c22_trajectory_with_a_bad_cell() {
     let t = write("badtraj.csv", "x,y,z\n1890,0,1024\n1890,zz,1024\n");
-    let m = model_out("c22.json");
-    succeeds(&[
-        "fit",
-        &shipped("comau_lhs.csv"),
-        "--space",
-        "js",
-        "--optimizer",
-        "hj",
-        "-o",
-        &m,
-    ]);
+    let m = js_model();
     fails(
         &[
             "compensate",

@@ -269,8 +269,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         }
         let done = match pick {
             None => true,
-            Some(_) if round > o.max_effects => {
-                let k = pick.expect("some");
+            Some(k) if round > o.max_effects => {
                 reports[k].note = Some(format!("not added: the cap of {} effects", o.max_effects));
                 true
             }
