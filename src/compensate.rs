@@ -35,6 +35,7 @@
 
 use crate::kinematics::{IkOptions, IkTarget, Robot};
 use crate::model::ErrorModel;
+use crate::physics::{AnyModel, HybridModel, PhysicsModel};
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
 use crate::{Error, Result};
@@ -225,10 +226,63 @@ pub fn first_pass_joints(
         .collect()
 }
 
+/// Anything that predicts the TCP error `δ̂(θ, λ)` (mm, measurement frame) of
+/// commanded poses: a Kriging [`ErrorModel`], a physics [`PhysicsModel`]
+/// (seed 000 eq 3, seed 002 eq 1) or their [`HybridModel`].
+pub trait ErrorPredictor: Sync {
+    /// Joint count the model was built for.
+    fn n_joints(&self) -> usize;
+    /// Predicted errors `[ex, ey, ez]` at commanded joints `q` approached in
+    /// directions `dir` (one row per pose).
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>>;
+}
+
+impl ErrorPredictor for ErrorModel {
+    fn n_joints(&self) -> usize {
+        self.n_joints
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict_mean(q, dir)
+    }
+}
+
+impl ErrorPredictor for PhysicsModel {
+    fn n_joints(&self) -> usize {
+        self.nominal.dof()
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict(q, dir)
+    }
+}
+
+impl ErrorPredictor for HybridModel {
+    fn n_joints(&self) -> usize {
+        self.physics.nominal.dof()
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict(q, dir)
+    }
+}
+
+impl ErrorPredictor for AnyModel {
+    fn n_joints(&self) -> usize {
+        match self {
+            AnyModel::Kriging(m) => m.n_joints(),
+            AnyModel::Physics(m) => ErrorPredictor::n_joints(m),
+        }
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        match self {
+            AnyModel::Kriging(m) => m.predict_mean(q, dir),
+            AnyModel::Physics(m) => m.predict(q, dir),
+        }
+    }
+}
+
 /// Compensate the target trajectory `targets` for `robot` with `model`.
-pub fn compensate(
+pub fn compensate<M: ErrorPredictor + ?Sized>(
     robot: &Robot,
-    model: &ErrorModel,
+    model: &M,
     targets: &Trajectory,
     opts: &CompensationOptions,
 ) -> Result<Compensated> {
@@ -238,10 +292,10 @@ pub fn compensate(
             "the trajectory has no points".into(),
         ));
     }
-    if model.n_joints != robot.dof() {
+    if model.n_joints() != robot.dof() {
         return Err(Error::JointCount {
             expected: robot.dof(),
-            got: model.n_joints,
+            got: model.n_joints(),
         });
     }
     let start = opts.start.clone().unwrap_or_else(|| robot.home.clone());
@@ -275,7 +329,7 @@ pub fn compensate(
             &opts.ik,
         )?;
         let dir = derive_directions(&q, Some(&start));
-        let pred = model.predict_mean(&q, &dir)?;
+        let pred = model.predict_errors(&q, &dir)?;
         let mut flipped = Vec::new();
         if let Some(pd) = &prev_dir {
             for (i, (a, b)) in dir.iter().zip(pd).enumerate() {
@@ -325,7 +379,7 @@ pub fn compensate(
             // the final commands are `next`; their joints are solved for the report
             let q_final = solve_joints(robot, targets, &next, &start, Some(&q), None, &opts.ik)?;
             let dir_final = derive_directions(&q_final, Some(&start));
-            let predicted = model.predict_mean(&q_final, &dir_final)?;
+            let predicted = model.predict_errors(&q_final, &dir_final)?;
             return Ok(Compensated {
                 commands: Trajectory {
                     poses: next,

@@ -81,8 +81,21 @@ impl Method {
         seed: u64,
         progress: GaProgress,
     ) -> Result<ErrorModel> {
+        self.fit_with(data, seed, false, progress)
+    }
+
+    /// [`Method::fit_with_progress`], optionally estimating a nugget (noise
+    /// variance ratio) with the correlation parameters.
+    pub fn fit_with(
+        self,
+        data: &Dataset,
+        seed: u64,
+        nugget: bool,
+        progress: GaProgress,
+    ) -> Result<ErrorModel> {
         let gps = KrigingOptions {
             seed,
+            nugget,
             ..KrigingOptions::default()
         };
         let hj = KrigingOptions {

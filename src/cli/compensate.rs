@@ -5,7 +5,7 @@ use clap::Args;
 use nalgebra::{Isometry3, UnitQuaternion};
 use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
 use robokrige::kinematics::{self, Robot};
-use robokrige::model::ErrorModel;
+use robokrige::physics::AnyModel;
 use robokrige::plot::{Labels, Series, xy_plot};
 use robokrige::sim::{Truth, execute, rng_for};
 use robokrige::stats::{PositionErrorTable, position_error_table};
@@ -271,7 +271,7 @@ fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()
 
 pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let robot = kinematics::preset(&a.robot)?;
-    let model = ErrorModel::load(&a.model)?;
+    let model = AnyModel::load(&a.model)?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
     let targets = read_targets(&a.traj, &robot, a.orientation.as_deref(), &start)?;
@@ -291,14 +291,14 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     res.commands.write_csv(&a.output)?;
     println!(
-        "{} {} points with a {:?} model in {secs:.3} s -> {}",
+        "{} {} points with {} in {secs:.3} s -> {}",
         if a.iterative {
             "iteratively compensated"
         } else {
             "compensated (single step)"
         },
         targets.traj.len(),
-        model.space,
+        model.describe(),
         a.output.display()
     );
     for it in &res.history {
@@ -350,7 +350,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
             } else {
                 "single-step"
             };
-            let space = format!("{:?}", model.space).to_uppercase();
+            let space = model.label();
             let title = format!("{name}: {mode} compensation, {space} model");
             plot(
                 p,
@@ -367,7 +367,10 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     if let Some(path) = &a.json {
         let mut v = serde_json::json!({
             "targets": a.traj, "output": a.output, "model": a.model, "robot": robot.name,
-            "space": model.space, "iterative": a.iterative, "converged": res.converged,
+            "space": match &model {
+                AnyModel::Kriging(m) => serde_json::to_value(m.space).expect("plain enum"),
+                AnyModel::Physics(_) => "physics".into(),
+            }, "iterative": a.iterative, "converged": res.converged,
             "stop": res.stop, "unsettled": res.unsettled,
             "iterations": res.history, "seconds": secs,
         });

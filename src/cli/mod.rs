@@ -6,6 +6,7 @@ mod cv;
 mod demo;
 mod diagnose;
 mod fit;
+mod physics;
 mod progress;
 mod simulate;
 
@@ -42,6 +43,8 @@ pub enum Command {
     Evaluate(compensate::EvaluateArgs),
     /// Find what the model misses, trace it to an effect, add it, report before/after.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Physics-based models (seeds 000, 002): identify from indexing tests, compare with Kriging.
+    Physics(physics::PhysicsArgs),
 }
 
 /// Run a parsed command.
@@ -55,6 +58,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compensate(a) => compensate::run_compensate(a),
         Command::Evaluate(a) => compensate::run_evaluate(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Physics(a) => physics::run(a),
     }
 }
 

@@ -1,7 +1,10 @@
 //! Numerical inverse kinematics: damped least squares (Levenberg–Marquardt
 //! damping) on position and, optionally, orientation.
 //!
-//! Step: `Δq = Jᵀ (J Jᵀ + μ² I)⁻¹ e`, with `e = [p* − p; L·log(R* Rᵀ)]` where the
+//! Step: `Δq = Jᵀ (J Jᵀ + μ² I)⁻¹ e = (JᵀJ + μ² I)⁻¹ Jᵀ e`, solved in the
+//! smaller of the two spaces (joint space for a robot with fewer joints than
+//! task rows, e.g. a 4-axis SCARA on a 6-row pose task, where `J Jᵀ` is
+//! singular), with `e = [p* − p; L·log(R* Rᵀ)]` where the
 //! orientation error is weighted by a length `L` (mm per rad) so both parts are
 //! comparable. μ shrinks after an accepted step and grows after a rejected one.
 //! Every iterate is clamped into the joint limits. The solver is local: it
@@ -83,12 +86,10 @@ impl Robot {
                 return Ok(q);
             }
             let j = self.task_jacobian(&q, target, opts);
-            let jjt = &j * j.transpose() + DMatrix::identity(j.nrows(), j.nrows()) * (mu * mu);
-            let Some(chol) = jjt.cholesky() else {
+            let Some(dq) = dls_step(&j, &e, mu) else {
                 mu *= 10.0;
                 continue;
             };
-            let dq = j.transpose() * chol.solve(&e);
             let mut trial = q.clone();
             for i in 0..n {
                 trial[i] += dq[i] / self.unit_scale(i);
@@ -181,5 +182,18 @@ impl Robot {
             }
         }
         out
+    }
+}
+
+/// The damped least-squares step `(JᵀJ + μ² I)⁻¹ Jᵀ e` (= `Jᵀ(JJᵀ + μ² I)⁻¹ e`),
+/// by Cholesky of the smaller Gram matrix; `None` if it is not positive definite.
+fn dls_step(j: &DMatrix<f64>, e: &DVector<f64>, mu: f64) -> Option<DVector<f64>> {
+    let (m, n) = j.shape();
+    if n < m {
+        let g = j.transpose() * j + DMatrix::identity(n, n) * (mu * mu);
+        Some(g.cholesky()?.solve(&(j.transpose() * e)))
+    } else {
+        let g = j * j.transpose() + DMatrix::identity(m, m) * (mu * mu);
+        Some(j.transpose() * g.cholesky()?.solve(e))
     }
 }

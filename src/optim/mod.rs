@@ -11,6 +11,10 @@
 //! - [`bfgs`]: box-constrained BFGS with finite-difference gradients, to
 //!   polish a smooth minimum found by a pattern search.
 //! - [`ga`]: genetic algorithm over bit strings (basis selection, seed 004).
+//! - [`levenberg_marquardt`]: Levenberg–Marquardt for nonlinear least squares
+//!   `min ½‖r(x)‖²` (takes residuals and Jacobian, not a scalar objective;
+//!   Marquardt scaling, QR-solved damped steps, unidentifiable parameters
+//!   detected and frozen); [`numerical_jacobian`] by central differences.
 //! - [`multistart`]: runs a local method from several starts in parallel (rayon)
 //!   and keeps the best; [`lhs_starts`] draws the starts.
 
@@ -18,11 +22,13 @@ mod bfgs;
 mod ga;
 mod gps;
 mod hooke_jeeves;
+mod lm;
 
 pub use bfgs::{BfgsOptions, bfgs};
 pub use ga::{GaOptions, GaResult, ga};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
+pub use lm::{LmOptions, LmResult, LmStop, levenberg_marquardt, numerical_jacobian};
 
 use rand::RngExt;
 use rayon::prelude::*;

@@ -313,9 +313,28 @@ pub fn circle(robot: &Robot, diameter: f64, points: usize) -> Result<Trajectory>
         ));
     }
     let home = robot.fk(&robot.home)?;
+    circle_around(robot, &home, &robot.home, diameter, points)
+}
+
+/// Ø`diameter` circle of `points` poses in the base XY plane around `center`
+/// (orientation fixed at `center`'s), each checked reachable by IK seeded
+/// from the previous point (the first from `seed`).
+pub fn circle_around(
+    robot: &Robot,
+    center: &Isometry3<f64>,
+    seed: &[f64],
+    diameter: f64,
+    points: usize,
+) -> Result<Trajectory> {
+    if points < 3 || diameter.is_nan() || diameter <= 0.0 {
+        return Err(Error::InvalidParameter(
+            "circle needs at least 3 points and a positive diameter".into(),
+        ));
+    }
+    let home = center;
     let c = home.translation.vector;
     let r = 0.5 * diameter;
-    let mut q = robot.home.clone();
+    let mut q = seed.to_vec();
     let mut poses = Vec::with_capacity(points);
     for k in 0..points {
         let phi = std::f64::consts::TAU * k as f64 / points as f64;

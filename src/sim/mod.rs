@@ -17,11 +17,13 @@
 pub mod campaign;
 mod effects;
 pub mod execute;
+mod scara_truth;
 mod true_robot;
 
 pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, simulate};
 pub use effects::{EFFECT_NAMES, Effect};
 pub use execute::{Execution, execute};
+pub use scara_truth::ScaraTruth;
 pub use true_robot::{
     Compliance, ErrorProfile, Harmonic, JointDeviation, NoiseModel, PoseContext, TrueRobot,
 };

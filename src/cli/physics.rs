@@ -1,0 +1,334 @@
+//! `robokrige physics identify | compare`.
+
+use super::progress::bar;
+use super::{read_data, to_json};
+use clap::{Args, Subcommand};
+use robokrige::kinematics;
+use robokrige::methods::Method;
+use robokrige::physics::{
+    CompareOptions, Comparison, Geometry, PhysicsIdentification, compare, identify_physics,
+    is_scara,
+};
+use robokrige::sim::{ScaraTruth, Truth};
+use robokrige::{Error, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Physics-based models of seeds 000 and 002 (lookup tables of angular
+/// positioning deviation per direction), and their comparison with Kriging.
+#[derive(Debug, Args)]
+pub struct PhysicsArgs {
+    #[command(subcommand)]
+    command: PhysicsCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum PhysicsCommand {
+    /// Identify a physics model from indexing tests (and, for a six-axis
+    /// robot, a measurement campaign for the D-H errors).
+    Identify(IdentifyArgs),
+    /// Simulate a robot and compare nominal, D-H, D-H + APD, Kriging JS/EJS
+    /// and the hybrid on prediction and compensation.
+    Compare(CompareArgs),
+}
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+A SCARA (seed 000) is identified from its J1 and J2 indexing tests alone:
+reference frame from the J1 plane and circle, link errors ΔL1, ΔL2, the J2
+offset θ20, bidirectional APD and radial-error-motion tables, parallelism of
+J2 to J1. A six-axis robot (seed 002) gets its APD tables from the indexing
+tests (circle-point analysis of every axis whose TCP circle is ≥ 50 mm) and its
+MD-H, tool and base errors by Levenberg–Marquardt on --train.
+
+Example:
+  robokrige physics identify datasets/scara_indexing.csv --robot scara-rh3frh5515 \\
+      -o scara_physics.json --truth datasets/scara_indexing.truth.json")]
+pub struct IdentifyArgs {
+    /// Indexing-test CSV (columns q.., dir.., x,y,z and `axis`).
+    indexing: PathBuf,
+    /// Robot preset.
+    #[arg(long, default_value = "scara-rh3frh5515")]
+    robot: String,
+    /// Measurement campaign with ex,ey,ez for the Levenberg–Marquardt D-H
+    /// calibration (needed for a six-axis robot, unused for a SCARA).
+    #[arg(long)]
+    train: Option<PathBuf>,
+    /// Output model (D-H + tables), usable with `compensate --model`.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the D-H-only model here.
+    #[arg(long)]
+    dh_output: Option<PathBuf>,
+    /// Simulator truth of the indexing campaign: print identified vs true.
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// Write the identification report as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Everything is simulated from --seed: the true robot, its indexing tests, a
+Latin-hypercube training campaign for Kriging, a Ø--path-mm circle path run
+forward and back, and --verify-poses random poses. Every model predicts the
+path's and the poses' errors (score: measured − predicted) and compensates
+them (iterative feed-forward; score: measured − target on the true robot).
+
+Example:
+  robokrige physics compare --robot scara-rh3frh5515 --seed 1 --report compare.md")]
+pub struct CompareArgs {
+    #[arg(long, default_value = "scara-rh3frh5515")]
+    robot: String,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, default_value_t = 300)]
+    train_poses: usize,
+    #[arg(long, default_value_t = 72)]
+    path_points: usize,
+    #[arg(long, default_value_t = 100.0)]
+    path_mm: f64,
+    #[arg(long, default_value_t = 50)]
+    verify_poses: usize,
+    /// Kriging method of the JS row.
+    #[arg(long, default_value = "js-hj")]
+    js: String,
+    /// Kriging method of the EJS row and of the hybrid's residual model.
+    #[arg(long, default_value = "ejs-gps")]
+    ejs: String,
+    /// Estimate a nugget in every Kriging fit (default: interpolate, as the papers).
+    #[arg(long)]
+    nugget: bool,
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Markdown report.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+pub fn run(a: PhysicsArgs) -> Result<()> {
+    match a.command {
+        PhysicsCommand::Identify(a) => run_identify(a),
+        PhysicsCommand::Compare(a) => run_compare(a),
+    }
+}
+
+fn write(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+fn run_identify(a: IdentifyArgs) -> Result<()> {
+    let robot = kinematics::preset(&a.robot)?;
+    // repeated poses are the design of an indexing test: no warning for them
+    let indexing = robokrige::dataset::read_csv(&a.indexing)?;
+    let train = match &a.train {
+        Some(p) => read_data(p)?,
+        None if is_scara(&robot) => indexing.clone(),
+        None => {
+            return Err(Error::InvalidParameter(format!(
+                "'{}' is not a SCARA: its D-H errors are identified by Levenberg–Marquardt on a campaign; give --train CAMPAIGN.csv",
+                robot.name
+            )));
+        }
+    };
+    let id = identify_physics(&indexing, &train, &robot)?;
+    id.full.save(&a.output)?;
+    if let Some(p) = &a.dh_output {
+        id.dh.save(p)?;
+    }
+    print!("{}", identify_text(&id));
+    if let Some(tp) = &a.truth {
+        let truth: Truth =
+            serde_json::from_str(&std::fs::read_to_string(tp).map_err(|e| Error::io(tp, e))?)
+                .map_err(|e| Error::Json {
+                    context: format!("{}: not a simulator truth file", tp.display()),
+                    source: e,
+                })?;
+        print!("{}", truth_text(&id, &truth));
+    }
+    println!("model: {}", a.output.display());
+    if let Some(p) = &a.json {
+        write(p, &to_json(&id, "identification report")?)?;
+    }
+    Ok(())
+}
+
+fn identify_text(id: &PhysicsIdentification) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{}", id.method);
+    let _ = writeln!(
+        s,
+        "axis  rows angles cycles  radius(mm)  circle rms  plane rms  repeat spread(°)  backlash ½(°)"
+    );
+    for ax in &id.axes {
+        let _ = writeln!(
+            s,
+            "J{:<4} {:>4} {:>6} {:>6} {:>11.4} {:>11.4} {:>10.4} {:>17.5} {:>14.5}",
+            ax.axis,
+            ax.rows,
+            ax.angles,
+            ax.cycles,
+            ax.radius_mm,
+            ax.circle_rms_mm,
+            ax.plane_rms_mm,
+            ax.repeat_spread_deg,
+            ax.backlash_half_deg
+        );
+    }
+    if let Geometry::Scara(g) = &id.full.geometry {
+        let _ = writeln!(
+            s,
+            "ΔL1 = {:+.4} mm, ΔL2 = {:+.4} mm, θ20 = {:+.5}° (eqs 12–14); parallelism J2→J1: a = {:+.2e}, b = {:+.2e}, z1 = {:+.4} mm (eq 22)",
+            g.dl1_mm, g.dl2_mm, g.theta20_deg, g.parallel_a, g.parallel_b, g.z1_mm
+        );
+    }
+    for lm in &id.lm {
+        let _ = writeln!(
+            s,
+            "Levenberg–Marquardt: {} parameters ({} frozen as unidentifiable), rms {:.4} → {:.4} mm in {} steps ({})",
+            lm.parameters,
+            lm.frozen.len(),
+            lm.rms_before_mm,
+            lm.rms_after_mm,
+            lm.iterations,
+            lm.stop
+        );
+    }
+    for n in &id.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    s
+}
+
+fn truth_text(id: &PhysicsIdentification, truth: &Truth) -> String {
+    let mut s = String::new();
+    let Geometry::Scara(g) = &id.full.geometry else {
+        let _ = writeln!(
+            s,
+            "(--truth: parameter comparison is printed for a SCARA only)"
+        );
+        return s;
+    };
+    let t = ScaraTruth::of(&truth.robot, &g.rest);
+    let _ = writeln!(s, "identified vs simulator truth:");
+    let _ = writeln!(
+        s,
+        "  ΔL1 {:+.4} vs {:+.4} mm, ΔL2 {:+.4} vs {:+.4} mm, θ20 {:+.5} vs {:+.5}°",
+        g.dl1_mm, t.dl1_mm, g.dl2_mm, t.dl2_mm, g.theta20_deg, t.theta20_deg
+    );
+    for (j, tab) in id.full.apd.iter().enumerate() {
+        let Some(tab) = tab else { continue };
+        let (mut sq, mut mx, mut k) = (0.0, 0.0_f64, 0);
+        for (i, q) in tab.angles_deg.iter().enumerate() {
+            for (d, v) in [(1.0, tab.plus[i]), (-1.0, tab.minus[i])] {
+                let e = v - ScaraTruth::apd(&truth.robot, j, g.rest[j], *q, d);
+                sq += e * e;
+                mx = mx.max(e.abs());
+                k += 1;
+            }
+        }
+        let _ = writeln!(
+            s,
+            "  J{} APD table: error rms {:.5}°, max {:.5}° over {k} entries",
+            j + 1,
+            (sq / k as f64).sqrt(),
+            mx
+        );
+    }
+    s
+}
+
+fn run_compare(a: CompareArgs) -> Result<()> {
+    let opts = CompareOptions {
+        robot: a.robot.clone(),
+        seed: a.seed,
+        train_poses: a.train_poses,
+        path_points: a.path_points,
+        path_mm: a.path_mm,
+        verify_poses: a.verify_poses,
+        js: Method::parse(&a.js)?,
+        ejs: Method::parse(&a.ejs)?,
+        nugget: a.nugget,
+    };
+    let pb = bar(9, "compare");
+    let t0 = std::time::Instant::now();
+    let res = compare(&opts, &|k, _, what| {
+        pb.set_position(k as u64);
+        pb.set_message(what.to_string());
+    });
+    pb.finish_and_clear();
+    let res = res?;
+    let text = compare_text(&res, t0.elapsed().as_secs_f64());
+    print!("{text}");
+    if let Some(p) = &a.report {
+        write(p, &text)?;
+    }
+    if let Some(p) = &a.json {
+        write(p, &to_json(&res, "comparison")?)?;
+    }
+    Ok(())
+}
+
+/// The comparison as Markdown.
+pub fn compare_text(c: &Comparison, secs: f64) -> String {
+    let o = &c.options;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Physics vs Kriging: {} (true robot of seed {})\n",
+        o.robot, o.seed
+    );
+    let _ = writeln!(
+        s,
+        "Physics model: {}. Data: {} indexing rows, {} training poses, a Ø{} mm circle path of {} points (forward and back), {} random poses. {secs:.0} s.\n",
+        c.physics, c.sizes[0], c.sizes[1], o.path_mm, c.sizes[2], c.sizes[3]
+    );
+    let _ = writeln!(
+        s,
+        "Prediction: |measured − predicted error|; compensation: |measured − target| after iterative feed-forward, on the simulated robot. Mean / max, mm; 3D and XY (seed 000's model is 2D).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| model | predict path 3D | predict path XY | predict poses 3D | compensate path 3D | compensate path XY | compensate poses 3D | compensate poses XY |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    let f = |x: &robokrige::physics::Score, xy: bool| {
+        if xy {
+            format!("{:.4} / {:.4}", x.mean_xy_mm, x.max_xy_mm)
+        } else {
+            format!("{:.4} / {:.4}", x.mean_3d_mm, x.max_3d_mm)
+        }
+    };
+    for r in &c.rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.model,
+            f(&r.predict_path, false),
+            f(&r.predict_path, true),
+            f(&r.predict_poses, false),
+            f(&r.compensate_path, false),
+            f(&r.compensate_path, true),
+            f(&r.compensate_poses, false),
+            f(&r.compensate_poses, true),
+        );
+    }
+    let (np, nq) = (&c.noise_path, &c.noise_poses);
+    let _ = writeln!(
+        s,
+        "| *noise alone (simulator truth)* | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+        np.mean_3d_mm,
+        np.mean_xy_mm,
+        nq.mean_3d_mm,
+        np.mean_3d_mm,
+        np.mean_xy_mm,
+        nq.mean_3d_mm,
+        nq.mean_xy_mm
+    );
+    let _ = writeln!(s);
+    for n in &c.notes {
+        let _ = writeln!(s, "- {n}");
+    }
+    s
+}

@@ -1,0 +1,106 @@
+//! Physics-based error models of seeds 000 and 002, the yardstick for the
+//! Kriging engine.
+//!
+//! | item | paper |
+//! |---|---|
+//! | [`BidirectionalTable`] | lookup table per direction, linear interpolation (seed 000 eqs 3–6, 19) |
+//! | [`PhysicsModel`] | identified geometry + tables: SCARA (seed 000 eqs 3, 18, 23) or MD-H chain (seed 002 eqs 1–2) |
+//! | [`identify_scara`] | seed 000 §2.4: frames, circle fits, eqs 7–14, 20, 22 |
+//! | [`identify_apd`], [`identify_mdh`] | seed 002: APD tables by circle-point analysis of indexing tests, MD-H errors by Levenberg–Marquardt |
+//! | [`HybridModel`] | physics first, universal Kriging on its residual |
+//! | [`compare`] | nominal / D-H / D-H+APD / Kriging JS, EJS / hybrid on one simulated robot |
+
+mod compare;
+mod mdh;
+mod model;
+mod scara;
+mod table;
+
+pub use compare::{CompareOptions, CompareRow, Comparison, Score, compare};
+pub use mdh::{ApdIdentification, LmSummary, apply_errors, identify_apd, identify_mdh};
+pub use model::{
+    AnyModel, Geometry, HybridModel, PHYSICS_FORMAT, PHYSICS_VERSION, PhysicsModel, ScaraGeometry,
+};
+pub use scara::{AxisReport, ScaraIdentification, ScaraOptions, identify_scara};
+pub use table::BidirectionalTable;
+
+use crate::Result;
+use crate::dataset::Dataset;
+use crate::kinematics::Robot;
+use serde::{Deserialize, Serialize};
+
+/// The physics models of one robot: D-H only and D-H + lookup tables.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PhysicsIdentification {
+    /// D-H parameters and angular positioning deviation tables.
+    pub full: PhysicsModel,
+    /// The conventional model: D-H parameters only.
+    pub dh: PhysicsModel,
+    /// How it was identified, one line.
+    pub method: String,
+    pub axes: Vec<AxisReport>,
+    pub notes: Vec<String>,
+    /// The calibrations, when Levenberg–Marquardt was used: D-H only, D-H + APD.
+    pub lm: Vec<LmSummary>,
+}
+
+/// Whether `robot` is a SCARA in the sense of seed 000: J1 and J2 revolute
+/// about parallel axes (no twist on link 1).
+pub fn is_scara(robot: &Robot) -> bool {
+    use crate::kinematics::JointKind::Revolute;
+    robot.dof() >= 2
+        && robot.links[0].kind == Revolute
+        && robot.links[1].kind == Revolute
+        && robot.links[0].alpha_deg.abs() < 1e-9
+        && robot.links[1].alpha_deg.abs() < 1e-9
+}
+
+/// Identify the physics models of `nominal`:
+/// - a SCARA (seed 000): everything from the indexing tests
+///   ([`identify_scara`]); the D-H model is the same without tables (eq 2);
+/// - otherwise (seed 002): APD tables from the indexing tests
+///   ([`identify_apd`]), then MD-H errors by Levenberg–Marquardt on the
+///   campaign `train`, once with the joints as commanded (D-H only) and once
+///   with the APD-corrected joints (D-H + APD).
+pub fn identify_physics(
+    indexing: &Dataset,
+    train: &Dataset,
+    nominal: &Robot,
+) -> Result<PhysicsIdentification> {
+    if is_scara(nominal) {
+        let id = identify_scara(indexing, nominal, &ScaraOptions::default())?;
+        return Ok(PhysicsIdentification {
+            dh: id.model.dh_only(),
+            full: id.model,
+            method: "seed 000: D-H errors, APD and radial tables and parallelism from the J1/J2 indexing tests".into(),
+            axes: id.axes,
+            notes: id.skipped,
+            lm: Vec::new(),
+        });
+    }
+    let apd = identify_apd(indexing, nominal, 50.0)?;
+    let (dh_robot, lm_dh) = identify_mdh(train, nominal, &vec![None; nominal.dof()])?;
+    let (robot, lm_full) = identify_mdh(train, nominal, &apd.apd)?;
+    let mut full = PhysicsModel::new(
+        format!(
+            "seed 002: APD tables from the indexing tests of {}, MD-H errors by Levenberg–Marquardt on {}",
+            indexing.source, train.source
+        ),
+        nominal.clone(),
+        Geometry::Mdh { robot },
+    );
+    full.apd = apd.apd;
+    let dh = PhysicsModel::new(
+        format!("MD-H errors by Levenberg–Marquardt on {}", train.source),
+        nominal.clone(),
+        Geometry::Mdh { robot: dh_robot },
+    );
+    Ok(PhysicsIdentification {
+        full,
+        dh,
+        method: "seed 002: APD tables from the indexing tests, MD-H errors by Levenberg–Marquardt on the campaign".into(),
+        axes: apd.axes,
+        notes: apd.skipped,
+        lm: vec![lm_dh, lm_full],
+    })
+}
