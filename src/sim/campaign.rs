@@ -6,7 +6,9 @@
 //! - `verify`: independent uniformly random poses (seed 003 §IV.C: 30).
 //! - `indexing`: single-axis indexing tests (seed 000 §2.3): each revolute joint
 //!   in turn is indexed over a grid forward then backward, `cycles` times, the
-//!   other joints at rest; every grid point is approached from both sides.
+//!   other joints at rest; every grid point is approached from both sides. A
+//!   wrist axis that the TCP lies on at rest is tested with a later joint bent
+//!   (seed 002 identifies every axis), so its circle is at least 50 mm.
 //! - `circle`: a Ø100 mm circle of commanded TCP points at fixed orientation
 //!   around the robot's home TCP (seed 004 §IV.B.3); not measured.
 
@@ -264,14 +266,53 @@ fn rest_pose(ranges: &[(f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
+/// Smallest TCP distance from a joint axis at which its indexing test can
+/// resolve the angle (seed 002 identifies every axis's APD from the circle).
+pub const INDEXING_MIN_RADIUS_MM: f64 = 50.0;
+
+/// Distance of the TCP from the axis line of joint `j` (0-based) at `q`.
+fn tcp_axis_distance(robot: &Robot, q: &[f64], j: usize) -> f64 {
+    let f = robot.frames(q);
+    let z = f[j].rotation * Vector3::z();
+    let v = f[robot.dof() + 1].translation.vector - f[j].translation.vector;
+    (v - z * v.dot(&z)).norm()
+}
+
+/// The rest pose for joint `j`'s test: the common rest, unless the TCP lies
+/// within [`INDEXING_MIN_RADIUS_MM`] of the axis (a wrist axis with the wrist
+/// straight); then the first later revolute joint that moves the TCP off the
+/// axis is bent to half of its range's larger end.
+fn axis_rest(robot: &Robot, rest: &[f64], ranges: &[(f64, f64)], j: usize) -> Vec<f64> {
+    if tcp_axis_distance(robot, rest, j) >= INDEXING_MIN_RADIUS_MM {
+        return rest.to_vec();
+    }
+    for k in j + 1..robot.dof() {
+        if robot.links[k].kind != JointKind::Revolute {
+            continue;
+        }
+        let (lo, hi) = ranges[k];
+        let mut q = rest.to_vec();
+        q[k] = if hi.abs() >= lo.abs() {
+            0.5 * hi
+        } else {
+            0.5 * lo
+        };
+        if tcp_axis_distance(robot, &q, j) >= INDEXING_MIN_RADIUS_MM {
+            return q;
+        }
+    }
+    rest.to_vec()
+}
+
 fn indexing(robot: &Robot, ranges: &[(f64, f64)], cycles: usize) -> Vec<Visit> {
-    let rest = rest_pose(ranges);
+    let common = rest_pose(ranges);
     let mut visits = Vec::new();
     for (j, link) in robot.links.iter().enumerate() {
         let (lo, hi) = ranges[j];
         if link.kind != JointKind::Revolute || hi - lo < 1e-6 {
             continue;
         }
+        let rest = axis_rest(robot, &common, ranges, j);
         let grid = indexing_grid(lo, hi);
         let step = grid[1] - grid[0];
         let over_lo = (0.5 * step).min(lo - robot.limits[j].0);
