@@ -205,3 +205,84 @@ fn diagnose_writes_json_report_and_plots() {
     assert!(err.contains("js-hj, ejs-hj or ejs-gps"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn physics_identify_then_compensate_with_the_physics_model() {
+    let dir = std::env::temp_dir().join(format!("robokrige-cli-phys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let (c, out, err) = rk(&[
+        "physics",
+        "identify",
+        &ds("scara_indexing.csv"),
+        "--robot",
+        "scara-rh3frh5515",
+        "-o",
+        &p("phys.json"),
+        "--dh-output",
+        &p("dh.json"),
+        "--truth",
+        &ds("scara_indexing.truth.json"),
+        "--json",
+        &p("id.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(
+        out.contains("ΔL1") && out.contains("identified vs simulator truth"),
+        "{out}"
+    );
+    assert!(!err.contains("repeat an earlier pose"), "{err}");
+    // random poses of the same true robot (seed 1), elbow bent (|q2| > 15°)
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--robot",
+        "scara-rh3frh5515",
+        "--kind",
+        "verify",
+        "--poses",
+        "20",
+        "--seed",
+        "1",
+        "--ranges",
+        "-165:165,20:143,50:100,-90:90",
+        "-o",
+        &p("v.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let mut after = Vec::new();
+    for m in ["phys.json", "dh.json"] {
+        let (c, out, err) = rk(&[
+            "compensate",
+            "--model",
+            &p(m),
+            "--robot",
+            "scara-rh3frh5515",
+            &p("v.csv"),
+            "-o",
+            &p("comp.csv"),
+            "--truth",
+            &p("v.truth.json"),
+            "--json",
+            &p("comp.json"),
+        ]);
+        assert_eq!(c, 0, "{err}");
+        assert!(out.contains("physics model"), "{out}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("comp.json")).unwrap()).unwrap();
+        let (b, a) = (
+            v["before"]["mean_abs_mm"].as_f64().unwrap(),
+            v["after"]["mean_abs_mm"].as_f64().unwrap(),
+        );
+        assert!(a < b, "{m}: {b} -> {a}");
+        assert_eq!(v["space"], "physics");
+        after.push(a);
+    }
+    assert!(
+        after[0] < after[1],
+        "D-H + APD {} vs D-H {}",
+        after[0],
+        after[1]
+    );
+    std::fs::remove_dir_all(dir).ok();
+}

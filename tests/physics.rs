@@ -7,7 +7,7 @@ use robokrige::kinematics;
 use robokrige::methods::Method;
 use robokrige::physics::{
     CompareOptions, Geometry, PhysicsModel, ScaraOptions, compare, identify_apd, identify_mdh,
-    identify_scara,
+    identify_scara, probing_example, straightness,
 };
 use robokrige::sim::campaign::simulate_on;
 use robokrige::sim::{
@@ -343,4 +343,39 @@ fn scara_comparison_ranks_the_models() {
     assert!(
         c.noise_path.mean_3d_mm > 0.0 && c.noise_path.mean_3d_mm < phys.predict_path.mean_3d_mm
     );
+}
+
+#[test]
+fn straightness_is_max_minus_min_about_the_fitted_line() {
+    let along = Vector3::y();
+    let probe = -Vector3::x();
+    // a tilted straight line: zero; one point pushed 0.05 mm into the face
+    let mut pts: Vec<Vector3<f64>> = (0..11)
+        .map(|k| Vector3::new(100.0 + 0.01 * k as f64, 10.0 * k as f64, 5.0))
+        .collect();
+    assert!(straightness(&pts, &along, &probe).straightness_mm < 1e-12);
+    pts[5].x -= 0.05;
+    let s = straightness(&pts, &along, &probe);
+    // the line fit shares the bump: residual 0.05·(1 − 1/11) at the point, −0.05/11 elsewhere
+    assert!((s.straightness_mm - 0.05).abs() < 1e-9, "{s:?}");
+}
+
+/// Seed 002 Table 2 in simulation: with the noise off, the D-H + APD model
+/// (eq 6) removes most of the probed straightness error of every side face,
+/// and beats the D-H-only model there.
+#[test]
+fn probing_correction_reduces_the_straightness_error() {
+    let (rows, _) = probing_example("kuka-kr30ha", 1, false).unwrap();
+    assert_eq!(rows.len(), 6);
+    for r in &rows {
+        eprintln!("{} {:?} {:?} {:?}", r.edge, r.nominal, r.dh, r.full);
+        if r.edge.contains("side") {
+            assert!(
+                r.full.straightness_mm < 0.5 * r.nominal.straightness_mm,
+                "{r:?}"
+            );
+            assert!(r.full.straightness_mm < r.dh.straightness_mm, "{r:?}");
+        }
+        assert!(r.full.straightness_mm < r.nominal.straightness_mm, "{r:?}");
+    }
 }

@@ -30,6 +30,22 @@ enum PhysicsCommand {
     /// Simulate a robot and compare nominal, D-H, D-H + APD, Kriging JS/EJS
     /// and the hybrid on prediction and compensation.
     Compare(CompareArgs),
+    /// Seed 002's probing example: a straightedge probed at three locations,
+    /// straightness with the nominal, D-H and D-H + APD models (Table 2).
+    Probing(ProbingArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ProbingArgs {
+    #[arg(long, default_value = "kuka-kr30ha")]
+    robot: String,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Switch the tracker and repeatability noise off (the systematic part alone).
+    #[arg(long)]
+    noise_free: bool,
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -111,6 +127,7 @@ pub fn run(a: PhysicsArgs) -> Result<()> {
     match a.command {
         PhysicsCommand::Identify(a) => run_identify(a),
         PhysicsCommand::Compare(a) => run_compare(a),
+        PhysicsCommand::Probing(a) => run_probing(a),
     }
 }
 
@@ -331,4 +348,36 @@ pub fn compare_text(c: &Comparison, secs: f64) -> String {
         let _ = writeln!(s, "- {n}");
     }
     s
+}
+
+fn run_probing(a: ProbingArgs) -> Result<()> {
+    let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
+    println!(
+        "# Probing a 1000 mm straightedge, 100 points: {} (true robot of seed {}{})\n",
+        a.robot,
+        a.seed,
+        if a.noise_free { ", noise off" } else { "" }
+    );
+    println!("Physics model: {how}.\n");
+    println!(
+        "| location / face | nominal: straightness / std (mm) | D-H only | D-H + APD | reduction (straightness), D-H + APD vs nominal |"
+    );
+    println!("|---|---|---|---|---|");
+    for r in &rows {
+        let f = |s: &robokrige::physics::Straightness| {
+            format!("{:.4} / {:.4}", s.straightness_mm, s.std_mm)
+        };
+        println!(
+            "| {} | {} | {} | {} | {:.0} % |",
+            r.edge,
+            f(&r.nominal),
+            f(&r.dh),
+            f(&r.full),
+            100.0 * (1.0 - r.full.straightness_mm / r.nominal.straightness_mm)
+        );
+    }
+    if let Some(p) = &a.json {
+        write(p, &to_json(&rows, "probing table")?)?;
+    }
+    Ok(())
 }

@@ -8,11 +8,13 @@
 //! | [`identify_scara`] | seed 000 §2.4: frames, circle fits, eqs 7–14, 20, 22 |
 //! | [`identify_apd`], [`identify_mdh`] | seed 002: APD tables by circle-point analysis of indexing tests, MD-H errors by Levenberg–Marquardt |
 //! | [`HybridModel`] | physics first, universal Kriging on its residual |
+//! | [`probe`], [`straightness`], [`probing_example`] | seed 002 eqs 3–6: probing a straightedge, straightness before/after (Table 2) |
 //! | [`compare`] | nominal / D-H / D-H+APD / Kriging JS, EJS / hybrid on one simulated robot |
 
 mod compare;
 mod mdh;
 mod model;
+mod probing;
 mod scara;
 mod table;
 
@@ -20,6 +22,10 @@ pub use compare::{CompareOptions, CompareRow, Comparison, Score, compare};
 pub use mdh::{ApdIdentification, LmSummary, apply_errors, identify_apd, identify_mdh};
 pub use model::{
     AnyModel, Geometry, HybridModel, PHYSICS_FORMAT, PHYSICS_VERSION, PhysicsModel, ScaraGeometry,
+};
+pub use probing::{
+    ProbeRun, ProbingRow, Straightedge, Straightness, example_edges, probe, probed_points,
+    probing_example, straightness,
 };
 pub use scara::{AxisReport, ScaraIdentification, ScaraOptions, identify_scara};
 pub use table::BidirectionalTable;
