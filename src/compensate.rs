@@ -268,7 +268,7 @@ impl ErrorPredictor for AnyModel {
     fn n_joints(&self) -> usize {
         match self {
             AnyModel::Kriging(m) => m.n_joints(),
-            AnyModel::Physics(m) => ErrorPredictor::n_joints(m),
+            AnyModel::Physics(m) => ErrorPredictor::n_joints(m.as_ref()),
         }
     }
     fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {

@@ -6,23 +6,17 @@ use robokrige::dataset::read_csv;
 use robokrige::kinematics;
 use robokrige::methods::Method;
 use robokrige::physics::{
-    CompareOptions, Geometry, PhysicsModel, ScaraOptions, compare, identify_apd, identify_mdh,
-    identify_scara, probing_example, straightness,
+    CompareOptions, Geometry, PhysicsModel, ScaraOptions, compare, identify_apd,
+    identify_crosstalk, identify_mdh, identify_scara, probing_example, straightness,
 };
 use robokrige::sim::campaign::simulate_on;
-use robokrige::sim::{
-    CampaignKind, CampaignSpec, ErrorProfile, ScaraTruth, SimOutput, TrueRobot, Truth,
-};
+use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, ScaraTruth, SimOutput, TrueRobot};
 use std::path::{Path, PathBuf};
 
 fn shipped(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("datasets")
         .join(name)
-}
-
-fn truth(name: &str) -> Truth {
-    serde_json::from_str(&std::fs::read_to_string(shipped(name)).unwrap()).unwrap()
 }
 
 /// Identification errors (identified − truth) on the indexing campaign of
@@ -377,5 +371,55 @@ fn probing_correction_reduces_the_straightness_error() {
             assert!(r.full.straightness_mm < r.dh.straightness_mm, "{r:?}");
         }
         assert!(r.full.straightness_mm < r.nominal.straightness_mm, "{r:?}");
+    }
+}
+
+/// Seed 000 §5.2 with and without a simulated J1-on-J2 cross-talk
+/// (0.01°·sin q2): found with the right shifts when present, not reported
+/// when absent, on five true robots.
+#[test]
+fn crosstalk_is_found_when_present_and_only_then() {
+    use robokrige::sim::Effect;
+    let nominal = kinematics::preset("scara-rh3frh5515").unwrap();
+    for seed in 1..=5 {
+        let robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), seed);
+        let (SimOutput::Measurements(idx), _) =
+            simulate_on(&robot, &CampaignSpec::new(CampaignKind::Indexing, seed)).unwrap()
+        else {
+            panic!()
+        };
+        let model = identify_scara(&idx, &nominal, &ScaraOptions::default())
+            .unwrap()
+            .model;
+        for effect in [false, true] {
+            let mut spec = CampaignSpec::new(CampaignKind::Crosstalk, seed);
+            if effect {
+                spec.effects =
+                    vec![Effect::parse("crosstalk:joint=1,from=2,gain_deg=0.01").unwrap()];
+            }
+            let (SimOutput::Measurements(xt), _) = simulate_on(&robot, &spec).unwrap() else {
+                panic!()
+            };
+            let r = identify_crosstalk(&xt, &model).unwrap();
+            let shifts: Vec<f64> = r
+                .groups
+                .iter()
+                .map(|g| g.mean_deg - r.groups[0].mean_deg)
+                .collect();
+            eprintln!(
+                "seed {seed} effect {effect}: shifts {shifts:.5?} se {:.5}",
+                r.shift_se_deg
+            );
+            assert_eq!(r.significant, effect, "seed {seed}");
+            if effect {
+                for g in &r.groups {
+                    let want = 0.01 * g.j2_deg.to_radians().sin();
+                    assert!(
+                        (g.mean_deg - r.groups[0].mean_deg - want).abs() < 4.0 * r.shift_se_deg,
+                        "seed {seed}: {g:?}"
+                    );
+                }
+            }
+        }
     }
 }

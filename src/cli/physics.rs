@@ -30,9 +30,28 @@ enum PhysicsCommand {
     /// Simulate a robot and compare nominal, D-H, D-H + APD, Kriging JS/EJS
     /// and the hybrid on prediction and compensation.
     Compare(CompareArgs),
+    /// Seed 000 §5.2: J1's deviation at several J2 angles against an
+    /// identified SCARA model (cross-talk).
+    Crosstalk(CrosstalkArgs),
     /// Seed 002's probing example: a straightedge probed at three locations,
     /// straightness with the nominal, D-H and D-H + APD models (Table 2).
     Probing(ProbingArgs),
+}
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige simulate --robot scara-rh3frh5515 --kind crosstalk --seed 1 -o xt.csv
+  robokrige physics identify datasets/scara_indexing.csv -o scara_physics.json
+  robokrige physics crosstalk xt.csv --model scara_physics.json")]
+pub struct CrosstalkArgs {
+    /// Cross-talk test CSV (J1 indexed with J2 held at several angles; `axis` = 1).
+    data: PathBuf,
+    /// Physics model identified from the indexing tests of the same set-up.
+    #[arg(long)]
+    model: PathBuf,
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -128,6 +147,7 @@ pub fn run(a: PhysicsArgs) -> Result<()> {
         PhysicsCommand::Identify(a) => run_identify(a),
         PhysicsCommand::Compare(a) => run_compare(a),
         PhysicsCommand::Probing(a) => run_probing(a),
+        PhysicsCommand::Crosstalk(a) => run_crosstalk(a),
     }
 }
 
@@ -378,6 +398,36 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
     }
     if let Some(p) = &a.json {
         write(p, &to_json(&rows, "probing table")?)?;
+    }
+    Ok(())
+}
+
+fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
+    let model = robokrige::physics::PhysicsModel::load(&a.model)?;
+    let data = robokrige::dataset::read_csv(&a.data)?;
+    let r = robokrige::physics::identify_crosstalk(&data, &model)?;
+    println!("J1 deviation the model misses, by J2 angle (seed 000 §5.2), degrees:");
+    println!("  J2      rows   mean shift   peak-to-peak");
+    for g in &r.groups {
+        println!(
+            "  {:>6.1} {:>6} {:>+12.5} {:>14.5}",
+            g.j2_deg, g.rows, g.mean_deg, g.peak_to_peak_deg
+        );
+    }
+    println!(
+        "largest shift vs J2 = {:.1}°: {:.5}° (standard error {:.5}°, one entry {:.5}°): {}",
+        r.groups[0].j2_deg,
+        r.max_shift_deg,
+        r.shift_se_deg,
+        r.entry_se_deg,
+        if r.significant {
+            "cross-talk: J1 depends on J2 (> 4 standard errors)"
+        } else {
+            "no significant cross-talk"
+        }
+    );
+    if let Some(p) = &a.json {
+        write(p, &to_json(&r, "cross-talk report")?)?;
     }
     Ok(())
 }

@@ -14,6 +14,8 @@ pub enum Kind {
     Verify,
     /// Single-axis indexing tests, each grid point approached from both sides (seed 000 §2.3).
     Indexing,
+    /// J1 indexed with J2 held at 0°, 20°, 40°, 60° (seed 000 §5.2, cross-talk).
+    Crosstalk,
     /// A circle of commanded TCP points (a trajectory to compensate; not measured).
     Circle,
 }
@@ -24,6 +26,7 @@ impl From<Kind> for CampaignKind {
             Kind::Lhs => CampaignKind::Lhs,
             Kind::Verify => CampaignKind::Verify,
             Kind::Indexing => CampaignKind::Indexing,
+            Kind::Crosstalk => CampaignKind::Crosstalk,
             Kind::Circle => CampaignKind::Circle,
         }
     }

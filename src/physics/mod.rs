@@ -6,12 +6,14 @@
 //! | [`BidirectionalTable`] | lookup table per direction, linear interpolation (seed 000 eqs 3–6, 19) |
 //! | [`PhysicsModel`] | identified geometry + tables: SCARA (seed 000 eqs 3, 18, 23) or MD-H chain (seed 002 eqs 1–2) |
 //! | [`identify_scara`] | seed 000 §2.4: frames, circle fits, eqs 7–14, 20, 22 |
+//! | [`identify_crosstalk`] | seed 000 §5.2: J1's deviation at several J2 angles, against the model |
 //! | [`identify_apd`], [`identify_mdh`] | seed 002: APD tables by circle-point analysis of indexing tests, MD-H errors by Levenberg–Marquardt |
 //! | [`HybridModel`] | physics first, universal Kriging on its residual |
 //! | [`probe`], [`straightness`], [`probing_example`] | seed 002 eqs 3–6: probing a straightedge, straightness before/after (Table 2) |
 //! | [`compare`] | nominal / D-H / D-H+APD / Kriging JS, EJS / hybrid on one simulated robot |
 
 mod compare;
+mod crosstalk;
 mod mdh;
 mod model;
 mod probing;
@@ -19,6 +21,7 @@ mod scara;
 mod table;
 
 pub use compare::{CompareOptions, CompareRow, Comparison, Score, compare};
+pub use crosstalk::{CrosstalkGroup, CrosstalkReport, identify_crosstalk};
 pub use mdh::{ApdIdentification, LmSummary, apply_errors, identify_apd, identify_mdh};
 pub use model::{
     AnyModel, Geometry, HybridModel, PHYSICS_FORMAT, PHYSICS_VERSION, PhysicsModel, ScaraGeometry,

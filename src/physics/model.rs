@@ -281,8 +281,8 @@ pub(crate) fn load_json<T: for<'de> Deserialize<'de>>(path: &Path, what: &str) -
 /// `compensate --model` accepts.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AnyModel {
-    Kriging(ErrorModel),
-    Physics(PhysicsModel),
+    Kriging(Box<ErrorModel>),
+    Physics(Box<PhysicsModel>),
 }
 
 impl AnyModel {
@@ -297,12 +297,12 @@ impl AnyModel {
             .and_then(|v| v.get("format").and_then(|f| f.as_str()).map(String::from))
             .is_some_and(|f| f == PHYSICS_FORMAT);
         if is_physics {
-            Ok(AnyModel::Physics(PhysicsModel::load(path)?))
+            Ok(AnyModel::Physics(Box::new(PhysicsModel::load(path)?)))
         } else {
-            Ok(AnyModel::Kriging(ErrorModel::from_json(
+            Ok(AnyModel::Kriging(Box::new(ErrorModel::from_json(
                 &text,
                 &path.display().to_string(),
-            )?))
+            )?)))
         }
     }
 

@@ -65,7 +65,8 @@ pub fn probe(
     start: &[f64],
     rng: &mut impl Rng,
 ) -> Result<ProbeRun> {
-    if edge.points < 3 || !(edge.length_mm > 0.0) || !(edge.approach_mm > 0.0) {
+    let bad = |v: f64| v.is_nan() || v <= 0.0;
+    if edge.points < 3 || bad(edge.length_mm) || bad(edge.approach_mm) {
         return Err(Error::InvalidParameter(
             "straightedge needs ≥ 3 points, a positive length and approach".into(),
         ));

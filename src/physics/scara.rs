@@ -102,8 +102,7 @@ pub(super) fn indexing_rows(data: &Dataset) -> Result<Vec<Vec<Row>>> {
     let cycle = data.covariate("cycle");
     let n = data.n_joints();
     let mut out: Vec<Vec<Row>> = (0..n).map(|_| Vec::new()).collect();
-    for k in 0..data.len() {
-        let a = axis.values[k];
+    for (k, (&a, p)) in axis.values.iter().zip(positions).enumerate() {
         if a.fract() != 0.0 || a < 1.0 || a > n as f64 {
             return Err(Error::Input {
                 source_name: src.clone(),
@@ -113,7 +112,7 @@ pub(super) fn indexing_rows(data: &Dataset) -> Result<Vec<Vec<Row>>> {
         out[a as usize - 1].push(Row {
             q: data.q[k].clone(),
             dir: data.dir[k].clone(),
-            p: Vector3::from(positions[k]),
+            p: Vector3::from(*p),
             cycle: cycle.map_or(1, |c| c.values[k].max(0.0) as usize),
         });
     }
@@ -403,9 +402,10 @@ pub(super) fn angle_table(
     let mut rp = Vec::with_capacity(na);
     let mut rm = Vec::with_capacity(na);
     let mut spread = 0.0_f64;
+    let (mut ss, mut dof, mut reps) = (0.0, 0usize, 1usize);
     for i in 0..na {
-        for d in 0..2 {
-            if acc[i][d].is_empty() {
+        for (d, cell) in acc[i].iter().enumerate() {
+            if cell.is_empty() {
                 return Err(Error::InvalidParameter(format!(
                     "J{} indexing test: angle {} was not measured in the {} direction (the test must be bidirectional)",
                     j + 1,
@@ -413,10 +413,14 @@ pub(super) fn angle_table(
                     if d == 0 { "positive" } else { "negative" }
                 )));
             }
-            let (lo, hi) = acc[i][d]
+            let (lo, hi) = cell
                 .iter()
                 .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
             spread = spread.max(hi - lo);
+            let m = mean(cell);
+            ss += cell.iter().map(|v| (v - m).powi(2)).sum::<f64>();
+            dof += cell.len() - 1;
+            reps = reps.max(cell.len());
         }
         plus.push(mean(&acc[i][0]));
         minus.push(mean(&acc[i][1]));
@@ -427,8 +431,12 @@ pub(super) fn angle_table(
     rp.iter_mut()
         .chain(rm.iter_mut())
         .for_each(|v| *v -= r_mean);
+    let mut table = BidirectionalTable::new(angles.clone(), plus, minus)?;
+    if dof > 0 {
+        table.entry_se = (ss / dof as f64).sqrt() / (reps as f64).sqrt();
+    }
     Ok(AxisTable {
-        table: BidirectionalTable::new(angles.clone(), plus, minus)?,
+        table,
         radial: BidirectionalTable::new(angles, rp, rm)?,
         ref_angle,
         spread,

@@ -24,6 +24,10 @@ pub struct BidirectionalTable {
     pub plus: Vec<f64>,
     /// Values for negative rotation (λ = −1).
     pub minus: Vec<f64>,
+    /// Standard error of one entry when it is a mean of repeated cycles
+    /// (pooled over the table), in the table's unit; 0 when unknown.
+    #[serde(default)]
+    pub entry_se: f64,
 }
 
 impl BidirectionalTable {
@@ -34,6 +38,7 @@ impl BidirectionalTable {
             angles_deg,
             plus,
             minus,
+            entry_se: 0.0,
         };
         t.validate()?;
         Ok(t)

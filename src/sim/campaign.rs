@@ -29,6 +29,8 @@ pub enum CampaignKind {
     Lhs,
     Verify,
     Indexing,
+    /// Seed 000 §5.2: J1 indexed (eq 21) with J2 held at several angles.
+    Crosstalk,
     Circle,
 }
 
@@ -38,7 +40,7 @@ impl CampaignKind {
         match self {
             CampaignKind::Lhs => 300,
             CampaignKind::Verify => 30,
-            CampaignKind::Indexing => 0,
+            CampaignKind::Indexing | CampaignKind::Crosstalk => 0,
             CampaignKind::Circle => 72,
         }
     }
@@ -135,6 +137,7 @@ pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput,
         CampaignKind::Lhs => measured(lhs(&ranges, spec.poses, &mut rng)),
         CampaignKind::Verify => measured(uniform(&ranges, spec.poses, &mut rng)),
         CampaignKind::Indexing => indexing(nominal, &ranges, spec.indexing_cycles),
+        CampaignKind::Crosstalk => crosstalk(nominal, &ranges, spec.indexing_cycles)?,
         CampaignKind::Circle => {
             let traj = circle(nominal, spec.circle_diameter_mm, spec.poses)?;
             return Ok((SimOutput::Trajectory(traj), truth));
@@ -156,6 +159,7 @@ fn kind_stream(kind: CampaignKind) -> &'static str {
         CampaignKind::Lhs => "campaign-lhs",
         CampaignKind::Verify => "campaign-verify",
         CampaignKind::Indexing => "campaign-indexing",
+        CampaignKind::Crosstalk => "campaign-crosstalk",
         CampaignKind::Circle => "campaign-circle",
     }
 }
@@ -344,6 +348,62 @@ fn indexing(robot: &Robot, ranges: &[(f64, f64)], cycles: usize) -> Vec<Visit> {
     visits
 }
 
+/// J2 angles of seed 000 §5.2 at which the J1 test is repeated.
+pub const CROSSTALK_J2_DEG: [f64; 4] = [0.0, 20.0, 40.0, 60.0];
+
+/// Seed 000 §5.2 (eq 21): J1 indexed at −100°, −80°, …, 100° bidirectionally
+/// with J2 held at each of [`CROSSTALK_J2_DEG`] (clamped into J2's range),
+/// `cycles` times; all rows are tagged axis 1.
+fn crosstalk(robot: &Robot, ranges: &[(f64, f64)], cycles: usize) -> Result<Vec<Visit>> {
+    if robot.dof() < 2 {
+        return Err(Error::InvalidParameter(
+            "the cross-talk test needs at least two joints".into(),
+        ));
+    }
+    let rest = rest_pose(ranges);
+    let (lo, hi) = (ranges[0].0.max(-100.0), ranges[0].1.min(100.0));
+    let grid: Vec<f64> = (0..=10)
+        .map(|i| -100.0 + 20.0 * i as f64)
+        .filter(|v| *v >= lo - 1e-9 && *v <= hi + 1e-9)
+        .collect();
+    if grid.len() < 3 {
+        return Err(Error::InvalidParameter(
+            "the cross-talk test needs J1's range to cover at least 3 of −100°, −80°, …, 100°"
+                .into(),
+        ));
+    }
+    let over = 10.0_f64;
+    let mut visits = Vec::new();
+    for (h, &held) in CROSSTALK_J2_DEG.iter().enumerate() {
+        let held = held.clamp(ranges[1].0, ranges[1].1);
+        let mut go = |v: f64, measured: bool, cycle: usize| {
+            let mut q = rest.clone();
+            q[0] = v;
+            q[1] = held;
+            visits.push(Visit {
+                q,
+                measured,
+                tag: Some((1, h * cycles + cycle + 1)),
+            });
+        };
+        for c in 0..cycles {
+            go((grid[0] - over).max(robot.limits[0].0), false, c);
+            for &v in &grid {
+                go(v, true, c);
+            }
+            go(
+                (grid[grid.len() - 1] + over).min(robot.limits[0].1),
+                false,
+                c,
+            );
+            for &v in grid.iter().rev() {
+                go(v, true, c);
+            }
+        }
+    }
+    Ok(visits)
+}
+
 /// Ø`diameter` circle of `points` commanded TCP poses in the base XY plane
 /// around the home TCP, orientation fixed at home's; every point checked
 /// reachable by IK along the path.
@@ -429,7 +489,7 @@ fn measure(
     if env.payload_column {
         covariates.push(covariate("payload_kg", env.payload_kg.clone()));
     }
-    if spec.kind == CampaignKind::Indexing {
+    if matches!(spec.kind, CampaignKind::Indexing | CampaignKind::Crosstalk) {
         let tags: Vec<(usize, usize)> = rows
             .iter()
             .map(|&i| visits[i].tag.unwrap_or((0, 0)))
