@@ -53,8 +53,27 @@ impl ErrorModel {
     /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
     /// with the given options' trend. Outputs and starts run in parallel.
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
-        let trend = opts.trend.trend(space.dim(data.n_joints()));
+        let trend = opts
+            .trend
+            .trend(space.encoded_dim(data.n_joints(), &opts.periodic));
         Self::fit_with_trend(data, space, opts, &[trend.clone(), trend.clone(), trend])
+    }
+
+    /// Universal Kriging with the kinematic-error trend (issue 10; seed 003
+    /// eq 4): each output's trend is `opts.trend`'s monomials plus the rows of
+    /// `robot`'s identification Jacobian for the calibration parameters that
+    /// are identifiable on `data` (greedy rank revelation of the stacked,
+    /// column-normalised `3m × (5n + 9)` Jacobian at the training poses,
+    /// relative tolerance `1e-7`; earlier parameters win). One fit thus does
+    /// the kinematic calibration (the trend's β) and Kriging of what remains.
+    pub fn fit_kinematic(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        robot: &crate::kinematics::Robot,
+    ) -> Result<Self> {
+        let trends = kinematic_trends(data, space, opts, robot)?;
+        Self::fit_with_trend(data, space, opts, &trends)
     }
 
     /// EJS&PCA of seed 003: for each output, PCC + PCA fusion
@@ -69,10 +88,10 @@ impl ErrorModel {
         variance_share: f64,
     ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
         let errors = data.errors_or_err()?;
-        let d = space.dim(data.n_joints());
-        let rows = space.rows(&data.q, &data.dir);
+        let d = space.encoded_dim(data.n_joints(), &opts.periodic);
+        let rows = space.encode_rows(&opts.periodic, &data.q, &data.dir);
         let x = Normalizer::fit(&rows).apply_rows(&rows);
-        let names = space.names(data.n_joints());
+        let names = space.encoded_names(data.n_joints(), &opts.periodic);
         let candidates = crate::kriging::Monomials::quadratic(d);
         let mut trends = Vec::with_capacity(3);
         let mut reports = Vec::with_capacity(3);
@@ -107,7 +126,7 @@ impl ErrorModel {
         opts: &KrigingOptions,
         extras: &[Feature],
     ) -> Result<Self> {
-        let d0 = space.dim(data.n_joints());
+        let d0 = space.encoded_dim(data.n_joints(), &opts.periodic);
         let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
         let mut terms = opts.trend.monomials(d0);
         terms.dim = d0 + extra_dims;
@@ -158,8 +177,14 @@ impl ErrorModel {
             });
         }
         let n = data.n_joints();
-        let mut rows = space.rows(&data.q, &data.dir);
-        let mut names = space.names(n);
+        if let Some(j) = opts.periodic.iter().find(|&&j| j >= n) {
+            return Err(Error::InvalidParameter(format!(
+                "periodic joint {} does not exist: the data has {n} joints",
+                j + 1
+            )));
+        }
+        let mut rows = space.encode_rows(&opts.periodic, &data.q, &data.dir);
+        let mut names = space.encoded_names(n, &opts.periodic);
         for f in extras {
             append_columns(&mut rows, &f.columns(data)?);
             names.extend(f.names());
@@ -224,7 +249,7 @@ impl ErrorModel {
     /// ([`Feature::columns_from_poses`]).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
-        let mut rows = self.space.rows(q, dir);
+        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
         for f in &self.extras {
             append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
         }
@@ -249,7 +274,7 @@ impl ErrorModel {
     /// for compensation.
     pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.check_rows(q, dir)?;
-        let mut rows = self.space.rows(q, dir);
+        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
         for f in &self.extras {
             append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
         }
@@ -284,7 +309,9 @@ impl ErrorModel {
     /// Predict for every row of a dataset (extra inputs from its columns).
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
-        let mut rows = self.space.rows(&data.q, &data.dir);
+        let mut rows = self
+            .space
+            .encode_rows(&self.options.periodic, &data.q, &data.dir);
         for f in &self.extras {
             append_columns(&mut rows, &f.columns(data)?);
         }
@@ -326,7 +353,9 @@ impl ErrorModel {
             context: source_name.into(),
             source: e,
         })?;
-        let dim = model.space.dim(model.n_joints)
+        let dim = model
+            .space
+            .encoded_dim(model.n_joints, &model.options.periodic)
             + model.extras.iter().map(|f| f.names().len()).sum::<usize>();
         let extras_ok = model
             .extras
@@ -344,4 +373,53 @@ impl ErrorModel {
         }
         Ok(model)
     }
+}
+
+/// The per-axis trends of [`ErrorModel::fit_kinematic`].
+pub fn kinematic_trends(
+    data: &Dataset,
+    space: Space,
+    opts: &KrigingOptions,
+    robot: &crate::kinematics::Robot,
+) -> Result<[crate::kriging::Trend; 3]> {
+    use crate::kinematics::{calib_len, identification_jacobian};
+    let n = data.n_joints();
+    if robot.dof() != n {
+        return Err(Error::JointCount {
+            expected: robot.dof(),
+            got: n,
+        });
+    }
+    let np = calib_len(n);
+    let m = data.len();
+    let rows: Vec<[Vec<f64>; 3]> = data
+        .q
+        .par_iter()
+        .map(|q| identification_jacobian(robot, q))
+        .collect();
+    let mut f = faer::Mat::<f64>::zeros(3 * m, np);
+    for (i, r) in rows.iter().enumerate() {
+        for a in 0..3 {
+            for k in 0..np {
+                f[(3 * i + a, k)] = r[a][k];
+            }
+        }
+    }
+    let (kept, _) = crate::kriging::independent_columns(&f, 1e-7);
+    let x = space.encode_rows(&opts.periodic, &data.q, &data.dir);
+    let norm = Normalizer::fit(&x);
+    let d = space.encoded_dim(n, &opts.periodic);
+    let nj = d - space.dim(n) + n; // joint columns
+    let make = |axis: usize| {
+        crate::kriging::Trend::Kinematic(crate::kriging::KinematicTrend {
+            robot: robot.clone(),
+            axis,
+            params: kept.clone(),
+            joint_mean: norm.mean[..nj].to_vec(),
+            joint_std: norm.std[..nj].to_vec(),
+            periodic: opts.periodic.clone(),
+            poly: opts.trend.monomials(d),
+        })
+    };
+    Ok([make(0), make(1), make(2)])
 }

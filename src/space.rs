@@ -89,6 +89,77 @@ impl Space {
     pub fn rows(self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Vec<Vec<f64>> {
         q.iter().zip(dir).map(|(a, b)| self.row(a, b)).collect()
     }
+
+    /// One row with the joints in `periodic` (0-based) encoded as
+    /// `(sin θ, cos θ)` instead of θ, so that θ and θ ± 360° are the same
+    /// input and the correlation wraps around (issue 10): joint columns in
+    /// joint order (one or two each), then the λ's for EJS.
+    pub fn encode(self, periodic: &[usize], q: &[f64], dir: &[f64]) -> Vec<f64> {
+        let mut s = Vec::with_capacity(q.len() + periodic.len() + dir.len());
+        for (j, v) in q.iter().enumerate() {
+            if periodic.contains(&j) {
+                let (sn, cs) = v.to_radians().sin_cos();
+                s.push(sn);
+                s.push(cs);
+            } else {
+                s.push(*v);
+            }
+        }
+        if self == Space::Ejs {
+            s.extend_from_slice(dir);
+        }
+        s
+    }
+
+    /// [`Space::encode`] for a sequence of poses (`periodic` empty: [`Space::rows`]).
+    pub fn encode_rows(
+        self,
+        periodic: &[usize],
+        q: &[Vec<f64>],
+        dir: &[Vec<f64>],
+    ) -> Vec<Vec<f64>> {
+        q.iter()
+            .zip(dir)
+            .map(|(a, b)| self.encode(periodic, a, b))
+            .collect()
+    }
+
+    /// Names of the encoded columns (`sin q1`, `cos q1` for a periodic joint).
+    pub fn encoded_names(self, n: usize, periodic: &[usize]) -> Vec<String> {
+        let mut v = Vec::new();
+        for i in 0..n {
+            if periodic.contains(&i) {
+                v.push(format!("sin q{}", i + 1));
+                v.push(format!("cos q{}", i + 1));
+            } else {
+                v.push(format!("q{}", i + 1));
+            }
+        }
+        if self == Space::Ejs {
+            v.extend((1..=n).map(|i| format!("dir{i}")));
+        }
+        v
+    }
+
+    /// Input dimension with `periodic` joints encoded.
+    pub fn encoded_dim(self, n: usize, periodic: &[usize]) -> usize {
+        self.dim(n) + periodic.iter().filter(|&&j| j < n).count()
+    }
+}
+
+/// Joints whose range in `q` exceeds half a turn (180°): the automatic choice
+/// of periodic joints (a revolute joint that turns that far reaches poses
+/// where θ and θ ± 360° are near each other).
+pub fn periodic_joints(q: &[Vec<f64>]) -> Vec<usize> {
+    let n = q.first().map_or(0, Vec::len);
+    (0..n)
+        .filter(|&j| {
+            let (lo, hi) = q
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(l, h), r| (l.min(r[j]), h.max(r[j])));
+            hi - lo > 180.0
+        })
+        .collect()
 }
 
 /// Column-wise z-score `(x − μ)/σ` with the sample standard deviation

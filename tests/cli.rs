@@ -286,3 +286,53 @@ fn physics_identify_then_compensate_with_the_physics_model() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn kinematic_and_periodic_options_are_checked() {
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let out = std::env::temp_dir().join(format!("rk-kin-{}.json", std::process::id()));
+    let o = out.display().to_string();
+    let (c, _, err) = rk(&["fit", &ds("comau_lhs.csv"), "--kinematic", "-o", &o]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("--kinematic needs --robot"), "{err}");
+    let (c, _, err) = rk(&["fit", &ds("comau_lhs.csv"), "--periodic", "9", "-o", &o]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("joint numbers 1..6"), "{err}");
+    let (c, _, err) = rk(&[
+        "fit",
+        &ds("comau_lhs.csv"),
+        "--robot",
+        "ur10",
+        "--tool",
+        "1,2",
+        "--kinematic",
+        "-o",
+        &o,
+    ]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("expected x,y,z"), "{err}");
+    // a working kinematic fit on the COMAU campaign, quick optimiser
+    let (c, stdout, err) = rk(&[
+        "fit",
+        &ds("comau_lhs.csv"),
+        "--robot",
+        "comau-nj220",
+        "--kinematic",
+        "--optimizer",
+        "hj",
+        "--space",
+        "js",
+        "-o",
+        &o,
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(stdout.contains("fitted 300 rows"), "{stdout}");
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(
+        model["outputs"][0]["trend"]["kind"], "kinematic",
+        "{}",
+        model["outputs"][0]["trend"]
+    );
+    std::fs::remove_file(out).ok();
+}

@@ -6,7 +6,6 @@ use clap::Args;
 use clap::ValueEnum;
 use robokrige::Result;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
-use robokrige::model::ErrorModel;
 use robokrige::plot::box_plot;
 use std::path::PathBuf;
 
@@ -56,13 +55,14 @@ pub fn run(a: CvArgs) -> Result<()> {
         return run_methods(&a, list);
     }
     let data = super::read_data(&a.data)?;
-    let (space, opts) = a.model.options();
+    let choice = a.model.resolve(&data)?;
+    let (space, opts) = (choice.space, &choice.opts);
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
         Mode::Refit => {
             let pb = bar(a.folds as u64, "folds");
             let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-                let m = ErrorModel::fit(train, space, &opts);
+                let m = choice.fit(train);
                 pb.inc(1);
                 m
             });
@@ -70,20 +70,37 @@ pub fn run(a: CvArgs) -> Result<()> {
             res?
         }
         Mode::ClosedForm => {
-            let model = ErrorModel::fit(&data, space, &opts)?;
+            let model = choice.fit(&data)?;
             cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
         }
     };
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
     println!(
-        "{}-fold CV ({}) of {:?} {:?} {:?} on {} rows, {:.1} s",
+        "{}-fold CV ({}) of {:?} {:?}{} {:?} on {} rows{}, {:.1} s",
         a.folds,
         res.mode,
         space,
         opts.trend,
+        if choice.kinematic.is_some() {
+            " + kinematic"
+        } else {
+            ""
+        },
         opts.optimizer,
         data.len(),
+        if opts.periodic.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", periodic {}",
+                opts.periodic
+                    .iter()
+                    .map(|j| format!("q{}", j + 1))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            )
+        },
         res.seconds
     );
     println!(

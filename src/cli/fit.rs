@@ -49,10 +49,71 @@ pub struct ModelArgs {
     /// Seed of the GPS starts.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Joints entered as (sin θ, cos θ) so θ and θ ± 360° coincide: "auto"
+    /// (those whose range in the data exceeds 180°), "none", or "1,4,6".
+    #[arg(long, default_value = "auto")]
+    periodic: String,
+    /// Robot preset for the kinematic trend (`--kinematic`).
+    #[arg(long)]
+    robot: Option<String>,
+    /// TCP offset in the flange frame, mm ("x,y,z"), for `--robot`.
+    #[arg(long)]
+    tool: Option<String>,
+    /// Add the kinematic-error basis (rows of the robot's identification
+    /// Jacobian, seed 003 eq 4) to the trend: one fit calibrates and krigs.
+    #[arg(long)]
+    kinematic: bool,
+}
+
+/// What [`ModelArgs::resolve`] gives: space, options, and the robot of the
+/// kinematic trend.
+pub struct ModelChoice {
+    pub space: Space,
+    pub opts: KrigingOptions,
+    pub kinematic: Option<robokrige::kinematics::Robot>,
+}
+
+impl ModelChoice {
+    /// Fit on `data` with this choice.
+    pub fn fit(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModel> {
+        match &self.kinematic {
+            Some(r) => ErrorModel::fit_kinematic(data, self.space, &self.opts, r),
+            None => ErrorModel::fit(data, self.space, &self.opts),
+        }
+    }
 }
 
 impl ModelArgs {
-    /// The space and fitting options these arguments select.
+    /// The full choice for `data` (periodic joints resolved on its rows).
+    pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ModelChoice> {
+        let (space, mut opts) = self.options();
+        opts.periodic = super::holdout::parse_periodic(&self.periodic, &data.q)?;
+        let kinematic = match (&self.robot, self.kinematic) {
+            (Some(r), true) => Some(super::holdout::robot_with_tool(r, self.tool.as_deref())?),
+            (None, true) => {
+                return Err(Error::InvalidParameter(
+                    "--kinematic needs --robot (the preset whose Jacobian forms the trend)".into(),
+                ));
+            }
+            (_, false) => None,
+        };
+        if let Some(r) = &kinematic {
+            if r.dof() != data.n_joints() {
+                return Err(Error::JointCount {
+                    expected: r.dof(),
+                    got: data.n_joints(),
+                });
+            }
+        }
+        Ok(ModelChoice {
+            space,
+            opts,
+            kinematic,
+        })
+    }
+
+    /// The space and fitting options these arguments select (no periodic
+    /// joints: see [`ModelArgs::resolve`]).
     pub fn options(&self) -> (Space, KrigingOptions) {
         let opts = KrigingOptions {
             trend: match self.trend {
@@ -101,7 +162,8 @@ pub struct FitArgs {
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
-    let (space, opts) = a.model.options();
+    let choice = a.model.resolve(&data)?;
+    let opts = &choice.opts;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => {
@@ -117,7 +179,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             pb.finish_and_clear();
             model?
         }
-        None => ErrorModel::fit(&data, space, &opts)?,
+        None => choice.fit(&data)?,
     };
     let space = model.space;
     let secs = t0.elapsed().as_secs_f64();

@@ -6,6 +6,7 @@ mod cv;
 mod demo;
 mod diagnose;
 mod fit;
+mod holdout;
 mod physics;
 mod progress;
 mod simulate;
@@ -45,6 +46,9 @@ pub enum Command {
     Diagnose(diagnose::DiagnoseArgs),
     /// Physics-based models (seeds 000, 002): identify from indexing tests, compare with Kriging.
     Physics(physics::PhysicsArgs),
+    /// Train on the first rows of a campaign, score on the next: nominal, D-H
+    /// calibration, hybrid, Kriging with the kinematic trend (JS and EJS).
+    Holdout(holdout::HoldoutArgs),
 }
 
 /// Run a parsed command.
@@ -59,6 +63,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Evaluate(a) => compensate::run_evaluate(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Physics(a) => physics::run(a),
+        Command::Holdout(a) => holdout::run(a),
     }
 }
 

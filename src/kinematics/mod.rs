@@ -14,9 +14,13 @@
 //! `θ_i = sign_i·q_i + θ_offset_i` (revolute) or `d_i + sign_i·q_i` (prismatic),
 //! so a preset can follow its controller's zero and sign conventions.
 
+mod calib;
 mod ik;
 mod presets;
 
+pub use calib::{
+    apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
+};
 pub use ik::{IkOptions, IkTarget};
 pub use presets::{PRESET_NAMES, preset};
 

@@ -18,7 +18,7 @@ pub mod trend;
 pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
 pub use model::{KrigingModel, KrigingModelData, Pred};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
-pub use trend::{Monomials, Trend, TrendModel, independent_columns, trend_matrix};
+pub use trend::{KinematicTrend, Monomials, Trend, TrendModel, independent_columns, trend_matrix};
 
 use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
 use crate::space::Normalizer;
@@ -87,6 +87,10 @@ pub struct KrigingOptions {
     /// Finish GPS with a finite-difference BFGS polish of the winning start
     /// (ψ to gradient-method precision; ~30 % more evaluations).
     pub polish: bool,
+    /// Joints (0-based) entered as `(sin θ, cos θ)` instead of θ
+    /// ([`crate::space::Space::encode`]); empty = none.
+    #[serde(default)]
+    pub periodic: Vec<usize>,
 }
 
 impl Default for KrigingOptions {
@@ -103,6 +107,7 @@ impl Default for KrigingOptions {
             tol: 1e-2,
             min_jitter: None,
             polish: true,
+            periodic: Vec::new(),
         }
     }
 }

@@ -121,13 +121,84 @@ impl TrendModel for Monomials {
     }
 }
 
-/// A trend a fitted model can carry: plain monomials, or a PCC+PCA fused
-/// basis ([`crate::basis`]).
+/// The linearised kinematic error as a trend (seed 003 eq 4, seed 004 eq 4):
+/// `f(s) = [monomials(s); ∂P_a/∂p_j(θ)]` for output axis `a` and the
+/// identifiable calibration parameters `p_j`
+/// ([`crate::kinematics::calib_names`]). Universal Kriging then estimates
+/// their β — the parameter errors as seen by this axis — by the same GLS
+/// that fits the rest, and Kriging models what the kinematic errors leave.
+/// The joint angles are recovered from the normalised joint columns
+/// (`v = s·std + mean`; `θ = v`, or `θ = atan2(sin, cos)` for a periodic
+/// joint, see [`crate::space::Space::encode`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KinematicTrend {
+    /// The nominal robot whose identification Jacobian is used.
+    pub robot: crate::kinematics::Robot,
+    /// Output axis 0, 1, 2 (x, y, z).
+    pub axis: usize,
+    /// Calibration parameters (indices into `calib_names`).
+    pub params: Vec<usize>,
+    /// Normalisation of the joint columns of the input.
+    pub joint_mean: Vec<f64>,
+    pub joint_std: Vec<f64>,
+    /// Joints encoded as (sin, cos).
+    #[serde(default)]
+    pub periodic: Vec<usize>,
+    /// Polynomial part (e.g. the constant).
+    pub poly: Monomials,
+}
+
+impl TrendModel for KinematicTrend {
+    fn len(&self) -> usize {
+        self.poly.len() + self.params.len()
+    }
+
+    fn dim(&self) -> usize {
+        self.poly.dim
+    }
+
+    fn eval_into(&self, s: &[f64], out: &mut [f64]) {
+        let k = self.poly.len();
+        self.poly.eval_into(s, &mut out[..k]);
+        let raw = |i: usize| s[i] * self.joint_std[i] + self.joint_mean[i];
+        let n = self.robot.dof();
+        let mut q = Vec::with_capacity(n);
+        let mut c = 0;
+        for j in 0..n {
+            if self.periodic.contains(&j) {
+                q.push(raw(c).atan2(raw(c + 1)).to_degrees());
+                c += 2;
+            } else {
+                q.push(raw(c));
+                c += 1;
+            }
+        }
+        let j = crate::kinematics::identification_jacobian_cols(&self.robot, &q, &self.params);
+        out[k..].copy_from_slice(&j[self.axis]);
+    }
+
+    fn term_name(&self, j: usize, inputs: &[String]) -> String {
+        let k = self.poly.len();
+        if j < k {
+            return self.poly.term_name(j, inputs);
+        }
+        let names = crate::kinematics::calib_names(self.robot.dof());
+        format!(
+            "dP{}/d{}",
+            ["x", "y", "z"][self.axis],
+            names[self.params[j - k]]
+        )
+    }
+}
+
+/// A trend a fitted model can carry: plain monomials, a PCC+PCA fused
+/// basis ([`crate::basis`]), or the kinematic-error basis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Trend {
     Monomials(Monomials),
     Fused(crate::basis::FusedBasis),
+    Kinematic(KinematicTrend),
 }
 
 impl From<Monomials> for Trend {
@@ -142,6 +213,19 @@ impl Trend {
         match self {
             Trend::Monomials(m) => Trend::Monomials(m.subset(keep)),
             Trend::Fused(f) => Trend::Fused(f.subset(keep)),
+            Trend::Kinematic(k) => {
+                let np = k.poly.len();
+                let poly: Vec<usize> = keep.iter().copied().filter(|&j| j < np).collect();
+                Trend::Kinematic(KinematicTrend {
+                    poly: k.poly.subset(&poly),
+                    params: keep
+                        .iter()
+                        .filter(|&&j| j >= np)
+                        .map(|&j| k.params[j - np])
+                        .collect(),
+                    ..k.clone()
+                })
+            }
         }
     }
 
@@ -149,6 +233,7 @@ impl Trend {
         match self {
             Trend::Monomials(m) => m,
             Trend::Fused(f) => f,
+            Trend::Kinematic(k) => k,
         }
     }
 }

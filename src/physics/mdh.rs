@@ -24,7 +24,7 @@ use crate::frames::{fit_circle_3d, wrap_pi};
 use crate::kinematics::{JointKind, Robot};
 use crate::optim::{LmOptions, levenberg_marquardt, numerical_jacobian};
 use crate::{Error, Result};
-use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// APD tables identified from indexing tests.
@@ -143,42 +143,7 @@ pub struct LmSummary {
     pub stop: String,
 }
 
-fn parameter_names(n: usize) -> Vec<String> {
-    let mut names = Vec::with_capacity(5 * n + 9);
-    for j in 1..=n {
-        for p in ["theta_off", "d", "a", "alpha", "beta"] {
-            names.push(format!("{p}{j}"));
-        }
-    }
-    for p in [
-        "tool_x", "tool_y", "tool_z", "base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz",
-    ] {
-        names.push(p.into());
-    }
-    names
-}
-
-/// The nominal robot with the parameter errors `x` (degrees and mm) applied.
-pub fn apply_errors(nominal: &Robot, x: &[f64]) -> Robot {
-    let n = nominal.dof();
-    let mut r = nominal.clone();
-    for (j, l) in r.links.iter_mut().enumerate() {
-        let e = &x[5 * j..5 * j + 5];
-        l.theta_offset_deg += e[0];
-        l.d_mm += e[1];
-        l.a_mm += e[2];
-        l.alpha_deg += e[3];
-        l.beta_deg += e[4];
-    }
-    let t = &x[5 * n..5 * n + 9];
-    r.tool = Isometry3::from_parts(
-        Translation3::new(t[0], t[1], t[2]),
-        UnitQuaternion::identity(),
-    ) * nominal.tool;
-    let rot = UnitQuaternion::from_scaled_axis(Vector3::new(t[6], t[7], t[8]).map(f64::to_radians));
-    r.base = Isometry3::from_parts(Translation3::new(t[3], t[4], t[5]), rot) * nominal.base;
-    r
-}
+pub use crate::kinematics::apply_errors;
 
 /// Identify the MD-H, tool and base errors of `nominal` from a campaign with
 /// measured errors, joints corrected by `apd` where given.
@@ -240,7 +205,7 @@ pub fn identify_mdh(
             ..LmOptions::default()
         },
     )?;
-    let names = parameter_names(n);
+    let names = crate::kinematics::calib_names(n);
     let summary = LmSummary {
         parameters: np - res.unidentifiable.len(),
         frozen: res
