@@ -411,7 +411,7 @@ pub fn kinematic_trends(
     let d = space.encoded_dim(n, &opts.periodic);
     let nj = d - space.dim(n) + n; // joint columns
     let make = |axis: usize| {
-        crate::kriging::Trend::Kinematic(crate::kriging::KinematicTrend {
+        crate::kriging::Trend::Kinematic(Box::new(crate::kriging::KinematicTrend {
             robot: robot.clone(),
             axis,
             params: kept.clone(),
@@ -419,7 +419,7 @@ pub fn kinematic_trends(
             joint_std: norm.std[..nj].to_vec(),
             periodic: opts.periodic.clone(),
             poly: opts.trend.monomials(d),
-        })
+        }))
     };
     Ok([make(0), make(1), make(2)])
 }

@@ -97,13 +97,11 @@ impl ModelArgs {
             }
             (_, false) => None,
         };
-        if let Some(r) = &kinematic {
-            if r.dof() != data.n_joints() {
-                return Err(Error::JointCount {
-                    expected: r.dof(),
-                    got: data.n_joints(),
-                });
-            }
+        if let Some(r) = kinematic.as_ref().filter(|r| r.dof() != data.n_joints()) {
+            return Err(Error::JointCount {
+                expected: r.dof(),
+                got: data.n_joints(),
+            });
         }
         Ok(ModelChoice {
             space,

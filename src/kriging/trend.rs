@@ -198,7 +198,7 @@ impl TrendModel for KinematicTrend {
 pub enum Trend {
     Monomials(Monomials),
     Fused(crate::basis::FusedBasis),
-    Kinematic(KinematicTrend),
+    Kinematic(Box<KinematicTrend>),
 }
 
 impl From<Monomials> for Trend {
@@ -216,15 +216,15 @@ impl Trend {
             Trend::Kinematic(k) => {
                 let np = k.poly.len();
                 let poly: Vec<usize> = keep.iter().copied().filter(|&j| j < np).collect();
-                Trend::Kinematic(KinematicTrend {
+                Trend::Kinematic(Box::new(KinematicTrend {
                     poly: k.poly.subset(&poly),
                     params: keep
                         .iter()
                         .filter(|&&j| j >= np)
                         .map(|&j| k.params[j - np])
                         .collect(),
-                    ..k.clone()
-                })
+                    ..k.as_ref().clone()
+                }))
             }
         }
     }
@@ -233,7 +233,7 @@ impl Trend {
         match self {
             Trend::Monomials(m) => m,
             Trend::Fused(f) => f,
-            Trend::Kinematic(k) => k,
+            Trend::Kinematic(k) => k.as_ref(),
         }
     }
 }
