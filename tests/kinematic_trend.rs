@@ -98,9 +98,7 @@ fn kinematic_trend_captures_geometric_errors() {
         .stiffness_nm_per_rad
         .iter_mut()
         .for_each(|k| *k = 0.0);
-    robot.noise.repeatability_sigma_deg = 0.0;
-    robot.noise.tracker_mpe_const_mm = 0.0;
-    robot.noise.tracker_mpe_per_m_mm = 0.0;
+    robot = robot.noise_free();
     let mut spec = CampaignSpec::new(CampaignKind::Lhs, 5);
     spec.poses = 150;
     let (SimOutput::Measurements(train), _) = simulate_on(&robot, &spec).unwrap() else {

@@ -26,9 +26,7 @@ fn scara_errors(seed: u64, noise: bool) -> [f64; 5] {
     let profile = ErrorProfile::for_robot(&nominal);
     let mut robot = TrueRobot::draw(&nominal, &profile, seed);
     if !noise {
-        robot.noise.repeatability_sigma_deg = 0.0;
-        robot.noise.tracker_mpe_const_mm = 0.0;
-        robot.noise.tracker_mpe_per_m_mm = 0.0;
+        robot = robot.noise_free();
     }
     let spec = CampaignSpec::new(CampaignKind::Indexing, seed);
     let (SimOutput::Measurements(data), _) = simulate_on(&robot, &spec).unwrap() else {
@@ -150,9 +148,7 @@ fn scara_model_predicts_the_true_error_better_than_dh_alone() {
     // noise-free true robot of seed 3: the identified model against the truth
     let nominal = kinematics::preset("scara-rh3frh5515").unwrap();
     let mut robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), 3);
-    robot.noise.repeatability_sigma_deg = 0.0;
-    robot.noise.tracker_mpe_const_mm = 0.0;
-    robot.noise.tracker_mpe_per_m_mm = 0.0;
+    robot = robot.noise_free();
     let (SimOutput::Measurements(idx), _) =
         simulate_on(&robot, &CampaignSpec::new(CampaignKind::Indexing, 3)).unwrap()
     else {
@@ -196,9 +192,7 @@ fn scara_model_predicts_the_true_error_better_than_dh_alone() {
 fn six_axis_apd_and_lm_recover_the_truth_without_noise() {
     let nominal = kinematics::preset("comau-nj220").unwrap();
     let mut robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), 2);
-    robot.noise.repeatability_sigma_deg = 0.0;
-    robot.noise.tracker_mpe_const_mm = 0.0;
-    robot.noise.tracker_mpe_per_m_mm = 0.0;
+    robot = robot.noise_free();
     robot
         .compliance
         .stiffness_nm_per_rad

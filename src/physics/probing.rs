@@ -222,9 +222,7 @@ pub fn probing_example(name: &str, seed: u64, noise: bool) -> Result<(Vec<Probin
     let nominal = crate::kinematics::preset(name)?;
     let mut robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), seed);
     if !noise {
-        robot.noise.repeatability_sigma_deg = 0.0;
-        robot.noise.tracker_mpe_const_mm = 0.0;
-        robot.noise.tracker_mpe_per_m_mm = 0.0;
+        robot = robot.noise_free();
     }
     let data = |kind| -> Result<crate::dataset::Dataset> {
         match campaign::simulate_on(&robot, &CampaignSpec::new(kind, seed))?.0 {

@@ -241,6 +241,15 @@ impl TrueRobot {
         self.nominal.dof()
     }
 
+    /// The same robot measured without noise: no joint repeatability, a
+    /// perfect tracker (to see the systematic errors alone).
+    pub fn noise_free(mut self) -> Self {
+        self.noise.repeatability_sigma_deg = 0.0;
+        self.noise.tracker_mpe_const_mm = 0.0;
+        self.noise.tracker_mpe_per_m_mm = 0.0;
+        self
+    }
+
     /// Gravity deflection of every joint in API units (deg / mm) at commanded `q`.
     pub fn gravity_deflection(&self, q: &[f64], payload_kg: f64) -> Vec<f64> {
         let n = self.dof();
