@@ -221,6 +221,71 @@ impl ErrorModel {
         })
     }
 
+    /// Refit on `data` at this model's correlation parameters ξ and nugget
+    /// (no search): the way to scale to thousands of rows when the O(m³)
+    /// search is too slow — choose ξ on a subset, then one factorisation on
+    /// everything (issue 10). Same space, options and kind of trend; a
+    /// kinematic trend is rebuilt for `data` (its parameters and the input
+    /// normalisation are re-derived), a polynomial one reused. The reports
+    /// keep the subset's search figures (ln ψ, evaluations).
+    pub fn refit_at_hyperparameters(&self, data: &Dataset) -> Result<Self> {
+        if !self.extras.is_empty() {
+            return Err(Error::InvalidParameter(
+                "refit at fixed hyperparameters does not support extra inputs".into(),
+            ));
+        }
+        let t0 = std::time::Instant::now();
+        let errors = data.errors_or_err()?;
+        self.check_rows(&data.q, &data.dir)?;
+        let trends: [crate::kriging::Trend; 3] = match &self.outputs[0].data.trend {
+            crate::kriging::Trend::Kinematic(k) => {
+                kinematic_trends(data, self.space, &self.options, &k.robot)?
+            }
+            _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
+        };
+        let rows = self
+            .space
+            .encode_rows(&self.options.periodic, &data.q, &data.dir);
+        let input_norm = Normalizer::fit(&rows);
+        let x = input_norm.apply_rows(&rows);
+        let inputs = TrainingInputs::new(&x);
+        let fits: Vec<Result<KrigingModel>> = (0..3)
+            .into_par_iter()
+            .map(|a| {
+                let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+                let r = &self.reports[a];
+                crate::kriging::fit_output_at(
+                    &x,
+                    &inputs,
+                    &y,
+                    &trends[a],
+                    &r.theta,
+                    r.nugget,
+                    self.options.min_jitter,
+                )
+            })
+            .collect();
+        let mut outputs = Vec::with_capacity(3);
+        for (a, f) in fits.into_iter().enumerate() {
+            outputs.push(f.map_err(|e| Error::Numerical(format!("output {}: {e}", AXES[a])))?);
+        }
+        let secs = t0.elapsed().as_secs_f64();
+        let reports = self
+            .reports
+            .iter()
+            .map(|r| FitReport {
+                seconds: secs,
+                ..r.clone()
+            })
+            .collect();
+        Ok(ErrorModel {
+            input_norm,
+            outputs,
+            reports,
+            ..self.clone()
+        })
+    }
+
     /// Warnings about the conditioning of the fit: an output whose correlation
     /// matrix needed more diagonal jitter than DACE's `(10 + m)·eps` to be
     /// factorised (near-duplicate poses, very long correlation lengths).

@@ -170,3 +170,33 @@ fn ur10_real_data_small_split() {
     );
     assert!(lm < 0.7 * nominal && k < lm, "{nominal} {lm} {k}");
 }
+
+/// Refitting at a model's own hyperparameters on its own rows reproduces it,
+/// for the polynomial and the kinematic trend; on more rows it still
+/// predicts (the scaling path of issue 10).
+#[test]
+fn refit_at_hyperparameters_reproduces_the_model() {
+    let data =
+        read_csv(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/comau_lhs.csv")).unwrap();
+    let sub = data.select(&(0..120).collect::<Vec<_>>());
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let q = data.q[200..210].to_vec();
+    let dir = data.dir[200..210].to_vec();
+    for kin in [false, true] {
+        let m = if kin {
+            ErrorModel::fit_kinematic(&sub, Space::Ejs, &hj(), &robot).unwrap()
+        } else {
+            ErrorModel::fit(&sub, Space::Ejs, &hj()).unwrap()
+        };
+        let again = m.refit_at_hyperparameters(&sub).unwrap();
+        let (a, b) = (
+            m.predict_mean(&q, &dir).unwrap(),
+            again.predict_mean(&q, &dir).unwrap(),
+        );
+        assert!(rms3(&a, &b) < 1e-9, "kinematic {kin}: {a:?} vs {b:?}");
+        let all = m.refit_at_hyperparameters(&data).unwrap();
+        let truth = &data.errors.as_ref().unwrap()[200..210];
+        // rows 200..210 are now training rows: interpolated
+        assert!(rms3(truth, &all.predict_mean(&q, &dir).unwrap()) < 1e-6);
+    }
+}

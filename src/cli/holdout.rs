@@ -57,8 +57,8 @@ pub struct HoldoutArgs {
     /// rows), "none", or a list like "1,4,6".
     #[arg(long, default_value = "auto")]
     periodic: String,
-    /// Instead: K-fold CV on all rows of the nominal and the D-H calibration
-    /// (Levenberg–Marquardt refitted on every training fold).
+    /// Instead: K-fold CV on all rows (D-H calibration refitted per fold;
+    /// Kriging at the ξ chosen on the first --train rows, refitted per fold).
     #[arg(long)]
     cv: Option<usize>,
     #[arg(long)]
@@ -133,41 +133,131 @@ fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> Row
     }
 }
 
+/// The Kriging options of `a` for training rows `q`.
+fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
+    Ok(KrigingOptions {
+        optimizer: match a.optimizer.as_str() {
+            "hj" => OptimizerKind::HookeJeeves,
+            "gps" => OptimizerKind::Gps,
+            o => {
+                return Err(Error::InvalidParameter(format!(
+                    "--optimizer '{o}': expected hj or gps"
+                )));
+            }
+        },
+        seed: a.seed,
+        nugget: a.nugget,
+        periodic: parse_periodic(&a.periodic, q)?,
+        ..KrigingOptions::default()
+    })
+}
+
+/// `errors − dh(q)` as a dataset.
+fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
+    let pred = dh.predict(&data.q, &data.dir)?;
+    let mut r = data.clone();
+    r.errors = Some(
+        data.errors_or_err()?
+            .iter()
+            .zip(&pred)
+            .map(|(e, p)| [e[0] - p[0], e[1] - p[1], e[2] - p[2]])
+            .collect(),
+    );
+    Ok(r)
+}
+
+fn calibrate(data: &Dataset, robot: &Robot) -> Result<PhysicsModel> {
+    let (cal, _) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
+    Ok(PhysicsModel::new(
+        "D-H calibration",
+        robot.clone(),
+        Geometry::Mdh { robot: cal },
+    ))
+}
+
+/// K-fold CV on all rows. The D-H calibration is refitted on every training
+/// fold. The Kriging models keep the hyperparameters (ξ, nugget) chosen on
+/// the first `--train` rows (the search is O(m³) per evaluation) and are
+/// refitted on every training fold at those values: the hybrid on the fold's
+/// own calibration residual, the kinematic-trend model on the fold.
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
     let fold = robokrige::cv::kfold_partition(data.len(), k, a.seed)?;
     let errors = data.errors_or_err()?;
-    let mut pred = vec![[0.0; 3]; data.len()];
-    let t0 = Instant::now();
-    let pb = bar(k as u64, "folds");
+    let m = data.len();
+    let first = data.select(&(0..a.train.min(m)).collect::<Vec<_>>());
+    let opts = kriging_opts(a, &data.q)?;
+    let pb = bar(k as u64 + 1, "cv");
+    pb.set_message(format!("hyperparameters on the first {} rows", first.len()));
+    let t_hyper = Instant::now();
+    let first_resid = residual(&first, &calibrate(&first, robot)?)?;
+    let spaces = [Space::Js, Space::Ejs];
+    let mut hybrid_t = Vec::new();
+    let mut kin_t = Vec::new();
+    for space in spaces {
+        hybrid_t.push(ErrorModel::fit(&first_resid, space, &opts)?);
+        kin_t.push(ErrorModel::fit_kinematic(&first, space, &opts, robot)?);
+    }
+    let hyper_secs = t_hyper.elapsed().as_secs_f64();
+    pb.inc(1);
+    let mut pred = vec![vec![[0.0; 3]; m]; 5];
+    let mut secs = [0.0; 5];
     for f in 0..k {
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| fold[i] == f);
-        let (cal, _) = identify_mdh(&data.select(&train), robot, &vec![None; robot.dof()])?;
-        let dh = PhysicsModel::new(
-            "D-H calibration",
-            robot.clone(),
-            Geometry::Mdh { robot: cal },
-        );
-        let held = data.select(&test);
-        for (j, p) in dh.predict(&held.q, &held.dir)?.into_iter().enumerate() {
-            pred[test[j]] = p;
+        pb.set_message(format!("fold {}", f + 1));
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
+        let (tr, held) = (data.select(&train), data.select(&test));
+        let t = Instant::now();
+        let dh = calibrate(&tr, robot)?;
+        let dh_secs = t.elapsed().as_secs_f64();
+        secs[0] += dh_secs;
+        let mut put = |slot: usize, p: Vec<[f64; 3]>| {
+            for (j, v) in p.into_iter().enumerate() {
+                pred[slot][test[j]] = v;
+            }
+        };
+        put(0, dh.predict(&held.q, &held.dir)?);
+        let resid = residual(&tr, &dh)?;
+        for s in 0..2 {
+            let t = Instant::now();
+            let h = HybridModel {
+                physics: dh.clone(),
+                residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
+            };
+            secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
+            put(1 + s, h.predict(&held.q, &held.dir)?);
+            let t = Instant::now();
+            let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
+            secs[3 + s] += t.elapsed().as_secs_f64();
+            put(3 + s, uk.predict_mean(&held.q, &held.dir)?);
         }
         pb.inc(1);
     }
     pb.finish_and_clear();
-    let rows = vec![
-        score("nominal", errors, &vec![[0.0; 3]; errors.len()], 0.0),
-        score(
-            "D-H calibration (LM, refit per fold)",
-            errors,
-            &pred,
-            t0.elapsed().as_secs_f64(),
-        ),
+    let names = [
+        "D-H calibration (LM, refit per fold)",
+        "hybrid: D-H calibration + Kriging JS",
+        "hybrid: D-H calibration + Kriging EJS",
+        "universal Kriging JS, kinematic trend",
+        "universal Kriging EJS, kinematic trend",
     ];
+    let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
+    for (i, n) in names.iter().enumerate() {
+        rows.push(score(n, errors, &pred[i], secs[i]));
+    }
     println!(
-        "{}: {k}-fold CV (fold seed {}) on all {} rows",
+        "{}: {k}-fold CV (fold seed {}) on all {m} rows; Kriging ξ{} chosen on the first {} rows ({hyper_secs:.1} s), refitted per fold at those values; periodic joints: {}",
         a.data.display(),
         a.seed,
-        data.len()
+        if a.nugget { " and nugget" } else { "" },
+        first.len(),
+        if opts.periodic.is_empty() {
+            "none".to_string()
+        } else {
+            opts.periodic
+                .iter()
+                .map(|j| format!("q{}", j + 1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
     );
     print_rows(&rows);
     if let Some(p) = &a.json {
@@ -210,22 +300,8 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let train = data.select(&(0..a.train).collect::<Vec<_>>());
     let test = data.select(&(a.train..a.train + a.test).collect::<Vec<_>>());
     let truth = test.errors_or_err()?.to_vec();
-    let periodic = parse_periodic(&a.periodic, &train.q)?;
-    let opts = KrigingOptions {
-        optimizer: match a.optimizer.as_str() {
-            "hj" => OptimizerKind::HookeJeeves,
-            "gps" => OptimizerKind::Gps,
-            o => {
-                return Err(Error::InvalidParameter(format!(
-                    "--optimizer '{o}': expected hj or gps"
-                )));
-            }
-        },
-        seed: a.seed,
-        nugget: a.nugget,
-        periodic: periodic.clone(),
-        ..KrigingOptions::default()
-    };
+    let opts = kriging_opts(&a, &train.q)?;
+    let periodic = opts.periodic.clone();
     let pb = bar(6, "holdout");
     let mut rows = Vec::new();
     rows.push(score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0));
@@ -245,16 +321,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         dh_secs,
     ));
     pb.inc(1);
-    let mut resid: Dataset = train.clone();
-    let pred_tr = dh.predict(&train.q, &train.dir)?;
-    resid.errors = Some(
-        train
-            .errors_or_err()?
-            .iter()
-            .zip(&pred_tr)
-            .map(|(e, p)| [e[0] - p[0], e[1] - p[1], e[2] - p[2]])
-            .collect(),
-    );
+    let resid = residual(&train, &dh)?;
     for space in [Space::Js, Space::Ejs] {
         let label = format!("{space:?}").to_uppercase();
         pb.set_message(format!("hybrid {label}"));
