@@ -13,7 +13,15 @@ use std::time::Instant;
 fn main() {
     let data = common::campaign();
     let t0 = Instant::now();
-    let model = fit_ga(&data, &KrigingOptions::default(), 10, 1, &|_, _, _| {}).expect("GA fit");
+    let model = fit_ga(
+        &data,
+        &KrigingOptions::default(),
+        10,
+        1,
+        &|_, _, _| {},
+        None,
+    )
+    .expect("GA fit");
     let Some(Selection::Ga { outputs: ga }) = &model.selection else {
         panic!("the GA fit records its selection");
     };

@@ -13,7 +13,7 @@
 //! term is kept in front (the components have zero training mean, and the
 //! Kriging mean still needs one).
 
-use crate::kriging::{Monomials, TrendModel, independent_columns, trend_matrix};
+use crate::kriging::{Monomials, Trend, TrendModel, independent_columns, trend_matrix};
 use crate::{Error, Result};
 use faer::linalg::solvers::SolveLstsq;
 use faer::{Mat, Side};
@@ -43,7 +43,7 @@ pub struct CandidateScreen {
 /// which is affine in `λ` because λ = ±1 (seed 003 eq 15 discussion). The
 /// reason names the terms it depends on.
 pub fn screen_candidates(
-    candidates: &Monomials,
+    candidates: &dyn TrendModel,
     x: &[Vec<f64>],
     names: &[String],
 ) -> CandidateScreen {
@@ -122,11 +122,34 @@ pub enum Selection {
     Ga { outputs: Vec<GaSelection> },
 }
 
+/// A candidate set PCC + PCA can draw from: monomials, or monomials plus the
+/// kinematic-error rows ([`crate::kriging::KinematicTrend`]).
+pub trait CandidateSet: TrendModel {
+    /// The candidates at `keep`, as a trend.
+    fn pick(&self, keep: &[usize]) -> Trend;
+}
+
+impl CandidateSet for Monomials {
+    fn pick(&self, keep: &[usize]) -> Trend {
+        Trend::Monomials(self.subset(keep))
+    }
+}
+
+impl CandidateSet for Trend {
+    fn pick(&self, keep: &[usize]) -> Trend {
+        self.subset(keep)
+    }
+}
+
 /// A fused trend basis `[1, w_1, …, w_k]`, `w_i = ((u(s) − μ)/σ)ᵀ e_i`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FusedBasis {
-    /// The selected candidates u (PCC above threshold).
+    /// The selected candidates u (PCC above threshold) when they are all
+    /// monomials (otherwise unused and empty).
     pub candidates: Monomials,
+    /// The selected candidates when some are kinematic-error rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic: Option<Box<crate::kriging::KinematicTrend>>,
     pub mean: Vec<f64>,
     pub std: Vec<f64>,
     /// Principal directions e_i (each of length `candidates.len()`), by
@@ -140,12 +163,26 @@ impl TrendModel for FusedBasis {
     }
 
     fn dim(&self) -> usize {
-        self.candidates.dim
+        match &self.kinematic {
+            Some(k) => k.dim(),
+            None => self.candidates.dim,
+        }
     }
 
     fn eval_into(&self, s: &[f64], out: &mut [f64]) {
-        let mut u = vec![0.0; self.candidates.len()];
-        self.candidates.eval_into(s, &mut u);
+        let u = match &self.kinematic {
+            Some(k) => {
+                let mut u = vec![0.0; k.len()];
+                k.eval_into(s, &mut u);
+                u
+            }
+            None => {
+                let mut u = vec![0.0; self.candidates.len()];
+                self.candidates.eval_into(s, &mut u);
+                u
+            }
+        };
+        let mut u = u;
         for ((v, m), sd) in u.iter_mut().zip(&self.mean).zip(&self.std) {
             *v = (*v - m) / sd;
         }
@@ -161,6 +198,27 @@ impl TrendModel for FusedBasis {
 }
 
 impl FusedBasis {
+    fn new(selected: Trend, mean: Vec<f64>, std: Vec<f64>, components: Vec<Vec<f64>>) -> Self {
+        let (candidates, kinematic) = match selected {
+            Trend::Kinematic(k) => (
+                Monomials {
+                    dim: k.poly.dim,
+                    exponents: Vec::new(),
+                },
+                Some(k),
+            ),
+            Trend::Monomials(m) => (m, None),
+            Trend::Fused(_) => unreachable!("candidate sets are monomials or kinematic"),
+        };
+        FusedBasis {
+            candidates,
+            kinematic,
+            mean,
+            std,
+            components,
+        }
+    }
+
     /// The same basis with only the terms at `keep` (index 0 = the constant).
     pub fn subset(&self, keep: &[usize]) -> Self {
         let mut out = self.clone();
@@ -198,7 +256,7 @@ pub struct PccPcaReport {
 /// `cum` (paper: 0.99). At most `max_terms` − 1 components are kept (the
 /// basis must leave room in the training folds).
 pub fn pcc_pca(
-    candidates: &Monomials,
+    candidates: &dyn CandidateSet,
     x: &[Vec<f64>],
     y: &[f64],
     t: f64,
@@ -247,15 +305,10 @@ pub fn pcc_pca(
         .collect();
     let sel: Vec<&(usize, f64, f64, f64)> = scored.iter().filter(|s| s.1.abs() > t).collect();
     let n2 = sel.len();
-    let selected = candidates.subset(&sel.iter().map(|s| s.0).collect::<Vec<_>>());
+    let selected = candidates.pick(&sel.iter().map(|s| s.0).collect::<Vec<_>>());
     let (mean, std): (Vec<f64>, Vec<f64>) = sel.iter().map(|s| (s.2, s.3)).unzip();
     if n2 == 0 {
-        let basis = FusedBasis {
-            candidates: selected,
-            mean,
-            std,
-            components: Vec::new(),
-        };
+        let basis = FusedBasis::new(selected, mean, std, Vec::new());
         return Ok((
             basis,
             PccPcaReport {
@@ -290,12 +343,7 @@ pub fn pcc_pca(
     let components = (0..n3)
         .map(|c| (0..n2).map(|k| evd.U()[(k, n2 - 1 - c)]).collect())
         .collect();
-    let basis = FusedBasis {
-        candidates: selected,
-        mean,
-        std,
-        components,
-    };
+    let basis = FusedBasis::new(selected, mean, std, components);
     let report = PccPcaReport {
         dropped: screen.dropped,
         no_variance,

@@ -109,7 +109,7 @@ impl Method {
             Method::EjsPca => {
                 ErrorModel::fit_pcc_pca(data, Space::Ejs, &gps, 0.1, 0.99).map(|r| r.0)
             }
-            Method::EjsGa => fit_ga(data, &gps, 10, seed, progress),
+            Method::EjsGa => fit_ga(data, &gps, 10, seed, progress, None),
         }
     }
 }
@@ -132,32 +132,47 @@ pub type GaProgress<'a> = &'a (dyn Fn(usize, usize, f64) + Sync);
 /// the size cap C ≤ (k−1)m/k; then a GPS fit with the selected trend. The
 /// model's `selection` holds each output's [`GaSelection`] (its fitness
 /// history is seed 004 Fig 10); `progress` is called after every generation.
+///
+/// With `kinematic = Some(robot)` the candidates of each output are the
+/// quadratic monomials *and* the rows of `robot`'s identification Jacobian
+/// ([`crate::kriging::KinematicTrend`], issue 10): the GA chooses among
+/// polynomial terms and kinematic-error terms alike. `opts.periodic` joints
+/// enter as (sin, cos).
 pub fn fit_ga(
     data: &Dataset,
     opts: &KrigingOptions,
     k: usize,
     seed: u64,
     progress: GaProgress,
+    kinematic: Option<&crate::kinematics::Robot>,
 ) -> Result<ErrorModel> {
     let errors = data.errors_or_err()?;
     let m = data.len();
-    let d = Space::Ejs.dim(data.n_joints());
-    let rows = Space::Ejs.rows(&data.q, &data.dir);
+    let n = data.n_joints();
+    let d = Space::Ejs.encoded_dim(n, &opts.periodic);
+    let rows = Space::Ejs.encode_rows(&opts.periodic, &data.q, &data.dir);
     let x = Normalizer::fit(&rows).apply_rows(&rows);
     let inputs = TrainingInputs::new(&x);
-    let names = Space::Ejs.names(data.n_joints());
+    let names = Space::Ejs.encoded_names(n, &opts.periodic);
     let fold = kfold_partition(m, k, seed)?;
     let blocks: Vec<Vec<usize>> = (0..k)
         .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
         .collect();
-    let all = Monomials::quadratic(d);
-    let screen = screen_candidates(&all, &x, &names);
-    let cand = all.subset(&screen.kept);
+    let quad = KrigingOptions {
+        trend: TrendKind::Quadratic,
+        ..opts.clone()
+    };
+    let all: [Trend; 3] = match kinematic {
+        Some(robot) => crate::model::kinematic_trends(data, Space::Ejs, &quad, robot)?,
+        None => std::array::from_fn(|_| Trend::from(Monomials::quadratic(d))),
+    };
     let cap = (k - 1) * m / k;
     let constant = TrendKind::Constant.trend(d);
     let mut trends = Vec::with_capacity(3);
     let mut reports = Vec::with_capacity(3);
     for a in 0..3 {
+        let screen = screen_candidates(&all[a], &x, &names);
+        let cand = all[a].subset(&screen.kept);
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
         let rmse = |bits: &[bool]| {
@@ -166,7 +181,7 @@ pub fn fit_ga(
                 &x,
                 &inputs,
                 &y,
-                &Trend::from(cand.subset(&keep)),
+                &cand.subset(&keep),
                 &base.theta,
                 base.nugget,
                 opts.min_jitter,
@@ -198,7 +213,7 @@ pub fn fit_ga(
             generations: best.generations,
             evaluations: best.evaluations,
         });
-        trends.push(Trend::from(trend));
+        trends.push(trend);
     }
     let trends: [Trend; 3] = trends.try_into().expect("three outputs");
     let mut model = ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)?;

@@ -87,18 +87,38 @@ impl ErrorModel {
         threshold: f64,
         variance_share: f64,
     ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
+        Self::fit_pcc_pca_with(data, space, opts, threshold, variance_share, None)
+    }
+
+    /// [`ErrorModel::fit_pcc_pca`] with, when `kinematic` names a robot, the
+    /// rows of its identification Jacobian among the candidates (issue 10).
+    pub fn fit_pcc_pca_with(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        threshold: f64,
+        variance_share: f64,
+        kinematic: Option<&crate::kinematics::Robot>,
+    ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
         let errors = data.errors_or_err()?;
         let d = space.encoded_dim(data.n_joints(), &opts.periodic);
         let rows = space.encode_rows(&opts.periodic, &data.q, &data.dir);
         let x = Normalizer::fit(&rows).apply_rows(&rows);
         let names = space.encoded_names(data.n_joints(), &opts.periodic);
-        let candidates = crate::kriging::Monomials::quadratic(d);
+        let quad = KrigingOptions {
+            trend: crate::kriging::TrendKind::Quadratic,
+            ..opts.clone()
+        };
+        let candidates: [crate::kriging::Trend; 3] = match kinematic {
+            Some(robot) => kinematic_trends(data, space, &quad, robot)?,
+            None => std::array::from_fn(|_| crate::kriging::Monomials::quadratic(d).into()),
+        };
         let mut trends = Vec::with_capacity(3);
         let mut reports = Vec::with_capacity(3);
         for a in 0..3 {
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
             let (basis, report) = crate::basis::pcc_pca(
-                &candidates,
+                &candidates[a],
                 &x,
                 &y,
                 threshold,

@@ -200,3 +200,33 @@ fn refit_at_hyperparameters_reproduces_the_model() {
         assert!(rms3(truth, &all.predict_mean(&q, &dir).unwrap()) < 1e-6);
     }
 }
+
+/// PCC + PCA over quadratic and kinematic candidates keeps kinematic rows
+/// among the selected (fused) candidates of a geometric error, and the model
+/// round-trips through its file.
+#[test]
+fn pcc_pca_can_fuse_kinematic_candidates() {
+    let data =
+        read_csv(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/comau_lhs.csv")).unwrap();
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let (m, reports) =
+        ErrorModel::fit_pcc_pca_with(&data, Space::Ejs, &hj(), 0.1, 0.99, Some(&robot)).unwrap();
+    for r in &reports {
+        let kin = r
+            .ranking
+            .iter()
+            .filter(|(n, c)| n.starts_with("dP") && c.abs() > 0.1)
+            .count();
+        assert!(kin > 0, "{:?}", &r.ranking[..5]);
+    }
+    let path = std::env::temp_dir().join(format!("rk-pca-kin-{}.json", std::process::id()));
+    m.save(&path).unwrap();
+    let back = ErrorModel::load(&path).unwrap();
+    let q = data.q[..5].to_vec();
+    let dir = data.dir[..5].to_vec();
+    assert_eq!(
+        back.predict_mean(&q, &dir).unwrap(),
+        m.predict_mean(&q, &dir).unwrap()
+    );
+    std::fs::remove_file(path).ok();
+}

@@ -173,7 +173,20 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                     AXES[axis]
                 ));
             };
-            let model = method.fit_with_progress(&data, opts.seed, &progress);
+            let model = match (&choice.kinematic, method) {
+                (Some(robot), robokrige::methods::Method::EjsGa) => {
+                    robokrige::methods::fit_ga(&data, opts, 10, opts.seed, &progress, Some(robot))
+                }
+                (Some(robot), robokrige::methods::Method::EjsPca) => {
+                    let space = robokrige::space::Space::Ejs;
+                    ErrorModel::fit_pcc_pca_with(&data, space, opts, 0.1, 0.99, Some(robot))
+                        .map(|r| r.0)
+                }
+                (Some(_), _) => Err(Error::InvalidParameter(
+                    "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
+                )),
+                (None, _) => method.fit_with_progress(&data, opts.seed, &progress),
+            };
             pb.finish_and_clear();
             model?
         }

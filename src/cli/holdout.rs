@@ -57,6 +57,14 @@ pub struct HoldoutArgs {
     /// rows), "none", or a list like "1,4,6".
     #[arg(long, default_value = "auto")]
     periodic: String,
+    /// Also: EJS with the trend chosen by the GA (seed 004) among the
+    /// quadratic and the kinematic candidates.
+    #[arg(long)]
+    ga: bool,
+    /// Also: EJS with the PCC + PCA fusion (seed 003) of the quadratic and
+    /// the kinematic candidates.
+    #[arg(long)]
+    pca: bool,
     /// Instead: K-fold CV on all rows (D-H calibration refitted per fold;
     /// Kriging at the ξ chosen on the first --train rows, refitted per fold).
     #[arg(long)]
@@ -349,6 +357,31 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
             secs,
         ));
         pb.inc(1);
+    }
+    if a.pca {
+        pb.set_message("PCC + PCA");
+        let t0 = Instant::now();
+        let (m, _) =
+            ErrorModel::fit_pcc_pca_with(&train, Space::Ejs, &opts, 0.1, 0.99, Some(&robot))?;
+        let secs = t0.elapsed().as_secs_f64();
+        rows.push(score(
+            "universal Kriging EJS, PCC + PCA fusion of quadratic + kinematic candidates",
+            &truth,
+            &m.predict_mean(&test.q, &test.dir)?,
+            secs,
+        ));
+    }
+    if a.ga {
+        pb.set_message("GA selection");
+        let t0 = Instant::now();
+        let m = robokrige::methods::fit_ga(&train, &opts, 10, a.seed, &|_, _, _| {}, Some(&robot))?;
+        let secs = t0.elapsed().as_secs_f64();
+        rows.push(score(
+            "universal Kriging EJS, GA-selected quadratic + kinematic trend",
+            &truth,
+            &m.predict_mean(&test.q, &test.dir)?,
+            secs,
+        ));
     }
     pb.finish_and_clear();
     println!(
