@@ -140,6 +140,10 @@ pub struct CompareArgs {
     /// Markdown report.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Write path plots here (seed 000 Figs 9–11): the measured path and
+    /// each model's prediction, errors magnified ×1000 in XY.
+    #[arg(long)]
+    plots: Option<PathBuf>,
 }
 
 pub fn run(a: PhysicsArgs) -> Result<()> {
@@ -304,7 +308,61 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     if let Some(p) = &a.json {
         write(p, &to_json(&res, "comparison")?)?;
     }
+    if let Some(dir) = &a.plots {
+        for f in path_plots(&res, dir)? {
+            println!("plot: {}", f.display());
+        }
+    }
     Ok(())
+}
+
+/// Seed 000 Figs 9–11: the nominal path, the measured path and a model's
+/// predicted path in XY, errors magnified ×1000; one SVG per model.
+fn path_plots(c: &Comparison, dir: &Path) -> Result<Vec<PathBuf>> {
+    use robokrige::plot::{Labels, Series, xy_plot};
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let k = 1000.0;
+    let shifted = |e: &[[f64; 3]]| -> Vec<(f64, f64)> {
+        c.path_nominal
+            .iter()
+            .zip(e)
+            .map(|(p, d)| (p[0] + k * d[0], p[1] + k * d[1]))
+            .collect()
+    };
+    let nominal: Vec<(f64, f64)> = c.path_nominal.iter().map(|p| (p[0], p[1])).collect();
+    let mut out = Vec::new();
+    for r in c.rows.iter().filter(|r| r.model != "nominal") {
+        let slug: String = r
+            .model
+            .chars()
+            .map(|ch| {
+                if ch.is_ascii_alphanumeric() {
+                    ch.to_ascii_lowercase()
+                } else {
+                    '_'
+                }
+            })
+            .collect::<String>()
+            .split('_')
+            .filter(|t| !t.is_empty())
+            .collect::<Vec<_>>()
+            .join("_");
+        let path = dir.join(format!("path_{slug}.svg"));
+        let title = format!("{}: {} (errors ×1000)", c.options.robot, r.model);
+        let labels = Labels {
+            title: &title,
+            x: "X (mm)",
+            y: "Y (mm)",
+        };
+        let series = [
+            Series::line("command (nominal)", nominal.clone()),
+            Series::points("measured", shifted(&c.path_errors)),
+            Series::line("predicted", shifted(&r.path_predicted)),
+        ];
+        xy_plot(&path, &labels, &series, true)?;
+        out.push(path);
+    }
+    Ok(out)
 }
 
 /// The comparison as Markdown.

@@ -102,6 +102,8 @@ pub struct CompareRow {
     pub compensate_poses: Score,
     /// Compensation iterations on the path.
     pub iterations: usize,
+    /// Predicted error at every path point, mm (for the plots).
+    pub path_predicted: Vec<[f64; 3]>,
 }
 
 /// Result of [`compare`].
@@ -117,6 +119,9 @@ pub struct Comparison {
     /// `E‖n‖ ≈ 1.596 σ` in 3D, `1.253 σ` in XY, over the path and the poses.
     pub noise_path: Score,
     pub noise_poses: Score,
+    /// The path's nominal TCP points and measured errors, mm (for the plots).
+    pub path_nominal: Vec<[f64; 3]>,
+    pub path_errors: Vec<[f64; 3]>,
     /// Campaign sizes: indexing rows, training rows, path points, poses.
     pub sizes: [usize; 4],
     pub notes: Vec<String>,
@@ -306,6 +311,7 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
             compensate_path: Score::of(&vs_target(&after_path.measured, &traj)),
             compensate_poses: Score::of(&vs_target(&after_poses.measured, &pose_targets)),
             iterations,
+            path_predicted: pp.clone(),
         });
     }
     if scara {
@@ -347,6 +353,12 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
         options: opts.clone(),
         physics: how,
         noise_path: noise(&run.joints),
+        path_nominal: run
+            .joints
+            .iter()
+            .map(|q| nominal.fk_unchecked(q).translation.vector.into())
+            .collect(),
+        path_errors: path_err.clone(),
         noise_poses: noise(&poses.q),
         rows,
         sizes: [indexing.len(), train.len(), traj.len(), poses.len()],
