@@ -180,12 +180,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     }
     print!("{}", identify_text(&id));
     if let Some(tp) = &a.truth {
-        let truth: Truth =
-            serde_json::from_str(&std::fs::read_to_string(tp).map_err(|e| Error::io(tp, e))?)
-                .map_err(|e| Error::Json {
-                    context: format!("{}: not a simulator truth file", tp.display()),
-                    source: e,
-                })?;
+        let truth = super::compensate::load_truth(tp)?;
         print!("{}", truth_text(&id, &truth));
     }
     println!("model: {}", a.output.display());
