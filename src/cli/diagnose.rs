@@ -50,6 +50,11 @@ pub struct DiagnoseArgs {
     fdr: f64,
     #[arg(long, default_value_t = 3)]
     max_effects: usize,
+    /// Joints entered as (sin θ, cos θ): "none" (default), "auto" (range >
+    /// 180°), or "1,4,6". Default none: on UR10 series B the interpolating
+    /// Hooke–Jeeves fits with auto encoding blew up in some folds.
+    #[arg(long, default_value = "none")]
+    periodic: String,
     /// Use only the first N rows (each CV fit is O(m³): keep m in the hundreds).
     #[arg(long)]
     rows: Option<usize>,
@@ -76,7 +81,7 @@ pub struct DiagnoseArgs {
     truth: Option<PathBuf>,
 }
 
-fn options(a: &DiagnoseArgs) -> Result<DiagnoseOptions> {
+fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     let (space, optimizer) = match a.method.as_str() {
         "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
         "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
@@ -92,6 +97,7 @@ fn options(a: &DiagnoseArgs) -> Result<DiagnoseOptions> {
         kriging: KrigingOptions {
             optimizer,
             seed: a.seed,
+            periodic: super::holdout::parse_periodic(&a.periodic, &data.q)?,
             ..KrigingOptions::default()
         },
         folds: a.folds,
@@ -113,7 +119,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     if let Some(n) = a.rows.filter(|&n| n < data.len()) {
         data = data.select(&(0..n).collect::<Vec<_>>());
     }
-    let opts = options(&a)?;
+    let opts = options(&a, &data)?;
     let pb = spinner("diagnose");
     let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
     pb.finish_and_clear();
