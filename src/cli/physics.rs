@@ -287,7 +287,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::parse(&a.ejs)?,
         nugget: a.nugget,
     };
-    let pb = bar(9, "compare");
+    let pb = bar(12, "compare");
     let t0 = std::time::Instant::now();
     let res = compare(&opts, &|k, _, what| {
         pb.set_position(k as u64);

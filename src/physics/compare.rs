@@ -174,7 +174,8 @@ fn minus(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<[f64; 3]> {
 pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> Result<Comparison> {
     let nominal = kinematics::preset(&opts.robot)?;
     let robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), opts.seed);
-    let total = 9;
+    // 6 set-up steps, then one per model row (6)
+    let total = 12;
     let step = |k: usize, what: &str| progress(k, total, what);
 
     step(0, "indexing tests and training campaign");
@@ -248,10 +249,7 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     ];
     let mut rows = Vec::new();
     for (k, (name, model)) in models.iter().enumerate() {
-        step(
-            6 + k.min(2),
-            &format!("predicting and compensating: {name}"),
-        );
+        step(6 + k, &format!("predicting and compensating: {name}"));
         let (pp, pq) = match model {
             Some(m) => (
                 m.predict_errors(&run.joints, &run.dir)?,
