@@ -287,9 +287,10 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::parse(&a.ejs)?,
         nugget: a.nugget,
     };
-    let pb = bar(12, "compare");
+    let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
-    let res = compare(&opts, &|k, _, what| {
+    let res = compare(&opts, &|k, total, what| {
+        pb.set_length(total as u64);
         pb.set_position(k as u64);
         pb.set_message(what.to_string());
     });
