@@ -7,7 +7,8 @@ use robokrige::kinematics;
 use robokrige::methods::Method;
 use robokrige::physics::{
     CompareOptions, Geometry, PhysicsModel, ScaraOptions, compare, identify_apd,
-    identify_crosstalk, identify_mdh, identify_scara, probing_example, straightness,
+    identify_crosstalk, identify_mdh, identify_scara, probing_example, register_campaign,
+    straightness,
 };
 use robokrige::sim::campaign::simulate_on;
 use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, ScaraTruth, SimOutput, TrueRobot};
@@ -416,4 +417,50 @@ fn crosstalk_is_found_when_present_and_only_then() {
             }
         }
     }
+}
+
+/// Seed 004 eqs 29–35: a campaign seen from a tracker (any rigid frame)
+/// registers back to the base frame; the recovered errors do not depend on
+/// the tracker's pose, and they equal the base-frame errors up to the rigid
+/// part the registration absorbs.
+#[test]
+fn registration_brings_tracker_data_to_the_base_frame() {
+    let data = read_csv(&shipped("comau_lhs.csv")).unwrap();
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let t = Isometry3::from_parts(
+        Translation3::new(3200.0, -1500.0, -300.0),
+        UnitQuaternion::from_euler_angles(0.3, -0.2, 2.4),
+    );
+    let mut seen = data.clone();
+    for p in seen.positions.as_mut().unwrap() {
+        *p = (t * Point3::from(Vector3::from(*p))).coords.into();
+    }
+    let (a, ra) = register_campaign(&data, &robot).unwrap();
+    let (b, rb) = register_campaign(&seen, &robot).unwrap();
+    assert!(!rb.reflection_guarded);
+    assert!((ra.rms - rb.rms).abs() < 1e-9, "{} vs {}", ra.rms, rb.rms);
+    let (ea, eb) = (a.errors.unwrap(), b.errors.unwrap());
+    for (u, v) in ea.iter().zip(&eb) {
+        for k in 0..3 {
+            assert!((u[k] - v[k]).abs() < 1e-6, "{u:?} vs {v:?}");
+        }
+    }
+    // the base-frame data needs only a small correction: its errors change by
+    // less than the errors themselves (the rigid part is absorbed)
+    let orig = data.errors.as_ref().unwrap();
+    let rms = |e: &[[f64; 3]]| {
+        (e.iter()
+            .map(|v| v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+            .sum::<f64>()
+            / e.len() as f64)
+            .sqrt()
+    };
+    assert!(
+        rms(&ea) <= rms(orig) + 1e-9,
+        "{} vs {}",
+        rms(&ea),
+        rms(orig)
+    );
+    let tr = ra.transform.translation.vector.norm();
+    assert!(tr < 5.0, "base-frame data moved by {tr} mm");
 }

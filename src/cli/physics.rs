@@ -33,6 +33,10 @@ enum PhysicsCommand {
     /// Seed 000 §5.2: J1's deviation at several J2 angles against an
     /// identified SCARA model (cross-talk).
     Crosstalk(CrosstalkArgs),
+    /// Seed 004 eqs 29–35: move a campaign measured in the tracker's frame
+    /// into the robot's base frame (SVD registration onto the nominal TCP
+    /// positions) and recompute ex, ey, ez.
+    Register(RegisterArgs),
     /// Seed 002's probing example: a straightedge probed at three locations,
     /// straightness with the nominal, D-H and D-H + APD models (Table 2).
     Probing(ProbingArgs),
@@ -52,6 +56,17 @@ pub struct CrosstalkArgs {
     model: PathBuf,
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct RegisterArgs {
+    /// Campaign with q.. and the measured x,y,z in the tracker's frame.
+    data: PathBuf,
+    #[arg(long)]
+    robot: String,
+    /// Output CSV: the same rows, x,y,z in the base frame, ex,ey,ez recomputed.
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -152,6 +167,7 @@ pub fn run(a: PhysicsArgs) -> Result<()> {
         PhysicsCommand::Compare(a) => run_compare(a),
         PhysicsCommand::Probing(a) => run_probing(a),
         PhysicsCommand::Crosstalk(a) => run_crosstalk(a),
+        PhysicsCommand::Register(a) => run_register(a),
     }
 }
 
@@ -483,5 +499,41 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
     if let Some(p) = &a.json {
         write(p, &to_json(&r, "cross-talk report")?)?;
     }
+    Ok(())
+}
+
+fn run_register(a: RegisterArgs) -> Result<()> {
+    let robot = kinematics::preset(&a.robot)?;
+    let data = read_data(&a.data)?;
+    let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
+    robokrige::dataset::write_csv(&a.output, &out)?;
+    let t = reg.transform.translation.vector;
+    let (axis, angle) = reg
+        .transform
+        .rotation
+        .axis_angle()
+        .map_or(([0.0, 0.0, 1.0], 0.0), |(ax, an)| ([ax.x, ax.y, ax.z], an));
+    println!(
+        "base ← tracker: translation ({:.3}, {:.3}, {:.3}) mm, rotation {:.5}° about ({:.4}, {:.4}, {:.4}){}",
+        t.x,
+        t.y,
+        t.z,
+        angle.to_degrees(),
+        axis[0],
+        axis[1],
+        axis[2],
+        if reg.reflection_guarded {
+            " (reflection guarded)"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "residual |registered − nominal| over {} rows: rms {:.4} mm, max {:.4} mm -> {}",
+        out.len(),
+        reg.rms,
+        reg.max,
+        a.output.display()
+    );
     Ok(())
 }

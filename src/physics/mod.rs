@@ -9,6 +9,7 @@
 //! | [`identify_crosstalk`] | seed 000 §5.2: J1's deviation at several J2 angles, against the model |
 //! | [`identify_apd`], [`identify_mdh`] | seed 002: APD tables by circle-point analysis of indexing tests, MD-H errors by Levenberg–Marquardt |
 //! | [`HybridModel`] | physics first, universal Kriging on its residual |
+//! | [`register_campaign`] | tracker frame → base frame by SVD registration (seed 004 eqs 29–35) |
 //! | [`probe`], [`straightness`], [`probing_example`] | seed 002 eqs 3–6: probing a straightedge, straightness before/after (Table 2) |
 //! | [`compare`] | nominal / D-H / D-H+APD / Kriging JS, EJS / hybrid on one simulated robot |
 
@@ -112,4 +113,43 @@ pub fn identify_physics(
         notes: apd.skipped,
         lm: vec![lm_dh, lm_full],
     })
+}
+
+/// Register a campaign measured in a tracker's frame into the robot's base
+/// frame (seed 004 eqs 29–35): the rigid transform that best maps the
+/// measured positions `x, y, z` onto the nominal TCP positions of the
+/// commanded joints ([`crate::frames::register`], reflection-safe), applied
+/// to the positions, and the errors recomputed as `registered − nominal`.
+/// The best-fit rigid part of the robot's own error is absorbed by the
+/// transform, as in the paper.
+pub fn register_campaign(
+    data: &Dataset,
+    nominal: &Robot,
+) -> Result<(Dataset, crate::frames::Registration)> {
+    use nalgebra::{Point3, Vector3};
+    let positions = data.positions.as_ref().ok_or_else(|| crate::Error::Input {
+        source_name: data.source.clone(),
+        message: "registration needs the measured positions x,y,z".into(),
+    })?;
+    if nominal.dof() != data.n_joints() {
+        return Err(crate::Error::JointCount {
+            expected: nominal.dof(),
+            got: data.n_joints(),
+        });
+    }
+    let from: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
+    let to: Vec<Vector3<f64>> = data
+        .q
+        .iter()
+        .map(|q| nominal.fk_unchecked(q).translation.vector)
+        .collect();
+    let reg = crate::frames::register(&from, &to)?;
+    let moved: Vec<Vector3<f64>> = from
+        .iter()
+        .map(|p| (reg.transform * Point3::from(*p)).coords)
+        .collect();
+    let mut out = data.clone();
+    out.positions = Some(moved.iter().map(|p| (*p).into()).collect());
+    out.errors = Some(moved.iter().zip(&to).map(|(p, n)| (p - n).into()).collect());
+    Ok((out, reg))
 }
