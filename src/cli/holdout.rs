@@ -11,7 +11,7 @@ use robokrige::dataset::Dataset;
 use robokrige::kinematics::{self, Robot};
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
-use robokrige::physics::{Geometry, HybridModel, PhysicsModel, identify_mdh};
+use robokrige::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
 use robokrige::space::Space;
 use robokrige::stats::spread;
 use robokrige::{Error, Result};
@@ -174,13 +174,15 @@ fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
     Ok(r)
 }
 
-fn calibrate(data: &Dataset, robot: &Robot) -> Result<PhysicsModel> {
-    let (cal, _) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
-    Ok(PhysicsModel::new(
+/// D-H calibration (Levenberg–Marquardt) of `robot` on `data`, as a model.
+fn calibrate(data: &Dataset, robot: &Robot) -> Result<(PhysicsModel, LmSummary)> {
+    let (cal, lm) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
+    let model = PhysicsModel::new(
         "D-H calibration",
         robot.clone(),
         Geometry::Mdh { robot: cal },
-    ))
+    );
+    Ok((model, lm))
 }
 
 /// K-fold CV on all rows. The D-H calibration is refitted on every training
@@ -197,7 +199,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
     let pb = bar(k as u64 + 1, "cv");
     pb.set_message(format!("hyperparameters on the first {} rows", first.len()));
     let t_hyper = Instant::now();
-    let first_resid = residual(&first, &calibrate(&first, robot)?)?;
+    let first_resid = residual(&first, &calibrate(&first, robot)?.0)?;
     let spaces = [Space::Js, Space::Ejs];
     let mut hybrid_t = Vec::new();
     let mut kin_t = Vec::new();
@@ -214,7 +216,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
         let (tr, held) = (data.select(&train), data.select(&test));
         let t = Instant::now();
-        let dh = calibrate(&tr, robot)?;
+        let (dh, _) = calibrate(&tr, robot)?;
         let dh_secs = t.elapsed().as_secs_f64();
         secs[0] += dh_secs;
         let mut put = |slot: usize, p: Vec<[f64; 3]>| {
@@ -315,12 +317,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     rows.push(score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0));
     pb.set_message("D-H calibration");
     let t0 = Instant::now();
-    let (cal, lm) = identify_mdh(&train, &robot, &vec![None; robot.dof()])?;
-    let dh = PhysicsModel::new(
-        "D-H calibration",
-        robot.clone(),
-        Geometry::Mdh { robot: cal },
-    );
+    let (dh, lm) = calibrate(&train, &robot)?;
     let dh_secs = t0.elapsed().as_secs_f64();
     rows.push(score(
         "D-H calibration (LM)",

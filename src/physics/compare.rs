@@ -18,9 +18,7 @@ use crate::compensate::{CompensationOptions, ErrorPredictor, compensate};
 use crate::dataset::Dataset;
 use crate::kinematics::{self, Robot};
 use crate::methods::Method;
-use crate::sim::{
-    CampaignKind, CampaignSpec, ErrorProfile, SimOutput, TrueRobot, campaign, execute, rng_for,
-};
+use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot, campaign, execute, rng_for};
 use crate::stats::spread;
 use crate::trajectory::Trajectory;
 use crate::{Error, Result};
@@ -127,13 +125,6 @@ pub struct Comparison {
     pub notes: Vec<String>,
 }
 
-fn measurements(robot: &TrueRobot, spec: &CampaignSpec) -> Result<Dataset> {
-    match campaign::simulate_on(robot, spec)?.0 {
-        SimOutput::Measurements(d) => Ok(d),
-        SimOutput::Trajectory(_) => Err(Error::Numerical("expected measurements".into())),
-    }
-}
-
 /// The bidirectional circle path: forward around, then back. Centred on the
 /// home TCP, or — if part of that circle is out of reach (a SCARA's home is
 /// near full stretch) — moved toward the base axis in steps of the radius
@@ -179,13 +170,13 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     let step = |k: usize, what: &str| progress(k, total, what);
 
     step(0, "indexing tests and training campaign");
-    let indexing = measurements(
+    let indexing = campaign::measurements(
         &robot,
         &CampaignSpec::new(CampaignKind::Indexing, opts.seed),
     )?;
     let mut lhs = CampaignSpec::new(CampaignKind::Lhs, opts.seed);
     lhs.poses = opts.train_poses;
-    let train = measurements(&robot, &lhs)?;
+    let train = campaign::measurements(&robot, &lhs)?;
     let mut ver = CampaignSpec::new(CampaignKind::Verify, opts.seed + 1000);
     // a SCARA with a stretched elbow is singular: a compensated target there
     // can lie out of reach, so its random poses keep |q2| ≥ 15°
@@ -195,7 +186,7 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     } else {
         opts.verify_poses
     };
-    let all = measurements(&robot, &ver)?;
+    let all = campaign::measurements(&robot, &ver)?;
     let keep: Vec<usize> = (0..all.len())
         .filter(|&k| !scara || all.q[k][1].abs() >= 15.0)
         .take(opts.verify_poses)

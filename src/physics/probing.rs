@@ -218,18 +218,12 @@ pub struct ProbingRow {
 /// off everywhere (identification and probing), which shows the systematic
 /// part of the probing error alone.
 pub fn probing_example(name: &str, seed: u64, noise: bool) -> Result<(Vec<ProbingRow>, String)> {
-    use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, SimOutput, campaign, rng_for};
+    use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, campaign, rng_for};
     let nominal = crate::kinematics::preset(name)?;
     let mut robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), seed);
     if !noise {
         robot = robot.noise_free();
     }
-    let data = |kind| -> Result<crate::dataset::Dataset> {
-        match campaign::simulate_on(&robot, &CampaignSpec::new(kind, seed))?.0 {
-            SimOutput::Measurements(d) => Ok(d),
-            SimOutput::Trajectory(_) => Err(Error::Numerical("expected measurements".into())),
-        }
-    };
     // index every axis over the range the probing uses (and the campaign's)
     let (edges, start) = example_edges(&nominal)?;
     let mut ranges = nominal.work_ranges.clone();
@@ -248,11 +242,12 @@ pub fn probing_example(name: &str, seed: u64, noise: bool) -> Result<(Vec<Probin
     }
     let mut idx_spec = CampaignSpec::new(CampaignKind::Indexing, seed);
     idx_spec.ranges = Some(ranges);
-    let indexing = match campaign::simulate_on(&robot, &idx_spec)?.0 {
-        SimOutput::Measurements(d) => d,
-        SimOutput::Trajectory(_) => return Err(Error::Numerical("expected measurements".into())),
-    };
-    let id = super::identify_physics(&indexing, &data(CampaignKind::Lhs)?, &nominal)?;
+    let indexing = campaign::measurements(&robot, &idx_spec)?;
+    let id = super::identify_physics(
+        &indexing,
+        &campaign::measurements(&robot, &CampaignSpec::new(CampaignKind::Lhs, seed))?,
+        &nominal,
+    )?;
     let mut rng = rng_for(seed, "probing");
     let mut rows = Vec::new();
     for edge in edges {

@@ -113,6 +113,17 @@ pub fn simulate(nominal: &Robot, spec: &CampaignSpec) -> Result<(SimOutput, Trut
     simulate_on(&robot, spec)
 }
 
+/// The measurements of a measured campaign kind (all but `circle`) on `robot`.
+pub fn measurements(robot: &TrueRobot, spec: &CampaignSpec) -> Result<Dataset> {
+    match simulate_on(robot, spec)?.0 {
+        SimOutput::Measurements(d) => Ok(d),
+        SimOutput::Trajectory(_) => Err(Error::InvalidParameter(format!(
+            "a {:?} campaign is a trajectory, not measurements",
+            spec.kind
+        ))),
+    }
+}
+
 /// Simulate `spec` on a given true robot (e.g. one loaded from a truth file).
 pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput, Truth)> {
     let nominal = &robot.nominal;
