@@ -1,8 +1,11 @@
 //! Extra model inputs beyond `[θ, λ]`: the effects `diagnose` can add
 //! (a covariate column, measurement order, a step, a joint harmonic, a
-//! cross-joint interaction, direction history). Each becomes one or two input
-//! dimensions of the Kriging model (with its own correlation length) and a
-//! linear trend term, so the GP can also let the effect vary with the pose.
+//! cross-joint interaction, direction history). A covariate, the order and
+//! direction history become input dimensions of the Kriging model (with
+//! their own correlation length) and a linear trend term, so the GP can also
+//! let the effect vary with the pose; a step, harmonic, interaction or
+//! cross-talk basis has a known shape and enters the trend only
+//! ([`Feature::trend_only`]).
 //!
 //! Values come from a campaign ([`Feature::columns`]), where a precomputed
 //! covariate column of the same name wins (so a feature keeps the values of the
@@ -70,6 +73,22 @@ impl Feature {
                 .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
                 .collect(),
         }
+    }
+
+    /// Whether the feature enters the model as trend terms only (a step or
+    /// harmonic regressor, a fixed interaction or cross-talk basis: its
+    /// shape is known, so the GP need not learn a correlation length over
+    /// it), rather than as an input dimension of the correlation with a
+    /// linear trend term (a covariate, the measurement order, direction
+    /// history: the effect may vary with the pose).
+    pub fn trend_only(&self) -> bool {
+        matches!(
+            self,
+            Feature::Step { .. }
+                | Feature::Harmonic { .. }
+                | Feature::Interaction { .. }
+                | Feature::Crosstalk { .. }
+        )
     }
 
     /// Check joint indices against `n` joints.

@@ -137,15 +137,20 @@ impl ErrorModel {
         Ok((model, reports))
     }
 
-    /// Fit with extra inputs `extras` after `[θ, λ]`: each is an input
-    /// dimension of the correlation and gets a linear trend term next to the
-    /// options' trend in `[θ, λ]`.
+    /// Fit with extra inputs `extras` after `[θ, λ]`: each gets a linear
+    /// trend term next to the options' trend in `[θ, λ]`, and those that are
+    /// not [`Feature::trend_only`] are also input dimensions of the
+    /// correlation. The model stores the extras with the correlation inputs
+    /// first (the order of its input columns).
     pub fn fit_with_extras(
         data: &Dataset,
         space: Space,
         opts: &KrigingOptions,
         extras: &[Feature],
     ) -> Result<Self> {
+        let mut extras = extras.to_vec();
+        extras.sort_by_key(Feature::trend_only);
+        let extras = &extras[..];
         let d0 = space.encoded_dim(data.n_joints(), &opts.periodic);
         let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
         let mut terms = opts.trend.monomials(d0);
@@ -211,7 +216,17 @@ impl ErrorModel {
         }
         let input_norm = Normalizer::fit(&rows);
         let x = input_norm.apply_rows(&rows);
-        let inputs = TrainingInputs::new(&x);
+        let trend_only: usize = extras
+            .iter()
+            .filter(|f| f.trend_only())
+            .map(|f| f.names().len())
+            .sum();
+        let corr_dims = names.len() - trend_only;
+        let inputs = TrainingInputs::new(
+            &x.iter()
+                .map(|r| r[..corr_dims].to_vec())
+                .collect::<Vec<_>>(),
+        );
         let fits: Vec<Result<(KrigingModel, FitReport)>> = (0..3)
             .into_par_iter()
             .map(|a| {
@@ -304,6 +319,19 @@ impl ErrorModel {
             reports,
             ..self.clone()
         })
+    }
+
+    /// Input dimensions that enter the correlation: `[θ, λ]` encoded and the
+    /// extras that are not trend-only (those come first, see
+    /// [`ErrorModel::fit_with_extras`]).
+    pub fn correlation_dims(&self) -> usize {
+        self.input_names.len()
+            - self
+                .extras
+                .iter()
+                .filter(|f| f.trend_only())
+                .map(|f| f.names().len())
+                .sum::<usize>()
     }
 
     /// Warnings about the conditioning of the fit: an output whose correlation

@@ -28,6 +28,7 @@ fn quick() -> DiagnoseOptions {
     DiagnoseOptions {
         kriging: KrigingOptions {
             optimizer: OptimizerKind::HookeJeeves,
+            nugget: true,
             max_evals: 300,
             starts: 2,
             ..KrigingOptions::default()
@@ -102,8 +103,17 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
     };
     let m = ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &extras).unwrap();
     assert_eq!(m.input_names.len(), 12 + 4);
+    // correlation inputs first; the harmonic is trend-only (ξ = 0 on its two columns)
+    let stored = vec![extras[0].clone(), extras[2].clone(), extras[1].clone()];
+    assert_eq!(m.extras, stored);
+    assert_eq!(m.correlation_dims(), 14);
+    for o in &m.outputs {
+        assert_eq!(o.data.theta.len(), 16);
+        assert!(o.data.theta[14..].iter().all(|t| *t == 0.0));
+        assert!(o.data.theta[..14].iter().all(|t| *t > 0.0));
+    }
     let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
-    assert_eq!(back.extras, extras);
+    assert_eq!(back.extras, stored);
     // from the dataset the payload column is used; from poses its reference 0
     let a = m.predict_dataset(&data).unwrap().mean;
     let b = m.predict(&data.q, &data.dir).unwrap().mean;

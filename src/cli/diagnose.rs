@@ -25,10 +25,15 @@ use std::path::{Path, PathBuf};
 Candidates: every numeric covariate column not in the model (alone and × joint
 angles), drift and a change point in the measurement order, harmonics of each
 joint over a scanned period range, cross-joint products, direction history.
-Each is scored by the out-of-fold share of the CV residual it explains, tested
-by permutation (maximum over its parameter scan) with Benjamini–Hochberg
-across candidates; the best significant one is added as a model input and the
-model is cross-validated again, until nothing significant remains.
+Each is tried inside the current model (its columns join the trend at the
+model's correlation parameters, refitted for the strongest few): statistic,
+the leave-one-out gain maximised over its parameter scan; p-value against
+sign-flipped pseudo-campaigns of the fitted model; Benjamini–Hochberg across
+candidates; score, the closed-form K-fold CV drop. The best significant one
+(q within the FDR and ≥ 2 % lower CV RMSE) is added the way its kind needs
+(trend terms for a step, harmonic, interaction or cross-talk; an input
+dimension for a covariate, the order or direction history), and the model
+is cross-validated again, until nothing significant remains.
 
 Example:
   robokrige diagnose datasets/comau_tracker_step.csv --json diag.json --report diag.md --plots diag/")]
@@ -38,6 +43,12 @@ pub struct DiagnoseArgs {
     /// Base model: js-hj, ejs-hj or ejs-gps (constant trend).
     #[arg(long, default_value = "ejs-hj")]
     method: String,
+    /// Fit the base model as an interpolator (no nugget). The default
+    /// estimates a nugget: measured data has noise, and an interpolating
+    /// model both stays far above the noise floor and leaves smooth
+    /// structure that makes smooth candidates look significant.
+    #[arg(long)]
+    no_nugget: bool,
     #[arg(long, default_value_t = 10)]
     folds: usize,
     /// Seed of the fold partition, the permutations and the fits.
@@ -96,6 +107,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         space,
         kriging: KrigingOptions {
             optimizer,
+            nugget: !a.no_nugget,
             seed: a.seed,
             periodic: super::holdout::parse_periodic(&a.periodic, &data.q)?,
             ..KrigingOptions::default()
@@ -203,8 +215,9 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
             .unwrap_or(0);
         if rank < 5 || e.accepted {
             println!(
-                "    {:<48} score {:>6.3}  p {:.4}  q {:.4}{}{}",
+                "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}{}{}",
                 describe(e),
+                if e.refit_xi { " ξ" } else { "  " },
                 e.score,
                 e.p_value,
                 e.q_value,
@@ -393,8 +406,9 @@ fn report(
     let _ = writeln!(
         s,
         "Base model `{}`; out-of-fold residuals of a {}-fold CV refitted on every training fold (fold seed {}); \
-         every candidate tested by {} permutations of the residual rows (maximum over its parameter scan), \
-         Benjamini–Hochberg at FDR {}; an effect is added only if it lowers the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
+         every candidate tried inside the model and tested against up to {} sign-flipped pseudo-campaigns \
+         (maximum over its parameter scan), Benjamini–Hochberg at FDR {}; an effect is added only if it lowers \
+         the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
         a.method, d.folds, d.seed, d.permutations, d.fdr, d.seconds
     );
     let _ = writeln!(
@@ -505,9 +519,10 @@ fn report(
     }
     let _ = writeln!(
         s,
-        "\nScore: share of the residual variance the candidate explains out of sample (10-fold least squares \
-         against the intercept). p: permutation p-value of the in-sample share, maximised over the candidate's \
-         parameter scan. q: Benjamini–Hochberg adjusted p over all candidates of the round."
+        "\nScore: relative drop of the model's K-fold CV squared error with the candidate in its trend (closed \
+         form; at the correlation parameters refitted with it for the strongest candidates, marked ξ). p: \
+         share of sign-flipped pseudo-campaigns of the fitted model in which the candidate's best leave-one-out \
+         gain over its parameter scan is as large. q: Benjamini–Hochberg adjusted p over all candidates of the round."
     );
     s
 }

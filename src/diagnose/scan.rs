@@ -2,17 +2,16 @@
 //!
 //! A *family* is one named effect scanned over a parameter grid (a step over
 //! the split row, a harmonic over the period, …); each grid point is a set of
-//! regressors. On residuals `R` (m × 3, centred per axis) the statistic of a
-//! grid point with orthonormal regressor basis `Q` is the share of residual
-//! variance it explains, pooled over the axes,
-//! `T = Σ_a ‖Qᵀ r_a‖² / Σ_a ‖r_a‖²`, and a family's statistic is its maximum
-//! over the grid. Significance is a permutation test of that maximum (the rows
-//! of `R` permuted jointly across axes, the same permutations for every
-//! family, so the scan over the grid is paid for), with the
-//! Benjamini–Hochberg correction across families. The score used for ranking
-//! is out of sample: `1 − SSE_cv / SSE0_cv`, K-fold least squares of the
-//! residuals on the best grid point's regressors against the intercept alone.
+//! regressor columns. Every grid point is tried *inside* the current model
+//! ([`gls`](super::gls)): its columns join the trend at the model's ξ and
+//! nugget, and the statistic is the pooled leave-one-out gain, maximised
+//! over the grid. Significance is a permutation test of that maximum against
+//! pseudo-campaigns of the fitted model (its whitened residuals permuted,
+//! the same permutations for every family, so the scan over the grid is paid
+//! for), with the Benjamini–Hochberg correction across families. The score
+//! used for ranking is the closed-form K-fold CV drop of the best grid point.
 
+use super::gls::{self, AxisSystem, FamilyTest};
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::sim::rng_for;
@@ -283,118 +282,180 @@ fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
 #[derive(Debug, Clone)]
 pub struct Tested {
     pub family: usize,
-    /// Best grid point (index) and its in-sample explained share T.
+    /// Best grid point (index) and its leave-one-out gain as a share of the
+    /// model's leave-one-out SSE (the test statistic, relative).
     pub best: usize,
     pub explained: f64,
     pub p_value: f64,
     /// Benjamini–Hochberg adjusted p-value.
     pub q_value: f64,
-    /// Out-of-sample explained share (the ranking score).
+    /// Out-of-sample score: relative drop of the closed-form K-fold CV SSE
+    /// when the best grid point joins the trend.
     pub score: f64,
+    /// Permutations run before the family's p-value was settled.
+    pub permutations: usize,
+    /// Tested at the ξ the model would choose with it (else at the model's ξ).
+    pub refit: bool,
 }
 
-fn explained(q: &[Vec<f64>], r: &[[f64; 3]], perm: Option<&[usize]>) -> f64 {
-    let mut num = 0.0;
-    for b in q {
-        let mut d = [0.0; 3];
-        match perm {
-            None => {
-                for (bi, ri) in b.iter().zip(r) {
-                    for a in 0..3 {
-                        d[a] += bi * ri[a];
-                    }
-                }
-            }
-            Some(p) => {
-                for (bi, &pi) in b.iter().zip(p) {
-                    for a in 0..3 {
-                        d[a] += bi * r[pi][a];
-                    }
-                }
-            }
-        }
-        num += d.iter().map(|x| x * x).sum::<f64>();
-    }
-    num
+/// Permutations per batch of the sequential test.
+const BATCH: usize = 100;
+/// Exceedances after which a family's p-value is settled (Besag & Clifford
+/// 1991): a clearly null family stops after a batch or two.
+const SETTLED: usize = 10;
+
+/// A family as tested: at the model's ξ (`systems == 0`) or at the ξ the
+/// model would choose with it (`systems ≥ 1`, see [`gls::refit_systems`]).
+struct Trial {
+    systems: usize,
+    test: FamilyTest,
+    best: (usize, f64),
 }
 
-/// Test every family on residuals `resid` (m × 3) with `permutations`
-/// permutations (seeded), and score the best grid point of each by `folds`-fold
-/// CV of least squares (fold of every row in `fold`).
+/// Test every family inside the current model (`systems`, one per output,
+/// [`gls`](super::gls)): statistic, the pooled leave-one-out gain of the best
+/// grid point at the model's ξ. The `refine` families with the largest
+/// statistic are then tested again at the ξ the model would choose with
+/// their best grid point (`refit`, which returns the systems there; `None`
+/// keeps the first test). p-values from up to `permutations`
+/// pseudo-campaigns (seeded, the same for every family, sequential: a family
+/// stops once [`SETTLED`] permutations reach its statistic,
+/// `p = (1 + exceed)/(1 + run)`); Benjamini–Hochberg across families; score,
+/// the closed-form K-fold CV drop with the folds `fold`.
+#[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
-    resid: &[[f64; 3]],
+    systems: Vec<AxisSystem>,
     permutations: usize,
     seed: u64,
     fold: &[usize],
-    folds: usize,
+    refine: usize,
+    refit: &(dyn Fn(&[Vec<f64>]) -> Option<Vec<AxisSystem>> + Sync),
+    progress: &dyn Fn(&str),
 ) -> Vec<Tested> {
-    let m = resid.len();
-    let mean: [f64; 3] =
-        std::array::from_fn(|a| resid.iter().map(|r| r[a]).sum::<f64>() / m as f64);
-    let r: Vec<[f64; 3]> = resid
+    let m = systems[0].rows();
+    let grids: Vec<Vec<Vec<Vec<f64>>>> = families
         .iter()
-        .map(|x| [x[0] - mean[0], x[1] - mean[1], x[2] - mean[2]])
+        .map(|f| f.grid.iter().map(|g| g.columns.clone()).collect())
         .collect();
-    let total: f64 = r
-        .iter()
-        .map(|x| x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-        .sum();
-    let bases: Vec<Vec<Vec<Vec<f64>>>> = families
+    let mut sets = vec![systems];
+    let data = gls::observed(&sets[0]);
+    let mut trials: Vec<Trial> = grids
         .par_iter()
-        .map(|f| f.grid.iter().map(|g| orthonormal(&g.columns)).collect())
-        .collect();
-    let family_max = |perm: Option<&[usize]>| -> Vec<(usize, f64)> {
-        bases
-            .iter()
-            .map(|grid| {
-                grid.iter()
-                    .enumerate()
-                    .map(|(g, q)| (g, explained(q, &r, perm)))
-                    .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
-            })
-            .collect()
-    };
-    let observed = family_max(None);
-    let exceed: Vec<usize> = (0..permutations)
-        .into_par_iter()
-        .map(|b| {
-            let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-permutation");
-            let mut p: Vec<usize> = (0..m).collect();
-            for i in (1..m).rev() {
-                p.swap(i, rng.random_range(0..=i));
+        .map(|grid| {
+            let test = FamilyTest::new(&sets[0], grid);
+            let best = test.best(&sets[0], &data);
+            Trial {
+                systems: 0,
+                test,
+                best,
             }
-            family_max(Some(&p))
-                .iter()
-                .zip(&observed)
-                .map(|(t, o)| usize::from(t.1 >= o.1 * (1.0 - 1e-12)))
-                .collect::<Vec<usize>>()
         })
-        .reduce(
-            || vec![0; families.len()],
-            |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect(),
-        );
-    let p: Vec<f64> = exceed
-        .iter()
-        .map(|e| (1 + e) as f64 / (permutations + 1) as f64)
+        .collect();
+    let mut order: Vec<usize> = (0..families.len())
+        .filter(|&k| trials[k].best.1.is_finite() && trials[k].best.1 > 0.0)
+        .collect();
+    order.sort_by(|&a, &b| trials[b].best.1.total_cmp(&trials[a].best.1));
+    for (n, &k) in order.iter().take(refine).enumerate() {
+        progress(&format!(
+            "re-estimating ξ with '{}' ({}/{})",
+            families[k].label,
+            n + 1,
+            refine.min(order.len())
+        ));
+        let Some(sys) = refit(&families[k].grid[trials[k].best.0].columns) else {
+            continue;
+        };
+        let test = FamilyTest::new(&sys, &grids[k]);
+        let best = test.best(&sys, &gls::observed(&sys));
+        sets.push(sys);
+        trials[k] = Trial {
+            systems: sets.len() - 1,
+            test,
+            best,
+        };
+    }
+    let mut exceed = vec![0usize; families.len()];
+    let mut run = vec![0usize; families.len()];
+    let mut done = 0;
+    while done < permutations {
+        let active: Vec<usize> = (0..families.len())
+            .filter(|&k| exceed[k] < SETTLED && trials[k].best.1.is_finite())
+            .collect();
+        if active.is_empty() {
+            break;
+        }
+        progress(&format!(
+            "permutations {done}/{permutations}: {} candidate(s) still open",
+            active.len()
+        ));
+        let batch = BATCH.min(permutations - done);
+        let hits: Vec<Vec<usize>> = (done..done + batch)
+            .into_par_iter()
+            .map(|b| {
+                let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-signs");
+                let signs: Vec<f64> = (0..m)
+                    .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
+                    .collect();
+                let mut pseudo: Vec<Option<Vec<gls::Response>>> = (0..sets.len()).map(|_| None).collect();
+                active
+                    .iter()
+                    .map(|&k| {
+                        let t = &trials[k];
+                        let resp = pseudo[t.systems]
+                            .get_or_insert_with(|| gls::flipped(&sets[t.systems], &signs));
+                        let o = t.best.1;
+                        let g = t.test.best(&sets[t.systems], resp).1;
+                        usize::from(g >= o - 1e-12 * o.abs())
+                    })
+                    .collect()
+            })
+            .collect();
+        for h in hits {
+            for (&k, x) in active.iter().zip(h) {
+                exceed[k] += x;
+                run[k] += 1;
+            }
+        }
+        done += batch;
+    }
+    let p: Vec<f64> = (0..families.len())
+        .map(|k| {
+            if trials[k].best.1.is_finite() {
+                (1 + exceed[k]) as f64 / (1 + run[k]) as f64
+            } else {
+                1.0
+            }
+        })
         .collect();
     let q = benjamini_hochberg(&p);
-    families
-        .par_iter()
-        .enumerate()
-        .map(|(k, f)| {
-            let best = observed[k].0;
+    // score and share against the model as it is (at its own ξ)
+    let before = gls::kfold_sse_before(&sets[0], fold);
+    let loo0 = gls::loo_sse_before(&sets[0]);
+    (0..families.len())
+        .into_par_iter()
+        .map(|k| {
+            let t = &trials[k];
+            let sys = &sets[t.systems];
+            let (best, gain) = t.best;
+            let score = if gain.is_finite() && before > 0.0 {
+                1.0 - t.test.kfold_sse(sys, best, fold) / before
+            } else {
+                0.0
+            };
             Tested {
                 family: k,
                 best,
-                explained: if total > 0.0 {
-                    observed[k].1 / total
+                explained: if gain.is_finite() && loo0 > 0.0 {
+                    gain / loo0
                 } else {
                     0.0
                 },
                 p_value: p[k],
                 q_value: q[k],
-                score: cv_score(&f.grid[best].columns, resid, fold, folds),
+                score,
+                permutations: run[k],
+                refit: t.systems > 0,
             }
         })
         .collect()
@@ -444,87 +505,6 @@ pub fn benjamini_hochberg(p: &[f64]) -> Vec<f64> {
     q
 }
 
-/// `1 − SSE_cv / SSE0_cv`: K-fold least squares of the residuals on
-/// `[1, columns]` against the intercept alone, pooled over the three axes.
-#[allow(clippy::needless_range_loop)] // `ax` indexes the axis of every residual row
-pub fn cv_score(columns: &[Vec<f64>], resid: &[[f64; 3]], fold: &[usize], folds: usize) -> f64 {
-    let m = resid.len();
-    let (mut sse, mut sse0) = (0.0, 0.0);
-    for f in 0..folds {
-        let train: Vec<usize> = (0..m).filter(|&i| fold[i] != f).collect();
-        let test: Vec<usize> = (0..m).filter(|&i| fold[i] == f).collect();
-        if train.is_empty() || test.is_empty() {
-            continue;
-        }
-        // centre on the training rows, orthonormalise, project
-        let cmean: Vec<f64> = columns
-            .iter()
-            .map(|c| train.iter().map(|&i| c[i]).sum::<f64>() / train.len() as f64)
-            .collect();
-        let tr_cols: Vec<Vec<f64>> = columns
-            .iter()
-            .zip(&cmean)
-            .map(|(c, mu)| train.iter().map(|&i| c[i] - mu).collect())
-            .collect();
-        // least squares via normal equations on the (small) orthonormalised set
-        let k = tr_cols.len();
-        let mut g = vec![vec![0.0; k]; k];
-        for a in 0..k {
-            for b in 0..k {
-                g[a][b] = tr_cols[a].iter().zip(&tr_cols[b]).map(|(x, y)| x * y).sum();
-            }
-            g[a][a] += 1e-9 * (1.0 + g[a][a]);
-        }
-        for ax in 0..3 {
-            let ymu = train.iter().map(|&i| resid[i][ax]).sum::<f64>() / train.len() as f64;
-            let rhs: Vec<f64> = tr_cols
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .zip(&train)
-                        .map(|(x, &i)| x * (resid[i][ax] - ymu))
-                        .sum()
-                })
-                .collect();
-            let beta = solve_small(&g, &rhs);
-            for &i in &test {
-                let pred: f64 = ymu
-                    + (0..k)
-                        .map(|a| beta[a] * (columns[a][i] - cmean[a]))
-                        .sum::<f64>();
-                sse += (resid[i][ax] - pred).powi(2);
-                sse0 += (resid[i][ax] - ymu).powi(2);
-            }
-        }
-    }
-    if sse0 > 0.0 { 1.0 - sse / sse0 } else { 0.0 }
-}
-
-/// Solve a small symmetric positive definite system by Cholesky.
-fn solve_small(g: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
-    let k = b.len();
-    let mut l = vec![vec![0.0; k]; k];
-    for i in 0..k {
-        for j in 0..=i {
-            let s: f64 = g[i][j] - (0..j).map(|t| l[i][t] * l[j][t]).sum::<f64>();
-            l[i][j] = if i == j {
-                s.max(1e-300).sqrt()
-            } else {
-                s / l[j][j]
-            };
-        }
-    }
-    let mut y = vec![0.0; k];
-    for i in 0..k {
-        y[i] = (b[i] - (0..i).map(|t| l[i][t] * y[t]).sum::<f64>()) / l[i][i];
-    }
-    let mut x = vec![0.0; k];
-    for i in (0..k).rev() {
-        x[i] = (y[i] - (i + 1..k).map(|t| l[t][i] * x[t]).sum::<f64>()) / l[i][i];
-    }
-    x
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -536,22 +516,5 @@ mod tests {
         assert!((q[2] - 0.0533333333333).abs() < 1e-9);
         assert!((q[1] - 0.0533333333333).abs() < 1e-9);
         assert!((q[3] - 0.5).abs() < 1e-12);
-    }
-
-    #[test]
-    fn cv_score_of_a_perfect_regressor_is_near_one_and_of_noise_near_zero() {
-        let m = 200;
-        let x: Vec<f64> = (0..m).map(|i| ((i * 37) % 101) as f64 / 101.0).collect();
-        let fold: Vec<usize> = (0..m).map(|i| i % 10).collect();
-        let r: Vec<[f64; 3]> = x.iter().map(|v| [2.0 * v, -v, 0.5 * v]).collect();
-        assert!(cv_score(std::slice::from_ref(&x), &r, &fold, 10) > 0.999);
-        let noise: Vec<[f64; 3]> = (0..m)
-            .map(|i| {
-                let t = (i as f64 * 12.9898).sin() * 43758.5453;
-                let u = t - t.floor() - 0.5;
-                [u, -u, u]
-            })
-            .collect();
-        assert!(cv_score(&[x], &noise, &fold, 10) < 0.05);
     }
 }

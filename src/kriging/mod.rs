@@ -226,7 +226,9 @@ fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Trend, names: &[String]) -> Result
 
 /// Fit one output at a **given** ξ and nugget ν (no optimisation): normalised
 /// inputs `x`, response `y` in original units, trend candidates `trend`;
-/// `min_jitter` as in [`KrigingOptions`].
+/// `min_jitter` as in [`KrigingOptions`]. As in [`fit_output`], `inputs`
+/// (and ξ) may cover only the first columns of `x`, the rest being
+/// trend-only.
 pub fn fit_output_at(
     x: &[Vec<f64>],
     inputs: &TrainingInputs,
@@ -255,10 +257,12 @@ pub fn fit_output_at(
         y: &p.y_norm,
     };
     let sol = problem.solve(theta, nugget)?;
+    let mut theta = theta.to_vec();
+    theta.resize(x.first().map_or(theta.len(), Vec::len), 0.0);
     KrigingModel::from_solution(
         sol,
         p.trend,
-        theta.to_vec(),
+        theta,
         nugget,
         x.to_vec(),
         p.y_mean,
@@ -269,7 +273,9 @@ pub fn fit_output_at(
 /// Fit one output at normalised inputs `x` (m rows) on response `y` (original
 /// units), with the trend candidates `trend` (dependent ones are dropped),
 /// choosing ξ (and ν) by minimising ln ψ. `inputs` is `x` prepared for the
-/// correlation fill; `names` name the inputs.
+/// correlation fill; `names` name the inputs. `inputs` may hold only the
+/// first columns of `x`: the others are *trend-only* inputs (a step or
+/// harmonic regressor), with ξ = 0, so they enter `f(s)` but not `R`.
 pub fn fit_output(
     x: &[Vec<f64>],
     inputs: &TrainingInputs,
@@ -277,6 +283,23 @@ pub fn fit_output(
     trend: &Trend,
     names: &[String],
     opts: &KrigingOptions,
+) -> Result<(KrigingModel, FitReport)> {
+    fit_output_from(x, inputs, y, trend, names, opts, None)
+}
+
+/// [`fit_output`] with an optional warm start `(ξ, ν)`: a local
+/// Hooke–Jeeves search from there (initial step 0.25 in log10 units)
+/// instead of the options' optimiser, for re-estimating ξ after a small
+/// change of the model (one more trend term). `ν` is ignored without a
+/// nugget; values are clamped into the box.
+pub fn fit_output_from(
+    x: &[Vec<f64>],
+    inputs: &TrainingInputs,
+    y: &[f64],
+    trend: &Trend,
+    names: &[String],
+    opts: &KrigingOptions,
+    start: Option<(&[f64], f64)>,
 ) -> Result<(KrigingModel, FitReport)> {
     opts.validate()?;
     let t0 = Instant::now();
@@ -304,7 +327,33 @@ pub fn fit_output(
     let (best_x, evals, starts) = if constant_response {
         (bounds.center(), 0, 0)
     } else {
-        let (best, starts) = optimise(&problem, &bounds, &unpack, opts);
+        let (best, starts) = match start {
+            Some((theta0, nu0)) => {
+                if theta0.len() != d {
+                    return Err(Error::InvalidParameter(format!(
+                        "warm start has {} correlation parameters, the inputs {d}",
+                        theta0.len()
+                    )));
+                }
+                let mut z0: Vec<f64> = theta0.iter().map(|t| t.max(1e-300).log10()).collect();
+                if opts.nugget {
+                    z0.push(nu0.max(1e-300).log10());
+                }
+                let z0: Vec<f64> = z0
+                    .iter()
+                    .zip(bounds.lo.iter().zip(&bounds.hi))
+                    .map(|(z, (lo, hi))| z.clamp(*lo, *hi))
+                    .collect();
+                let obj = ln_psi_objective(&problem, &unpack);
+                let hj = HjOptions {
+                    initial_step: 0.25,
+                    max_evals: opts.max_evals,
+                    ..HjOptions::default()
+                };
+                (optim::hooke_jeeves(obj, &z0, &bounds, &hj), 1)
+            }
+            None => optimise(&problem, &bounds, &unpack, opts),
+        };
         if !best.f.is_finite() {
             return Err(Error::Numerical(
                 "no hyperparameter in the box gave a finite likelihood".into(),
@@ -312,8 +361,10 @@ pub fn fit_output(
         }
         (best.x, best.evals, starts)
     };
-    let (theta, nugget) = unpack(&best_x);
+    let (mut theta, nugget) = unpack(&best_x);
     let sol = problem.solve(&theta, nugget)?;
+    // trend-only inputs (beyond `inputs.d`) do not enter the correlation
+    theta.resize(x.first().map_or(d, Vec::len), 0.0);
     let report = FitReport {
         theta: theta.clone(),
         nugget,

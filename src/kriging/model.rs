@@ -199,6 +199,12 @@ impl KrigingModel {
         })
     }
 
+    /// The factors of the fit in normalised units: `C` (lower Cholesky
+    /// factor of R + νI), `F̃ = C⁻¹F` and `G` (upper, `F̃ = QG`).
+    pub fn factors(&self) -> (&Mat<f64>, &Mat<f64>, &Mat<f64>) {
+        (&self.c, &self.ftilde, &self.g)
+    }
+
     /// Input dimension.
     pub fn dim(&self) -> usize {
         self.data.theta.len()

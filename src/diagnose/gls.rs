@@ -1,0 +1,506 @@
+//! What a candidate would gain *inside* the model (step 3 of `diagnose`).
+//!
+//! A Gaussian process over the joint angles absorbs part of any effect that
+//! depends on them, and what it leaves in its out-of-fold residuals is not
+//! shaped like the effect (a cross-talk of 0.05° left residuals no regressor
+//! explained). So a candidate is judged by what it brings to the model:
+//! its regressor columns X are added to the trend of every output at the
+//! current ξ and nugget (held fixed), and the drop of the cross-validation
+//! error is computed in closed form.
+//!
+//! For one output with `R = CCᵀ` (nugget included), `Z = C⁻¹`, trend `F`,
+//! `F̃ = ZF = Q_F G` and `P = I − Q_F Q_Fᵀ`, the held-out residuals of
+//! universal Kriging at fixed ξ use the residual precision (Dubrule 1983;
+//! [`crate::kriging::KrigingModel::held_out_residuals`])
+//!
+//! `A = R⁻¹ − R⁻¹F(FᵀR⁻¹F)⁻¹FᵀR⁻¹ = MᵀM`,  `M = PZ`,  `γ = Ay`,
+//!
+//! leave-one-out `e_i = γ_i / A_ii` and leave-block-out `e_b = A_bb⁻¹ γ_b`.
+//! Adding columns X to `F` is the rank-k update, with `Q_X` an orthonormal
+//! basis of `MX` and the whitened residual `r̃ = My = Cᵀγ`,
+//!
+//! `A' = A − UUᵀ`,  `U = ZᵀQ_X`,  `A'y = γ − U(Q_Xᵀ r̃)`,
+//!
+//! so a grid point costs two products with the m × m matrices `M` and `Zᵀ`
+//! (batched over a family's grid) and O(mk) for its leave-one-out errors.
+//!
+//! The test statistic of a family is the largest leave-one-out gain over its
+//! grid, `Σ_axes y_std² (SSE_before − SSE_after)` in mm². Its null
+//! distribution comes from pseudo-campaigns of the fitted model itself: the
+//! whitened residual of every row multiplied by a random sign (the same on
+//! the three axes) gives `γ* = Mᵀ(s ∘ r̃)`, data the model explains as well
+//! as the real data but in which no candidate has a real effect. Signs, not
+//! a permutation of the rows (Freedman & Lane 1983), because the noise is
+//! not the same everywhere: joint repeatability reaches the TCP through the
+//! Jacobian, so a regressor shaped like a Jacobian column lines up with the
+//! noisier rows, and a permutation, which spreads the large residuals over
+//! all rows, flagged such candidates in campaigns without any effect. A
+//! sign flip keeps every row's size (the wild bootstrap). Only `γ` and `r̃`
+//! change, so one resample costs one m × m product per axis.
+
+use crate::kriging::{KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_at, fit_output_from};
+use crate::model::ErrorModel;
+use crate::{Error, Result};
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::{Mat, Par};
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// One output of the current model, prepared for trend updates.
+pub struct AxisSystem {
+    /// `Z = C⁻¹`.
+    z: Mat<f64>,
+    /// `M = PZ`.
+    mw: Mat<f64>,
+    /// `Q_Fᵀ Z` (p × m): what the projection removes.
+    b: Mat<f64>,
+    /// `A = MᵀM`.
+    a: Mat<f64>,
+    a_diag: Vec<f64>,
+    gamma: Vec<f64>,
+    rt: Vec<f64>,
+    /// `y_std²`: normalised units → mm².
+    scale2: f64,
+}
+
+impl AxisSystem {
+    /// From a fitted output (O(m³), once per round).
+    pub fn new(model: &KrigingModel) -> Self {
+        let (c, ft, g) = model.factors();
+        let m = c.nrows();
+        let mut z = Mat::<f64>::identity(m, m);
+        solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
+        // Q_Fᵀ = G⁻ᵀ F̃ᵀ
+        let mut qt = ft.transpose().to_owned();
+        solve_lower_triangular_in_place(g.transpose(), qt.as_mut(), Par::Seq);
+        let b = &qt * &z;
+        let mw = &z - qt.transpose() * &b;
+        let a = mw.transpose() * &mw;
+        let gamma = model.data.gamma.clone();
+        let gcol = Mat::<f64>::from_fn(m, 1, |i, _| gamma[i]);
+        let rtm = c.transpose() * &gcol;
+        AxisSystem {
+            a_diag: (0..m).map(|i| a[(i, i)]).collect(),
+            rt: (0..m).map(|i| rtm[(i, 0)]).collect(),
+            z,
+            mw,
+            b,
+            a,
+            gamma,
+            scale2: model.data.y_std * model.data.y_std,
+        }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.gamma.len()
+    }
+
+    /// `γ* = Mᵀr̃*` for a pseudo whitened residual `r̃*`.
+    fn gamma_of(&self, rt: &[f64]) -> Vec<f64> {
+        let m = self.rows();
+        let r = Mat::<f64>::from_fn(m, 1, |i, _| rt[i]);
+        let g = self.mw.transpose() * &r;
+        (0..m).map(|i| g[(i, 0)]).collect()
+    }
+
+    /// Leave-one-out SSE without any added column (normalised units).
+    fn loo_sse0(&self, gamma: &[f64]) -> f64 {
+        gamma
+            .iter()
+            .zip(&self.a_diag)
+            .map(|(g, a)| (g / a).powi(2))
+            .sum()
+    }
+}
+
+/// A family's grid prepared on one axis: an orthonormal basis `Q_X` of the
+/// whitened, projected columns of every grid point and `U = ZᵀQ_X`.
+struct Prepared {
+    q: Mat<f64>,
+    u: Mat<f64>,
+    /// Columns of `q`/`u` of each grid point (empty: nothing new).
+    spans: Vec<Range<usize>>,
+}
+
+/// Relative size below which a whitened column counts as already in the
+/// span of the trend (or of the point's earlier columns).
+const DEPENDENT: f64 = 1e-7;
+
+fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
+    let m = sys.rows();
+    let k: usize = grid.iter().map(Vec::len).sum();
+    let x = Mat::<f64>::from_fn(m, k, {
+        let cols: Vec<&Vec<f64>> = grid.iter().flatten().collect();
+        move |i, j| cols[j][i]
+    });
+    let xt = &sys.mw * &x;
+    let xb = &sys.b * &x;
+    let mut q = Mat::<f64>::zeros(m, k);
+    let mut spans = Vec::with_capacity(grid.len());
+    let (mut src, mut dst) = (0, 0);
+    for point in grid {
+        let start = dst;
+        for _ in point {
+            let full2: f64 = (0..m).map(|i| xt[(i, src)].powi(2)).sum::<f64>()
+                + (0..xb.nrows()).map(|i| xb[(i, src)].powi(2)).sum::<f64>();
+            let mut v: Vec<f64> = (0..m).map(|i| xt[(i, src)]).collect();
+            for _ in 0..2 {
+                for c in start..dst {
+                    let d: f64 = (0..m).map(|i| v[i] * q[(i, c)]).sum();
+                    v.iter_mut().enumerate().for_each(|(i, x)| *x -= d * q[(i, c)]);
+                }
+            }
+            let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if full2 > 0.0 && nv > DEPENDENT * full2.sqrt() {
+                for (i, x) in v.iter().enumerate() {
+                    q[(i, dst)] = x / nv;
+                }
+                dst += 1;
+            }
+            src += 1;
+        }
+        spans.push(start..dst);
+    }
+    let q = q.subcols(0, dst).to_owned();
+    let u = sys.z.transpose() * &q;
+    Prepared { q, u, spans }
+}
+
+/// Leave-one-out SSE (normalised units) of every grid point for the
+/// response with `gamma`, `rt`; `NaN` where a point leaves a row
+/// unpredictable (its A'_ii vanishes).
+fn loo_sse(sys: &AxisSystem, prep: &Prepared, gamma: &[f64], rt: &[f64]) -> Vec<f64> {
+    let m = sys.rows();
+    let mut num = vec![0.0; m];
+    let mut den = vec![0.0; m];
+    prep.spans
+        .iter()
+        .map(|span| {
+            num.copy_from_slice(gamma);
+            den.copy_from_slice(&sys.a_diag);
+            for c in span.clone() {
+                let qc = prep.q.col(c);
+                let uc = prep.u.col(c);
+                let coef: f64 = (0..m).map(|i| qc[i] * rt[i]).sum();
+                for i in 0..m {
+                    num[i] -= uc[i] * coef;
+                    den[i] -= uc[i] * uc[i];
+                }
+            }
+            let mut sse = 0.0;
+            for i in 0..m {
+                if den[i] <= 1e-10 * sys.a_diag[i] {
+                    return f64::NAN;
+                }
+                sse += (num[i] / den[i]).powi(2);
+            }
+            sse
+        })
+        .collect()
+}
+
+/// One candidate family prepared on the three outputs.
+pub struct FamilyTest {
+    axes: Vec<Prepared>,
+}
+
+impl FamilyTest {
+    /// `grid[g]` holds the regressor columns of grid point g.
+    pub fn new(systems: &[AxisSystem], grid: &[Vec<Vec<f64>>]) -> Self {
+        FamilyTest {
+            axes: systems.iter().map(|s| prepare(s, grid)).collect(),
+        }
+    }
+
+    /// Pooled leave-one-out gain (mm²) of every grid point; `responses`
+    /// holds `(γ, r̃, SSE₀)` per axis (the real data or a pseudo-campaign).
+    fn gains(&self, systems: &[AxisSystem], responses: &[Response]) -> Vec<f64> {
+        let mut total = vec![0.0; self.axes[0].spans.len()];
+        for ((sys, prep), r) in systems.iter().zip(&self.axes).zip(responses) {
+            for (t, sse) in total
+                .iter_mut()
+                .zip(loo_sse(sys, prep, &r.gamma, &r.rt))
+            {
+                *t += sys.scale2 * (r.sse0 - sse);
+            }
+        }
+        total
+    }
+
+    /// Best grid point and its pooled leave-one-out gain (mm²) on the data;
+    /// `(0, −∞)` when no point is usable.
+    pub fn best(&self, systems: &[AxisSystem], responses: &[Response]) -> (usize, f64) {
+        self.gains(systems, responses)
+            .into_iter()
+            .enumerate()
+            .filter(|(_, g)| g.is_finite())
+            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
+    }
+
+    /// Closed-form K-fold CV SSE (mm², pooled over the axes) with grid point
+    /// `g` added (fold of every row in `fold`).
+    pub fn kfold_sse(&self, systems: &[AxisSystem], g: usize, fold: &[usize]) -> f64 {
+        systems
+            .iter()
+            .zip(&self.axes)
+            .map(|(sys, prep)| {
+                let span = prep.spans[g].clone();
+                let coef: Vec<f64> = span
+                    .clone()
+                    .map(|c| (0..sys.rows()).map(|i| prep.q[(i, c)] * sys.rt[i]).sum())
+                    .collect();
+                blocks(fold)
+                    .iter()
+                    .map(|idx| {
+                        let n = idx.len();
+                        let mut a = Mat::<f64>::from_fn(n, n, |r, c| sys.a[(idx[r], idx[c])]);
+                        let mut gam = Mat::<f64>::from_fn(n, 1, |r, _| sys.gamma[idx[r]]);
+                        for (k, c) in span.clone().enumerate() {
+                            for r in 0..n {
+                                let ur = prep.u[(idx[r], c)];
+                                gam[(r, 0)] -= ur * coef[k];
+                                for s in 0..n {
+                                    a[(r, s)] -= ur * prep.u[(idx[s], c)];
+                                }
+                            }
+                        }
+                        sys.scale2 * block_sse(a, gam)
+                    })
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+}
+
+/// Rows of every fold.
+fn blocks(fold: &[usize]) -> Vec<Vec<usize>> {
+    let folds = fold.iter().max().map_or(0, |f| f + 1);
+    (0..folds)
+        .map(|f| (0..fold.len()).filter(|&i| fold[i] == f).collect::<Vec<_>>())
+        .filter(|b| !b.is_empty())
+        .collect()
+}
+
+/// `‖A_bb⁻¹ γ_b‖²`.
+fn block_sse(a: Mat<f64>, gamma: Mat<f64>) -> f64 {
+    let e = faer::linalg::solvers::Solve::solve(&a.partial_piv_lu(), &gamma);
+    (0..e.nrows()).map(|r| e[(r, 0)].powi(2)).sum()
+}
+
+/// Closed-form K-fold CV SSE (mm², pooled) of the model as it is.
+pub fn kfold_sse_before(systems: &[AxisSystem], fold: &[usize]) -> f64 {
+    systems
+        .iter()
+        .map(|sys| {
+            blocks(fold)
+                .iter()
+                .map(|idx| {
+                    let n = idx.len();
+                    let a = Mat::<f64>::from_fn(n, n, |r, c| sys.a[(idx[r], idx[c])]);
+                    let g = Mat::<f64>::from_fn(n, 1, |r, _| sys.gamma[idx[r]]);
+                    sys.scale2 * block_sse(a, g)
+                })
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// The response of one axis: `γ = Ay`, the whitened residual `r̃` and the
+/// leave-one-out SSE without additions.
+pub struct Response {
+    gamma: Vec<f64>,
+    rt: Vec<f64>,
+    sse0: f64,
+}
+
+/// The responses of the data itself.
+pub fn observed(systems: &[AxisSystem]) -> Vec<Response> {
+    systems
+        .iter()
+        .map(|s| Response {
+            sse0: s.loo_sse0(&s.gamma),
+            gamma: s.gamma.clone(),
+            rt: s.rt.clone(),
+        })
+        .collect()
+}
+
+/// A pseudo-campaign of the fitted model: the whitened residual of every
+/// row multiplied by `signs[i] = ±1` (the same sign on every axis).
+pub fn flipped(systems: &[AxisSystem], signs: &[f64]) -> Vec<Response> {
+    systems
+        .iter()
+        .map(|s| {
+            let rt: Vec<f64> = s.rt.iter().zip(signs).map(|(r, f)| r * f).collect();
+            let gamma = s.gamma_of(&rt);
+            Response {
+                sse0: s.loo_sse0(&gamma),
+                rt,
+                gamma,
+            }
+        })
+        .collect()
+}
+
+/// Leave-one-out SSE (mm², pooled) of the model as it is.
+pub fn loo_sse_before(systems: &[AxisSystem]) -> f64 {
+    systems
+        .iter()
+        .map(|s| s.scale2 * s.loo_sse0(&s.gamma))
+        .sum()
+}
+
+/// The systems of `model` at the ξ and nugget it would choose with
+/// `columns` in its trend. A GP that has bent its correlation lengths to
+/// absorb part of an effect (a short length over q2 for a q2 harmonic)
+/// hides it from a test at its own ξ; here every output is refitted (ξ, ν
+/// by a local search from the model's own, so an irrelevant column leaves
+/// them where they were) with the columns as trend-only inputs, and then
+/// factorised at that ξ with its own trend, so the candidate is tested
+/// where the model would stand with it. `errors` are the campaign's
+/// measured errors (mm).
+pub fn refit_systems(
+    model: &ErrorModel,
+    errors: &[[f64; 3]],
+    opts: &KrigingOptions,
+    columns: &[Vec<f64>],
+) -> Result<Vec<AxisSystem>> {
+    let corr = model.correlation_dims();
+    model
+        .outputs
+        .par_iter()
+        .enumerate()
+        .map(|(a, km)| {
+            let Trend::Monomials(base) = &km.data.trend else {
+                return Err(Error::InvalidParameter(
+                    "diagnose refits need a polynomial trend".into(),
+                ));
+            };
+            let x = &km.data.x_train;
+            let d = base.dim;
+            let k = columns.len();
+            let x_aug: Vec<Vec<f64>> = x
+                .iter()
+                .enumerate()
+                .map(|(i, r)| r.iter().copied().chain(columns.iter().map(|c| c[i])).collect())
+                .collect();
+            let mut terms = base.clone();
+            terms.dim = d + k;
+            terms.exponents.iter_mut().for_each(|e| e.resize(d + k, 0));
+            for j in 0..k {
+                let mut e = vec![0u8; d + k];
+                e[d + j] = 1;
+                terms.exponents.push(e);
+            }
+            let inputs = TrainingInputs::new(
+                &x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>(),
+            );
+            let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+            let names: Vec<String> = (1..=d + k).map(|j| format!("s{j}")).collect();
+            let start = (&km.data.theta[..corr], km.data.nugget);
+            let (_, report) = fit_output_from(
+                &x_aug,
+                &inputs,
+                &y,
+                &Trend::Monomials(terms),
+                &names,
+                opts,
+                Some(start),
+            )?;
+            let at = fit_output_at(
+                x,
+                &inputs,
+                &y,
+                &km.data.trend,
+                &report.theta[..corr],
+                report.nugget,
+                opts.min_jitter,
+            )?;
+            Ok(AxisSystem::new(&at))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kriging::{Monomials, fit_output};
+
+    /// A small GP problem: 2 correlated inputs, one trend-only column.
+    fn problem() -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
+        let m = 60;
+        let x: Vec<Vec<f64>> = (0..m)
+            .map(|i| {
+                let t = i as f64;
+                vec![(t * 0.618).fract() * 2.0 - 1.0, (t * 0.414).fract() * 2.0 - 1.0]
+            })
+            .collect();
+        let extra: Vec<f64> = (0..m).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .zip(&extra)
+            .enumerate()
+            .map(|(i, (r, e))| (2.0 * r[0]).sin() + r[1] * r[1] + 0.3 * e + 0.01 * ((i * 13) % 7) as f64)
+            .collect();
+        (x, extra, y)
+    }
+
+    #[test]
+    fn closed_form_gain_equals_refactorising_with_the_column_in_the_trend() {
+        let (x, extra, y) = problem();
+        let inputs = TrainingInputs::new(&x);
+        let opts = KrigingOptions {
+            nugget: true,
+            optimizer: crate::kriging::OptimizerKind::HookeJeeves,
+            ..KrigingOptions::default()
+        };
+        let names = vec!["a".to_string(), "b".to_string()];
+        let base = Trend::Monomials(Monomials::constant(2));
+        let (model, rep) = fit_output(&x, &inputs, &y, &base, &names, &opts).unwrap();
+        let sys = vec![AxisSystem::new(&model)];
+        let test = FamilyTest::new(&sys, &[vec![extra.clone()]]);
+        // the same column in the trend, factorised at the same ξ and nugget
+        let x_aug: Vec<Vec<f64>> = x
+            .iter()
+            .zip(&extra)
+            .map(|(r, e)| vec![r[0], r[1], *e])
+            .collect();
+        let mut terms = Monomials::constant(3);
+        terms.exponents.push(vec![0, 0, 1]);
+        let aug = fit_output_at(
+            &x_aug,
+            &inputs,
+            &y,
+            &Trend::Monomials(terms),
+            &rep.theta,
+            rep.nugget,
+            None,
+        )
+        .unwrap();
+        assert_eq!(aug.data.theta, vec![rep.theta[0], rep.theta[1], 0.0]);
+        let m = x.len();
+        let fold: Vec<usize> = (0..m).map(|i| (i * 7) % 6).collect();
+        let folds: Vec<Vec<usize>> = (0..6)
+            .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
+            .collect();
+        let sse = |e: Vec<f64>| e.iter().map(|v| v * v).sum::<f64>();
+        let singles: Vec<Vec<usize>> = (0..m).map(|i| vec![i]).collect();
+        let loo_before = sse(model.held_out_residuals(&singles).unwrap());
+        let loo_after = sse(aug.held_out_residuals(&singles).unwrap());
+        let gain = test.best(&sys, &observed(&sys)).1;
+        assert!(loo_before > 2.0 * loo_after, "{loo_before} {loo_after}");
+        assert!(((loo_before - loo_after) - gain).abs() < 1e-8 * loo_before, "{gain}");
+        assert!((loo_sse_before(&sys) - loo_before).abs() < 1e-9 * loo_before);
+        let kf_before = sse(model.held_out_residuals(&folds).unwrap());
+        let kf_after = sse(aug.held_out_residuals(&folds).unwrap());
+        assert!((kfold_sse_before(&sys, &fold) - kf_before).abs() < 1e-8 * kf_before);
+        assert!((test.kfold_sse(&sys, 0, &fold) - kf_after).abs() < 1e-8 * kf_before);
+        // a column already in the trend (a constant) adds nothing
+        let none = FamilyTest::new(&sys, &[vec![vec![3.0; m]]]);
+        assert!(none.best(&sys, &observed(&sys)).1.abs() < 1e-12);
+        // sign-flipped pseudo-campaigns keep the model's own fit
+        let signs: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { -1.0 } else { 1.0 }).collect();
+        let pseudo = flipped(&sys, &signs);
+        assert!(pseudo[0].sse0 > 0.0 && test.best(&sys, &pseudo).1.is_finite());
+    }
+}
