@@ -34,7 +34,7 @@ fn quick() -> DiagnoseOptions {
             ..KrigingOptions::default()
         },
         folds: 5,
-        permutations: 399,
+        permutations: 999,
         max_effects: 2,
         ..DiagnoseOptions::default()
     }
@@ -62,6 +62,32 @@ fn a_tracker_bump_is_found_at_its_row_added_and_removed_from_the_residual() {
     assert_eq!(
         serde_json::to_string(&again.effects).unwrap(),
         serde_json::to_string(&d.effects).unwrap()
+    );
+}
+
+#[test]
+fn a_gear_harmonic_absorbed_by_the_gp_is_still_found_and_added_as_trend_terms() {
+    // the GP shortens its q2 length scale to soak the harmonic up; tested at
+    // the ξ it would have with the harmonic, the effect stands out
+    let data = campaign(
+        200,
+        2,
+        Some("harmonic:joint=2,period_deg=7.5,amp_deg=0.004"),
+    );
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::Harmonic, "{top:?}");
+    assert_eq!(top.source, ["q2"]);
+    let p = top.params["period_deg"];
+    assert!((p / 7.5 - 1.0).abs() < 0.05, "period {p}");
+    assert!(top.significant && top.accepted && top.refit_xi, "{top:?}");
+    assert!(matches!(d.extras[0], Feature::Harmonic { joint: 2, .. }));
+    assert!(d.extras[0].trend_only());
+    assert!(
+        d.after.pooled_rmse_mm < 0.75 * d.before.pooled_rmse_mm,
+        "{:?} → {:?}",
+        d.before.cv_rmse_mm,
+        d.after.cv_rmse_mm
     );
 }
 

@@ -38,7 +38,9 @@
 //! sign flip keeps every row's size (the wild bootstrap). Only `γ` and `r̃`
 //! change, so one resample costs one m × m product per axis.
 
-use crate::kriging::{KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_at, fit_output_from};
+use crate::kriging::{
+    KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_at, fit_output_from,
+};
 use crate::model::ErrorModel;
 use crate::{Error, Result};
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
@@ -147,7 +149,9 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
             for _ in 0..2 {
                 for c in start..dst {
                     let d: f64 = (0..m).map(|i| v[i] * q[(i, c)]).sum();
-                    v.iter_mut().enumerate().for_each(|(i, x)| *x -= d * q[(i, c)]);
+                    v.iter_mut()
+                        .enumerate()
+                        .for_each(|(i, x)| *x -= d * q[(i, c)]);
                 }
             }
             let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -217,10 +221,7 @@ impl FamilyTest {
     fn gains(&self, systems: &[AxisSystem], responses: &[Response]) -> Vec<f64> {
         let mut total = vec![0.0; self.axes[0].spans.len()];
         for ((sys, prep), r) in systems.iter().zip(&self.axes).zip(responses) {
-            for (t, sse) in total
-                .iter_mut()
-                .zip(loo_sse(sys, prep, &r.gamma, &r.rt))
-            {
+            for (t, sse) in total.iter_mut().zip(loo_sse(sys, prep, &r.gamma, &r.rt)) {
                 *t += sys.scale2 * (r.sse0 - sse);
             }
         }
@@ -276,7 +277,11 @@ impl FamilyTest {
 fn blocks(fold: &[usize]) -> Vec<Vec<usize>> {
     let folds = fold.iter().max().map_or(0, |f| f + 1);
     (0..folds)
-        .map(|f| (0..fold.len()).filter(|&i| fold[i] == f).collect::<Vec<_>>())
+        .map(|f| {
+            (0..fold.len())
+                .filter(|&i| fold[i] == f)
+                .collect::<Vec<_>>()
+        })
         .filter(|b| !b.is_empty())
         .collect()
 }
@@ -382,7 +387,12 @@ pub fn refit_systems(
             let x_aug: Vec<Vec<f64>> = x
                 .iter()
                 .enumerate()
-                .map(|(i, r)| r.iter().copied().chain(columns.iter().map(|c| c[i])).collect())
+                .map(|(i, r)| {
+                    r.iter()
+                        .copied()
+                        .chain(columns.iter().map(|c| c[i]))
+                        .collect()
+                })
                 .collect();
             let mut terms = base.clone();
             terms.dim = d + k;
@@ -392,9 +402,8 @@ pub fn refit_systems(
                 e[d + j] = 1;
                 terms.exponents.push(e);
             }
-            let inputs = TrainingInputs::new(
-                &x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>(),
-            );
+            let inputs =
+                TrainingInputs::new(&x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>());
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
             let names: Vec<String> = (1..=d + k).map(|j| format!("s{j}")).collect();
             let start = (&km.data.theta[..corr], km.data.nugget);
@@ -432,7 +441,10 @@ mod tests {
         let x: Vec<Vec<f64>> = (0..m)
             .map(|i| {
                 let t = i as f64;
-                vec![(t * 0.618).fract() * 2.0 - 1.0, (t * 0.414).fract() * 2.0 - 1.0]
+                vec![
+                    (t * 0.618).fract() * 2.0 - 1.0,
+                    (t * 0.414).fract() * 2.0 - 1.0,
+                ]
             })
             .collect();
         let extra: Vec<f64> = (0..m).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
@@ -440,7 +452,9 @@ mod tests {
             .iter()
             .zip(&extra)
             .enumerate()
-            .map(|(i, (r, e))| (2.0 * r[0]).sin() + r[1] * r[1] + 0.3 * e + 0.01 * ((i * 13) % 7) as f64)
+            .map(|(i, (r, e))| {
+                (2.0 * r[0]).sin() + r[1] * r[1] + 0.3 * e + 0.01 * ((i * 13) % 7) as f64
+            })
             .collect();
         (x, extra, y)
     }
@@ -489,7 +503,10 @@ mod tests {
         let loo_after = sse(aug.held_out_residuals(&singles).unwrap());
         let gain = test.best(&sys, &observed(&sys)).1;
         assert!(loo_before > 2.0 * loo_after, "{loo_before} {loo_after}");
-        assert!(((loo_before - loo_after) - gain).abs() < 1e-8 * loo_before, "{gain}");
+        assert!(
+            ((loo_before - loo_after) - gain).abs() < 1e-8 * loo_before,
+            "{gain}"
+        );
         assert!((loo_sse_before(&sys) - loo_before).abs() < 1e-9 * loo_before);
         let kf_before = sse(model.held_out_residuals(&folds).unwrap());
         let kf_after = sse(aug.held_out_residuals(&folds).unwrap());
@@ -499,7 +516,9 @@ mod tests {
         let none = FamilyTest::new(&sys, &[vec![vec![3.0; m]]]);
         assert!(none.best(&sys, &observed(&sys)).1.abs() < 1e-12);
         // sign-flipped pseudo-campaigns keep the model's own fit
-        let signs: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { -1.0 } else { 1.0 }).collect();
+        let signs: Vec<f64> = (0..m)
+            .map(|i| if i % 3 == 0 { -1.0 } else { 1.0 })
+            .collect();
         let pseudo = flipped(&sys, &signs);
         assert!(pseudo[0].sse0 > 0.0 && test.best(&sys, &pseudo).1.is_finite());
     }

@@ -68,8 +68,10 @@ fn params(kv: &[(&str, f64)]) -> BTreeMap<String, f64> {
 /// The candidate families a campaign supports. Covariates named in
 /// `exclude` (already in the model) and columns with missing values are left
 /// out; the harmonic periods run from 2° to half the joint's range, in steps
-/// of a quarter cycle over the range. With a robot preset (`robot`), joint
-/// cross-talk candidates mapped through its Jacobian are added.
+/// of a tenth of a cycle over the range (a phase error of at most 1/20
+/// cycle at the ends; a quarter-cycle grid picked 7.99° for a 7.5°
+/// harmonic). With a robot preset (`robot`), joint cross-talk candidates
+/// mapped through its Jacobian are added.
 pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
@@ -156,7 +158,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
         let range = hi - lo;
         let mut grid = Vec::new();
         let mut cycles = 2.0;
-        while range / cycles >= 2.0 && grid.len() < 160 {
+        while range / cycles >= 2.0 && grid.len() < 480 {
             let period = range / cycles;
             let w = std::f64::consts::TAU / period;
             let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
@@ -169,7 +171,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
                     period_deg: period,
                 }],
             });
-            cycles += 0.25;
+            cycles += 0.1;
         }
         if !grid.is_empty() {
             out.push(Family {
@@ -397,7 +399,8 @@ pub fn test_families(
                 let signs: Vec<f64> = (0..m)
                     .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
                     .collect();
-                let mut pseudo: Vec<Option<Vec<gls::Response>>> = (0..sets.len()).map(|_| None).collect();
+                let mut pseudo: Vec<Option<Vec<gls::Response>>> =
+                    (0..sets.len()).map(|_| None).collect();
                 active
                     .iter()
                     .map(|&k| {

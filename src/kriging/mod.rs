@@ -259,15 +259,7 @@ pub fn fit_output_at(
     let sol = problem.solve(theta, nugget)?;
     let mut theta = theta.to_vec();
     theta.resize(x.first().map_or(theta.len(), Vec::len), 0.0);
-    KrigingModel::from_solution(
-        sol,
-        p.trend,
-        theta,
-        nugget,
-        x.to_vec(),
-        p.y_mean,
-        p.y_std,
-    )
+    KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)
 }
 
 /// Fit one output at normalised inputs `x` (m rows) on response `y` (original
