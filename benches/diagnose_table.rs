@@ -62,6 +62,16 @@ fn main() {
             "crosstalk:joint=1,from=2,gain_deg=0.05",
             crosstalk,
         ),
+        (
+            "hysteresis q2 0.005°/20°",
+            "hysteresis:joint=2,amp_deg=0.005,travel_deg=20",
+            hysteresis_q2,
+        ),
+        (
+            "hysteresis q2 0.01°/20°",
+            "hysteresis:joint=2,amp_deg=0.01,travel_deg=20",
+            hysteresis_q2,
+        ),
     ];
     // `cargo bench --bench diagnose_table -- harmonic`: only matching cases
     let only: Vec<String> = std::env::args()
@@ -153,4 +163,8 @@ fn step_150(e: &robokrige::diagnose::EffectReport) -> bool {
 fn crosstalk(e: &robokrige::diagnose::EffectReport) -> bool {
     e.kind == EffectKind::Interaction && e.source.iter().any(|s| s == "q2")
         || e.kind == EffectKind::Harmonic && e.source == ["q2"]
+}
+
+fn hysteresis_q2(e: &robokrige::diagnose::EffectReport) -> bool {
+    e.kind == EffectKind::DirectionHistory && e.source == ["dir2"]
 }

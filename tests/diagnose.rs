@@ -92,6 +92,22 @@ fn a_gear_harmonic_absorbed_by_the_gp_is_still_found_and_added_as_trend_terms() 
 }
 
 #[test]
+fn hysteresis_after_reversals_is_traced_to_the_travel_since_the_reversal() {
+    let data = campaign(
+        200,
+        3,
+        Some("hysteresis:joint=2,amp_deg=0.01,travel_deg=20"),
+    );
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::DirectionHistory, "{top:?}");
+    assert_eq!(top.source, ["dir2"]);
+    assert!(top.significant && top.accepted, "{top:?}");
+    assert!(matches!(d.extras[0], Feature::SinceReversal { joint: 2 }));
+    assert!(d.after.pooled_rmse_mm < 0.8 * d.before.pooled_rmse_mm);
+}
+
+#[test]
 fn a_control_campaign_reports_no_significant_effect() {
     let data = campaign(160, 4, None);
     let d = diagnose(&data, &quick(), &|_| {}).unwrap();

@@ -217,8 +217,8 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
             println!(
                 "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}{}{}",
                 describe(e),
-                if e.refit_xi { " ξ" } else { "  " },
                 e.score,
+                if e.refit_xi { " ξ" } else { "  " },
                 e.p_value,
                 e.q_value,
                 if e.accepted {
@@ -259,6 +259,7 @@ pub(super) fn describe(e: &EffectReport) -> String {
         .map(|(k, v)| match k.as_str() {
             "period_deg" => format!("period {v:.3}°"),
             "row" => format!("at row {v:.0}"),
+            "scale_deg" => format!("scale {v:.1}°"),
             _ => format!("{k} {}", fmt_param(*v)),
         })
         .collect();

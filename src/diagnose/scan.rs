@@ -229,30 +229,64 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
             }
         }
     }
-    // direction history
+    // direction history: each alone and signed by the current direction λ
+    // (a history effect on a joint acts along its λ, like backlash)
     for j in 0..n {
-        for f in [
-            Feature::PreviousDirection { joint: j + 1 },
-            Feature::SinceReversal { joint: j + 1 },
-        ] {
-            let col = zscore(
-                &f.columns_from_poses(&data.q, &data.dir)
-                    .expect("pose feature")[0],
-            );
-            if col.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            let label = match f {
-                Feature::PreviousDirection { .. } => format!("previous direction of q{}", j + 1),
-                _ => format!("travel of q{} since its last reversal", j + 1),
-            };
+        let lam: Vec<f64> = data.dir.iter().map(|d| d[j]).collect();
+        let signed = |v: &[f64]| -> Vec<Vec<f64>> {
+            vec![
+                zscore(v),
+                zscore(&v.iter().zip(&lam).map(|(a, l)| a * l).collect::<Vec<_>>()),
+            ]
+        };
+        let prev = Feature::PreviousDirection { joint: j + 1 };
+        let pv = prev
+            .columns_from_poses(&data.q, &data.dir)
+            .expect("pose feature");
+        if pv[0].iter().any(|v| *v != pv[0][0]) {
             out.push(Family {
                 kind: EffectKind::DirectionHistory,
                 source: vec![format!("dir{}", j + 1)],
-                label,
-                grid: vec![single(BTreeMap::new(), col, f)],
+                label: format!("previous direction of q{}", j + 1),
+                grid: vec![GridPoint {
+                    params: BTreeMap::new(),
+                    columns: signed(&pv[0]),
+                    add: vec![prev],
+                }],
             });
         }
+        // travel s since the last reversal: linear, and saturating
+        // 1 − e^(−s/S) over a geometric scan of the scale S
+        let since = Feature::SinceReversal { joint: j + 1 };
+        let s = since
+            .columns_from_poses(&data.q, &data.dir)
+            .expect("pose feature")[0]
+            .clone();
+        let smax = s.iter().cloned().fold(0.0, f64::max);
+        if smax <= 0.0 {
+            continue;
+        }
+        let mut grid = vec![GridPoint {
+            params: BTreeMap::new(),
+            columns: signed(&s),
+            add: vec![since.clone()],
+        }];
+        let mut scale = smax / 2.0;
+        while scale >= 0.5 && grid.len() < 24 {
+            let sat: Vec<f64> = s.iter().map(|v| 1.0 - (-v / scale).exp()).collect();
+            grid.push(GridPoint {
+                params: params(&[("scale_deg", scale)]),
+                columns: signed(&sat),
+                add: vec![since.clone()],
+            });
+            scale /= 1.5;
+        }
+        out.push(Family {
+            kind: EffectKind::DirectionHistory,
+            source: vec![format!("dir{}", j + 1)],
+            label: format!("travel of q{} since its last reversal", j + 1),
+            grid,
+        });
     }
     out
 }
@@ -300,6 +334,10 @@ pub struct Tested {
     pub refit: bool,
 }
 
+/// Re-estimates ξ with a grid point's columns in the trend and returns the
+/// model's systems there ([`gls::refit_systems`]); `None` keeps the first test.
+pub type Refit<'a> = dyn Fn(&[Vec<f64>]) -> Option<Vec<AxisSystem>> + Sync + 'a;
+
 /// Permutations per batch of the sequential test.
 const BATCH: usize = 100;
 /// Exceedances after which a family's p-value is settled (Besag & Clifford
@@ -332,7 +370,7 @@ pub fn test_families(
     seed: u64,
     fold: &[usize],
     refine: usize,
-    refit: &(dyn Fn(&[Vec<f64>]) -> Option<Vec<AxisSystem>> + Sync),
+    refit: &Refit<'_>,
     progress: &dyn Fn(&str),
 ) -> Vec<Tested> {
     let m = systems[0].rows();

@@ -466,6 +466,7 @@ fn measure(
 ) -> Result<Dataset> {
     let all_q: Vec<Vec<f64>> = visits.iter().map(|v| v.q.clone()).collect();
     let all_dir = derive_directions(&all_q, Some(&robot.nominal.home));
+    let travel = super::effects::travel_since_reversal(&all_q, &all_dir, Some(&robot.nominal.home));
     let rows: Vec<usize> = (0..visits.len()).filter(|&i| visits[i].measured).collect();
     let m = rows.len();
     let env = Environment::draw(spec, m, rng);
@@ -480,6 +481,7 @@ fn measure(
         let mut extra = vec![0.0; qk.len()];
         for e in &spec.effects {
             e.joint_deviation(qk, &mut extra);
+            e.history_deviation(dk, &travel[i], &mut extra);
         }
         for (a, x) in qa.iter_mut().zip(&extra) {
             *a += x + gaussian(rng, robot.noise.repeatability_sigma_deg);

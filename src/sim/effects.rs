@@ -7,7 +7,8 @@
 //! `temperature:delta_k=6,tau_s=1800`, `payload:kg=0/25/50`,
 //! `harmonic:joint=2,period_deg=7.5,amp_deg=0.004`,
 //! `tracker-step:row=150,dx=0.15,dy=0,dz=-0.1`,
-//! `crosstalk:joint=1,from=2,gain_deg=0.004`.
+//! `crosstalk:joint=1,from=2,gain_deg=0.004`,
+//! `hysteresis:joint=2,amp_deg=0.01,travel_deg=20`.
 
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -45,15 +46,26 @@ pub enum Effect {
         from: usize,
         gain_deg: f64,
     },
+    /// Hysteresis that builds up after a reversal (Dahl-type friction):
+    /// joint `joint` deviates by `λ·A·(1 − e^(−s/S))`, `s` its travel since
+    /// its last reversal (the move to the pose included). Constant backlash
+    /// (EJS's λ) is the saturated value; for moves of the order of `S` the
+    /// deviation depends on the move history, which no column records.
+    Hysteresis {
+        joint: usize,
+        amp_deg: f64,
+        travel_deg: f64,
+    },
 }
 
 /// Names accepted by [`Effect::parse`].
-pub const EFFECT_NAMES: [&str; 5] = [
+pub const EFFECT_NAMES: [&str; 6] = [
     "temperature",
     "payload",
     "harmonic",
     "tracker-step",
     "crosstalk",
+    "hysteresis",
 ];
 
 impl Effect {
@@ -85,6 +97,11 @@ impl Effect {
                 from: kv.joint("from", 2)?,
                 gain_deg: kv.f("gain_deg", 0.01)?,
             },
+            "hysteresis" => Effect::Hysteresis {
+                joint: kv.joint("joint", 2)?,
+                amp_deg: kv.f("amp_deg", 0.01)?,
+                travel_deg: kv.f("travel_deg", 20.0)?,
+            },
             other => {
                 return Err(Error::InvalidParameter(format!(
                     "unknown effect '{other}' in '{spec}' (known: {})",
@@ -115,6 +132,11 @@ impl Effect {
             Effect::Crosstalk { joint, from, .. } if joint == from => {
                 bad("crosstalk: joint and from must differ".into())
             }
+            Effect::Hysteresis { travel_deg, .. } if travel_deg.is_nan() || *travel_deg <= 0.0 => {
+                bad(format!(
+                    "hysteresis: travel_deg must be > 0, got {travel_deg}"
+                ))
+            }
             _ => Ok(()),
         }
     }
@@ -133,6 +155,7 @@ impl Effect {
         match self {
             Effect::Harmonic { joint, .. } => check(*joint),
             Effect::Crosstalk { joint, from, .. } => check(*joint).and(check(*from)),
+            Effect::Hysteresis { joint, .. } => check(*joint),
             _ => Ok(()),
         }
     }
@@ -154,6 +177,54 @@ impl Effect {
             _ => {}
         }
     }
+
+    /// Extra joint deviation that depends on the move history: `dir` the
+    /// approach directions λ, `since_reversal` every joint's travel since its
+    /// last reversal ([`travel_since_reversal`]).
+    pub fn history_deviation(&self, dir: &[f64], since_reversal: &[f64], out: &mut [f64]) {
+        if let Effect::Hysteresis {
+            joint,
+            amp_deg,
+            travel_deg,
+        } = self
+        {
+            let j = joint - 1;
+            out[j] += dir[j] * amp_deg * (1.0 - (-since_reversal[j] / travel_deg).exp());
+        }
+    }
+}
+
+/// Every joint's travel since its direction last changed, for a visiting
+/// sequence `q` with directions `dir` (from `start`, where the travel is 0):
+/// reset at a reversal, then the move to the pose added.
+pub fn travel_since_reversal(
+    q: &[Vec<f64>],
+    dir: &[Vec<f64>],
+    start: Option<&[f64]>,
+) -> Vec<Vec<f64>> {
+    let n = q.first().map_or(0, Vec::len);
+    let mut travel = vec![0.0; n];
+    let mut prev_q: Option<&[f64]> = start;
+    let mut prev_dir: Option<&[f64]> = None;
+    q.iter()
+        .zip(dir)
+        .map(|(qi, di)| {
+            for j in 0..n {
+                if prev_dir.is_some_and(|p| p[j] != di[j]) {
+                    travel[j] = 0.0;
+                }
+                if let Some(p) = prev_q {
+                    let step = (qi[j] - p[j]).abs();
+                    if step > crate::space::MOVE_EPS {
+                        travel[j] += step;
+                    }
+                }
+            }
+            prev_q = Some(qi);
+            prev_dir = Some(di);
+            travel.clone()
+        })
+        .collect()
 }
 
 /// `key=value` pairs of one effect spec, consumed as they are read so that a
@@ -255,5 +326,22 @@ mod tests {
         assert!(Effect::parse("warp-drive").is_err());
         assert!(Effect::parse("temperature:tau_s=-1").is_err());
         assert!(Effect::parse("crosstalk:joint=2,from=2").is_err());
+        assert!(Effect::parse("hysteresis:travel_deg=0").is_err());
+    }
+
+    #[test]
+    fn hysteresis_builds_up_with_the_travel_since_a_reversal() {
+        let q: Vec<Vec<f64>> = [0.0, 10.0, 25.0, 20.0, 5.0, 30.0]
+            .iter()
+            .map(|v| vec![*v])
+            .collect();
+        let dir = crate::space::derive_directions(&q, Some(&[-5.0]));
+        let s = travel_since_reversal(&q, &dir, Some(&[-5.0]));
+        let s: Vec<f64> = s.iter().map(|r| r[0]).collect();
+        assert_eq!(s, vec![5.0, 15.0, 30.0, 5.0, 20.0, 25.0]);
+        let e = Effect::parse("hysteresis:joint=1,amp_deg=0.01,travel_deg=10").unwrap();
+        let mut out = [0.0];
+        e.history_deviation(&dir[3], &[5.0], &mut out);
+        assert!((out[0] + 0.01 * (1.0 - (-0.5f64).exp())).abs() < 1e-15);
     }
 }

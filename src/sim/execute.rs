@@ -50,15 +50,18 @@ pub fn execute(
         &IkOptions::default(),
     ))?;
     let dir = derive_directions(&joints, Some(start));
+    let travel = super::effects::travel_since_reversal(&joints, &dir, Some(start));
     let ctx = Default::default();
     let measured = joints
         .iter()
         .zip(&dir)
-        .map(|(q, d)| {
+        .zip(&travel)
+        .map(|((q, d), s)| {
             let mut qa = robot.actual_joints(q, d, &ctx);
             let mut extra = vec![0.0; q.len()];
             for e in effects {
                 e.joint_deviation(q, &mut extra);
+                e.history_deviation(d, s, &mut extra);
             }
             for (a, x) in qa.iter_mut().zip(&extra) {
                 *a += x + gaussian(rng, robot.noise.repeatability_sigma_deg);
