@@ -15,5 +15,6 @@ rk simulate --robot comau-nj220 --poses 300 --seed 1 --effect payload:kg=0/60/12
 rk simulate --robot comau-nj220 --poses 300 --seed 1 --effect harmonic:joint=2,period_deg=7.5,amp_deg=0.004 -o $D/comau_harmonic.csv
 rk simulate --robot comau-nj220 --poses 300 --seed 1 --effect tracker-step:row=150,dx=0.15,dy=-0.1,dz=0.1 -o $D/comau_tracker_step.csv
 rk simulate --robot comau-nj220 --poses 300 --seed 1 --effect crosstalk:joint=1,from=2,gain_deg=0.01 -o $D/comau_crosstalk.csv
+rk simulate --robot comau-nj220 --poses 300 --seed 1 --effect hysteresis:joint=2,amp_deg=0.01,travel_deg=20 -o $D/comau_hysteresis.csv
 # SCARA RH-3FRH5515 indexing tests (seed 000 §2.3)
 rk simulate --robot scara-rh3frh5515 --kind indexing --cycles 3 --seed 1 -o $D/scara_indexing.csv
