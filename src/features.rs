@@ -221,6 +221,15 @@ fn check_complete(source: &str, names: &[String], cols: Vec<Vec<f64>>) -> Result
     Ok(cols)
 }
 
+/// Number of input columns of `extras` that are trend-only.
+pub fn trend_only_dims(extras: &[Feature]) -> usize {
+    extras
+        .iter()
+        .filter(|f| f.trend_only())
+        .map(|f| f.names().len())
+        .sum()
+}
+
 /// Append the columns of `features` to `rows` (one row per pose).
 pub fn append_columns(rows: &mut [Vec<f64>], cols: &[Vec<f64>]) {
     for c in cols {

@@ -216,12 +216,7 @@ impl ErrorModel {
         }
         let input_norm = Normalizer::fit(&rows);
         let x = input_norm.apply_rows(&rows);
-        let trend_only: usize = extras
-            .iter()
-            .filter(|f| f.trend_only())
-            .map(|f| f.names().len())
-            .sum();
-        let corr_dims = names.len() - trend_only;
+        let corr_dims = names.len() - crate::features::trend_only_dims(extras);
         let inputs = TrainingInputs::new(
             &x.iter()
                 .map(|r| r[..corr_dims].to_vec())
@@ -325,13 +320,7 @@ impl ErrorModel {
     /// extras that are not trend-only (those come first, see
     /// [`ErrorModel::fit_with_extras`]).
     pub fn correlation_dims(&self) -> usize {
-        self.input_names.len()
-            - self
-                .extras
-                .iter()
-                .filter(|f| f.trend_only())
-                .map(|f| f.names().len())
-                .sum::<usize>()
+        self.input_names.len() - crate::features::trend_only_dims(&self.extras)
     }
 
     /// Warnings about the conditioning of the fit: an output whose correlation

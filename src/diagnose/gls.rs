@@ -31,11 +31,9 @@
 //! the three axes) gives `γ* = Mᵀ(s ∘ r̃)`, data the model explains as well
 //! as the real data but in which no candidate has a real effect. Signs, not
 //! a permutation of the rows (Freedman & Lane 1983), because the noise is
-//! not the same everywhere: joint repeatability reaches the TCP through the
-//! Jacobian, so a regressor shaped like a Jacobian column lines up with the
-//! noisier rows, and a permutation, which spreads the large residuals over
-//! all rows, flagged such candidates in campaigns without any effect. A
-//! sign flip keeps every row's size (the wild bootstrap). Only `γ` and `r̃`
+//! not the same everywhere (joint repeatability reaches the TCP through the
+//! Jacobian, tracker noise grows with the distance): a sign flip keeps every
+//! row's size, a permutation does not (the wild bootstrap). Only `γ` and `r̃`
 //! change, so one resample costs one m × m product per axis.
 
 use crate::kriging::{

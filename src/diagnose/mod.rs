@@ -10,8 +10,9 @@
 //! 3. **Tracing** ([`scan::test_families`], [`gls`]): each grid point is
 //!    tried inside the current model (its columns join the trend at the
 //!    model's ξ and nugget); a family's statistic is its best leave-one-out
-//!    gain, its p-value a permutation test against pseudo-campaigns of the
-//!    fitted model, Benjamini–Hochberg across families, and its score the
+//!    gain (for the strongest few at the ξ re-estimated with them), its
+//!    p-value a test against sign-flipped pseudo-campaigns of the fitted
+//!    model, Benjamini–Hochberg across families, and its score the
 //!    closed-form K-fold CV drop.
 //! 4. **Adding**: the best-scoring significant family's feature joins the
 //!    model the way its kind needs ([`crate::features::Feature`]): a step,
@@ -46,8 +47,10 @@ pub struct DiagnoseOptions {
     pub space: Space,
     pub kriging: KrigingOptions,
     pub folds: usize,
-    /// Seed of the fold partition and of the permutations.
+    /// Seed of the fold partition and of the resamples.
     pub seed: u64,
+    /// Most sign-flip resamples per candidate (a sign-flip permutation test;
+    /// a clearly null candidate stops after a batch or two).
     pub permutations: usize,
     /// False-discovery rate for the Benjamini–Hochberg step.
     pub fdr: f64,

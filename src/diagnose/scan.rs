@@ -5,11 +5,13 @@
 //! regressor columns. Every grid point is tried *inside* the current model
 //! ([`gls`](super::gls)): its columns join the trend at the model's ξ and
 //! nugget, and the statistic is the pooled leave-one-out gain, maximised
-//! over the grid. Significance is a permutation test of that maximum against
-//! pseudo-campaigns of the fitted model (its whitened residuals permuted,
-//! the same permutations for every family, so the scan over the grid is paid
-//! for), with the Benjamini–Hochberg correction across families. The score
-//! used for ranking is the closed-form K-fold CV drop of the best grid point.
+//! over the grid; the strongest few families are tried again at the ξ the
+//! model would choose with them. Significance is a test of that maximum
+//! against pseudo-campaigns of the fitted model (its whitened residuals with
+//! random signs, the same resamples for every family, so the scan over the
+//! grid is paid for), with the Benjamini–Hochberg correction across
+//! families. The score used for ranking is the closed-form K-fold CV drop
+//! of the best grid point.
 
 use super::gls::{self, AxisSystem, FamilyTest};
 use crate::dataset::Dataset;
@@ -69,9 +71,8 @@ fn params(kv: &[(&str, f64)]) -> BTreeMap<String, f64> {
 /// `exclude` (already in the model) and columns with missing values are left
 /// out; the harmonic periods run from 2° to half the joint's range, in steps
 /// of a tenth of a cycle over the range (a phase error of at most 1/20
-/// cycle at the ends; a quarter-cycle grid picked 7.99° for a 7.5°
-/// harmonic). With a robot preset (`robot`), joint cross-talk candidates
-/// mapped through its Jacobian are added.
+/// cycle at the ends). With a robot preset (`robot`), joint cross-talk
+/// candidates mapped through its Jacobian are added.
 pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
