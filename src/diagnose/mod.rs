@@ -38,6 +38,9 @@ pub use scan::EffectKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// Significant candidates per round whose refit CV is tried before giving up.
+const CONFIRMATIONS: usize = 3;
+
 /// Options of [`diagnose`]; `Default` is EJS with Hooke–Jeeves and a
 /// nugget (measurement noise: without one, the interpolating model cannot
 /// approach the noise floor), 10 folds, 1999 permutations, FDR 5 %, at most
@@ -314,41 +317,55 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 .collect();
             reports[k].confounded_with = similar;
         }
-        let done = match pick {
-            None => true,
-            Some(k) if round > o.max_effects => {
+        // the best significant candidates in turn, until the refit CV
+        // confirms one (at most CONFIRMATIONS per round)
+        let mut done = true;
+        let order: Vec<usize> = (0..reports.len())
+            .filter(|&i| reports[i].significant && reports[i].score > 0.0)
+            .take(CONFIRMATIONS)
+            .collect();
+        for k in order {
+            if round > o.max_effects {
                 reports[k].note = Some(format!("not added: the cap of {} effects", o.max_effects));
-                true
+                break;
             }
-            Some(k) => {
-                let mut trial = extras.clone();
-                for f in &reports[k].add {
-                    if !trial.contains(f) {
-                        trial.push(f.clone());
-                    }
+            let mut trial = extras.clone();
+            for f in &reports[k].add {
+                if !trial.contains(f) {
+                    trial.push(f.clone());
                 }
-                progress(&format!(
-                    "adding '{}' and cross-validating again",
-                    reports[k].label
+            }
+            progress(&format!(
+                "adding '{}' and cross-validating again",
+                reports[k].label
+            ));
+            let after = cross_validated(data, &trial, o)?;
+            if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
+                reports[k].accepted = true;
+                extras = trial;
+                current = after.clone();
+                steps.push(after);
+                done = false;
+                break;
+            }
+            let drop = format!(
+                "CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop",
+                current.pooled_rmse_mm,
+                after.pooled_rmse_mm,
+                100.0 * o.min_gain
+            );
+            if reports[k].refit_xi {
+                // its statistic came from ξ re-estimated on these data, whose
+                // null is optimistic: without the refit CV's confirmation it
+                // does not count
+                reports[k].significant = false;
+                reports[k].note = Some(format!(
+                    "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
                 ));
-                let after = cross_validated(data, &trial, o)?;
-                if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
-                    reports[k].accepted = true;
-                    extras = trial;
-                    current = after.clone();
-                    steps.push(after);
-                    false
-                } else {
-                    reports[k].note = Some(format!(
-                        "not added: CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop",
-                        current.pooled_rmse_mm,
-                        after.pooled_rmse_mm,
-                        100.0 * o.min_gain
-                    ));
-                    true
-                }
+            } else {
+                reports[k].note = Some(format!("not added: {drop}"));
             }
-        };
+        }
         effects.extend(reports);
         if done {
             break;
