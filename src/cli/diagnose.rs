@@ -30,7 +30,8 @@ model's correlation parameters, refitted for the strongest few): statistic,
 the leave-one-out gain maximised over its parameter scan; p-value against
 sign-flipped pseudo-campaigns of the fitted model; Benjamini–Hochberg across
 candidates; score, the closed-form K-fold CV drop. The best significant one
-(q within the FDR and ≥ 2 % lower CV RMSE) is added the way its kind needs
+(q within the FDR and ≥ 2 % lower CV RMSE; for one tested at re-estimated
+parameters, also confirmed by the refit CV) is added the way its kind needs
 (trend terms for a step, harmonic, interaction or cross-talk; an input
 dimension for a covariate, the order or direction history), and the model
 is cross-validated again, until nothing significant remains.

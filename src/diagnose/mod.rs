@@ -62,7 +62,8 @@ pub struct DiagnoseOptions {
     /// a candidate is *significant* when its q-value is within `fdr` and its
     /// closed-form CV drop reaches this (a detectable but negligible effect
     /// is ranked, with a note, not flagged), and it is *kept* when the refit
-    /// CV confirms the drop.
+    /// CV confirms the drop. A candidate whose statistic comes from
+    /// re-estimated ξ stays significant only if that confirmation succeeds.
     pub min_gain: f64,
     /// Robot preset name: enables the joint cross-talk candidates (Jacobian).
     pub robot: Option<String>,
