@@ -355,7 +355,7 @@ struct Trial {
     /// Reported grid point and the systems it is scored at (0: the model's).
     best: usize,
     systems: usize,
-    /// The family's test at re-estimated ξ (`systems ≥ 1`).
+    /// The family's test at re-estimated ξ, when that is where it is scored.
     refit: Option<FamilyTest>,
 }
 
@@ -432,14 +432,15 @@ pub fn test_families(
         // the model without it, which inflates the first, or better, which
         // inflates the second)
         let improvement = gain.min(gain - (gls::loo_sse_before(&sys) - loo0));
-        sets.push(sys);
         let t = &mut trials[k];
+        // kept only when it wins (4 m × m matrices per output)
         if improvement > t.stat {
+            sets.push(sys);
             t.stat = improvement;
             t.best = best;
             t.systems = sets.len() - 1;
+            t.refit = Some(test);
         }
-        t.refit = Some(test);
     }
     let mut exceed = vec![0usize; families.len()];
     let mut run = vec![0usize; families.len()];
