@@ -296,7 +296,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                         )
                     }),
                     refit_xi: t.refit,
-                    resamples: t.permutations,
+                    resamples: t.resamples,
                     add: g.add.clone(),
                 }
             })

@@ -329,8 +329,8 @@ pub struct Tested {
     /// Out-of-sample score: relative drop of the closed-form K-fold CV SSE
     /// when the best grid point joins the trend.
     pub score: f64,
-    /// Permutations run before the family's p-value was settled.
-    pub permutations: usize,
+    /// Sign-flip resamples run before the family's p-value was settled.
+    pub resamples: usize,
     /// Tested at the ξ the model would choose with it (else at the model's ξ).
     pub refit: bool,
 }
@@ -339,7 +339,7 @@ pub struct Tested {
 /// model's systems there ([`gls::refit_systems`]); `None` keeps the first test.
 pub type Refit<'a> = dyn Fn(&[Vec<f64>]) -> Option<Vec<AxisSystem>> + Sync + 'a;
 
-/// Permutations per batch of the sequential test.
+/// Resamples per batch of the sequential test.
 const BATCH: usize = 100;
 /// Exceedances after which a family's p-value is settled (Besag & Clifford
 /// 1991): a clearly null family stops after a batch or two.
@@ -520,7 +520,7 @@ pub fn test_families(
                 p_value: p[k],
                 q_value: q[k],
                 score,
-                permutations: run[k],
+                resamples: run[k],
                 refit: t.systems > 0,
             }
         })
