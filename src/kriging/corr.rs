@@ -17,6 +17,21 @@ pub trait CorrelationModel: Send + Sync {
             *o = self.corr(theta, &a, &x.row(i + 1 + k));
         }
     }
+
+    /// Gradient hook of the likelihood: for column `i` of R's strict lower
+    /// triangle, `grad[k] += Σ_j w[j] · ∂R(s_i, s_{i+1+j}) / ∂ln ξ_k`, where
+    /// `r[j] = R(s_i, s_{i+1+j})` are the values [`Self::fill_column`] wrote
+    /// (models whose derivative is a multiple of R use them). `w` is scratch:
+    /// an implementation may overwrite it.
+    fn accumulate_gradient(
+        &self,
+        theta: &[f64],
+        x: &TrainingInputs,
+        i: usize,
+        r: &[f64],
+        w: &mut [f64],
+        grad: &mut [f64],
+    );
 }
 
 /// Gaussian correlation, seed 003 eq 8: `R = exp(−Σ_k ξ_k (s_k − s'_k)²)`.
@@ -47,6 +62,36 @@ impl CorrelationModel for Gaussian {
             }
         }
         super::fastexp::exp_in_place(out);
+    }
+
+    /// `∂R/∂ln ξ_k = −ξ_k (s_k − s'_k)² R`: with `v_j = w_j R_j` precomputed,
+    /// one vectorised pass per dimension.
+    fn accumulate_gradient(
+        &self,
+        theta: &[f64],
+        x: &TrainingInputs,
+        i: usize,
+        r: &[f64],
+        w: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        for (v, b) in w.iter_mut().zip(r) {
+            *v *= b;
+        }
+        let wr = &*w;
+        for (k, (t, g)) in theta.iter().zip(grad.iter_mut()).enumerate() {
+            let col = x.dim_values(k);
+            let a = col[i];
+            let s: f64 = wr
+                .iter()
+                .zip(&col[i + 1..])
+                .map(|(v, b)| {
+                    let diff = b - a;
+                    v * diff * diff
+                })
+                .sum();
+            *g -= t * s;
+        }
     }
 }
 

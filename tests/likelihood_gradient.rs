@@ -1,0 +1,138 @@
+//! The analytic gradient of the concentrated likelihood ln ψ (issue 16 §1)
+//! against central differences, for constant, linear, kinematic and fused
+//! (PCC+PCA) trends, at several ξ, with and without a nugget.
+
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::kinematics;
+use robokrige::kriging::{
+    Gaussian, KrigingModel, KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs,
+    Workspace, trend_matrix,
+};
+use robokrige::model::ErrorModel;
+use robokrige::space::Space;
+use std::path::Path;
+
+fn campaign(rows: usize) -> Dataset {
+    let d = read_csv(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_lhs.csv"
+    )))
+    .unwrap();
+    d.select(&(0..rows).collect::<Vec<_>>())
+}
+
+/// A quick fit whose only purpose is to produce each kind of trend.
+fn quick() -> KrigingOptions {
+    KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 30,
+        ..KrigingOptions::default()
+    }
+}
+
+/// ln ψ at `z` = (log10 ξ, [log10 ν]).
+fn ln_psi(prob: &KrigingProblem, z: &[f64], d: usize, ws: &mut Workspace) -> f64 {
+    let theta: Vec<f64> = z[..d].iter().map(|v| 10f64.powf(*v)).collect();
+    let nu = if z.len() > d { 10f64.powf(z[d]) } else { 0.0 };
+    prob.psi(&theta, nu, ws).unwrap().ln_psi
+}
+
+/// Checks every component of the analytic gradient of one output's problem
+/// against central differences at three ξ, with and without a nugget.
+fn check(out: &KrigingModel, y: &[f64], what: &str) {
+    let data = &out.data;
+    let x = &data.x_train;
+    let d = data.theta.len();
+    let inputs = TrainingInputs::new(x);
+    let f = trend_matrix(&data.trend, x);
+    let yn: Vec<f64> = y.iter().map(|v| (v - data.y_mean) / data.y_std).collect();
+    let prob = KrigingProblem {
+        min_jitter: None,
+        corr: &Gaussian,
+        inputs: &inputs,
+        f: &f,
+        y: &yn,
+    };
+    let mut ws = Workspace::new(x.len(), f.ncols());
+    let mut ws_fd = Workspace::new(x.len(), f.ncols());
+    let points: [(f64, Option<f64>); 4] = [
+        (-1.5, None),
+        (-0.7, None),
+        (-1.0, Some(-2.5)),
+        (-0.3, Some(-1.2)),
+    ];
+    for (k0, (base, nugget)) in points.into_iter().enumerate() {
+        // a different ξ per dimension, so that every component is exercised
+        let mut z: Vec<f64> = (0..d)
+            .map(|k| base + 0.35 * (((k + k0) * 7 % 5) as f64 - 2.0) / 2.0)
+            .collect();
+        if let Some(nu) = nugget {
+            z.push(nu);
+        }
+        let theta: Vec<f64> = z[..d].iter().map(|v| 10f64.powf(*v)).collect();
+        let nu = nugget.map_or(0.0, |v| 10f64.powf(v));
+        let mut grad = vec![0.0; z.len()];
+        let v = prob.psi_grad(&theta, nu, &mut ws, &mut grad).unwrap();
+        assert_eq!(v.ln_psi, prob.psi(&theta, nu, &mut ws_fd).unwrap().ln_psi);
+        let h = 1e-5;
+        let scale = grad.iter().map(|g| g.abs()).fold(0.0, f64::max);
+        assert!(scale > 1e-4, "{what}: a gradient of zero tests nothing");
+        for k in 0..z.len() {
+            let mut zp = z.clone();
+            zp[k] += h;
+            let mut zm = z.clone();
+            zm[k] -= h;
+            let fd = (ln_psi(&prob, &zp, d, &mut ws_fd) - ln_psi(&prob, &zm, d, &mut ws_fd))
+                / (2.0 * h);
+            assert!(
+                (grad[k] - fd).abs() <= 1e-6 + 1e-5 * scale,
+                "{what}, point {k0}, component {k}: analytic {} vs central difference {fd}",
+                grad[k]
+            );
+        }
+    }
+}
+
+fn check_model(model: &ErrorModel, data: &Dataset, what: &str) {
+    let errors = data.errors.as_ref().unwrap();
+    for (a, out) in model.outputs.iter().enumerate() {
+        let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+        check(out, &y, &format!("{what} output {a}"));
+    }
+}
+
+#[test]
+fn gradient_matches_central_differences_constant_and_linear_trends() {
+    let data = campaign(70);
+    for trend in [
+        robokrige::kriging::TrendKind::Constant,
+        robokrige::kriging::TrendKind::Linear,
+    ] {
+        let opts = KrigingOptions { trend, ..quick() };
+        let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+        check_model(&model, &data, &format!("{trend:?}"));
+    }
+}
+
+#[test]
+fn gradient_matches_central_differences_kinematic_trend() {
+    let data = campaign(90);
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let model = ErrorModel::fit_kinematic(&data, Space::Ejs, &quick(), &robot).unwrap();
+    assert!(matches!(
+        model.outputs[0].data.trend,
+        robokrige::kriging::Trend::Kinematic(_)
+    ));
+    check_model(&model, &data, "kinematic");
+}
+
+#[test]
+fn gradient_matches_central_differences_fused_trend() {
+    let data = campaign(80);
+    let (model, _) = ErrorModel::fit_pcc_pca(&data, Space::Ejs, &quick(), 0.1, 0.99).unwrap();
+    assert!(matches!(
+        model.outputs[0].data.trend,
+        robokrige::kriging::Trend::Fused(_)
+    ));
+    check_model(&model, &data, "fused");
+}
