@@ -23,6 +23,9 @@ use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
+/// GPS starts of the papers' set-ups (box centre + 3 LHS points).
+pub const PAPER_GPS_STARTS: usize = 4;
+
 /// A named model variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -96,6 +99,8 @@ impl Method {
         let gps = KrigingOptions {
             seed,
             nugget,
+            optimizer: OptimizerKind::Gps,
+            starts: PAPER_GPS_STARTS,
             ..KrigingOptions::default()
         };
         let hj = KrigingOptions {

@@ -82,8 +82,8 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
             zp[k] += h;
             let mut zm = z.clone();
             zm[k] -= h;
-            let fd = (ln_psi(&prob, &zp, d, &mut ws_fd) - ln_psi(&prob, &zm, d, &mut ws_fd))
-                / (2.0 * h);
+            let fd =
+                (ln_psi(&prob, &zp, d, &mut ws_fd) - ln_psi(&prob, &zm, d, &mut ws_fd)) / (2.0 * h);
             assert!(
                 (grad[k] - fd).abs() <= 1e-6 + 1e-5 * scale,
                 "{what}, point {k0}, component {k}: analytic {} vs central difference {fd}",

@@ -25,6 +25,8 @@ pub enum TrendArg {
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum OptimizerArg {
+    /// Projected BFGS on the analytic likelihood gradient, 8 starts (default).
+    Bfgs,
     /// Generalised pattern search from several LHS starts.
     Gps,
     /// Hooke–Jeeves from the centre of the box.
@@ -38,15 +40,15 @@ pub struct ModelArgs {
     space: SpaceArg,
     #[arg(long, value_enum, default_value = "constant")]
     trend: TrendArg,
-    #[arg(long, value_enum, default_value = "gps")]
+    #[arg(long, value_enum, default_value = "bfgs")]
     optimizer: OptimizerArg,
     /// Estimate a nugget (measurement noise) with the correlation parameters.
     #[arg(long)]
     nugget: bool,
-    /// GPS starts (box centre + LHS points).
-    #[arg(long, default_value_t = 4)]
-    starts: usize,
-    /// Seed of the GPS starts.
+    /// Starting points (centre + LHS points) [default: 8 for bfgs, 4 for gps].
+    #[arg(long)]
+    starts: Option<usize>,
+    /// Seed of the LHS starts.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Joints entered as (sin θ, cos θ) so θ and θ ± 360° coincide: "auto"
@@ -120,11 +122,15 @@ impl ModelArgs {
                 TrendArg::Quadratic => TrendKind::Quadratic,
             },
             optimizer: match self.optimizer {
+                OptimizerArg::Bfgs => OptimizerKind::Bfgs,
                 OptimizerArg::Gps => OptimizerKind::Gps,
                 OptimizerArg::Hj => OptimizerKind::HookeJeeves,
             },
             nugget: self.nugget,
-            starts: self.starts,
+            starts: self.starts.unwrap_or(match self.optimizer {
+                OptimizerArg::Gps => robokrige::methods::PAPER_GPS_STARTS,
+                _ => KrigingOptions::default().starts,
+            }),
             seed: self.seed,
             ..KrigingOptions::default()
         };

@@ -47,8 +47,9 @@ pub struct HoldoutArgs {
     test: usize,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Kriging hyperparameter search: hj (Hooke–Jeeves, fast) or gps.
-    #[arg(long, default_value = "hj")]
+    /// Kriging hyperparameter search: bfgs (analytic gradient, 8 starts),
+    /// hj (Hooke–Jeeves) or gps (4 starts).
+    #[arg(long, default_value = "bfgs")]
     optimizer: String,
     /// Estimate a nugget in the Kriging fits (real data has noise).
     #[arg(long)]
@@ -145,13 +146,19 @@ fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> Row
 fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
     Ok(KrigingOptions {
         optimizer: match a.optimizer.as_str() {
+            "bfgs" => OptimizerKind::Bfgs,
             "hj" => OptimizerKind::HookeJeeves,
             "gps" => OptimizerKind::Gps,
             o => {
                 return Err(Error::InvalidParameter(format!(
-                    "--optimizer '{o}': expected hj or gps"
+                    "--optimizer '{o}': expected bfgs, hj or gps"
                 )));
             }
+        },
+        starts: if a.optimizer == "gps" {
+            robokrige::methods::PAPER_GPS_STARTS
+        } else {
+            KrigingOptions::default().starts
         },
         seed: a.seed,
         nugget: a.nugget,
@@ -387,10 +394,10 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         a.train,
         a.train + 1,
         a.train + a.test,
-        if a.optimizer == "gps" {
-            "GPS"
-        } else {
-            "Hooke–Jeeves"
+        match a.optimizer.as_str() {
+            "gps" => "GPS",
+            "hj" => "Hooke–Jeeves",
+            _ => "BFGS (analytic gradient)",
         },
         if a.nugget { ", nugget estimated" } else { "" },
         if periodic.is_empty() {

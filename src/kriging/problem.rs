@@ -23,10 +23,10 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::{
     LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
 };
+use faer::linalg::matmul::triangular::{BlockStructure, matmul as tri_matmul};
 use faer::linalg::qr::no_pivoting::factor::{
     qr_in_place, qr_in_place_scratch, recommended_block_size,
 };
-use faer::linalg::matmul::triangular::{BlockStructure, matmul as tri_matmul};
 use faer::linalg::triangular_inverse::invert_lower_triangular;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
@@ -279,7 +279,11 @@ impl KrigingProblem<'_> {
         let mut gamma = vec![0.0; m];
         for j in 0..m {
             gamma[j] += rinv[(j, j)] * e[j];
-            let col = &rinv.col(j).try_as_col_major().expect("contiguous").as_slice()[j + 1..];
+            let col = &rinv
+                .col(j)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()[j + 1..];
             let mut acc = 0.0;
             for (k, r) in col.iter().enumerate() {
                 gamma[j + 1 + k] += r * e[j];
@@ -291,8 +295,17 @@ impl KrigingProblem<'_> {
         grad.fill(0.0);
         let mut w = vec![0.0; m];
         for j in 0..m {
-            let rin = &rinv.col(j).try_as_col_major().expect("contiguous").as_slice()[j + 1..];
-            let rc = &ws.base.col(j).try_as_col_major().expect("contiguous").as_slice()[j + 1..];
+            let rin = &rinv
+                .col(j)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()[j + 1..];
+            let rc = &ws
+                .base
+                .col(j)
+                .try_as_col_major()
+                .expect("contiguous")
+                .as_slice()[j + 1..];
             let wj = &mut w[..rin.len()];
             let gj = gamma[j] * inv_s2;
             for ((o, a), g) in wj.iter_mut().zip(rin).zip(&gamma[j + 1..]) {

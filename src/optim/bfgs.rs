@@ -125,7 +125,7 @@ pub fn bfgs<F: FnMut(&[f64]) -> f64>(
     }
 }
 
-fn identity(d: usize) -> Vec<Vec<f64>> {
+pub(super) fn identity(d: usize) -> Vec<Vec<f64>> {
     (0..d)
         .map(|i| (0..d).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
         .collect()
@@ -156,7 +156,7 @@ fn gradient<F: FnMut(&[f64]) -> f64>(
 }
 
 /// `H ← (I − ρsyᵀ) H (I − ρysᵀ) + ρssᵀ`, skipped unless `sᵀy > 0`.
-fn bfgs_update(h: &mut [Vec<f64>], s: &[f64], y: &[f64]) {
+pub(super) fn bfgs_update(h: &mut [Vec<f64>], s: &[f64], y: &[f64]) {
     let sy: f64 = s.iter().zip(y).map(|(a, b)| a * b).sum();
     if sy
         <= 1e-12

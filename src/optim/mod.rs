@@ -1,5 +1,5 @@
-//! Derivative-free box-constrained minimisers. They know nothing about
-//! Kriging: each takes an objective closure `FnMut(&[f64]) -> f64` (return
+//! Box-constrained minimisers. They know nothing about
+//! Kriging: the derivative-free ones take an objective closure `FnMut(&[f64]) -> f64` (return
 //! `f64::INFINITY` for a point that cannot be evaluated) and a [`Bounds`].
 //!
 //! - [`hooke_jeeves`]: exploratory coordinate moves + pattern moves, step
@@ -10,6 +10,8 @@
 //!   below a tolerance or the evaluation budget is spent.
 //! - [`bfgs`]: box-constrained BFGS with finite-difference gradients, to
 //!   polish a smooth minimum found by a pattern search.
+//! - [`quasi_newton`]: projected BFGS with analytic gradients (the default
+//!   hyperparameter search; takes `FnMut(&[f64], &mut [f64]) -> f64`).
 //! - [`ga`]: genetic algorithm over bit strings (basis selection, seed 004).
 //! - [`levenberg_marquardt`]: Levenberg–Marquardt for nonlinear least squares
 //!   `min ½‖r(x)‖²` (takes residuals and Jacobian, not a scalar objective;
@@ -23,12 +25,14 @@ mod ga;
 mod gps;
 mod hooke_jeeves;
 mod lm;
+mod quasi_newton;
 
 pub use bfgs::{BfgsOptions, bfgs};
 pub use ga::{GaOptions, GaResult, ga};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
 pub use lm::{LmOptions, LmResult, LmStop, levenberg_marquardt, numerical_jacobian};
+pub use quasi_newton::{QuasiNewtonOptions, quasi_newton};
 
 use rand::RngExt;
 use rayon::prelude::*;
