@@ -16,7 +16,11 @@ use std::path::Path;
 
 /// Format tag and version of saved models.
 pub const MODEL_FORMAT: &str = "robokrige-error-model";
-pub const MODEL_VERSION: u32 = 1;
+/// Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
+/// first needed). Version 1 files, which store it, still load.
+pub const MODEL_VERSION: u32 = 2;
+/// Oldest model-file version that loads.
+pub const MODEL_VERSION_MIN: u32 = 1;
 
 /// Output axis names.
 pub const AXES: [&str; 3] = ["ex", "ey", "ez"];
@@ -360,7 +364,11 @@ impl ErrorModel {
 
     fn predict_rows(&self, rows: &[Vec<f64>]) -> Result<Prediction> {
         let s = self.input_norm.apply_rows(rows);
-        let per_axis: Vec<Vec<Pred>> = self.outputs.par_iter().map(|m| m.predict(&s)).collect();
+        let per_axis: Vec<Vec<Pred>> = self
+            .outputs
+            .par_iter()
+            .map(|m| m.predict(&s))
+            .collect::<Result<_>>()?;
         let mut mean = vec![[0.0; 3]; rows.len()];
         let mut std = vec![[0.0; 3]; rows.len()];
         for (a, preds) in per_axis.iter().enumerate() {
@@ -443,15 +451,16 @@ impl ErrorModel {
         })?;
         let format = head.get("format").and_then(|v| v.as_str()).unwrap_or("");
         let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
-        if format != MODEL_FORMAT || version != u64::from(MODEL_VERSION) {
+        let known = u64::from(MODEL_VERSION_MIN)..=u64::from(MODEL_VERSION);
+        if format != MODEL_FORMAT || !known.contains(&version) {
             return Err(Error::Input {
                 source_name: source_name.into(),
                 message: format!(
-                    "not a robokrige error model of version {MODEL_VERSION} (found format '{format}', version {version}); refit it with this version"
+                    "not a robokrige error model of version {MODEL_VERSION_MIN}–{MODEL_VERSION} (found format '{format}', version {version}); refit it with this version"
                 ),
             });
         }
-        let model: ErrorModel = serde_json::from_value(head).map_err(|e| Error::Json {
+        let mut model: ErrorModel = serde_json::from_value(head).map_err(|e| Error::Json {
             context: source_name.into(),
             source: e,
         })?;
@@ -473,6 +482,8 @@ impl ErrorModel {
                 message: "model file is inconsistent (outputs or input dimension)".into(),
             });
         }
+        // held in memory (and saved again) in the current form
+        model.version = MODEL_VERSION;
         Ok(model)
     }
 }

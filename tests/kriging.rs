@@ -48,7 +48,7 @@ fn interpolates_training_points_with_zero_mse_and_nonnegative_mse_elsewhere() {
     ] {
         let y = axis(&d, 1);
         let m = fit_output_at(&x, &inputs, &y, &trend, &THETA, 0.0, None).unwrap();
-        let p = m.predict(&x);
+        let p = m.predict(&x).unwrap();
         for (pi, yi) in p.iter().zip(&y) {
             assert!((pi.mean - yi).abs() < 1e-7, "{} vs {}", pi.mean, yi);
             assert!(
@@ -64,6 +64,7 @@ fn interpolates_training_points_with_zero_mse_and_nonnegative_mse_elsewhere() {
             .collect();
         assert!(
             m.predict(&mid)
+                .unwrap()
                 .iter()
                 .all(|p| p.mse >= 0.0 && p.mse.is_finite() && p.mean.is_finite())
         );
@@ -87,6 +88,7 @@ fn with_a_nugget_the_model_smooths_instead_of_interpolating() {
     .unwrap();
     let worst = m
         .predict(&x)
+        .unwrap()
         .iter()
         .zip(&y)
         .map(|(p, v)| (p.mean - v).abs())
@@ -121,7 +123,12 @@ fn row_order_does_not_change_predictions() {
         .iter()
         .map(|r| r.iter().map(|v| v + 0.05).collect())
         .collect();
-    for (pa, pb) in a.predict(&probe).iter().zip(b.predict(&probe)) {
+    for (pa, pb) in a
+        .predict(&probe)
+        .unwrap()
+        .iter()
+        .zip(b.predict(&probe).unwrap())
+    {
         assert!((pa.mean - pb.mean).abs() < 1e-9 * (1.0 + pa.mean.abs()));
         assert!((pa.mse - pb.mse).abs() < 1e-9 * (1e-6 + pa.mse));
     }
@@ -181,7 +188,7 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
     let text =
         std::fs::read_to_string(&path)
             .unwrap()
-            .replacen("\"version\":1", "\"version\":99", 1);
+            .replacen("\"version\":2", "\"version\":99", 1);
     let err = ErrorModel::from_json(&text, "old.json")
         .unwrap_err()
         .to_string();
@@ -189,6 +196,75 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
     // wrong joint count at prediction
     assert!(model.predict(&[vec![0.0; 5]], &[vec![1.0; 5]]).is_err());
     std::fs::remove_file(path).ok();
+}
+
+/// Model files are O(m·d): no Cholesky factor is written, and the MSE after
+/// loading (factor recomputed) is bit-identical. A version-1 file, which
+/// stores the factor, still loads and predicts the same.
+#[test]
+fn model_files_store_no_factor_and_version_1_files_still_load() {
+    let d = campaign(80);
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 60,
+        nugget: true,
+        ..KrigingOptions::default()
+    };
+    let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    let text = serde_json::to_string(&model).unwrap();
+    assert!(!text.contains("chol_lower"));
+    let back = ErrorModel::from_json(&text, "v2.json").unwrap();
+    // a version-1 file: the same model with each output's packed factor
+    let mut v1: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v1["version"] = 1.into();
+    for (a, out) in model.outputs.iter().enumerate() {
+        let (c, _, _) = out.factors().unwrap();
+        let packed: Vec<f64> = (0..c.nrows())
+            .flat_map(|i| (0..=i).map(move |j| (i, j)))
+            .map(|(i, j)| c[(i, j)])
+            .collect();
+        v1["outputs"][a]["chol_lower"] = serde_json::to_value(packed).unwrap();
+    }
+    let v1_text = v1.to_string();
+    assert!(
+        v1_text.len() > 2 * text.len(),
+        "the factor dominates a v1 file"
+    );
+    let old = ErrorModel::from_json(&v1_text, "v1.json").unwrap();
+    assert_eq!(old.version, 2);
+    let probe_q: Vec<Vec<f64>> =
+        d.q.iter()
+            .map(|q| q.iter().map(|v| v - 0.4).collect())
+            .collect();
+    let p0 = model.predict(&probe_q, &d.dir).unwrap();
+    for other in [&back, &old] {
+        let p = other.predict(&probe_q, &d.dir).unwrap();
+        for (x, y) in p0
+            .mean
+            .iter()
+            .chain(&p0.std)
+            .flatten()
+            .zip(p.mean.iter().chain(&p.std).flatten())
+        {
+            assert_eq!(x.to_bits(), y.to_bits());
+        }
+    }
+    // an impossible ξ or scale is refused on load, with one clear error
+    for (field, value) in [("theta", "[-1.0]"), ("y_std", "1e300"), ("nugget", "-0.5")] {
+        let mut bad: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let v: serde_json::Value = serde_json::from_str(value).unwrap();
+        if field == "theta" {
+            let mut t = bad["outputs"][0]["theta"].clone();
+            t[0] = v[0].clone();
+            bad["outputs"][0]["theta"] = t;
+        } else {
+            bad["outputs"][0][field] = v;
+        }
+        assert!(
+            ErrorModel::from_json(&bad.to_string(), "bad.json").is_err(),
+            "{field} = {value} accepted"
+        );
+    }
 }
 
 #[test]
@@ -375,7 +451,7 @@ fn closed_form_cv_equals_refit_at_fixed_theta() {
             )
             .unwrap();
             let xh: Vec<Vec<f64>> = block.iter().map(|&i| x[i].clone()).collect();
-            for (p, &i) in refit.predict(&xh).iter().zip(block) {
+            for (p, &i) in refit.predict(&xh).unwrap().iter().zip(block) {
                 let e = y[i] - p.mean;
                 let diff = (closed[i] - e).abs() / e.abs().max(1e-3);
                 worst = worst.max(diff);

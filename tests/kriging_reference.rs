@@ -121,7 +121,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
             Some(ref_nugget(&fx)),
         )
         .unwrap();
-        let pred = model.predict(&s.xv);
+        let pred = model.predict(&s.xv).unwrap();
         let (mean_ref, mse_ref) = (f64s(&c["verify"]["mean"]), f64s(&c["verify"]["mse"]));
         // 1e-8, or where R is so ill-conditioned that no float64 code gets
         // there (js: cond(R) = 2.8e8; SMT and numpy are off by 2–4e-8) the

@@ -61,7 +61,7 @@ proptest! {
     ) {
         let x = points(&flat, 3);
         let m = fit(&x, &y, theta);
-        for (p, yi) in m.predict(&x).iter().zip(&y) {
+        for (p, yi) in m.predict(&x).unwrap().iter().zip(&y) {
             prop_assert!((p.mean - yi).abs() < 1e-6, "{} vs {}", p.mean, yi);
             prop_assert!(p.mse >= 0.0 && p.mse < 1e-6);
         }
@@ -76,13 +76,13 @@ proptest! {
         shift in -5.0f64..5.0,
     ) {
         let x = points(&flat, 3);
-        let base = fit(&x, &y, 1.0).predict(std::slice::from_ref(&probe))[0];
+        let base = fit(&x, &y, 1.0).predict(std::slice::from_ref(&probe)).unwrap()[0];
         let rev_x: Vec<Vec<f64>> = x.iter().rev().cloned().collect();
         let rev_y: Vec<f64> = y.iter().rev().copied().collect();
-        let rev = fit(&rev_x, &rev_y, 1.0).predict(std::slice::from_ref(&probe))[0];
+        let rev = fit(&rev_x, &rev_y, 1.0).predict(std::slice::from_ref(&probe)).unwrap()[0];
         prop_assert!((rev.mean - base.mean).abs() < 1e-8 * (1.0 + base.mean.abs()));
         let ay: Vec<f64> = y.iter().map(|v| scale * v + shift).collect();
-        let aff = fit(&x, &ay, 1.0).predict(std::slice::from_ref(&probe))[0];
+        let aff = fit(&x, &ay, 1.0).predict(std::slice::from_ref(&probe)).unwrap()[0];
         let want = scale * base.mean + shift;
         prop_assert!((aff.mean - want).abs() < 1e-7 * (scale + shift.abs() + 1.0), "{} vs {want}", aff.mean);
         prop_assert!((aff.mse - scale * scale * base.mse).abs() <= 1e-6 * scale * scale * (base.mse + 1e-12));
@@ -102,7 +102,7 @@ fn nearly_coincident_points_and_extreme_correlation_lengths_stay_finite() {
         let m = fit(&x, &y, theta);
         assert!(m.data.jitter >= dace);
 
-        for p in m.predict(&probe) {
+        for p in m.predict(&probe).unwrap() {
             assert!(
                 p.mean.is_finite() && p.mse.is_finite() && p.mse >= 0.0,
                 "θ {theta}: {p:?}"
@@ -195,6 +195,6 @@ fn an_unfactorisable_correlation_matrix_escalates_the_jitter() {
         "jitter {:e}",
         m.data.jitter
     );
-    let p = m.predict(&[vec![0.5], vec![2.0]]);
+    let p = m.predict(&[vec![0.5], vec![2.0]]).unwrap();
     assert!(p.iter().all(|v| v.mean.is_finite() && v.mse.is_finite()));
 }

@@ -65,8 +65,8 @@ pub struct AxisSystem {
 
 impl AxisSystem {
     /// From a fitted output (O(m³), once per round).
-    pub fn new(model: &KrigingModel) -> Self {
-        let (c, ft, g) = model.factors();
+    pub fn new(model: &KrigingModel) -> Result<Self> {
+        let (c, ft, g) = model.factors()?;
         let m = c.nrows();
         let mut z = Mat::<f64>::identity(m, m);
         solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
@@ -79,7 +79,7 @@ impl AxisSystem {
         let gamma = model.data.gamma.clone();
         let gcol = Mat::<f64>::from_fn(m, 1, |i, _| gamma[i]);
         let rtm = c.transpose() * &gcol;
-        AxisSystem {
+        Ok(AxisSystem {
             a_diag: (0..m).map(|i| a[(i, i)]).collect(),
             rt: (0..m).map(|i| rtm[(i, 0)]).collect(),
             z,
@@ -88,7 +88,7 @@ impl AxisSystem {
             a,
             gamma,
             scale2: model.data.y_std * model.data.y_std,
-        }
+        })
     }
 
     pub fn rows(&self) -> usize {
@@ -423,7 +423,7 @@ pub fn refit_systems(
                 report.nugget,
                 opts.min_jitter,
             )?;
-            Ok(AxisSystem::new(&at))
+            AxisSystem::new(&at)
         })
         .collect()
 }
@@ -469,7 +469,7 @@ mod tests {
         let names = vec!["a".to_string(), "b".to_string()];
         let base = Trend::Monomials(Monomials::constant(2));
         let (model, rep) = fit_output(&x, &inputs, &y, &base, &names, &opts).unwrap();
-        let sys = vec![AxisSystem::new(&model)];
+        let sys = vec![AxisSystem::new(&model).unwrap()];
         let test = FamilyTest::new(&sys, &[vec![extra.clone()]]);
         // the same column in the trend, factorised at the same ξ and nugget
         let x_aug: Vec<Vec<f64>> = x

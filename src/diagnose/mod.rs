@@ -252,8 +252,11 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         ));
         let work = with_columns(data, &extras)?;
         let model = ErrorModel::fit_with_extras(&work, o.space, &o.kriging, &extras)?;
-        let systems: Vec<gls::AxisSystem> =
-            model.outputs.iter().map(gls::AxisSystem::new).collect();
+        let systems: Vec<gls::AxisSystem> = model
+            .outputs
+            .iter()
+            .map(gls::AxisSystem::new)
+            .collect::<Result<_>>()?;
         let refit = |cols: &[Vec<f64>]| gls::refit_systems(&model, errors, &o.kriging, cols).ok();
         let mut tested = scan::test_families(
             &fams,

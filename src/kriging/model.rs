@@ -40,22 +40,38 @@ pub struct KrigingModelData {
     pub sigma2: f64,
     /// ln ψ at ξ (eq 14); `f64::MIN` stands for −∞ (σ² = 0).
     pub ln_psi: f64,
-    /// Lower Cholesky factor of R, packed by rows (`i ≥ j`).
+    /// Lower Cholesky factor of R, packed by rows (`i ≥ j`): written by
+    /// model files of version 1 only (O(m²)); now empty, and the factor is
+    /// recomputed from ξ, ν, ε and the inputs when first needed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub chol_lower: Vec<f64>,
     /// QR factor G of F̃, packed by rows (`i ≤ j`).
     pub g_upper: Vec<f64>,
 }
 
-/// A fitted model with its factors unpacked for prediction.
+/// The m × m part of a fit, needed for the MSE and closed-form CV but not
+/// for the mean: C (lower Cholesky factor of R + νI) and `F̃ = C⁻¹F`.
+#[derive(Debug, Clone)]
+struct Factors {
+    c: Mat<f64>,
+    ftilde: Mat<f64>,
+}
+
+/// Largest m whose factor a freshly fitted model keeps in memory (128 MB);
+/// beyond it the factor is recomputed on the first MSE request.
+const KEEP_FACTOR_MAX_M: usize = 4096;
+
+/// A fitted model ready for prediction. The mean needs only β and γ; the
+/// Cholesky factor is computed on the first MSE request (or kept from the
+/// fit), so a loaded model costs O(m·d) until then.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(try_from = "KrigingModelData", into = "KrigingModelData")]
 pub struct KrigingModel {
     pub data: KrigingModelData,
-    c: Mat<f64>,
     g: Mat<f64>,
-    ftilde: Mat<f64>,
     /// Training inputs, dimension-major (vectorised correlation vectors).
     xt: TrainingInputs,
+    factors: std::sync::OnceLock<std::result::Result<Factors, String>>,
 }
 
 impl PartialEq for KrigingModel {
@@ -73,12 +89,13 @@ impl From<KrigingModel> for KrigingModelData {
 impl TryFrom<KrigingModelData> for KrigingModel {
     type Error = Error;
 
-    fn try_from(data: KrigingModelData) -> Result<Self> {
+    fn try_from(mut data: KrigingModelData) -> Result<Self> {
         let m = data.x_train.len();
         let p = data.trend.len();
         let d = data.theta.len();
         let bad = |what: &str| Err(Error::InvalidParameter(format!("Kriging model: {what}")));
-        if data.gamma.len() != m || data.chol_lower.len() != m * (m + 1) / 2 {
+        let old_factor = !data.chol_lower.is_empty();
+        if data.gamma.len() != m || (old_factor && data.chol_lower.len() != m * (m + 1) / 2) {
             return bad("training size and factors disagree");
         }
         if data.beta.len() != p || data.g_upper.len() != p * (p + 1) / 2 || data.trend.dim() != d {
@@ -103,16 +120,36 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         {
             return bad("non-finite or invalid values");
         }
-        let c = unpack_lower(&data.chol_lower, m);
+        if data.theta.iter().any(|t| *t < 0.0) {
+            return bad("a correlation parameter ξ is negative");
+        }
+        let jitter_ok =
+            data.jitter.is_finite() && (0.0..=super::problem::MAX_JITTER).contains(&data.jitter);
+        if !data.nugget.is_finite() || data.nugget < 0.0 || !jitter_ok {
+            return bad("the nugget or the jitter is negative, non-finite or out of range");
+        }
+        // the MSE is σ²·y_std²: it must stay finite
+        if data.sigma2 < 0.0 || !(data.y_std * data.y_std * data.sigma2.max(1.0)).is_finite() {
+            return bad("σ² is negative or the output scale is not finite");
+        }
+        if data.x_train.iter().flatten().any(|v| !v.is_finite()) {
+            return bad("non-finite training inputs");
+        }
         let g = unpack_upper(&data.g_upper, p);
-        let ftilde = ftilde(&c, &data.trend, &data.x_train);
         let xt = TrainingInputs::new(&data.x_train);
+        let factors = std::sync::OnceLock::new();
+        if old_factor {
+            // a version-1 file: use its factor, and save the compact form
+            let c = unpack_lower(&data.chol_lower, m);
+            let ftilde = ftilde(&c, &data.trend, &data.x_train);
+            let _ = factors.set(Ok(Factors { c, ftilde }));
+            data.chol_lower = Vec::new();
+        }
         Ok(KrigingModel {
             data,
-            c,
             g,
-            ftilde,
             xt,
+            factors,
         })
     }
 }
@@ -170,12 +207,6 @@ impl KrigingModel {
     ) -> Result<Self> {
         let m = x_train.len();
         let p = trend.len();
-        let mut chol_lower = Vec::with_capacity(m * (m + 1) / 2);
-        for i in 0..m {
-            for j in 0..=i {
-                chol_lower.push(sol.c[(i, j)]);
-            }
-        }
         let mut g_upper = Vec::with_capacity(p * (p + 1) / 2);
         for i in 0..p {
             for j in i..p {
@@ -194,15 +225,35 @@ impl KrigingModel {
             gamma: sol.gamma,
             sigma2: sol.value.sigma2,
             ln_psi: storable_ln_psi(sol.value.ln_psi),
-            chol_lower,
+            chol_lower: Vec::new(),
             g_upper,
+        })
+        .inspect(|model| {
+            if m <= KEEP_FACTOR_MAX_M {
+                let ftilde = ftilde(&sol.c, &model.data.trend, &model.data.x_train);
+                let _ = model.factors.set(Ok(Factors { c: sol.c, ftilde }));
+            }
         })
     }
 
     /// The factors of the fit in normalised units: `C` (lower Cholesky
-    /// factor of R + νI), `F̃ = C⁻¹F` and `G` (upper, `F̃ = QG`).
-    pub fn factors(&self) -> (&Mat<f64>, &Mat<f64>, &Mat<f64>) {
-        (&self.c, &self.ftilde, &self.g)
+    /// factor of R + νI), `F̃ = C⁻¹F` and `G` (upper, `F̃ = QG`). C is
+    /// recomputed from ξ, ν, ε and the training inputs on the first call
+    /// (O(m³), bit-identical to the fit's) unless the fit kept it.
+    pub fn factors(&self) -> Result<(&Mat<f64>, &Mat<f64>, &Mat<f64>)> {
+        let f = self.factors.get_or_init(|| {
+            let d = &self.data;
+            super::problem::factor_at(&Gaussian, &self.xt, &d.theta, d.nugget, d.jitter)
+                .map(|c| {
+                    let ftilde = ftilde(&c, &d.trend, &d.x_train);
+                    Factors { c, ftilde }
+                })
+                .map_err(|e| e.to_string())
+        });
+        match f {
+            Ok(f) => Ok((&f.c, &f.ftilde, &self.g)),
+            Err(e) => Err(Error::Numerical(e.clone())),
+        }
     }
 
     /// Input dimension.
@@ -242,14 +293,16 @@ impl KrigingModel {
 
     /// Predict at normalised inputs (mean and MSE in original units).
     /// Blocks of points run in parallel; each point's result does not depend
-    /// on the others.
-    pub fn predict(&self, s: &[Vec<f64>]) -> Vec<Pred> {
-        s.par_chunks(BLOCK)
-            .flat_map_iter(|blk| self.predict_block(blk))
-            .collect()
+    /// on the others. An error only when the factor cannot be recomputed
+    /// (see [`KrigingModel::factors`]).
+    pub fn predict(&self, s: &[Vec<f64>]) -> Result<Vec<Pred>> {
+        let (c, ftilde, _) = self.factors()?;
+        Ok(s.par_chunks(BLOCK)
+            .flat_map_iter(|blk| self.predict_block(blk, c, ftilde))
+            .collect())
     }
 
-    fn predict_block(&self, s: &[Vec<f64>]) -> Vec<Pred> {
+    fn predict_block(&self, s: &[Vec<f64>], c: &Mat<f64>, ftilde: &Mat<f64>) -> Vec<Pred> {
         let d = &self.data;
         let (m, p, b) = (d.x_train.len(), d.trend.len(), s.len());
         let mut r = Mat::<f64>::zeros(m, b);
@@ -272,12 +325,12 @@ impl KrigingModel {
             }
         }
         // r̃ = C⁻¹ r and U = F̃ᵀ r̃ for all points of the block at once
-        solve_lower_triangular_in_place(self.c.as_ref(), r.as_mut(), Par::Seq);
+        solve_lower_triangular_in_place(c.as_ref(), r.as_mut(), Par::Seq);
         let mut uu = Mat::<f64>::zeros(p, b);
         matmul(
             uu.as_mut(),
             Accum::Replace,
-            self.ftilde.transpose(),
+            ftilde.transpose(),
             r.as_ref(),
             1.0,
             Par::Seq,
@@ -316,6 +369,7 @@ impl KrigingModel {
         let d = &self.data;
         let m = d.x_train.len();
         let p = d.trend.len();
+        let (c, ftilde, g) = self.factors()?;
         let mut out = vec![f64::NAN; m];
         for block in blocks {
             let k = block.len();
@@ -331,7 +385,7 @@ impl KrigingModel {
             for (j, &i) in block.iter().enumerate() {
                 z[(i, j)] = 1.0;
             }
-            solve_lower_triangular_in_place(self.c.as_ref(), z.as_mut(), Par::Seq);
+            solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
             let mut b = Mat::<f64>::zeros(k, k);
             matmul(
                 b.as_mut(),
@@ -346,13 +400,13 @@ impl KrigingModel {
             matmul(
                 qz.as_mut(),
                 Accum::Replace,
-                self.ftilde.transpose(),
+                ftilde.transpose(),
                 z.as_ref(),
                 1.0,
                 Par::Seq,
             );
             faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-                self.g.transpose(),
+                g.transpose(),
                 qz.as_mut(),
                 Par::Seq,
             );

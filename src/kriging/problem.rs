@@ -249,11 +249,8 @@ impl KrigingProblem<'_> {
         // β = G⁻¹ b from the QR of [F̃ ỹ], then e = y − Fβ
         let mut beta = vec![0.0; p];
         for j in (0..p).rev() {
-            let mut s = ws.aug[(j, p)];
-            for k in j + 1..p {
-                s -= ws.aug[(j, k)] * beta[k];
-            }
-            beta[j] = s / ws.aug[(j, j)];
+            let s: f64 = (j + 1..p).map(|k| ws.aug[(j, k)] * beta[k]).sum();
+            beta[j] = (ws.aug[(j, p)] - s) / ws.aug[(j, j)];
         }
         let e: Vec<f64> = (0..m)
             .map(|i| self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>())
@@ -334,7 +331,8 @@ impl KrigingProblem<'_> {
         let p = self.f.ncols();
         let mut ws = Workspace::new(m, p);
         let value = self.evaluate(theta, nugget, &mut ws)?;
-        let mut c = ws.r.clone();
+        // the factor leaves the workspace (no m × m copy)
+        let mut c = std::mem::replace(&mut ws.r, Mat::zeros(0, 0));
         for j in 0..m {
             for i in 0..j {
                 c[(i, j)] = 0.0;
@@ -366,6 +364,48 @@ impl KrigingProblem<'_> {
             gamma: resid.iter().copied().collect(),
         })
     }
+}
+
+/// The lower Cholesky factor C of `R + (ν + ε)I` at a known jitter ε, filled
+/// and factorised exactly as during the fit, so the factor is bit-identical
+/// to the fit's (saved models keep ξ, ν, ε and the inputs, not C: O(m·d)
+/// instead of O(m²)). Upper triangle zero. One m × m allocation.
+pub fn factor_at(
+    corr: &dyn CorrelationModel,
+    inputs: &TrainingInputs,
+    theta: &[f64],
+    nugget: f64,
+    jitter: f64,
+) -> Result<Mat<f64>> {
+    let m = inputs.m;
+    let mut c = Mat::<f64>::zeros(m, m);
+    inputs.fill_lower(corr, theta, nugget, c.as_mut());
+    for i in 0..m {
+        c[(i, i)] += jitter;
+    }
+    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
+        m,
+        Par::Seq,
+        Default::default(),
+    ));
+    cholesky_in_place(
+        c.as_mut(),
+        LltRegularization::default(),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map_err(|_| {
+        Error::Numerical(format!(
+            "correlation matrix not positive definite at the saved ξ, ν = {nugget:e} and jitter {jitter:e}"
+        ))
+    })?;
+    for j in 0..m {
+        for i in 0..j {
+            c[(i, j)] = 0.0;
+        }
+    }
+    Ok(c)
 }
 
 /// ln ψ as stored in reports and model files: −∞ (a response the trend

@@ -213,8 +213,8 @@ mod tests {
                 ..QuasiNewtonOptions::default()
             },
         );
-        for i in 0..3 {
-            assert!((r.x[i] - t[i]).abs() < 1e-6, "{r:?}");
+        for (x, t) in r.x.iter().zip(&t).take(3) {
+            assert!((x - t).abs() < 1e-6, "{r:?}");
         }
         assert_eq!(r.x[3], 2.0);
         assert!(r.evals < 60, "{} evaluations", r.evals);
