@@ -78,6 +78,16 @@ pub enum Error {
     #[error("{}: plot: {message}", path.display())]
     Plot { path: PathBuf, message: String },
 
+    /// A command would allocate more memory than the limit allows
+    /// ([`crate::memory`]).
+    #[error("{what} needs about {needed} of memory, over the limit of {limit}: {hint}")]
+    Memory {
+        what: String,
+        needed: String,
+        limit: String,
+        hint: String,
+    },
+
     /// A linear-algebra step failed (e.g. a matrix that stays singular).
     #[error("numerical failure: {0}")]
     Numerical(String),

@@ -14,6 +14,7 @@
 //! | [`dataset`] | the measurement CSV: read, validate, write |
 //! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
 //! | [`stats`] | summaries of error sets |
+//! | [`memory`] | memory estimates and the limit checked before large allocations |
 //! | [`kriging`] | universal Kriging: trend, correlation, fit, predict |
 //! | [`basis`], [`methods`], [`cv`] | trend selection, the papers' model variants, K-fold CV |
 //! | [`plot`] | SVG charts (box plots, x–y plots) |
@@ -28,6 +29,7 @@ pub mod features;
 pub mod frames;
 pub mod kinematics;
 pub mod kriging;
+pub mod memory;
 pub mod methods;
 pub mod model;
 pub mod optim;

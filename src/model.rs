@@ -14,6 +14,30 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`]),
+/// refused with [`Error::Memory`] when its estimated peak exceeds the
+/// memory limit ([`crate::memory`]); the message names the most rows that
+/// fit.
+pub fn check_fit_memory(
+    rows: usize,
+    optimizer: crate::kriging::OptimizerKind,
+) -> Result<crate::kriging::FitPlan> {
+    let threads = rayon::current_num_threads();
+    let plan = crate::kriging::FitPlan::new(rows, 3, optimizer, threads);
+    if let Some((limit, _)) = crate::memory::limit() {
+        let fits = crate::kriging::FitPlan::max_rows(limit, 3, optimizer, threads);
+        crate::memory::check(
+            &format!("a fit of {rows} rows"),
+            plan.bytes,
+            &format!(
+                "fit at most {fits} rows (a subset, e.g. `--rows {fits}` where the command has it), or raise {}",
+                crate::memory::LIMIT_ENV
+            ),
+        )?;
+    }
+    Ok(plan)
+}
+
 /// Format tag and version of saved models.
 pub const MODEL_FORMAT: &str = "robokrige-error-model";
 /// Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
@@ -226,13 +250,17 @@ impl ErrorModel {
                 .map(|r| r[..corr_dims].to_vec())
                 .collect::<Vec<_>>(),
         );
-        let fits: Vec<Result<(KrigingModel, FitReport)>> = (0..3)
-            .into_par_iter()
-            .map(|a| {
-                let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-                fit_output(&x, &inputs, &y, &trends[a], &names, opts)
-            })
-            .collect();
+        let plan = check_fit_memory(data.len(), opts.optimizer)?;
+        let fit_axis = |a: usize| {
+            let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+            fit_output(&x, &inputs, &y, &trends[a], &names, opts)
+        };
+        // large campaigns: one output at a time, one m × m factor in memory
+        let fits: Vec<Result<(KrigingModel, FitReport)>> = if plan.sequential_outputs {
+            (0..3).map(fit_axis).collect()
+        } else {
+            (0..3).into_par_iter().map(fit_axis).collect()
+        };
         let mut outputs = Vec::with_capacity(3);
         let mut reports = Vec::with_capacity(3);
         for (a, f) in fits.into_iter().enumerate() {

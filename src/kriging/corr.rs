@@ -118,6 +118,21 @@ impl TrainingInputs {
         TrainingInputs { m, d, by_dim }
     }
 
+    /// The rows at `rows`, in that order.
+    pub fn select(&self, rows: &[usize]) -> Self {
+        let m = rows.len();
+        let mut by_dim = Vec::with_capacity(m * self.d);
+        for k in 0..self.d {
+            let col = self.dim_values(k);
+            by_dim.extend(rows.iter().map(|&i| col[i]));
+        }
+        TrainingInputs {
+            m,
+            d: self.d,
+            by_dim,
+        }
+    }
+
     /// Values of dimension k for all rows.
     pub fn dim_values(&self, k: usize) -> &[f64] {
         &self.by_dim[k * self.m..(k + 1) * self.m]

@@ -59,7 +59,7 @@ struct Factors {
 
 /// Largest m whose factor a freshly fitted model keeps in memory (128 MB);
 /// beyond it the factor is recomputed on the first MSE request.
-const KEEP_FACTOR_MAX_M: usize = 4096;
+pub const KEEP_FACTOR_MAX_M: usize = 4096;
 
 /// A fitted model ready for prediction. The mean needs only β and γ; the
 /// Cholesky factor is computed on the first MSE request (or kept from the

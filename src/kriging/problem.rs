@@ -191,31 +191,49 @@ impl KrigingProblem<'_> {
     }
 
     fn evaluate(&self, theta: &[f64], nugget: f64, ws: &mut Workspace) -> Result<PsiValue> {
-        let m = self.m();
-        let p = self.f.ncols();
         let jitter = self.factor_r(theta, nugget, ws)?;
-        let ln_det_r = 2.0 * (0..m).map(|i| ws.r[(i, i)].ln()).sum::<f64>();
-        ws.aug.as_mut().subcols_mut(0, p).copy_from(self.f.as_ref());
-        for (i, v) in self.y.iter().enumerate() {
-            ws.aug[(i, p)] = *v;
-        }
-        solve_lower_triangular_in_place(ws.r.as_ref(), ws.aug.as_mut(), Par::Seq);
-        let stack = MemStack::new(&mut ws.mem);
-        qr_in_place(
-            ws.aug.as_mut(),
-            ws.qcoef.as_mut(),
+        let (ln_det_r, sigma2) = self.trend_qr(
+            ws.r.as_ref(),
+            &mut ws.aug,
+            &mut ws.qcoef,
+            &mut ws.mem,
             Par::Seq,
-            stack,
-            Default::default(),
         );
-        let rho = ws.aug[(p, p)];
-        let sigma2 = rho * rho / m as f64;
         Ok(PsiValue {
-            ln_psi: ln_det_r / m as f64 + sigma2.ln(),
+            ln_psi: ln_det_r / self.m() as f64 + sigma2.ln(),
             sigma2,
             ln_det_r,
             jitter,
         })
+    }
+
+    /// Given the factor C: `ln|R| = 2Σ ln C_ii`, then `[F̃ ỹ] = C⁻¹[F y]` and
+    /// its QR in `aug` (G and b on top, ρ at (p, p)); returns (ln|R|, σ²).
+    fn trend_qr(
+        &self,
+        c: faer::MatRef<'_, f64>,
+        aug: &mut Mat<f64>,
+        qcoef: &mut Mat<f64>,
+        mem: &mut MemBuffer,
+        par: Par,
+    ) -> (f64, f64) {
+        let m = self.m();
+        let p = self.f.ncols();
+        let ln_det_r = 2.0 * (0..m).map(|i| c[(i, i)].ln()).sum::<f64>();
+        aug.as_mut().subcols_mut(0, p).copy_from(self.f.as_ref());
+        for (i, v) in self.y.iter().enumerate() {
+            aug[(i, p)] = *v;
+        }
+        solve_lower_triangular_in_place(c, aug.as_mut(), par);
+        qr_in_place(
+            aug.as_mut(),
+            qcoef.as_mut(),
+            Par::Seq,
+            MemStack::new(mem),
+            Default::default(),
+        );
+        let rho = aug[(p, p)];
+        (ln_det_r, rho * rho / m as f64)
     }
 
     /// ln ψ and its gradient in the optimisers' coordinates `z = (log10 ξ,
@@ -326,26 +344,56 @@ impl KrigingProblem<'_> {
 
     /// Full solution at ξ: C, G, β, γ (eqs 10–13). Unlike [`Self::psi`] it
     /// accepts σ² = 0 (a response the trend reproduces exactly).
+    ///
+    /// Holds one m × m matrix (the factor, filled in place and refilled for
+    /// the next jitter rung if the Cholesky fails: the same ladder and the
+    /// same bits as [`Self::psi`]'s), so that campaigns of ten thousand rows
+    /// fit in memory; from [`PAR_MIN_ROWS`] rows the factorisation uses all
+    /// threads.
     pub fn solve(&self, theta: &[f64], nugget: f64) -> Result<Solution> {
         let m = self.m();
         let p = self.f.ncols();
-        let mut ws = Workspace::new(m, p);
-        let value = self.evaluate(theta, nugget, &mut ws)?;
-        // the factor leaves the workspace (no m × m copy)
-        let mut c = std::mem::replace(&mut ws.r, Mat::zeros(0, 0));
-        for j in 0..m {
-            for i in 0..j {
-                c[(i, j)] = 0.0;
+        let par = par_for(m);
+        let eps0 = self.min_jitter.unwrap_or((10.0 + m as f64) * f64::EPSILON);
+        let max_rung = (MAX_JITTER / eps0).log10().floor() as usize;
+        let mut factored = None;
+        for k in 0..=max_rung {
+            let jitter = eps0 * 10f64.powi(k as i32);
+            if let Ok(c) = factor_at(self.corr, self.inputs, theta, nugget, jitter) {
+                factored = Some((c, jitter));
+                break;
             }
         }
+        let Some((c, jitter)) = factored else {
+            return Err(Error::Numerical(format!(
+                "correlation matrix not positive definite even with jitter {MAX_JITTER:e} (duplicate poses? try a nugget)"
+            )));
+        };
+        let bs = recommended_block_size::<f64>(m, p + 1);
+        let mut aug = Mat::zeros(m, p + 1);
+        let mut qcoef = Mat::zeros(bs, (p + 1).min(m));
+        let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(
+            m,
+            p + 1,
+            bs,
+            Par::Seq,
+            Default::default(),
+        ));
+        let (ln_det_r, sigma2) = self.trend_qr(c.as_ref(), &mut aug, &mut qcoef, &mut mem, par);
+        let value = PsiValue {
+            ln_psi: ln_det_r / m as f64 + sigma2.ln(),
+            sigma2,
+            ln_det_r,
+            jitter,
+        };
         // G and b from the QR of [F̃ ỹ]; β = G⁻¹ b
         let mut g = Mat::<f64>::zeros(p, p);
         let mut beta = vec![0.0; p];
         for j in 0..p {
             for i in 0..=j {
-                g[(i, j)] = ws.aug[(i, j)];
+                g[(i, j)] = aug[(i, j)];
             }
-            beta[j] = ws.aug[(j, p)];
+            beta[j] = aug[(j, p)];
         }
         let mut b = faer::Col::from_fn(p, |i| beta[i]);
         solve_upper_triangular_in_place(g.as_ref(), b.as_mat_mut(), Par::Seq);
@@ -354,8 +402,8 @@ impl KrigingProblem<'_> {
         let mut resid = faer::Col::from_fn(m, |i| {
             self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>()
         });
-        solve_lower_triangular_in_place(c.as_ref(), resid.as_mat_mut(), Par::Seq);
-        solve_upper_triangular_in_place(c.transpose(), resid.as_mat_mut(), Par::Seq);
+        solve_lower_triangular_in_place(c.as_ref(), resid.as_mat_mut(), par);
+        solve_upper_triangular_in_place(c.transpose(), resid.as_mat_mut(), par);
         Ok(Solution {
             value,
             c,
@@ -363,6 +411,20 @@ impl KrigingProblem<'_> {
             beta,
             gamma: resid.iter().copied().collect(),
         })
+    }
+}
+
+/// From this many rows a single factorisation ([`KrigingProblem::solve`],
+/// [`factor_at`]) uses all threads; below, one (the callers run outputs and
+/// starts in parallel). The choice depends on m alone, so a factor
+/// recomputed after loading a model is the fit's, bit for bit.
+pub const PAR_MIN_ROWS: usize = 2048;
+
+fn par_for(m: usize) -> Par {
+    if m >= PAR_MIN_ROWS {
+        Par::rayon(0)
+    } else {
+        Par::Seq
     }
 }
 
@@ -378,20 +440,17 @@ pub fn factor_at(
     jitter: f64,
 ) -> Result<Mat<f64>> {
     let m = inputs.m;
+    let par = par_for(m);
     let mut c = Mat::<f64>::zeros(m, m);
     inputs.fill_lower(corr, theta, nugget, c.as_mut());
     for i in 0..m {
         c[(i, i)] += jitter;
     }
-    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
-        m,
-        Par::Seq,
-        Default::default(),
-    ));
+    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(m, par, Default::default()));
     cholesky_in_place(
         c.as_mut(),
         LltRegularization::default(),
-        Par::Seq,
+        par,
         MemStack::new(&mut mem),
         Default::default(),
     )

@@ -59,16 +59,30 @@ impl Default for QuasiNewtonOptions {
 /// `∇f(x)` into `g`; it returns `f64::INFINITY` (or NaN) where f cannot be
 /// evaluated, and the search backs off from there. Never returns a point
 /// worse than the clamped start.
-pub fn quasi_newton<F>(
+pub fn quasi_newton<F>(fg: F, x0: &[f64], bounds: &Bounds, opts: &QuasiNewtonOptions) -> OptimResult
+where
+    F: FnMut(&[f64], &mut [f64]) -> f64,
+{
+    quasi_newton_warm(fg, x0, None, bounds, opts).0
+}
+
+/// [`quasi_newton`] from a given inverse Hessian approximation (e.g. the
+/// one a run on a subset of the data ended with), returning the final one
+/// too. `None` starts from the identity, scaled after the first step.
+pub fn quasi_newton_warm<F>(
     mut fg: F,
     x0: &[f64],
+    hinv0: Option<Vec<Vec<f64>>>,
     bounds: &Bounds,
     opts: &QuasiNewtonOptions,
-) -> OptimResult
+) -> (OptimResult, Vec<Vec<f64>>)
 where
     F: FnMut(&[f64], &mut [f64]) -> f64,
 {
     let d = x0.len();
+    let warm = hinv0
+        .as_ref()
+        .is_some_and(|h| h.len() == d && h.iter().all(|r| r.len() == d));
     let evals = std::cell::Cell::new(0);
     let mut eval = |x: &[f64], g: &mut [f64]| {
         evals.set(evals.get() + 1);
@@ -78,8 +92,10 @@ where
     let mut x = bounds.clamp(x0);
     let mut g = vec![0.0; d];
     let mut fx = eval(&x, &mut g);
-    let mut hinv = identity(d);
-    let mut scaled = false;
+    let (mut hinv, mut scaled) = match hinv0 {
+        Some(h) if warm => (h, true),
+        _ => (identity(d), false),
+    };
     let mut iterations = 0;
     let mut gn = vec![0.0; d];
     let stop = loop {
@@ -175,13 +191,16 @@ where
             break StopReason::MeshTolerance;
         }
     };
-    OptimResult {
-        x,
-        f: fx,
-        evals: evals.get(),
-        iterations,
-        stop,
-    }
+    (
+        OptimResult {
+            x,
+            f: fx,
+            evals: evals.get(),
+            iterations,
+            stop,
+        },
+        hinv,
+    )
 }
 
 #[cfg(test)]
