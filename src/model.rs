@@ -14,6 +14,19 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// Per joint `(min, max)` of the rows.
+fn joint_range(q: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let n = q.first().map_or(0, Vec::len);
+    (0..n)
+        .map(|j| {
+            q.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+                    (lo.min(r[j]), hi.max(r[j]))
+                })
+        })
+        .collect()
+}
+
 /// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`]),
 /// refused with [`Error::Memory`] when its estimated peak exceeds the
 /// memory limit ([`crate::memory`]); the message names the most rows that
@@ -68,7 +81,91 @@ pub struct ErrorModel {
     /// Basis selection that chose the trends (PCC+PCA or GA), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub selection: Option<crate::basis::Selection>,
+    /// Joint range `(min, max)` of the training campaign, degrees, per joint
+    /// (empty in files written before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joint_range: Vec<(f64, f64)>,
 }
+
+/// Why a prediction point is outside what the training data covers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum CoverageIssue {
+    /// A joint outside the campaign's range.
+    JointRange {
+        joint: usize,
+        value_deg: f64,
+        min_deg: f64,
+        max_deg: f64,
+    },
+    /// The prediction's standard deviation is a large share of the prior
+    /// (process) standard deviation: no training pose is near.
+    Uncertain {
+        axis: usize,
+        std_mm: f64,
+        process_std_mm: f64,
+    },
+    /// The Kriging correction `r(s)ᵀγ` departs from the trend-only
+    /// prediction by more than the process σ allows: a trend that
+    /// extrapolates wildly, corrected by the GP near the data only.
+    TrendDisagrees {
+        axis: usize,
+        correction_mm: f64,
+        process_std_mm: f64,
+    },
+}
+
+impl std::fmt::Display for CoverageIssue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CoverageIssue::JointRange {
+                joint,
+                value_deg,
+                min_deg,
+                max_deg,
+            } => write!(
+                f,
+                "q{} = {value_deg:.2}° outside the campaign's [{min_deg:.2}, {max_deg:.2}]°",
+                joint + 1
+            ),
+            CoverageIssue::Uncertain {
+                axis,
+                std_mm,
+                process_std_mm,
+            } => write!(
+                f,
+                "{} std {std_mm:.4} mm is {:.0} % of the prior {process_std_mm:.4} mm (far from every training pose)",
+                AXES[*axis],
+                100.0 * std_mm / process_std_mm
+            ),
+            CoverageIssue::TrendDisagrees {
+                axis,
+                correction_mm,
+                process_std_mm,
+            } => write!(
+                f,
+                "{} Kriging correction {correction_mm:.3} mm is {:.1} process σ ({process_std_mm:.4} mm) from the trend",
+                AXES[*axis],
+                correction_mm.abs() / process_std_mm
+            ),
+        }
+    }
+}
+
+/// A prediction point with its coverage issues.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoverageWarning {
+    /// 0-based index of the point.
+    pub index: usize,
+    pub issues: Vec<CoverageIssue>,
+}
+
+/// Share of the process standard deviation above which a prediction's
+/// standard deviation counts as "far from the data" (the Kriging std tends
+/// to the process std away from every training pose).
+pub const UNCERTAIN_SHARE: f64 = 0.5;
+/// Process σ's by which the Kriging correction may depart from the trend.
+pub const TREND_SIGMAS: f64 = 6.0;
 
 /// Predicted errors with their standard deviations (√MSE), mm.
 #[derive(Debug, Clone, PartialEq)]
@@ -280,6 +377,7 @@ impl ErrorModel {
             reports,
             extras: extras.to_vec(),
             selection: None,
+            joint_range: joint_range(&data.q),
         })
     }
 
@@ -344,6 +442,7 @@ impl ErrorModel {
             input_norm,
             outputs,
             reports,
+            joint_range: joint_range(&data.q),
             ..self.clone()
         })
     }
@@ -454,6 +553,63 @@ impl ErrorModel {
             append_columns(&mut rows, &f.columns(data)?);
         }
         self.predict_rows(&rows)
+    }
+
+    /// The points of a prediction that leave what the training data
+    /// covers (issue 16 §3): a joint outside the campaign's range, a
+    /// standard deviation over [`UNCERTAIN_SHARE`] of the process std, or a
+    /// Kriging correction more than [`TREND_SIGMAS`] process σ from the
+    /// trend-only prediction. `pred` is this model's prediction at `q`,
+    /// `dir`. Only points with an issue are listed, in order.
+    pub fn coverage(
+        &self,
+        q: &[Vec<f64>],
+        dir: &[Vec<f64>],
+        pred: &Prediction,
+    ) -> Result<Vec<CoverageWarning>> {
+        self.check_rows(q, dir)?;
+        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
+        for f in &self.extras {
+            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
+        }
+        let s = self.input_norm.apply_rows(&rows);
+        let trend: Vec<Vec<f64>> = self.outputs.iter().map(|o| o.predict_trend(&s)).collect();
+        let mut out = Vec::new();
+        for (k, qk) in q.iter().enumerate() {
+            let mut issues = Vec::new();
+            for (j, (&v, &(lo, hi))) in qk.iter().zip(&self.joint_range).enumerate() {
+                if v < lo || v > hi {
+                    issues.push(CoverageIssue::JointRange {
+                        joint: j,
+                        value_deg: v,
+                        min_deg: lo,
+                        max_deg: hi,
+                    });
+                }
+            }
+            for (a, o) in self.outputs.iter().enumerate() {
+                let process = o.process_std();
+                if pred.std[k][a] > UNCERTAIN_SHARE * process {
+                    issues.push(CoverageIssue::Uncertain {
+                        axis: a,
+                        std_mm: pred.std[k][a],
+                        process_std_mm: process,
+                    });
+                }
+                let correction = pred.mean[k][a] - trend[a][k];
+                if correction.abs() > TREND_SIGMAS * process {
+                    issues.push(CoverageIssue::TrendDisagrees {
+                        axis: a,
+                        correction_mm: correction,
+                        process_std_mm: process,
+                    });
+                }
+            }
+            if !issues.is_empty() {
+                out.push(CoverageWarning { index: k, issues });
+            }
+        }
+        Ok(out)
     }
 
     /// Write as JSON.

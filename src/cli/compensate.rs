@@ -289,6 +289,11 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     pb.finish_and_clear();
     let res: Compensated = res?;
     let secs = t0.elapsed().as_secs_f64();
+    if let AnyModel::Kriging(m) = &model {
+        let pred = m.predict(&res.joints, &res.dir)?;
+        let coverage = m.coverage(&res.joints, &res.dir, &pred)?;
+        super::print_coverage(&coverage, res.joints.len(), None);
+    }
     res.commands.write_csv(&a.output)?;
     println!(
         "{} {} points with {} in {secs:.3} s -> {}",

@@ -308,6 +308,8 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         });
     }
     let pred = model.predict_dataset(&data)?;
+    let coverage = model.coverage(&data.q, &data.dir, &pred)?;
+    super::print_coverage(&coverage, data.len(), data.ids.as_deref());
     let file = std::fs::File::create(&a.output).map_err(|e| Error::io(&a.output, e))?;
     let mut w = std::io::BufWriter::new(file);
     let n = data.n_joints();
@@ -344,7 +346,8 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         let after = robokrige::stats::summarize(&resid);
         if let Some(path) = &a.json {
             let v = serde_json::json!({"poses": data.len(), "output": a.output,
-                "measured": before, "after_subtracting_prediction": after});
+                "measured": before, "after_subtracting_prediction": after,
+                "coverage_warnings": coverage});
             super::write_json(path, &v, "prediction summary")?;
         }
         println!(
@@ -357,7 +360,8 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         );
     }
     if let (None, Some(path)) = (&data.errors, &a.json) {
-        let v = serde_json::json!({"poses": data.len(), "output": a.output});
+        let v = serde_json::json!({"poses": data.len(), "output": a.output,
+            "coverage_warnings": coverage});
         super::write_json(path, &v, "prediction summary")?;
     }
     println!("wrote {}", a.output.display());

@@ -291,6 +291,25 @@ impl KrigingModel {
             .collect()
     }
 
+    /// The trend-only prediction `f(s)ᵀβ` at normalised inputs, original
+    /// units (what the model says without its Kriging correction).
+    pub fn predict_trend(&self, s: &[Vec<f64>]) -> Vec<f64> {
+        let d = &self.data;
+        let mut fs = vec![0.0; d.trend.len()];
+        s.iter()
+            .map(|x| {
+                d.trend.eval_into(x, &mut fs);
+                d.y_mean + d.y_std * dot(&fs, &d.beta)
+            })
+            .collect()
+    }
+
+    /// The process (prior) standard deviation `σ·y_std`, original units:
+    /// what the Kriging std tends to far from every training point.
+    pub fn process_std(&self) -> f64 {
+        self.data.sigma2.sqrt() * self.data.y_std
+    }
+
     /// Predict at normalised inputs (mean and MSE in original units).
     /// Blocks of points run in parallel; each point's result does not depend
     /// on the others. An error only when the factor cannot be recomputed
