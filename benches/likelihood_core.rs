@@ -9,6 +9,15 @@
 //!
 //! Run: `cargo bench --bench likelihood_core -- [sizes] [--new-only]`,
 //! sizes comma-separated (default `300,600,1200`).
+//!
+//! `-- --scale [sizes] [--old-max M]` prints the scale table instead (sizes
+//! default `300,600,1200,2773,12000`): per size, fit wall time, peak
+//! resident memory of the fit (`VmHWM`, reset before each fit), ψ
+//! evaluations, held-out RMS 3D / floor, model file size, load time and the
+//! time of the first prediction with standard deviations (the factor is
+//! recomputed then); the previous GPS default beside it up to `--old-max`
+//! rows (default 1200). The train/test CSVs are written to
+//! `target/bench-data/` for `benches/reference_scale.py`.
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kinematics;
@@ -79,8 +88,92 @@ fn run(case: &Case, label: &str, opts: &KrigingOptions) {
     );
 }
 
+/// Peak resident memory since the last reset, bytes (Linux).
+fn peak_rss() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    l.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kb| kb * 1024)
+}
+
+/// Reset the peak resident memory (Linux `clear_refs` 5).
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+fn scale_row(case: &Case, label: &str, opts: &KrigingOptions) {
+    reset_peak();
+    let t0 = Instant::now();
+    let model = ErrorModel::fit(&case.train, Space::Ejs, opts).expect("fit");
+    let secs = t0.elapsed().as_secs_f64();
+    let peak = peak_rss().map_or("-".into(), |b| robokrige::memory::human(b));
+    let evals: usize = model.reports.iter().map(|r| r.evals).sum();
+    let (test, floor) = case.test.as_ref().expect("simulated");
+    let ho = held_out(&model, test) / floor;
+    let path = std::env::temp_dir().join(format!("robokrige-scale-{}.json", std::process::id()));
+    model.save(&path).unwrap();
+    let size = std::fs::metadata(&path).unwrap().len();
+    let t1 = Instant::now();
+    let back = ErrorModel::load(&path).unwrap();
+    let load = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    back.predict(&test.q, &test.dir).unwrap();
+    let first = t2.elapsed().as_secs_f64();
+    std::fs::remove_file(&path).ok();
+    println!(
+        "| {} | {label} | {secs:.1} | {peak} | {evals} | {ho:.2}× | {} | {load:.2} | {first:.2} |",
+        case.train.len(),
+        robokrige::memory::human(size)
+    );
+}
+
+fn scale(args: &[String]) {
+    let sizes: Vec<usize> = args
+        .iter()
+        .find(|a| a.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .map_or(vec![300, 600, 1200, 2773, 12000], |s| {
+            s.split(',').map(|v| v.parse().expect("size")).collect()
+        });
+    let old_max: usize = args
+        .iter()
+        .position(|a| a == "--old-max")
+        .and_then(|i| args.get(i + 1))
+        .map_or(1200, |v| v.parse().expect("--old-max"));
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/target/bench-data"));
+    std::fs::create_dir_all(dir).unwrap();
+    println!("| m | optimiser | fit s | peak memory | ψ evaluations | held-out RMS 3D / floor | model file | load s | first predict with std, s |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for m in sizes {
+        let case = simulated("comau-nj220", SEED, m);
+        let (test, floor) = case.test.as_ref().unwrap();
+        robokrige::dataset::write_csv(&dir.join(format!("train_{m}.csv")), &case.train).unwrap();
+        robokrige::dataset::write_csv(&dir.join(format!("test_{m}.csv")), test).unwrap();
+        std::fs::write(dir.join(format!("floor_{m}.txt")), format!("{floor}")).unwrap();
+        for nugget in [false, true] {
+            let n = if nugget { " + nugget" } else { "" };
+            if m <= old_max {
+                let old = KrigingOptions {
+                    optimizer: OptimizerKind::Gps,
+                    starts: 4,
+                    nugget,
+                    ..KrigingOptions::default()
+                };
+                scale_row(&case, &format!("GPS + polish (previous default){n}"), &old);
+            }
+            let new = KrigingOptions {
+                nugget,
+                ..KrigingOptions::default()
+            };
+            scale_row(&case, &format!("BFGS (new default){n}"), &new);
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--scale") {
+        scale(&args);
+        return;
+    }
     let new_only = args.iter().any(|a| a == "--new-only");
     let sizes: Vec<usize> = args
         .iter()
@@ -118,6 +211,7 @@ fn main() {
             if !new_only {
                 let old = KrigingOptions {
                     optimizer: OptimizerKind::Gps,
+                    starts: 4,
                     nugget,
                     ..KrigingOptions::default()
                 };
