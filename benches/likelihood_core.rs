@@ -92,7 +92,11 @@ fn run(case: &Case, label: &str, opts: &KrigingOptions) {
 fn peak_rss() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    l.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kb| kb * 1024)
+    l.split_whitespace()
+        .nth(1)?
+        .parse::<u64>()
+        .ok()
+        .map(|kb| kb * 1024)
 }
 
 /// Reset the peak resident memory (Linux `clear_refs` 5).
@@ -140,7 +144,9 @@ fn scale(args: &[String]) {
         .map_or(1200, |v| v.parse().expect("--old-max"));
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/target/bench-data"));
     std::fs::create_dir_all(dir).unwrap();
-    println!("| m | optimiser | fit s | peak memory | ψ evaluations | held-out RMS 3D / floor | model file | load s | first predict with std, s |");
+    println!(
+        "| m | optimiser | fit s | peak memory | ψ evaluations | held-out RMS 3D / floor | model file | load s | first predict with std, s |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|");
     for m in sizes {
         let case = simulated("comau-nj220", SEED, m);

@@ -163,7 +163,7 @@ pub struct CoverageWarning {
 /// Share of the process standard deviation above which a prediction's
 /// standard deviation counts as "far from the data" (the Kriging std tends
 /// to the process std away from every training pose).
-pub const UNCERTAIN_SHARE: f64 = 0.5;
+pub const UNCERTAIN_SHARE: f64 = 0.7;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;
 
