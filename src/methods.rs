@@ -168,7 +168,7 @@ pub fn fit_ga(
         ..opts.clone()
     };
     let all: [Trend; 3] = match kinematic {
-        Some(robot) => crate::model::kinematic_trends(data, Space::Ejs, &quad, robot)?,
+        Some(robot) => crate::model::kinematic_candidates(data, Space::Ejs, &quad, robot)?,
         None => std::array::from_fn(|_| Trend::from(Monomials::quadratic(d))),
     };
     let cap = (k - 1) * m / k;
