@@ -109,7 +109,7 @@ fn scale_row(case: &Case, label: &str, opts: &KrigingOptions) {
     let t0 = Instant::now();
     let model = ErrorModel::fit(&case.train, Space::Ejs, opts).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
-    let peak = peak_rss().map_or("-".into(), |b| robokrige::memory::human(b));
+    let peak = peak_rss().map_or("-".into(), robokrige::memory::human);
     let evals: usize = model.reports.iter().map(|r| r.evals).sum();
     let (test, floor) = case.test.as_ref().expect("simulated");
     let ho = held_out(&model, test) / floor;

@@ -53,31 +53,12 @@ pub fn bfgs<F: FnMut(&[f64]) -> f64>(
             let y: Vec<f64> = g.iter().zip(&g_old).map(|(a, b)| a - b).collect();
             bfgs_update(&mut hinv, &s, &y);
         }
-        let free: Vec<bool> = (0..d)
-            .map(|i| {
-                !((x[i] <= bounds.lo[i] && g[i] > 0.0) || (x[i] >= bounds.hi[i] && g[i] < 0.0))
-            })
-            .collect();
-        let gmax = (0..d)
-            .filter(|&i| free[i])
-            .map(|i| g[i].abs())
-            .fold(0.0, f64::max);
+        let (free, gmax) = free_set(&x, &g, bounds);
         if gmax < opts.gtol || iterations >= opts.max_iter {
             break StopReason::MeshTolerance;
         }
         iterations += 1;
-        let mut p: Vec<f64> = (0..d)
-            .map(|i| {
-                if free[i] {
-                    -(0..d)
-                        .filter(|&j| free[j])
-                        .map(|j| hinv[i][j] * g[j])
-                        .sum::<f64>()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let mut p = newton_direction(&hinv, &g, &free);
         let mut slope: f64 = p.iter().zip(&g).map(|(a, b)| a * b).sum();
         if slope >= 0.0 {
             hinv = identity(d);
@@ -123,6 +104,35 @@ pub fn bfgs<F: FnMut(&[f64]) -> f64>(
         iterations,
         stop,
     }
+}
+
+/// Coordinates not held at a bound by their gradient, and the largest
+/// gradient component among them (the projected-gradient test).
+pub(super) fn free_set(x: &[f64], g: &[f64], bounds: &Bounds) -> (Vec<bool>, f64) {
+    let free: Vec<bool> = (0..x.len())
+        .map(|i| !((x[i] <= bounds.lo[i] && g[i] > 0.0) || (x[i] >= bounds.hi[i] && g[i] < 0.0)))
+        .collect();
+    let gmax = (0..x.len())
+        .filter(|&i| free[i])
+        .map(|i| g[i].abs())
+        .fold(0.0, f64::max);
+    (free, gmax)
+}
+
+/// `p = −H g` on the free coordinates, 0 on the others.
+pub(super) fn newton_direction(hinv: &[Vec<f64>], g: &[f64], free: &[bool]) -> Vec<f64> {
+    (0..g.len())
+        .map(|i| {
+            if free[i] {
+                -(0..g.len())
+                    .filter(|&j| free[j])
+                    .map(|j| hinv[i][j] * g[j])
+                    .sum::<f64>()
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 pub(super) fn identity(d: usize) -> Vec<Vec<f64>> {

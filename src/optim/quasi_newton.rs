@@ -25,7 +25,7 @@
 //! a projection handles exactly and a reparametrisation of the box would
 //! flatten into a vanishing gradient.
 
-use super::bfgs::{bfgs_update, identity};
+use super::bfgs::{bfgs_update, free_set, identity, newton_direction};
 use super::{Bounds, OptimResult, StopReason};
 
 /// Options of [`quasi_newton`].
@@ -102,15 +102,7 @@ where
         if !fx.is_finite() {
             break StopReason::Budget;
         }
-        let free: Vec<bool> = (0..d)
-            .map(|i| {
-                !((x[i] <= bounds.lo[i] && g[i] > 0.0) || (x[i] >= bounds.hi[i] && g[i] < 0.0))
-            })
-            .collect();
-        let gmax = (0..d)
-            .filter(|&i| free[i])
-            .map(|i| g[i].abs())
-            .fold(0.0, f64::max);
+        let (free, gmax) = free_set(&x, &g, bounds);
         if gmax < opts.gtol {
             break StopReason::MeshTolerance;
         }
@@ -118,18 +110,7 @@ where
             break StopReason::Budget;
         }
         iterations += 1;
-        let mut p: Vec<f64> = (0..d)
-            .map(|i| {
-                if free[i] {
-                    -(0..d)
-                        .filter(|&j| free[j])
-                        .map(|j| hinv[i][j] * g[j])
-                        .sum::<f64>()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let mut p = newton_direction(&hinv, &g, &free);
         if p.iter().zip(&g).map(|(a, b)| a * b).sum::<f64>() >= 0.0 {
             hinv = identity(d);
             scaled = false;
