@@ -24,7 +24,7 @@ use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// GPS starts of the papers' set-ups (box centre + 3 LHS points).
-pub const PAPER_GPS_STARTS: usize = 4;
+pub const PAPER_GPS_STARTS: usize = OptimizerKind::Gps.default_starts();
 
 /// A named model variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -559,13 +559,17 @@ impl ErrorModel {
     /// covers (issue 16 §3): a joint outside the campaign's range, a
     /// standard deviation over [`UNCERTAIN_SHARE`] of the process std, or a
     /// Kriging correction more than [`TREND_SIGMAS`] process σ from the
-    /// trend-only prediction. `pred` is this model's prediction at `q`,
-    /// `dir`. Only points with an issue are listed, in order.
+    /// trend-only prediction. `mean` is this model's predicted mean at `q`,
+    /// `dir`; `std` its standard deviations when they were computed (the
+    /// std check is skipped without them, so a caller that needs only the
+    /// mean, like compensation, never pays for the m × m factor). Only
+    /// points with an issue are listed, in order.
     pub fn coverage(
         &self,
         q: &[Vec<f64>],
         dir: &[Vec<f64>],
-        pred: &Prediction,
+        mean: &[[f64; 3]],
+        std: Option<&[[f64; 3]]>,
     ) -> Result<Vec<CoverageWarning>> {
         self.check_rows(q, dir)?;
         let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
@@ -589,14 +593,17 @@ impl ErrorModel {
             }
             for (a, o) in self.outputs.iter().enumerate() {
                 let process = o.process_std();
-                if pred.std[k][a] > UNCERTAIN_SHARE * process {
+                if let Some(s) = std
+                    .map(|s| s[k][a])
+                    .filter(|s| *s > UNCERTAIN_SHARE * process)
+                {
                     issues.push(CoverageIssue::Uncertain {
                         axis: a,
-                        std_mm: pred.std[k][a],
+                        std_mm: s,
                         process_std_mm: process,
                     });
                 }
-                let correction = pred.mean[k][a] - trend[a][k];
+                let correction = mean[k][a] - trend[a][k];
                 if correction.abs() > TREND_SIGMAS * process {
                     issues.push(CoverageIssue::TrendDisagrees {
                         axis: a,

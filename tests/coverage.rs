@@ -32,7 +32,9 @@ fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
     q.push(far);
     dir.push(d.dir[0].clone());
     let pred = model.predict(&q, &dir).unwrap();
-    let warnings = model.coverage(&q, &dir, &pred).unwrap();
+    let warnings = model
+        .coverage(&q, &dir, &pred.mean, Some(&pred.std))
+        .unwrap();
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     assert_eq!(warnings[0].index, 40);
     let issues = &warnings[0].issues;

@@ -290,8 +290,9 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let res: Compensated = res?;
     let secs = t0.elapsed().as_secs_f64();
     if let AnyModel::Kriging(m) = &model {
-        let pred = m.predict(&res.joints, &res.dir)?;
-        let coverage = m.coverage(&res.joints, &res.dir, &pred)?;
+        // the means the compensation used; no standard deviations (they
+        // would need the m × m factor)
+        let coverage = m.coverage(&res.joints, &res.dir, &res.predicted, None)?;
         super::print_coverage(&coverage, res.joints.len(), None);
     }
     res.commands.write_csv(&a.output)?;

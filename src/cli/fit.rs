@@ -115,22 +115,20 @@ impl ModelArgs {
     /// The space and fitting options these arguments select (no periodic
     /// joints: see [`ModelArgs::resolve`]).
     pub fn options(&self) -> (Space, KrigingOptions) {
+        let optimizer = match self.optimizer {
+            OptimizerArg::Bfgs => OptimizerKind::Bfgs,
+            OptimizerArg::Gps => OptimizerKind::Gps,
+            OptimizerArg::Hj => OptimizerKind::HookeJeeves,
+        };
         let opts = KrigingOptions {
             trend: match self.trend {
                 TrendArg::Constant => TrendKind::Constant,
                 TrendArg::Linear => TrendKind::Linear,
                 TrendArg::Quadratic => TrendKind::Quadratic,
             },
-            optimizer: match self.optimizer {
-                OptimizerArg::Bfgs => OptimizerKind::Bfgs,
-                OptimizerArg::Gps => OptimizerKind::Gps,
-                OptimizerArg::Hj => OptimizerKind::HookeJeeves,
-            },
+            optimizer,
             nugget: self.nugget,
-            starts: self.starts.unwrap_or(match self.optimizer {
-                OptimizerArg::Gps => robokrige::methods::PAPER_GPS_STARTS,
-                _ => KrigingOptions::default().starts,
-            }),
+            starts: self.starts.unwrap_or(optimizer.default_starts()),
             seed: self.seed,
             ..KrigingOptions::default()
         };
@@ -308,7 +306,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         });
     }
     let pred = model.predict_dataset(&data)?;
-    let coverage = model.coverage(&data.q, &data.dir, &pred)?;
+    let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
     let file = std::fs::File::create(&a.output).map_err(|e| Error::io(&a.output, e))?;
     let mut w = std::io::BufWriter::new(file);

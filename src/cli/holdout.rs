@@ -144,22 +144,19 @@ fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> Row
 
 /// The Kriging options of `a` for training rows `q`.
 fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
+    let optimizer = match a.optimizer.as_str() {
+        "bfgs" => OptimizerKind::Bfgs,
+        "hj" => OptimizerKind::HookeJeeves,
+        "gps" => OptimizerKind::Gps,
+        o => {
+            return Err(Error::InvalidParameter(format!(
+                "--optimizer '{o}': expected bfgs, hj or gps"
+            )));
+        }
+    };
     Ok(KrigingOptions {
-        optimizer: match a.optimizer.as_str() {
-            "bfgs" => OptimizerKind::Bfgs,
-            "hj" => OptimizerKind::HookeJeeves,
-            "gps" => OptimizerKind::Gps,
-            o => {
-                return Err(Error::InvalidParameter(format!(
-                    "--optimizer '{o}': expected bfgs, hj or gps"
-                )));
-            }
-        },
-        starts: if a.optimizer == "gps" {
-            robokrige::methods::PAPER_GPS_STARTS
-        } else {
-            KrigingOptions::default().starts
-        },
+        optimizer,
+        starts: optimizer.default_starts(),
         seed: a.seed,
         nugget: a.nugget,
         periodic: parse_periodic(&a.periodic, q)?,

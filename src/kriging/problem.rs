@@ -80,13 +80,6 @@ impl Workspace {
             cinv: Mat::zeros(0, 0),
         }
     }
-
-    /// Bytes held by a workspace for `m` rows (three m × m matrices when the
-    /// gradient is used, two otherwise), for memory estimates before a fit.
-    pub fn bytes(m: usize, gradient: bool) -> usize {
-        let mats = if gradient { 3 } else { 2 };
-        mats * m * m * std::mem::size_of::<f64>()
-    }
 }
 
 /// Value of the concentrated objective at one ξ.
@@ -236,6 +229,18 @@ impl KrigingProblem<'_> {
         (ln_det_r, rho * rho / m as f64)
     }
 
+    /// `y − Fβ`.
+    fn residual(&self, beta: &[f64]) -> Vec<f64> {
+        (0..self.m())
+            .map(|i| {
+                self.y[i]
+                    - (0..beta.len())
+                        .map(|j| self.f[(i, j)] * beta[j])
+                        .sum::<f64>()
+            })
+            .collect()
+    }
+
     /// ln ψ and its gradient in the optimisers' coordinates `z = (log10 ξ,
     /// log10 ν)`; `grad` has `d` entries, plus one for ν when it has `d + 1`.
     ///
@@ -264,15 +269,8 @@ impl KrigingProblem<'_> {
         let d = theta.len();
         assert!(grad.len() == d || grad.len() == d + 1, "gradient length");
         let v = self.psi(theta, nugget, ws)?;
-        // β = G⁻¹ b from the QR of [F̃ ỹ], then e = y − Fβ
-        let mut beta = vec![0.0; p];
-        for j in (0..p).rev() {
-            let s: f64 = (j + 1..p).map(|k| ws.aug[(j, k)] * beta[k]).sum();
-            beta[j] = (ws.aug[(j, p)] - s) / ws.aug[(j, j)];
-        }
-        let e: Vec<f64> = (0..m)
-            .map(|i| self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>())
-            .collect();
+        let (_, beta) = gls_beta(&ws.aug, p);
+        let e = self.residual(&beta);
         // R⁻¹ (lower) = C⁻ᵀ C⁻¹, written over the factor in ws.r
         if ws.cinv.nrows() != m {
             ws.cinv = Mat::zeros(m, m);
@@ -346,10 +344,10 @@ impl KrigingProblem<'_> {
     /// accepts σ² = 0 (a response the trend reproduces exactly).
     ///
     /// Holds one m × m matrix (the factor, filled in place and refilled for
-    /// the next jitter rung if the Cholesky fails: the same ladder and the
-    /// same bits as [`Self::psi`]'s), so that campaigns of ten thousand rows
-    /// fit in memory; from [`PAR_MIN_ROWS`] rows the factorisation uses all
-    /// threads.
+    /// the next jitter rung if the Cholesky fails: the same ladder as
+    /// [`Self::psi`]'s, and below [`PAR_MIN_ROWS`] rows the same bits), so
+    /// that campaigns of ten thousand rows fit in memory; from
+    /// [`PAR_MIN_ROWS`] rows the factorisation uses all threads.
     pub fn solve(&self, theta: &[f64], nugget: f64) -> Result<Solution> {
         let m = self.m();
         let p = self.f.ncols();
@@ -386,22 +384,10 @@ impl KrigingProblem<'_> {
             ln_det_r,
             jitter,
         };
-        // G and b from the QR of [F̃ ỹ]; β = G⁻¹ b
-        let mut g = Mat::<f64>::zeros(p, p);
-        let mut beta = vec![0.0; p];
-        for j in 0..p {
-            for i in 0..=j {
-                g[(i, j)] = aug[(i, j)];
-            }
-            beta[j] = aug[(j, p)];
-        }
-        let mut b = faer::Col::from_fn(p, |i| beta[i]);
-        solve_upper_triangular_in_place(g.as_ref(), b.as_mat_mut(), Par::Seq);
-        let beta: Vec<f64> = b.iter().copied().collect();
+        let (g, beta) = gls_beta(&aug, p);
         // γ = C⁻ᵀ C⁻¹ (y − Fβ)
-        let mut resid = faer::Col::from_fn(m, |i| {
-            self.y[i] - (0..p).map(|j| self.f[(i, j)] * beta[j]).sum::<f64>()
-        });
+        let e = self.residual(&beta);
+        let mut resid = faer::Col::from_fn(m, |i| e[i]);
         solve_lower_triangular_in_place(c.as_ref(), resid.as_mat_mut(), par);
         solve_upper_triangular_in_place(c.transpose(), resid.as_mat_mut(), par);
         Ok(Solution {
@@ -412,6 +398,15 @@ impl KrigingProblem<'_> {
             gamma: resid.iter().copied().collect(),
         })
     }
+}
+
+/// G and `β = G⁻¹ b` (eq 11) from the QR of `[F̃ ỹ]` held in `aug`
+/// ([`KrigingProblem::trend_qr`]).
+fn gls_beta(aug: &Mat<f64>, p: usize) -> (Mat<f64>, Vec<f64>) {
+    let g = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { aug[(i, j)] } else { 0.0 });
+    let mut b = faer::Col::from_fn(p, |i| aug[(i, p)]);
+    solve_upper_triangular_in_place(g.as_ref(), b.as_mat_mut(), Par::Seq);
+    (g, b.iter().copied().collect())
 }
 
 /// From this many rows a single factorisation ([`KrigingProblem::solve`],
