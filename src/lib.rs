@@ -27,6 +27,7 @@ pub mod diagnose;
 pub mod error;
 pub mod features;
 pub mod frames;
+pub mod holdout;
 pub mod kinematics;
 pub mod kriging;
 pub mod memory;

@@ -7,7 +7,9 @@
 
 use crate::dataset::Dataset;
 use crate::features::{Feature, append_columns};
-use crate::kriging::{FitReport, KrigingModel, KrigingOptions, Pred, TrainingInputs, fit_output};
+use crate::kriging::{
+    FitReport, KrigingModel, KrigingOptions, Pred, TrainingInputs, fit_output_from,
+};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -347,10 +349,20 @@ impl ErrorModel {
                 .map(|r| r[..corr_dims].to_vec())
                 .collect::<Vec<_>>(),
         );
+        if !matches!(opts.warm_start.len(), 0 | 3) {
+            return Err(Error::InvalidParameter(format!(
+                "warm starts must be one per output (3), not {}",
+                opts.warm_start.len()
+            )));
+        }
         let plan = check_fit_memory(data.len(), opts.optimizer)?;
         let fit_axis = |a: usize| {
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-            fit_output(&x, &inputs, &y, &trends[a], &names, opts)
+            let start = opts
+                .warm_start
+                .get(a)
+                .map(|w| (w.theta.as_slice(), w.nugget));
+            fit_output_from(&x, &inputs, &y, &trends[a], &names, opts, start)
         };
         // large campaigns: one output at a time, one m × m factor in memory
         let fits: Vec<Result<(KrigingModel, FitReport)>> = if plan.sequential_outputs {
@@ -372,7 +384,11 @@ impl ErrorModel {
             n_joints: n,
             input_names: names,
             input_norm,
-            options: opts.clone(),
+            // a warm start is how this fit began, not what the model is
+            options: KrigingOptions {
+                warm_start: Vec::new(),
+                ..opts.clone()
+            },
             outputs,
             reports,
             extras: extras.to_vec(),
@@ -445,6 +461,16 @@ impl ErrorModel {
             joint_range: joint_range(&data.q),
             ..self.clone()
         })
+    }
+
+    /// This model's hyperparameters as warm starts of a refit on similar data
+    /// ([`KrigingOptions::warm_start`]), one per output.
+    pub fn warm_starts(&self) -> Vec<crate::kriging::WarmStart> {
+        let d = self.correlation_dims();
+        self.reports
+            .iter()
+            .map(|r| crate::kriging::WarmStart::of(r, d))
+            .collect()
     }
 
     /// Input dimensions that enter the correlation: `[θ, λ]` encoded and the

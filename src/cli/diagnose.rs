@@ -95,12 +95,14 @@ pub struct DiagnoseArgs {
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     let (space, optimizer) = match a.method.as_str() {
+        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
+        "js" => (Space::Js, OptimizerKind::Bfgs),
         "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
         "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
         "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
         other => {
             return Err(Error::InvalidParameter(format!(
-                "diagnose supports --method js-hj, ejs-hj or ejs-gps, not '{other}'"
+                "diagnose supports --method ejs, js, js-hj, ejs-hj or ejs-gps, not '{other}'"
             )));
         }
     };

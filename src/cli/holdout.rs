@@ -8,14 +8,13 @@ use clap::Args;
 use nalgebra::{Isometry3, Translation3};
 use robokrige::compensate::ErrorPredictor;
 use robokrige::dataset::Dataset;
+use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
 use robokrige::kinematics::{self, Robot};
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
-use robokrige::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
+use robokrige::physics::HybridModel;
 use robokrige::space::Space;
-use robokrige::stats::spread;
 use robokrige::{Error, Result};
-use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -74,15 +73,6 @@ pub struct HoldoutArgs {
     json: Option<PathBuf>,
 }
 
-#[derive(Debug, Serialize)]
-struct Row {
-    model: String,
-    mean_mm: f64,
-    max_mm: f64,
-    rms_xyz_mm: [f64; 3],
-    seconds: f64,
-}
-
 /// `--periodic auto|none|1,4,6` → 0-based joints.
 pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
     let n = q.first().map_or(0, Vec::len);
@@ -121,27 +111,6 @@ pub fn robot_with_tool(name: &str, tool: Option<&str>) -> Result<Robot> {
     Ok(robot)
 }
 
-fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> Row {
-    let r: Vec<[f64; 3]> = truth
-        .iter()
-        .zip(pred)
-        .map(|(t, p)| [t[0] - p[0], t[1] - p[1], t[2] - p[2]])
-        .collect();
-    let d: Vec<f64> = r
-        .iter()
-        .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
-        .collect();
-    let s = spread(&d);
-    let rms = |a: usize| (r.iter().map(|e| e[a] * e[a]).sum::<f64>() / r.len() as f64).sqrt();
-    Row {
-        model: name.into(),
-        mean_mm: s.mean,
-        max_mm: s.max,
-        rms_xyz_mm: [rms(0), rms(1), rms(2)],
-        seconds,
-    }
-}
-
 /// The Kriging options of `a` for training rows `q`.
 fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
     let optimizer = match a.optimizer.as_str() {
@@ -164,105 +133,23 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
     })
 }
 
-/// `errors − dh(q)` as a dataset.
-fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
-    let pred = dh.predict(&data.q, &data.dir)?;
-    let mut r = data.clone();
-    r.errors = Some(
-        data.errors_or_err()?
-            .iter()
-            .zip(&pred)
-            .map(|(e, p)| [e[0] - p[0], e[1] - p[1], e[2] - p[2]])
-            .collect(),
-    );
-    Ok(r)
-}
-
-/// D-H calibration (Levenberg–Marquardt) of `robot` on `data`, as a model.
-fn calibrate(data: &Dataset, robot: &Robot) -> Result<(PhysicsModel, LmSummary)> {
-    let (cal, lm) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
-    let model = PhysicsModel::new(
-        "D-H calibration",
-        robot.clone(),
-        Geometry::Mdh { robot: cal },
-    );
-    Ok((model, lm))
-}
-
-/// K-fold CV on all rows. The D-H calibration is refitted on every training
-/// fold. The Kriging models keep the hyperparameters (ξ, nugget) chosen on
-/// the first `--train` rows (the search is O(m³) per evaluation) and are
-/// refitted on every training fold at those values: the hybrid on the fold's
-/// own calibration residual, the kinematic-trend model on the fold.
+/// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
-    let fold = robokrige::cv::kfold_partition(data.len(), k, a.seed)?;
-    let errors = data.errors_or_err()?;
-    let m = data.len();
-    let first = data.select(&(0..a.train.min(m)).collect::<Vec<_>>());
     let opts = kriging_opts(a, &data.q)?;
     let pb = bar(k as u64 + 1, "cv");
-    pb.set_message(format!("hyperparameters on the first {} rows", first.len()));
-    let t_hyper = Instant::now();
-    let first_resid = residual(&first, &calibrate(&first, robot)?.0)?;
-    let spaces = [Space::Js, Space::Ejs];
-    let mut hybrid_t = Vec::new();
-    let mut kin_t = Vec::new();
-    for space in spaces {
-        hybrid_t.push(ErrorModel::fit(&first_resid, space, &opts)?);
-        kin_t.push(ErrorModel::fit_kinematic(&first, space, &opts, robot)?);
-    }
-    let hyper_secs = t_hyper.elapsed().as_secs_f64();
-    pb.inc(1);
-    let mut pred = vec![vec![[0.0; 3]; m]; 5];
-    let mut secs = [0.0; 5];
-    for f in 0..k {
-        pb.set_message(format!("fold {}", f + 1));
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
-        let (tr, held) = (data.select(&train), data.select(&test));
-        let t = Instant::now();
-        let (dh, _) = calibrate(&tr, robot)?;
-        let dh_secs = t.elapsed().as_secs_f64();
-        secs[0] += dh_secs;
-        let mut put = |slot: usize, p: Vec<[f64; 3]>| {
-            for (j, v) in p.into_iter().enumerate() {
-                pred[slot][test[j]] = v;
-            }
-        };
-        put(0, dh.predict(&held.q, &held.dir)?);
-        let resid = residual(&tr, &dh)?;
-        for s in 0..2 {
-            let t = Instant::now();
-            let h = HybridModel {
-                physics: dh.clone(),
-                residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
-            };
-            secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
-            put(1 + s, h.predict(&held.q, &held.dir)?);
-            let t = Instant::now();
-            let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
-            secs[3 + s] += t.elapsed().as_secs_f64();
-            put(3 + s, uk.predict_mean(&held.q, &held.dir)?);
-        }
-        pb.inc(1);
-    }
+    let cv = holdout_cv(data, robot, &opts, k, a.seed, a.train, &|done, msg| {
+        pb.set_position(done as u64);
+        pb.set_message(msg.to_string());
+    })?;
     pb.finish_and_clear();
-    let names = [
-        "D-H calibration (LM, refit per fold)",
-        "hybrid: D-H calibration + Kriging JS",
-        "hybrid: D-H calibration + Kriging EJS",
-        "universal Kriging JS, kinematic trend",
-        "universal Kriging EJS, kinematic trend",
-    ];
-    let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
-    for (i, n) in names.iter().enumerate() {
-        rows.push(score(n, errors, &pred[i], secs[i]));
-    }
     println!(
-        "{}: {k}-fold CV (fold seed {}) on all {m} rows; Kriging ξ{} chosen on the first {} rows ({hyper_secs:.1} s), refitted per fold at those values; periodic joints: {}",
+        "{}: {k}-fold CV (fold seed {}) on all {} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}",
         a.data.display(),
         a.seed,
+        data.len(),
         if a.nugget { " and nugget" } else { "" },
-        first.len(),
+        cv.hyper_rows,
+        cv.hyper_seconds,
         if opts.periodic.is_empty() {
             "none".to_string()
         } else {
@@ -273,14 +160,14 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
                 .join(", ")
         }
     );
-    print_rows(&rows);
+    print_rows(&cv.rows);
     if let Some(p) = &a.json {
-        std::fs::write(p, to_json(&rows, "cv table")?).map_err(|e| Error::io(p, e))?;
+        std::fs::write(p, to_json(&cv, "cv table")?).map_err(|e| Error::io(p, e))?;
     }
     Ok(())
 }
 
-fn print_rows(rows: &[Row]) {
+fn print_rows(rows: &[HoldoutRow]) {
     println!("| model | mean 3D (mm) | max 3D (mm) | RMS x / y / z (mm) | time |");
     println!("|---|---|---|---|---|");
     for r in rows {

@@ -120,6 +120,10 @@ struct Prepared {
     u: Mat<f64>,
     /// Columns of `q`/`u` of each grid point (empty: nothing new).
     spans: Vec<Range<usize>>,
+    /// `1 / A'_ii` of each grid point, which does not depend on the response
+    /// (`A'_ii = A_ii − Σ_c U_ic²`); `None` where the point leaves a row
+    /// unpredictable (`A'_ii` vanishes).
+    inv_den: Vec<Option<Vec<f64>>>,
 }
 
 /// Relative size below which a whitened column counts as already in the
@@ -165,7 +169,23 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
     }
     let q = q.subcols(0, dst).to_owned();
     let u = sys.z.transpose() * &q;
-    Prepared { q, u, spans }
+    let inv_den = spans
+        .iter()
+        .map(|span| {
+            (0..m)
+                .map(|i| {
+                    let den = sys.a_diag[i] - span.clone().map(|c| u[(i, c)].powi(2)).sum::<f64>();
+                    (den > 1e-10 * sys.a_diag[i]).then(|| 1.0 / den)
+                })
+                .collect()
+        })
+        .collect();
+    Prepared {
+        q,
+        u,
+        spans,
+        inv_den,
+    }
 }
 
 /// Leave-one-out SSE (normalised units) of every grid point for the
@@ -173,30 +193,26 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
 /// unpredictable (its A'_ii vanishes).
 fn loo_sse(sys: &AxisSystem, prep: &Prepared, gamma: &[f64], rt: &[f64]) -> Vec<f64> {
     let m = sys.rows();
+    // Q_Xᵀ r̃ for every column at once
+    let r = faer::ColRef::from_slice(rt);
+    let coef = prep.q.transpose() * r;
     let mut num = vec![0.0; m];
-    let mut den = vec![0.0; m];
     prep.spans
         .iter()
-        .map(|span| {
+        .zip(&prep.inv_den)
+        .map(|(span, inv_den)| {
+            let Some(inv_den) = inv_den else {
+                return f64::NAN;
+            };
             num.copy_from_slice(gamma);
-            den.copy_from_slice(&sys.a_diag);
             for c in span.clone() {
-                let qc = prep.q.col(c);
                 let uc = prep.u.col(c);
-                let coef: f64 = (0..m).map(|i| qc[i] * rt[i]).sum();
-                for i in 0..m {
-                    num[i] -= uc[i] * coef;
-                    den[i] -= uc[i] * uc[i];
+                let k = coef[c];
+                for (n, u) in num.iter_mut().zip(uc.iter()) {
+                    *n -= u * k;
                 }
             }
-            let mut sse = 0.0;
-            for i in 0..m {
-                if den[i] <= 1e-10 * sys.a_diag[i] {
-                    return f64::NAN;
-                }
-                sse += (num[i] / den[i]).powi(2);
-            }
-            sse
+            num.iter().zip(inv_den).map(|(n, w)| (n * w).powi(2)).sum()
         })
         .collect()
 }

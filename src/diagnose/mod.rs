@@ -213,12 +213,26 @@ pub fn with_columns(data: &Dataset, extras: &[Feature]) -> Result<Dataset> {
     Ok(work)
 }
 
-fn cross_validated(data: &Dataset, extras: &[Feature], o: &DiagnoseOptions) -> Result<CvStats> {
+/// The model with `extras` fitted on all of `data`, and its K-fold CV. Each
+/// fold is refitted with a local search warm-started at the full model's
+/// hyperparameters ([`KrigingOptions::warm_start`]): a fold holds 90 % of the
+/// rows, so its optimum lies in the same basin, and the multistart would
+/// find it again at several times the cost.
+fn cross_validated(
+    data: &Dataset,
+    extras: &[Feature],
+    o: &DiagnoseOptions,
+) -> Result<(CvStats, ErrorModel)> {
     let work = with_columns(data, extras)?;
+    let model = ErrorModel::fit_with_extras(&work, o.space, &o.kriging, extras)?;
+    let warm = KrigingOptions {
+        warm_start: model.warm_starts(),
+        ..o.kriging.clone()
+    };
     let res = cross_validate_refit(&work, o.folds, o.seed, |train| {
-        ErrorModel::fit_with_extras(train, o.space, &o.kriging, extras)
+        ErrorModel::fit_with_extras(train, o.space, &warm, extras)
     })?;
-    Ok(cv_stats(res.residuals, extras))
+    Ok((cv_stats(res.residuals, extras), model))
 }
 
 /// Run the loop on `data` (which needs `ex,ey,ez`). `progress` receives one
@@ -231,7 +245,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     let min_score = 1.0 - (1.0 - o.min_gain).powi(2);
     let fold = kfold_partition(data.len(), o.folds, o.seed)?;
     progress("cross-validating the current model");
-    let before = cross_validated(data, &[], o)?;
+    let (before, mut model) = cross_validated(data, &[], o)?;
     let mut current = before.clone();
     let mut extras: Vec<Feature> = Vec::new();
     let mut steps = Vec::new();
@@ -250,8 +264,6 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             fams.len(),
             o.permutations
         ));
-        let work = with_columns(data, &extras)?;
-        let model = ErrorModel::fit_with_extras(&work, o.space, &o.kriging, &extras)?;
         let systems: Vec<gls::AxisSystem> = model
             .outputs
             .iter()
@@ -324,6 +336,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         // the best significant candidates in turn, until the refit CV
         // confirms one (at most CONFIRMATIONS per round)
         let mut done = true;
+        let mut next_model = None;
         let order: Vec<usize> = (0..reports.len())
             .filter(|&i| reports[i].significant && reports[i].score > 0.0)
             .take(CONFIRMATIONS)
@@ -343,10 +356,11 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 "adding '{}' and cross-validating again",
                 reports[k].label
             ));
-            let after = cross_validated(data, &trial, o)?;
+            let (after, trial_model) = cross_validated(data, &trial, o)?;
             if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
                 reports[k].accepted = true;
                 extras = trial;
+                next_model = Some(trial_model);
                 current = after.clone();
                 steps.push(after);
                 done = false;
@@ -374,6 +388,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         if done {
             break;
         }
+        model = next_model.expect("an accepted effect has its model");
     }
     Ok(Diagnosis {
         space: o.space,

@@ -1,0 +1,191 @@
+//! Kriging beside the D-H calibration on held-out rows of a measured
+//! campaign (issue 10's real-data table; issue 16's no-blow-up check).
+//!
+//! Five models are scored on rows they were not trained on: the D-H
+//! calibration (Levenberg–Marquardt on the MD-H, tool and base errors), the
+//! two-stage hybrid (D-H calibration, then Kriging JS or EJS on its residual)
+//! and universal Kriging with the kinematic trend (the GLS does the
+//! calibration), JS and EJS. [`holdout_cv`] is the K-fold version on all
+//! rows; the CLI's `holdout` prints its table.
+
+use crate::cv::kfold_partition;
+use crate::dataset::Dataset;
+use crate::kinematics::Robot;
+use crate::kriging::KrigingOptions;
+use crate::model::ErrorModel;
+use crate::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
+use crate::space::Space;
+use crate::stats::spread;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::time::Instant;
+
+/// One model's held-out errors.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HoldoutRow {
+    pub model: String,
+    /// Mean and max of the 3D error |e − ê|, mm.
+    pub mean_mm: f64,
+    pub max_mm: f64,
+    pub rms_xyz_mm: [f64; 3],
+    /// Wall time of the model's fits (all folds), s.
+    pub seconds: f64,
+}
+
+/// Scores `pred` against the measured `truth`.
+pub fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> HoldoutRow {
+    let r: Vec<[f64; 3]> = truth
+        .iter()
+        .zip(pred)
+        .map(|(t, p)| [t[0] - p[0], t[1] - p[1], t[2] - p[2]])
+        .collect();
+    let d: Vec<f64> = r.iter().map(|e| norm3(e)).collect();
+    let s = spread(&d);
+    let rms = |a: usize| (r.iter().map(|e| e[a] * e[a]).sum::<f64>() / r.len() as f64).sqrt();
+    HoldoutRow {
+        model: name.into(),
+        mean_mm: s.mean,
+        max_mm: s.max,
+        rms_xyz_mm: [rms(0), rms(1), rms(2)],
+        seconds,
+    }
+}
+
+fn norm3(e: &[f64; 3]) -> f64 {
+    (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt()
+}
+
+/// D-H calibration (Levenberg–Marquardt, every parameter free; redundant
+/// ones frozen) of `robot` on `data`, as a model.
+pub fn calibrate(data: &Dataset, robot: &Robot) -> Result<(PhysicsModel, LmSummary)> {
+    let (cal, lm) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
+    let model = PhysicsModel::new(
+        "D-H calibration",
+        robot.clone(),
+        Geometry::Mdh { robot: cal },
+    );
+    Ok((model, lm))
+}
+
+/// `data` with its errors replaced by `errors − dh(q)`: what a hybrid's
+/// Kriging stage learns.
+pub fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
+    let pred = dh.predict(&data.q, &data.dir)?;
+    let mut r = data.clone();
+    r.errors = Some(
+        data.errors_or_err()?
+            .iter()
+            .zip(&pred)
+            .map(|(e, p)| [e[0] - p[0], e[1] - p[1], e[2] - p[2]])
+            .collect(),
+    );
+    Ok(r)
+}
+
+/// The models of [`holdout_cv`], in the order of its rows (after "nominal").
+pub const CV_MODELS: [&str; 5] = [
+    "D-H calibration (LM, refit per fold)",
+    "hybrid: D-H calibration + Kriging JS",
+    "hybrid: D-H calibration + Kriging EJS",
+    "universal Kriging JS, kinematic trend",
+    "universal Kriging EJS, kinematic trend",
+];
+
+/// The result of [`holdout_cv`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HoldoutCv {
+    /// "nominal" (no correction), then the [`CV_MODELS`].
+    pub rows: Vec<HoldoutRow>,
+    /// Max 3D error of each of the [`CV_MODELS`] in each fold, mm.
+    pub fold_max_mm: Vec<[f64; 5]>,
+    /// Rows the Kriging hyperparameters were chosen on, and the time it took.
+    pub hyper_rows: usize,
+    pub hyper_seconds: f64,
+}
+
+/// K-fold CV (fold partition from `seed`) of the five models on all rows.
+/// The D-H calibration is refitted on every training fold. The Kriging
+/// models keep the hyperparameters (ξ, nugget) chosen with `opts` on the
+/// first `hyper_rows` rows and are refitted on every training fold at those
+/// values: the hybrid on the fold's own calibration residual, the
+/// kinematic-trend model on the fold. `progress(done, message)` is called
+/// before each of the `k + 1` steps.
+pub fn holdout_cv(
+    data: &Dataset,
+    robot: &Robot,
+    opts: &KrigingOptions,
+    k: usize,
+    seed: u64,
+    hyper_rows: usize,
+    progress: &dyn Fn(usize, &str),
+) -> Result<HoldoutCv> {
+    let fold = kfold_partition(data.len(), k, seed)?;
+    let errors = data.errors_or_err()?;
+    let m = data.len();
+    if hyper_rows < 10 {
+        return Err(Error::InvalidParameter(format!(
+            "the hyperparameters need at least 10 rows, not {hyper_rows}"
+        )));
+    }
+    let first = data.select(&(0..hyper_rows.min(m)).collect::<Vec<_>>());
+    progress(
+        0,
+        &format!("hyperparameters on the first {} rows", first.len()),
+    );
+    let t_hyper = Instant::now();
+    let first_resid = residual(&first, &calibrate(&first, robot)?.0)?;
+    let spaces = [Space::Js, Space::Ejs];
+    let mut hybrid_t = Vec::new();
+    let mut kin_t = Vec::new();
+    for space in spaces {
+        hybrid_t.push(ErrorModel::fit(&first_resid, space, opts)?);
+        kin_t.push(ErrorModel::fit_kinematic(&first, space, opts, robot)?);
+    }
+    let hyper_seconds = t_hyper.elapsed().as_secs_f64();
+    let mut pred = vec![vec![[0.0; 3]; m]; 5];
+    let mut secs = [0.0; 5];
+    let mut fold_max_mm = Vec::with_capacity(k);
+    for f in 0..k {
+        progress(f + 1, &format!("fold {}", f + 1));
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
+        let (tr, held) = (data.select(&train), data.select(&test));
+        let t = Instant::now();
+        let (dh, _) = calibrate(&tr, robot)?;
+        let dh_secs = t.elapsed().as_secs_f64();
+        secs[0] += dh_secs;
+        let mut worst = [0.0f64; 5];
+        let mut put = |slot: usize, p: Vec<[f64; 3]>| {
+            for (j, v) in p.into_iter().enumerate() {
+                let e = errors[test[j]];
+                worst[slot] = worst[slot].max(norm3(&[e[0] - v[0], e[1] - v[1], e[2] - v[2]]));
+                pred[slot][test[j]] = v;
+            }
+        };
+        put(0, dh.predict(&held.q, &held.dir)?);
+        let resid = residual(&tr, &dh)?;
+        for s in 0..2 {
+            let t = Instant::now();
+            let h = HybridModel {
+                physics: dh.clone(),
+                residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
+            };
+            secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
+            put(1 + s, h.predict(&held.q, &held.dir)?);
+            let t = Instant::now();
+            let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
+            secs[3 + s] += t.elapsed().as_secs_f64();
+            put(3 + s, uk.predict_mean(&held.q, &held.dir)?);
+        }
+        fold_max_mm.push(worst);
+    }
+    let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
+    for (i, n) in CV_MODELS.iter().enumerate() {
+        rows.push(score(n, errors, &pred[i], secs[i]));
+    }
+    Ok(HoldoutCv {
+        rows,
+        fold_max_mm,
+        hyper_rows: first.len(),
+        hyper_seconds,
+    })
+}
