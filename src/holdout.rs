@@ -98,6 +98,12 @@ pub struct HoldoutCv {
     pub rows: Vec<HoldoutRow>,
     /// Max 3D error of each of the [`CV_MODELS`] in each fold, mm.
     pub fold_max_mm: Vec<[f64; 5]>,
+    /// The same over the held-out rows the model does not flag as outside
+    /// its coverage ([`ErrorModel::coverage`]; the D-H calibration flags
+    /// none), mm.
+    pub fold_max_covered_mm: Vec<[f64; 5]>,
+    /// Rows each of the [`CV_MODELS`] flagged when they were held out.
+    pub flagged: Vec<Vec<usize>>,
     /// Rows the Kriging hyperparameters were chosen on, and the time it took.
     pub hyper_rows: usize,
     pub hyper_seconds: f64,
@@ -145,6 +151,8 @@ pub fn holdout_cv(
     let mut pred = vec![vec![[0.0; 3]; m]; 5];
     let mut secs = [0.0; 5];
     let mut fold_max_mm = Vec::with_capacity(k);
+    let mut fold_max_covered_mm = Vec::with_capacity(k);
+    let mut flagged = vec![Vec::new(); 5];
     for f in 0..k {
         progress(f + 1, &format!("fold {}", f + 1));
         let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
@@ -154,14 +162,22 @@ pub fn holdout_cv(
         let dh_secs = t.elapsed().as_secs_f64();
         secs[0] += dh_secs;
         let mut worst = [0.0f64; 5];
-        let mut put = |slot: usize, p: Vec<[f64; 3]>| {
+        let mut worst_covered = [0.0f64; 5];
+        // predictions of model `slot` on the held-out rows, and the rows it
+        // flags as outside its coverage
+        let mut put = |slot: usize, p: Vec<[f64; 3]>, flags: Vec<usize>| {
             for (j, v) in p.into_iter().enumerate() {
                 let e = errors[test[j]];
-                worst[slot] = worst[slot].max(norm3(&[e[0] - v[0], e[1] - v[1], e[2] - v[2]]));
+                let err = norm3(&[e[0] - v[0], e[1] - v[1], e[2] - v[2]]);
+                worst[slot] = worst[slot].max(err);
+                if !flags.contains(&j) {
+                    worst_covered[slot] = worst_covered[slot].max(err);
+                }
                 pred[slot][test[j]] = v;
             }
+            flagged[slot].extend(flags.iter().map(|&j| test[j]));
         };
-        put(0, dh.predict(&held.q, &held.dir)?);
+        put(0, dh.predict(&held.q, &held.dir)?, Vec::new());
         let resid = residual(&tr, &dh)?;
         for s in 0..2 {
             let t = Instant::now();
@@ -170,13 +186,16 @@ pub fn holdout_cv(
                 residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
             };
             secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
-            put(1 + s, h.predict(&held.q, &held.dir)?);
+            let flags = flagged_rows(&h.residual, &held)?;
+            put(1 + s, h.predict(&held.q, &held.dir)?, flags);
             let t = Instant::now();
             let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
             secs[3 + s] += t.elapsed().as_secs_f64();
-            put(3 + s, uk.predict_mean(&held.q, &held.dir)?);
+            let flags = flagged_rows(&uk, &held)?;
+            put(3 + s, uk.predict_mean(&held.q, &held.dir)?, flags);
         }
         fold_max_mm.push(worst);
+        fold_max_covered_mm.push(worst_covered);
     }
     let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
     for (i, n) in CV_MODELS.iter().enumerate() {
@@ -185,7 +204,26 @@ pub fn holdout_cv(
     Ok(HoldoutCv {
         rows,
         fold_max_mm,
+        fold_max_covered_mm,
+        flagged: flagged
+            .into_iter()
+            .map(|mut f| {
+                f.sort_unstable();
+                f
+            })
+            .collect(),
         hyper_rows: first.len(),
         hyper_seconds,
     })
+}
+
+/// Rows of `held` that `model` flags as outside its coverage (joint range,
+/// prediction std, or a correction far beyond its trend).
+fn flagged_rows(model: &ErrorModel, held: &Dataset) -> Result<Vec<usize>> {
+    let p = model.predict(&held.q, &held.dir)?;
+    Ok(model
+        .coverage(&held.q, &held.dir, &p.mean, Some(&p.std))?
+        .into_iter()
+        .map(|w| w.index)
+        .collect())
 }

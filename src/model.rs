@@ -713,6 +713,11 @@ impl ErrorModel {
 /// whose independent share is r has its β amplified ~1/r.
 pub const KINEMATIC_AXIS_TOL: f64 = 1e-3;
 
+/// Rows a kinematic trend column's new component must be spread over, on
+/// its axis, to be kept ([`crate::kriging::supported_columns`]): the rule of
+/// thumb of ten observations per coefficient.
+pub const KINEMATIC_MIN_SUPPORT: f64 = 10.0;
+
 /// Share of a parameter's 3-axis Jacobian norm below which one axis's
 /// column counts as zero: the parameter does not move that axis, and what
 /// the finite differences give is rounding noise (e.g. `dPz/dtheta_off1`,
@@ -769,7 +774,7 @@ fn kinematic_trend_set(
     axis_tol: Option<f64>,
 ) -> Result<[crate::kriging::Trend; 3]> {
     use crate::kinematics::{calib_len, identification_jacobian};
-    use crate::kriging::independent_columns;
+    use crate::kriging::{independent_columns, supported_columns};
     let n = data.n_joints();
     if robot.dof() != n {
         return Err(Error::JointCount {
@@ -827,7 +832,7 @@ fn kinematic_trend_set(
                 fa[(i, np0 + c)] = rows[i][a][k];
             }
         }
-        let (cols, _) = independent_columns(&fa, tol);
+        let (cols, _) = supported_columns(&fa, tol, KINEMATIC_MIN_SUPPORT);
         cols.iter()
             .filter(|&&j| j >= np0)
             .map(|&j| seen[j - np0])

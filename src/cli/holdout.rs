@@ -161,6 +161,24 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         }
     );
     print_rows(&cv.rows);
+    for (name, (rows, worst)) in robokrige::holdout::CV_MODELS
+        .iter()
+        .zip(
+            cv.flagged.iter().zip(
+                cv.fold_max_covered_mm
+                    .iter()
+                    .fold([0.0f64; 5], |a, b| std::array::from_fn(|i| a[i].max(b[i]))),
+            ),
+        )
+        .skip(1)
+    {
+        if !rows.is_empty() {
+            println!(
+                "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
+                rows.len()
+            );
+        }
+    }
     if let Some(p) = &a.json {
         std::fs::write(p, to_json(&cv, "cv table")?).map_err(|e| Error::io(p, e))?;
     }

@@ -18,7 +18,10 @@ pub mod trend;
 pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
 pub use model::{KrigingModel, KrigingModelData, Pred};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
-pub use trend::{KinematicTrend, Monomials, Trend, TrendModel, independent_columns, trend_matrix};
+pub use trend::{
+    KinematicTrend, Monomials, Trend, TrendModel, independent_columns, support, supported_columns,
+    trend_matrix,
+};
 
 use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
 use crate::space::Normalizer;

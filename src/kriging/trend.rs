@@ -276,6 +276,23 @@ pub fn trend_matrix(trend: &dyn TrendModel, rows: &[Vec<f64>]) -> faer::Mat<f64>
 /// (lower-degree) columns win, so e.g. `λ²` (≡ affine in λ) is dropped, not `1`.
 /// Returns `(kept, dropped)` column indices.
 pub fn independent_columns(f: &faer::Mat<f64>, rel_tol: f64) -> (Vec<usize>, Vec<usize>) {
+    supported_columns(f, rel_tol, 0.0)
+}
+
+/// [`independent_columns`] that also drops a column whose new component
+/// (orthogonal to the kept columns) lives on fewer than `min_support` rows:
+/// its support `(Σ v_i²)² / Σ v_i⁴` (the participation ratio: n for a
+/// component spread evenly over n rows, 1 for one row). A trend coefficient
+/// identified by one or two rows takes those rows' noise and residual
+/// exactly (leverage 1), and multiplies it wherever the column is large: a
+/// Jacobian column that vanishes over a campaign whose tool keeps one
+/// direction, except at its home and check poses, gave held-out errors of
+/// 4–9 mm against 0.19 mm for the D-H calibration (`tests/no_blow_up.rs`).
+pub fn supported_columns(
+    f: &faer::Mat<f64>,
+    rel_tol: f64,
+    min_support: f64,
+) -> (Vec<usize>, Vec<usize>) {
     let m = f.nrows();
     let mut basis: Vec<Vec<f64>> = Vec::new();
     let (mut kept, mut dropped) = (Vec::new(), Vec::new());
@@ -289,7 +306,7 @@ pub fn independent_columns(f: &faer::Mat<f64>, rel_tol: f64) -> (Vec<usize>, Vec
             }
         }
         let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm0 > 0.0 && norm > rel_tol * norm0 {
+        if norm0 > 0.0 && norm > rel_tol * norm0 && support(&v) >= min_support {
             v.iter_mut().for_each(|x| *x /= norm);
             basis.push(v);
             kept.push(j);
@@ -298,6 +315,14 @@ pub fn independent_columns(f: &faer::Mat<f64>, rel_tol: f64) -> (Vec<usize>, Vec
         }
     }
     (kept, dropped)
+}
+
+/// Participation ratio `(Σ v_i²)² / Σ v_i⁴` of `v`: the number of rows it is
+/// spread over (0 for a zero vector).
+pub fn support(v: &[f64]) -> f64 {
+    let s2: f64 = v.iter().map(|x| x * x).sum();
+    let s4: f64 = v.iter().map(|x| (x * x) * (x * x)).sum();
+    if s4 > 0.0 { s2 * s2 / s4 } else { 0.0 }
 }
 
 #[cfg(test)]
