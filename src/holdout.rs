@@ -39,7 +39,7 @@ pub fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) ->
         .zip(pred)
         .map(|(t, p)| [t[0] - p[0], t[1] - p[1], t[2] - p[2]])
         .collect();
-    let d: Vec<f64> = r.iter().map(|e| norm3(e)).collect();
+    let d: Vec<f64> = r.iter().map(norm3).collect();
     let s = spread(&d);
     let rms = |a: usize| (r.iter().map(|e| e[a] * e[a]).sum::<f64>() / r.len() as f64).sqrt();
     HoldoutRow {

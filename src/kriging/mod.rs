@@ -178,11 +178,11 @@ impl KrigingOptions {
                 "starts, max_evals and tol must be positive".into(),
             ));
         }
-        if self
-            .warm_start
-            .iter()
-            .any(|w| w.theta.iter().any(|t| !t.is_finite() || *t < 0.0) || !(w.nugget >= 0.0))
-        {
+        if self.warm_start.iter().any(|w| {
+            w.theta.iter().any(|t| !t.is_finite() || *t < 0.0)
+                || w.nugget.is_nan()
+                || w.nugget < 0.0
+        }) {
             return Err(Error::InvalidParameter(
                 "warm starts need finite ξ ≥ 0 and a nugget ≥ 0".into(),
             ));
