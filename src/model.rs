@@ -358,11 +358,15 @@ impl ErrorModel {
         let plan = check_fit_memory(data.len(), opts.optimizer)?;
         let fit_axis = |a: usize| {
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-            let start = opts
-                .warm_start
-                .get(a)
-                .map(|w| (w.theta.as_slice(), w.nugget));
-            fit_output_from(&x, &inputs, &y, &trends[a], &names, opts, start)
+            fit_output_from(
+                &x,
+                &inputs,
+                &y,
+                &trends[a],
+                &names,
+                opts,
+                opts.warm_start.get(a),
+            )
         };
         // large campaigns: one output at a time, one m × m factor in memory
         let fits: Vec<Result<(KrigingModel, FitReport)>> = if plan.sequential_outputs {

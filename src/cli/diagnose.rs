@@ -41,8 +41,10 @@ Example:
 pub struct DiagnoseArgs {
     /// Measurement CSV (any extra numeric columns are candidate covariates).
     data: PathBuf,
-    /// Base model: js-hj, ejs-hj or ejs-gps (constant trend).
-    #[arg(long, default_value = "ejs-hj")]
+    /// Base model (constant trend, nugget): ejs or js (BFGS on the analytic
+    /// gradient; CV folds warm-started from the full fit), or the papers'
+    /// js-hj, ejs-hj, ejs-gps.
+    #[arg(long, default_value = "ejs")]
     method: String,
     /// Fit the base model as an interpolator (no nugget). The default
     /// estimates a nugget: measured data has noise, and an interpolating

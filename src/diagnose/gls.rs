@@ -37,7 +37,7 @@
 //! change, so one resample costs one m × m product per axis.
 
 use crate::kriging::{
-    KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_at, fit_output_from,
+    KrigingModel, KrigingOptions, TrainingInputs, Trend, WarmStart, fit_output_at, fit_output_from,
 };
 use crate::model::ErrorModel;
 use crate::{Error, Result};
@@ -420,7 +420,11 @@ pub fn refit_systems(
                 TrainingInputs::new(&x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>());
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
             let names: Vec<String> = (1..=d + k).map(|j| format!("s{j}")).collect();
-            let start = (&km.data.theta[..corr], km.data.nugget);
+            let start = WarmStart {
+                theta: km.data.theta[..corr].to_vec(),
+                nugget: km.data.nugget,
+                inverse_hessian: model.reports[a].inverse_hessian.clone(),
+            };
             let (_, report) = fit_output_from(
                 &x_aug,
                 &inputs,
@@ -428,7 +432,7 @@ pub fn refit_systems(
                 &Trend::Monomials(terms),
                 &names,
                 opts,
-                Some(start),
+                Some(&start),
             )?;
             let at = fit_output_at(
                 x,

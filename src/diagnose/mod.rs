@@ -41,8 +41,8 @@ use std::collections::BTreeMap;
 /// Significant candidates per round whose refit CV is tried before giving up.
 const CONFIRMATIONS: usize = 3;
 
-/// Options of [`diagnose`]; `Default` is EJS with Hooke–Jeeves and a
-/// nugget (measurement noise: without one, the interpolating model cannot
+/// Options of [`diagnose`]; `Default` is EJS with the default optimiser
+/// (BFGS on the analytic gradient) and a nugget (measurement noise: without one, the interpolating model cannot
 /// approach the noise floor), 10 folds, 1999 permutations, FDR 5 %, at most
 /// 3 effects.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,7 +77,6 @@ impl Default for DiagnoseOptions {
         DiagnoseOptions {
             space: Space::Ejs,
             kriging: KrigingOptions {
-                optimizer: crate::kriging::OptimizerKind::HookeJeeves,
                 nugget: true,
                 ..KrigingOptions::default()
             },

@@ -127,14 +127,19 @@ pub struct KrigingOptions {
 pub struct WarmStart {
     pub theta: Vec<f64>,
     pub nugget: f64,
+    /// The BFGS inverse Hessian there (in log10 ξ, log10 ν), if known: the
+    /// local search then starts with the curvature it ended with (used only
+    /// when its size matches the search).
+    pub inverse_hessian: Option<Vec<Vec<f64>>>,
 }
 
 impl WarmStart {
-    /// The hyperparameters a fit ended at.
+    /// The hyperparameters a fit ended at, and its curvature.
     pub fn of(report: &FitReport, corr_dims: usize) -> Self {
         WarmStart {
             theta: report.theta[..corr_dims.min(report.theta.len())].to_vec(),
             nugget: report.nugget,
+            inverse_hessian: report.inverse_hessian.clone(),
         }
     }
 }
@@ -214,6 +219,10 @@ pub struct FitReport {
     /// the data and the options (byte-identical for the same command).
     #[serde(skip)]
     pub seconds: f64,
+    /// The BFGS inverse Hessian at the optimum (log10 units), for a warm
+    /// start ([`WarmStart::of`]); not saved.
+    #[serde(skip)]
+    pub inverse_hessian: Option<Vec<Vec<f64>>>,
 }
 
 impl PartialEq for FitReport {
@@ -354,7 +363,7 @@ pub fn fit_output_from(
     trend: &Trend,
     names: &[String],
     opts: &KrigingOptions,
-    start: Option<(&[f64], f64)>,
+    start: Option<&WarmStart>,
 ) -> Result<(KrigingModel, FitReport)> {
     opts.validate()?;
     let t0 = Instant::now();
@@ -379,20 +388,20 @@ pub fn fit_output_from(
     };
     // a constant response has nothing to learn: any ξ reproduces it exactly
     let constant_response = p.y_norm.iter().all(|v| *v == 0.0);
-    let (best_x, evals, starts, search_rows) = if constant_response {
-        (bounds.center(), 0, 0, 0)
+    let search = if constant_response {
+        None
     } else {
-        let (best, starts, rows) = match start {
-            Some((theta0, nu0)) => {
-                if theta0.len() != d {
+        let search = match start {
+            Some(w) => {
+                if w.theta.len() != d {
                     return Err(Error::InvalidParameter(format!(
                         "warm start has {} correlation parameters, the inputs {d}",
-                        theta0.len()
+                        w.theta.len()
                     )));
                 }
-                let mut z0: Vec<f64> = theta0.iter().map(|t| t.max(1e-300).log10()).collect();
+                let mut z0: Vec<f64> = w.theta.iter().map(|t| t.max(1e-300).log10()).collect();
                 if opts.nugget {
-                    z0.push(nu0.max(1e-300).log10());
+                    z0.push(w.nugget.max(1e-300).log10());
                 }
                 let z0: Vec<f64> = z0
                     .iter()
@@ -400,8 +409,11 @@ pub fn fit_output_from(
                     .map(|(z, (lo, hi))| z.clamp(*lo, *hi))
                     .collect();
                 if opts.optimizer == OptimizerKind::Bfgs {
-                    let (r, rows) = converge_bfgs(&problem, &z0, None, &bounds, &unpack, opts);
-                    (r, 1, rows)
+                    let hinv = w
+                        .inverse_hessian
+                        .clone()
+                        .filter(|h| h.len() == z0.len() && h.iter().all(|r| r.len() == z0.len()));
+                    converge_bfgs(&problem, &z0, hinv, &bounds, &unpack, opts)
                 } else {
                     let obj = ln_psi_objective(&problem, &unpack);
                     let hj = HjOptions {
@@ -409,22 +421,26 @@ pub fn fit_output_from(
                         max_evals: opts.max_evals,
                         ..HjOptions::default()
                     };
-                    (
-                        optim::hooke_jeeves(obj, &z0, &bounds, &hj),
-                        1,
-                        p.y_norm.len(),
-                    )
+                    Search {
+                        best: optim::hooke_jeeves(obj, &z0, &bounds, &hj),
+                        starts: 1,
+                        rows: p.y_norm.len(),
+                        inverse_hessian: None,
+                    }
                 }
             }
             None => optimise(&problem, &bounds, &unpack, opts),
         };
-        if !best.f.is_finite() {
+        if !search.best.f.is_finite() {
             return Err(Error::Numerical(
                 "no hyperparameter in the box gave a finite likelihood".into(),
             ));
         }
-        (best.x, best.evals, starts, rows)
+        Some(search)
     };
+    let best_x = search
+        .as_ref()
+        .map_or_else(|| bounds.center(), |s| s.best.x.clone());
     let (mut theta, nugget) = unpack(&best_x);
     let sol = problem.solve(&theta, nugget)?;
     // trend-only inputs (beyond `inputs.d`) do not enter the correlation
@@ -438,10 +454,11 @@ pub fn fit_output_from(
         trend_terms: p.trend_terms,
         dropped_terms: p.dropped_terms,
         optimizer: opts.optimizer,
-        starts,
-        evals,
-        search_rows,
+        starts: search.as_ref().map_or(0, |s| s.starts),
+        evals: search.as_ref().map_or(0, |s| s.best.evals),
+        search_rows: search.as_ref().map_or(0, |s| s.rows),
         seconds: t0.elapsed().as_secs_f64(),
+        inverse_hessian: search.and_then(|s| s.inverse_hessian),
     };
     let model =
         KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?;
@@ -597,31 +614,44 @@ impl std::fmt::Display for FitPlan {
 ///   likelihood, at a few dozen full evaluations instead of hundreds;
 /// - larger: the same with the convergence on a subset of [`REFINE_ROWS`]
 ///   rows; [`fit_output_from`] then solves once on all rows at that ξ.
-///
-/// Returns the result, the starts, and the rows of the last stage.
 fn optimise_bfgs(
     problem: &KrigingProblem,
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
-) -> (OptimResult, usize, usize) {
+) -> Search {
     let m = problem.m();
     if m <= SEARCH_ROWS {
-        let (r, starts, _) = multistart_bfgs(problem, bounds, unpack, opts);
-        return (r, starts, m);
+        let (best, starts, hinv) = multistart_bfgs(problem, bounds, unpack, opts);
+        return Search {
+            best,
+            starts,
+            rows: m,
+            inverse_hessian: Some(hinv),
+        };
     }
     let sub = SubsetData::new(problem, &row_subset(m, SEARCH_ROWS, opts.seed));
     let (found, starts, hinv) = multistart_bfgs(&sub.problem(problem), bounds, unpack, opts);
     // the subset's curvature is a far better start than the identity (on
     // 2 773 UR10 rows: 40 full-data iterations instead of 67)
-    let (mut r, rows) = converge_bfgs(problem, &found.x, Some(hinv), bounds, unpack, opts);
-    r.evals += found.evals;
-    (r, starts, rows)
+    let mut r = converge_bfgs(problem, &found.x, Some(hinv), bounds, unpack, opts);
+    r.best.evals += found.evals;
+    r.starts = starts;
+    r
+}
+
+/// How a hyperparameter search went: the best point, the starts, the rows
+/// of its last stage and, for BFGS, the inverse Hessian there.
+struct Search {
+    best: OptimResult,
+    starts: usize,
+    rows: usize,
+    inverse_hessian: Option<Hessian>,
 }
 
 /// BFGS from `x0` (inverse Hessian `hinv`, or the identity) to convergence
 /// on all rows, or on a seeded subset of [`REFINE_ROWS`] rows when there are
-/// more; returns the result and the rows it used.
+/// more (one start).
 fn converge_bfgs(
     problem: &KrigingProblem,
     x0: &[f64],
@@ -629,7 +659,7 @@ fn converge_bfgs(
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
-) -> (OptimResult, usize) {
+) -> Search {
     let m = problem.m();
     let full = optim::QuasiNewtonOptions {
         max_evals: opts.max_evals,
@@ -644,8 +674,13 @@ fn converge_bfgs(
     });
     let refine = refine_sub.as_ref().map(|s| s.problem(problem));
     let obj = ln_psi_grad_objective(refine.as_ref().unwrap_or(problem), unpack);
-    let (r, _) = optim::quasi_newton_warm(obj, x0, hinv, bounds, &full);
-    (r, refine_rows)
+    let (best, h) = optim::quasi_newton_warm(obj, x0, hinv, bounds, &full);
+    Search {
+        best,
+        starts: 1,
+        rows: refine_rows,
+        inverse_hessian: Some(h),
+    }
 }
 
 /// A problem's data restricted to some rows.
@@ -772,8 +807,14 @@ fn optimise(
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
-) -> (OptimResult, usize, usize) {
+) -> Search {
     let m = problem.m();
+    let done = |best: OptimResult, starts: usize| Search {
+        best,
+        starts,
+        rows: m,
+        inverse_hessian: None,
+    };
     let run = |x0: &[f64], initial_mesh: f64, tol: f64| {
         let obj = ln_psi_objective(problem, unpack);
         match opts.optimizer {
@@ -801,7 +842,7 @@ fn optimise(
         }
     };
     match opts.optimizer {
-        OptimizerKind::HookeJeeves => return (run(&bounds.center(), 0.5, opts.tol), 1, m),
+        OptimizerKind::HookeJeeves => return done(run(&bounds.center(), 0.5, opts.tol), 1),
         OptimizerKind::Bfgs => return optimise_bfgs(problem, bounds, unpack, opts),
         OptimizerKind::Gps => {}
     }
@@ -833,10 +874,10 @@ fn optimise(
     let mut best = pool.swap_remove(0);
     if !opts.polish {
         best.evals = evals;
-        return (best, starts.len(), m);
+        return done(best, starts.len());
     }
     let obj = ln_psi_objective(problem, unpack);
     let mut polished = optim::bfgs(obj, &best.x, bounds, &optim::BfgsOptions::default());
     polished.evals += evals;
-    (polished, starts.len(), m)
+    done(polished, starts.len())
 }
