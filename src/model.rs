@@ -521,11 +521,34 @@ impl ErrorModel {
 
     fn predict_rows(&self, rows: &[Vec<f64>]) -> Result<Prediction> {
         let s = self.input_norm.apply_rows(rows);
-        let per_axis: Vec<Vec<Pred>> = self
-            .outputs
-            .par_iter()
-            .map(|m| m.predict(&s))
-            .collect::<Result<_>>()?;
+        // the first standard deviation needs each output's m × m factor,
+        // which then stays with the model: known before it is allocated
+        let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+        let missing = self.outputs.iter().filter(|o| !o.has_factors()).count() as u64;
+        if missing > 0 {
+            crate::memory::check(
+                &format!(
+                    "prediction standard deviations of a {m}-row model ({missing} m × m factor(s))"
+                ),
+                missing * crate::memory::square_bytes(m),
+                &format!(
+                    "predict the mean only (`compensate` does), or fit on fewer rows; or raise {}",
+                    crate::memory::LIMIT_ENV
+                ),
+            )?;
+        }
+        let per_axis: Vec<Vec<Pred>> = if m > crate::kriging::model::KEEP_FACTOR_MAX_M {
+            // large models: one factorisation at a time, each multi-threaded
+            self.outputs
+                .iter()
+                .map(|o| o.predict(&s))
+                .collect::<Result<_>>()?
+        } else {
+            self.outputs
+                .par_iter()
+                .map(|o| o.predict(&s))
+                .collect::<Result<_>>()?
+        };
         let mut mean = vec![[0.0; 3]; rows.len()];
         let mut std = vec![[0.0; 3]; rows.len()];
         for (a, preds) in per_axis.iter().enumerate() {

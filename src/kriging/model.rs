@@ -256,6 +256,12 @@ impl KrigingModel {
         }
     }
 
+    /// Whether the factors are in memory (kept from the fit, or computed by
+    /// an earlier [`KrigingModel::factors`] call).
+    pub fn has_factors(&self) -> bool {
+        self.factors.get().is_some()
+    }
+
     /// Input dimension.
     pub fn dim(&self) -> usize {
         self.data.theta.len()
