@@ -214,16 +214,35 @@ pub fn with_columns(data: &Dataset, extras: &[Feature]) -> Result<Dataset> {
 
 /// The model with `extras` fitted on all of `data`, and its K-fold CV. Each
 /// fold is refitted with a local search warm-started at the full model's
-/// hyperparameters ([`KrigingOptions::warm_start`]): a fold holds 90 % of the
-/// rows, so its optimum lies in the same basin, and the multistart would
-/// find it again at several times the cost.
+/// hyperparameters and curvature ([`KrigingOptions::warm_start`]): a fold
+/// holds 90 % of the rows, so its optimum lies in the same basin, and the
+/// multistart would find it again at several times the cost. With `from`
+/// (the current model) and the same correlation inputs — the candidate adds
+/// trend terms only — the full fit too is a local search from `from`, so
+/// that the model with the effect is compared with the model without it in
+/// the same basin of the multimodal likelihood (the candidate was found
+/// there: [`gls::refit_systems`]).
 fn cross_validated(
     data: &Dataset,
     extras: &[Feature],
     o: &DiagnoseOptions,
+    from: Option<&ErrorModel>,
 ) -> Result<(CvStats, ErrorModel)> {
     let work = with_columns(data, extras)?;
-    let model = ErrorModel::fit_with_extras(&work, o.space, &o.kriging, extras)?;
+    let corr_dims = o.space.encoded_dim(data.n_joints(), &o.kriging.periodic)
+        + extras
+            .iter()
+            .filter(|f| !f.trend_only())
+            .map(|f| f.names().len())
+            .sum::<usize>();
+    let start = KrigingOptions {
+        warm_start: from
+            .filter(|m| m.correlation_dims() == corr_dims)
+            .map(ErrorModel::warm_starts)
+            .unwrap_or_default(),
+        ..o.kriging.clone()
+    };
+    let model = ErrorModel::fit_with_extras(&work, o.space, &start, extras)?;
     let warm = KrigingOptions {
         warm_start: model.warm_starts(),
         ..o.kriging.clone()
@@ -244,7 +263,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     let min_score = 1.0 - (1.0 - o.min_gain).powi(2);
     let fold = kfold_partition(data.len(), o.folds, o.seed)?;
     progress("cross-validating the current model");
-    let (before, mut model) = cross_validated(data, &[], o)?;
+    let (before, mut model) = cross_validated(data, &[], o, None)?;
     let mut current = before.clone();
     let mut extras: Vec<Feature> = Vec::new();
     let mut steps = Vec::new();
@@ -355,7 +374,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 "adding '{}' and cross-validating again",
                 reports[k].label
             ));
-            let (after, trial_model) = cross_validated(data, &trial, o)?;
+            let (after, trial_model) = cross_validated(data, &trial, o, Some(&model))?;
             if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
                 reports[k].accepted = true;
                 extras = trial;
