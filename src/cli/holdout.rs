@@ -26,7 +26,9 @@ Models: nominal (no correction); D-H calibration (Levenberg–Marquardt on the
 5n + 9 MD-H, tool and base errors; redundant ones frozen); hybrid (D-H
 calibration, then Kriging JS or EJS on its residual); universal Kriging with
 the kinematic trend (constant + identification-Jacobian rows; the GLS does the
-calibration), JS and EJS. Kriging hyperparameters by Hooke–Jeeves.
+calibration), JS and EJS. Kriging hyperparameters by --optimizer (BFGS by
+default). With --cv, each model also reports the held-out rows it flags as
+outside its coverage.
 
 Example (the public UR10 data, series C):
   robokrige holdout ../shared/data/ipa-ur10/series_c_random_poses.csv \\
