@@ -1,0 +1,85 @@
+//! Warm starts (`KrigingOptions::warm_start`): a refit on 90 % of the rows,
+//! started from the full fit's ξ, ν and curvature, reaches the ln ψ of a
+//! cold multistart at a fraction of the evaluations; and the support screen
+//! of the kinematic trend (`supported_columns`).
+
+use robokrige::dataset::read_csv;
+use robokrige::kriging::{KrigingOptions, WarmStart, support, supported_columns};
+use robokrige::model::ErrorModel;
+use robokrige::space::Space;
+
+#[test]
+fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
+    let data = read_csv(std::path::Path::new("datasets/comau_lhs.csv")).unwrap();
+    let data = data.select(&(0..200).collect::<Vec<_>>());
+    let o = KrigingOptions {
+        nugget: true,
+        ..KrigingOptions::default()
+    };
+    let full = ErrorModel::fit(&data, Space::Ejs, &o).unwrap();
+    let warm = KrigingOptions {
+        warm_start: full.warm_starts(),
+        ..o.clone()
+    };
+    let fold = data.select(&(0..200).filter(|i| i % 10 != 3).collect::<Vec<_>>());
+    let w = ErrorModel::fit(&fold, Space::Ejs, &warm).unwrap();
+    let c = ErrorModel::fit(&fold, Space::Ejs, &o).unwrap();
+    for a in 0..3 {
+        let (rw, rc) = (&w.reports[a], &c.reports[a]);
+        eprintln!(
+            "axis {a}: warm ln ψ {:.5} ({} evals), cold {:.5} ({} evals)",
+            rw.ln_psi, rw.evals, rc.ln_psi, rc.evals
+        );
+        assert!(rw.ln_psi <= rc.ln_psi + 1e-3, "axis {a}");
+        assert!(3 * rw.evals < rc.evals, "axis {a}");
+        assert_eq!(rw.starts, 1);
+    }
+    // the start is how the fit began, not part of the model
+    assert!(w.options.warm_start.is_empty());
+}
+
+#[test]
+fn warm_starts_of_the_wrong_size_are_refused() {
+    let data = read_csv(std::path::Path::new("datasets/comau_lhs.csv")).unwrap();
+    let data = data.select(&(0..60).collect::<Vec<_>>());
+    let one = WarmStart {
+        theta: vec![0.1; 3],
+        nugget: 0.0,
+        inverse_hessian: None,
+    };
+    for starts in [vec![one.clone()], vec![one.clone(), one.clone(), one]] {
+        let o = KrigingOptions {
+            warm_start: starts,
+            ..KrigingOptions::default()
+        };
+        assert!(ErrorModel::fit(&data, Space::Ejs, &o).is_err());
+    }
+    let bad = KrigingOptions {
+        warm_start: vec![
+            WarmStart {
+                theta: vec![-1.0; 12],
+                nugget: 0.0,
+                inverse_hessian: None,
+            };
+            3
+        ],
+        ..KrigingOptions::default()
+    };
+    assert!(bad.validate().is_err());
+}
+
+#[test]
+fn a_column_seen_by_one_row_is_not_supported() {
+    assert!((support(&[0.0, 2.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+    assert!((support(&[1.0; 40]) - 40.0).abs() < 1e-9);
+    assert_eq!(support(&[0.0; 5]), 0.0);
+    let m = 50;
+    // constant, a ramp, and a column that is zero except on one row
+    let f = faer::Mat::from_fn(m, 3, |i, j| match j {
+        0 => 1.0,
+        1 => i as f64,
+        _ => f64::from(u8::from(i == 7)),
+    });
+    assert_eq!(supported_columns(&f, 1e-3, 0.0).0, vec![0, 1, 2]);
+    assert_eq!(supported_columns(&f, 1e-3, 10.0).0, vec![0, 1]);
+}
