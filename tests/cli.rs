@@ -336,3 +336,47 @@ fn kinematic_and_periodic_options_are_checked() {
     );
     std::fs::remove_file(out).ok();
 }
+
+/// Issue 18 §1: an output that is an input (by path, through `..`, or a
+/// hard link) or another output is refused before any work, and the input
+/// is left as it was.
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let dir = std::env::temp_dir().join(format!("robokrige-guard-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--poses",
+        "30",
+        "--seed",
+        "5",
+        "-o",
+        &p("d.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let before = std::fs::read(dir.join("d.csv")).unwrap();
+    std::fs::hard_link(dir.join("d.csv"), dir.join("link.csv")).unwrap();
+    for out in [p("d.csv"), p("sub/../d.csv"), p("link.csv")] {
+        let (c, _, err) = rk(&["fit", &p("d.csv"), "--optimizer", "hj", "-o", &out]);
+        assert_eq!(c, 1, "{out}: {err}");
+        assert!(err.contains("refusing to overwrite"), "{err}");
+    }
+    assert_eq!(std::fs::read(dir.join("d.csv")).unwrap(), before);
+    let (c, _, err) = rk(&["fit", &p("d.csv"), "--optimizer", "hj", "-o", &p("m.json")]);
+    assert_eq!(c, 0, "{err}");
+    let (c, _, err) = rk(&["predict", &p("m.json"), &p("d.csv"), "-o", &p("m.json")]);
+    assert_eq!(c, 1, "{err}");
+    let (c, _, err) = rk(&[
+        "predict",
+        &p("m.json"),
+        &p("d.csv"),
+        "-o",
+        &p("o.csv"),
+        "--json",
+        &p("o.csv"),
+    ]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("same file"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -270,6 +270,12 @@ fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()
 }
 
 pub fn run_compensate(a: CompensateArgs) -> Result<()> {
+    let mut inputs = vec![a.traj.as_path(), a.model.as_path()];
+    inputs.extend(a.truth.as_deref());
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.plot.as_deref());
+    outputs.extend(a.json.as_deref());
+    super::check_outputs(&inputs, &outputs)?;
     let robot = kinematics::preset(&a.robot)?;
     let model = AnyModel::load(&a.model)?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());

@@ -163,6 +163,7 @@ pub struct FitArgs {
 }
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
+    super::check_outputs(&[&a.data], &[&a.output])?;
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
@@ -293,6 +294,9 @@ pub struct PredictArgs {
 }
 
 pub fn run_predict(a: PredictArgs) -> Result<()> {
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.json.as_deref());
+    super::check_outputs(&[&a.model, &a.poses], &outputs)?;
     let model = ErrorModel::load(&a.model)?;
     let data = super::read_data(&a.poses)?;
     if data.n_joints() != model.n_joints {

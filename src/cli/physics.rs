@@ -503,6 +503,7 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
 }
 
 fn run_register(a: RegisterArgs) -> Result<()> {
+    super::check_outputs(&[&a.data], &[&a.output])?;
     let robot = kinematics::preset(&a.robot)?;
     let data = read_data(&a.data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
