@@ -55,6 +55,11 @@ pub enum Mode {
 }
 
 pub fn run(a: CvArgs) -> Result<()> {
+    let outputs: Vec<&std::path::Path> = [a.json.as_deref(), a.plot.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    super::check_outputs(&[&a.data], &outputs)?;
     if let Some(list) = &a.methods {
         return run_methods(&a, list);
     }

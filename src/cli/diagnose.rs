@@ -132,6 +132,23 @@ pub(super) fn rmse3(v: &[f64; 3]) -> String {
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
+    let inputs: Vec<&std::path::Path> = [
+        Some(a.data.as_path()),
+        a.traj.as_deref(),
+        a.truth.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let outputs: Vec<&std::path::Path> = [
+        a.json.as_deref(),
+        a.report.as_deref(),
+        a.model_out.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    super::check_outputs(&inputs, &outputs)?;
     let mut data = super::read_data(&a.data)?;
     if let Some(n) = a.rows.filter(|&n| n < data.len()) {
         data = data.select(&(0..n).collect::<Vec<_>>());

@@ -205,6 +205,8 @@ fn print_rows(rows: &[HoldoutRow]) {
 }
 
 pub fn run(a: HoldoutArgs) -> Result<()> {
+    let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
+    super::check_outputs(&[&a.data], &outputs)?;
     let data = read_data(&a.data)?;
     let robot = robot_with_tool(&a.robot, a.tool.as_deref())?;
     if let Some(k) = a.cv {
