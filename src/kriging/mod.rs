@@ -762,58 +762,55 @@ fn multistart_bfgs(
         start_box.hi[k] = hi.clamp(bounds.lo[k], bounds.hi[k]);
     }
     let starts = optim::lhs_starts(&start_box, opts.starts, opts.seed);
-    let stage = |iters: usize| optim::QuasiNewtonOptions {
-        max_iter: iters,
+    let full_iter = optim::QuasiNewtonOptions::default().max_iter;
+    // a pool of `n` runs stops after `iters` iterations, or converges once
+    // only the finalists are left
+    let limit = |n: usize, iters: usize| optim::QuasiNewtonOptions {
+        max_iter: if n <= FINALISTS { full_iter } else { iters },
         max_evals: opts.max_evals,
         ..optim::QuasiNewtonOptions::default()
     };
-    // (start index, result, inverse Hessian): runs continue where they stopped
-    let mut pool: Vec<(usize, OptimResult, Option<Hessian>)> = starts
-        .iter()
-        .enumerate()
-        .map(|(i, x0)| {
-            let r = OptimResult {
-                x: x0.clone(),
-                f: f64::INFINITY,
-                evals: 0,
-                iterations: 0,
-                stop: optim::StopReason::Budget,
-            };
-            (i, r, None)
-        })
-        .collect();
-    let mut evals = 0;
-    let mut iters = SCREEN_ITER;
-    loop {
-        let last = pool.len() <= FINALISTS;
-        let o = if last {
-            stage(optim::QuasiNewtonOptions::default().max_iter)
-        } else {
-            stage(iters)
-        };
-        pool = pool
-            .into_par_iter()
-            .map(|(i, r, h)| {
+    // (start index, from, inverse Hessian) → (start index, result, its
+    // inverse Hessian): runs continue where they stopped
+    let run = |pool: Vec<(usize, Vec<f64>, Option<Hessian>)>, o: optim::QuasiNewtonOptions| {
+        pool.into_par_iter()
+            .map(|(i, x, h)| {
                 let obj = ln_psi_grad_objective(problem, unpack);
-                let (r, h) = optim::quasi_newton_warm(obj, &r.x, h, bounds, &o);
-                (i, r, Some(h))
+                let (r, h) = optim::quasi_newton_warm(obj, &x, h, bounds, &o);
+                (i, r, h)
             })
-            .collect();
-        evals += pool.iter().map(|p| p.1.evals).sum::<usize>();
-        if last {
-            break;
-        }
+            .collect::<Vec<(usize, OptimResult, Hessian)>>()
+    };
+    let mut iters = SCREEN_ITER;
+    let mut pool = run(
+        starts
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (i, x.clone(), None))
+            .collect(),
+        limit(starts.len(), iters),
+    );
+    let mut evals: usize = pool.iter().map(|p| p.1.evals).sum();
+    while pool.len() > FINALISTS {
         // successive halving: the better half (start order breaks ties)
         // continues for twice as many iterations
         pool.sort_by(|a, b| a.1.f.total_cmp(&b.1.f).then(a.0.cmp(&b.0)));
         pool.truncate(pool.len().div_ceil(2));
         iters *= 2;
+        let o = limit(pool.len(), iters);
+        pool = run(
+            pool.into_iter()
+                .map(|(i, r, h)| (i, r.x, Some(h)))
+                .collect(),
+            o,
+        );
+        evals += pool.iter().map(|p| p.1.evals).sum::<usize>();
     }
     // the first of the best (start order breaks ties)
     pool.sort_by(|a, b| a.1.f.total_cmp(&b.1.f).then(a.0.cmp(&b.0)));
     let (_, mut best, hinv) = pool.into_iter().next().expect("at least one start");
     best.evals = evals;
-    (best, starts.len(), hinv.expect("run at least once"))
+    (best, starts.len(), hinv)
 }
 
 /// A BFGS inverse Hessian approximation.
