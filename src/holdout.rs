@@ -186,13 +186,13 @@ pub fn holdout_cv(
                 residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
             };
             secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
-            let flags = flagged_rows(&h.residual, &held)?;
+            let (_, flags) = predicted(&h.residual, &held)?;
             put(1 + s, h.predict(&held.q, &held.dir)?, flags);
             let t = Instant::now();
             let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
             secs[3 + s] += t.elapsed().as_secs_f64();
-            let flags = flagged_rows(&uk, &held)?;
-            put(3 + s, uk.predict_mean(&held.q, &held.dir)?, flags);
+            let (mean, flags) = predicted(&uk, &held)?;
+            put(3 + s, mean, flags);
         }
         fold_max_mm.push(worst);
         fold_max_covered_mm.push(worst_covered);
@@ -217,13 +217,15 @@ pub fn holdout_cv(
     })
 }
 
-/// Rows of `held` that `model` flags as outside its coverage (joint range,
-/// prediction std, or a correction far beyond its trend).
-fn flagged_rows(model: &ErrorModel, held: &Dataset) -> Result<Vec<usize>> {
+/// `model`'s predicted mean on `held`, and the rows it flags as outside its
+/// coverage (joint range, prediction std, or a correction far beyond its
+/// trend).
+fn predicted(model: &ErrorModel, held: &Dataset) -> Result<(Vec<[f64; 3]>, Vec<usize>)> {
     let p = model.predict(&held.q, &held.dir)?;
-    Ok(model
+    let flags = model
         .coverage(&held.q, &held.dir, &p.mean, Some(&p.std))?
         .into_iter()
         .map(|w| w.index)
-        .collect())
+        .collect();
+    Ok((p.mean, flags))
 }
