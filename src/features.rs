@@ -221,6 +221,12 @@ fn check_complete(source: &str, names: &[String], cols: Vec<Vec<f64>>) -> Result
     Ok(cols)
 }
 
+/// Number of input columns of `extras` that enter the correlation (the
+/// others are trend-only).
+pub fn correlation_dims(extras: &[Feature]) -> usize {
+    extras.iter().map(|f| f.names().len()).sum::<usize>() - trend_only_dims(extras)
+}
+
 /// Number of input columns of `extras` that are trend-only.
 pub fn trend_only_dims(extras: &[Feature]) -> usize {
     extras

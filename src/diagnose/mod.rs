@@ -229,15 +229,12 @@ fn cross_validated(
     from: Option<&ErrorModel>,
 ) -> Result<(CvStats, ErrorModel)> {
     let work = with_columns(data, extras)?;
-    let corr_dims = o.space.encoded_dim(data.n_joints(), &o.kriging.periodic)
-        + extras
-            .iter()
-            .filter(|f| !f.trend_only())
-            .map(|f| f.names().len())
-            .sum::<usize>();
+    let same_inputs = |m: &&ErrorModel| {
+        crate::features::correlation_dims(&m.extras) == crate::features::correlation_dims(extras)
+    };
     let start = KrigingOptions {
         warm_start: from
-            .filter(|m| m.correlation_dims() == corr_dims)
+            .filter(same_inputs)
             .map(ErrorModel::warm_starts)
             .unwrap_or_default(),
         ..o.kriging.clone()
