@@ -5,35 +5,22 @@
 //! 10⁴–10⁶ mm that cancel on the training poses only, and a pose outside the
 //! campaign's family was predicted metres off.
 
+#[path = "common/tool_down.rs"]
+mod tool_down;
+
 use robokrige::dataset::Dataset;
-use robokrige::kinematics::{Robot, preset};
+use robokrige::kinematics::Robot;
 use robokrige::kriging::{
     KrigingOptions, OptimizerKind, TrendModel, independent_columns, trend_matrix,
 };
 use robokrige::model::{ErrorModel, kinematic_trends};
 use robokrige::physics::{Geometry, PhysicsModel, identify_mdh};
-use robokrige::sim::{ErrorProfile, PoseContext, TrueRobot, rng_for};
+use robokrige::sim::{PoseContext, TrueRobot};
 use robokrige::space::{Normalizer, Space, periodic_joints};
 
-/// A UR10 with a TCP offset, measured (noise-free) at `m` poses with the
-/// tool pointing down: joints 1, 2, 3, 6 in a Latin hypercube over more than
-/// 180°, joint 4 = −90° − θ2 − θ3, joint 5 = −90° ± 3°.
+/// [`tool_down::ur10_tool_down`] measured noise-free.
 fn tool_down(m: usize) -> (Robot, TrueRobot, Dataset) {
-    let mut nominal = preset("ur10").unwrap();
-    nominal.tool = nalgebra::Isometry3::translation(-0.14, 0.30, 92.82);
-    let truth = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), 7);
-    let ranges = [
-        (-170.0, 170.0),
-        (-185.0, 5.0),
-        (-170.0, 170.0),
-        (0.0, 0.0),
-        (-93.0, -87.0),
-        (-200.0, 200.0),
-    ];
-    let mut q = robokrige::sim::campaign::lhs(&ranges, m, &mut rng_for(7, "tool-down"));
-    for r in &mut q {
-        r[3] = -90.0 - r[1] - r[2];
-    }
+    let (nominal, truth, q) = tool_down::ur10_tool_down(m, 7, "tool-down");
     let mut data = Dataset::from_poses("<tool down>", q, None).unwrap();
     data.errors = Some(errors(&truth, &data.q, &data.dir));
     (nominal, truth, data)

@@ -7,32 +7,18 @@
 //! default optimiser and a nugget: no fold's max error may exceed 3× the D-H
 //! calibration's max in the same fold.
 
+#[path = "common/tool_down.rs"]
+mod tool_down;
+
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{CV_MODELS, holdout_cv};
-use robokrige::kinematics::preset;
 use robokrige::kriging::KrigingOptions;
-use robokrige::sim::{ErrorProfile, PoseContext, TrueRobot, gaussian, rng_for};
+use robokrige::sim::{PoseContext, gaussian, rng_for};
 use robokrige::space::periodic_joints;
 
 #[test]
 fn no_fold_of_a_wide_range_campaign_blows_up() {
-    let mut robot = preset("ur10").unwrap();
-    robot.tool = nalgebra::Isometry3::translation(-0.14, 0.30, 92.82);
-    let truth = TrueRobot::draw(&robot, &ErrorProfile::for_robot(&robot), 911);
-    // joints 1, 2, 3, 6 in a Latin hypercube over more than 180°, joint 4
-    // keeping the tool down (−90° − θ2 − θ3, itself over 180°), joint 5 near −90°
-    let ranges = [
-        (-170.0, 170.0),
-        (-185.0, 5.0),
-        (-170.0, 170.0),
-        (0.0, 0.0),
-        (-93.0, -87.0),
-        (-200.0, 200.0),
-    ];
-    let mut q = robokrige::sim::campaign::lhs(&ranges, 400, &mut rng_for(911, "wide"));
-    for r in &mut q {
-        r[3] = -90.0 - r[1] - r[2];
-    }
+    let (robot, truth, mut q) = tool_down::ur10_tool_down(400, 911, "wide");
     // a real campaign starts at the home pose and has a few check poses out
     // of its family (on the first 632 rows of UR10 series B, the fold
     // holding the home pose is the one that blew up)
