@@ -34,6 +34,7 @@ pub mod memory;
 pub mod methods;
 pub mod model;
 pub mod optim;
+pub mod output;
 pub mod physics;
 pub mod plot;
 pub mod sim;

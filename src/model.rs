@@ -678,7 +678,7 @@ impl ErrorModel {
             context: format!("saving {}", path.display()),
             source: e,
         })?;
-        std::fs::write(path, text).map_err(|e| Error::io(path, e))
+        crate::output::write_text(path, &text)
     }
 
     /// Read a model saved by [`ErrorModel::save`], checking format and version.

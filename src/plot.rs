@@ -80,9 +80,21 @@ pub fn box_plot(
     y_label: &str,
     groups: &[(String, Vec<f64>)],
 ) -> Result<()> {
+    let mut svg = String::new();
+    draw_box_plot(&mut svg, path, title, y_label, groups)?;
+    crate::output::write_text(path, &svg)
+}
+
+fn draw_box_plot(
+    svg: &mut String,
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    groups: &[(String, Vec<f64>)],
+) -> Result<()> {
     let err = plot_err(path);
     let width = (160 + 120 * groups.len() as u32).max(480);
-    let root = SVGBackend::new(path, (width, 420)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (width, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
     let (_, hi) = span(groups.iter().flat_map(|g| g.1.iter().copied()), true);
     let n = groups.len().max(1);
@@ -197,8 +209,20 @@ pub struct Labels<'a> {
 /// An x–y plot of several series with a legend; `equal_aspect` gives both
 /// axes the same scale (for paths in a plane).
 pub fn xy_plot(path: &Path, labels: &Labels, series: &[Series], equal_aspect: bool) -> Result<()> {
+    let mut svg = String::new();
+    draw_xy_plot(&mut svg, path, labels, series, equal_aspect)?;
+    crate::output::write_text(path, &svg)
+}
+
+fn draw_xy_plot(
+    svg: &mut String,
+    path: &Path,
+    labels: &Labels,
+    series: &[Series],
+    equal_aspect: bool,
+) -> Result<()> {
     let err = plot_err(path);
-    let root = SVGBackend::new(path, (640, 520)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (640, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
     let mut xr = span(
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),

@@ -39,10 +39,13 @@ impl Trajectory {
 
     /// Write as CSV (full f64 precision).
     pub fn write_csv(&self, path: &Path) -> Result<()> {
-        let mut w = csv::Writer::from_path(path).map_err(|e| csv_io(path, e))?;
+        crate::output::write_atomic(path, |out| self.write_records(out))
+    }
+
+    fn write_records(&self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let mut w = csv::Writer::from_writer(out);
         let ncol = if self.has_orientation { 7 } else { 4 };
-        w.write_record(&HEADER[..ncol])
-            .map_err(|e| csv_io(path, e))?;
+        w.write_record(&HEADER[..ncol])?;
         for (k, p) in self.poses.iter().enumerate() {
             let t = p.translation.vector;
             let (r, pi, y) = p.rotation.euler_angles();
@@ -55,9 +58,9 @@ impl Trajectory {
             if self.has_orientation {
                 rec.extend([r, pi, y].map(|a| a.to_degrees().to_string()));
             }
-            w.write_record(&rec).map_err(|e| csv_io(path, e))?;
+            w.write_record(&rec)?;
         }
-        w.flush().map_err(|e| Error::io(path, e))
+        w.flush()
     }
 
     /// Read a trajectory CSV; errors name the line and column.

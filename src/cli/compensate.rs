@@ -419,6 +419,10 @@ fn check_robot(truth: &Truth, name: &str, path: &Path) -> Result<()> {
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
+    let mut inputs = vec![a.traj.as_path(), a.truth.as_path()];
+    inputs.extend(a.compensated.iter().map(PathBuf::as_path));
+    let outputs: Vec<&Path> = a.plot.iter().chain(&a.json).map(PathBuf::as_path).collect();
+    super::check_outputs(&inputs, &outputs)?;
     let truth = load_truth(&a.truth)?;
     let robot = match &a.robot {
         Some(name) => {

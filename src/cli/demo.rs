@@ -92,6 +92,11 @@ pub fn run(a: DemoArgs) -> Result<()> {
         let d = out.join(sub);
         std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
     }
+    let report_md = out.join("report.md");
+    let outputs: Vec<&Path> = std::iter::once(report_md.as_path())
+        .chain(a.json.as_deref())
+        .collect();
+    super::check_outputs(&[], &outputs)?;
     let robot = kinematics::preset("comau-nj220")?;
     let pb = bar(9, "demo");
     pb.set_message("simulating the COMAU campaigns");
@@ -304,7 +309,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         out,
     );
     let report_path = out.join("report.md");
-    std::fs::write(&report_path, &report).map_err(|e| Error::io(&report_path, e))?;
+    robokrige::output::write_text(&report_path, &report)?;
     pb.inc(1);
     pb.finish_and_clear();
     print!("{}", summary(&rows, &comp, &diag, secs));

@@ -198,7 +198,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     }
     if let Some(path) = &a.report {
         let text = report(&a, &d, &plots, compensation.as_ref());
-        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+        robokrige::output::write_text(path, &text)?;
         println!("report: {}", path.display());
     }
     Ok(())

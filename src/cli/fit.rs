@@ -5,7 +5,6 @@ use robokrige::kriging::{KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::space::Space;
 use robokrige::{Error, Result};
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -312,32 +311,32 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     let pred = model.predict_dataset(&data)?;
     let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    let file = std::fs::File::create(&a.output).map_err(|e| Error::io(&a.output, e))?;
-    let mut w = std::io::BufWriter::new(file);
-    let n = data.n_joints();
-    let mut header = vec!["id".to_string()];
-    header.extend((1..=n).map(|i| format!("q{i}")));
-    header.extend((1..=n).map(|i| format!("dir{i}")));
-    header.extend(AXES.iter().map(|a| format!("pred_{a}")));
-    header.extend(AXES.iter().map(|a| format!("std_{a}")));
-    if data.errors.is_some() {
-        header.extend(AXES.iter().map(|a| a.to_string()));
-    }
-    let io = |e| Error::io(&a.output, e);
-    writeln!(w, "{}", header.join(",")).map_err(io)?;
-    for k in 0..data.len() {
-        let id = data.ids.as_ref().map_or(k.to_string(), |v| v[k].clone());
-        let mut row = vec![id];
-        row.extend(data.q[k].iter().map(f64::to_string));
-        row.extend(data.dir[k].iter().map(|d| format!("{d}")));
-        row.extend(pred.mean[k].iter().map(f64::to_string));
-        row.extend(pred.std[k].iter().map(f64::to_string));
-        if let Some(e) = &data.errors {
-            row.extend(e[k].iter().map(f64::to_string));
+    robokrige::output::write_atomic(&a.output, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        let n = data.n_joints();
+        let mut header = vec!["id".to_string()];
+        header.extend((1..=n).map(|i| format!("q{i}")));
+        header.extend((1..=n).map(|i| format!("dir{i}")));
+        header.extend(AXES.iter().map(|a| format!("pred_{a}")));
+        header.extend(AXES.iter().map(|a| format!("std_{a}")));
+        if data.errors.is_some() {
+            header.extend(AXES.iter().map(|a| a.to_string()));
         }
-        writeln!(w, "{}", row.join(",")).map_err(io)?;
-    }
-    w.flush().map_err(io)?;
+        w.write_record(&header)?;
+        for k in 0..data.len() {
+            let id = data.ids.as_ref().map_or(k.to_string(), |v| v[k].clone());
+            let mut row = vec![id];
+            row.extend(data.q[k].iter().map(f64::to_string));
+            row.extend(data.dir[k].iter().map(|d| format!("{d}")));
+            row.extend(pred.mean[k].iter().map(f64::to_string));
+            row.extend(pred.std[k].iter().map(f64::to_string));
+            if let Some(e) = &data.errors {
+                row.extend(e[k].iter().map(f64::to_string));
+            }
+            w.write_record(&row)?;
+        }
+        w.flush()
+    })?;
     if let Some(e) = &data.errors {
         let resid: Vec<[f64; 3]> = e
             .iter()

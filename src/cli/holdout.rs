@@ -182,7 +182,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         }
     }
     if let Some(p) = &a.json {
-        std::fs::write(p, to_json(&cv, "cv table")?).map_err(|e| Error::io(p, e))?;
+        robokrige::output::write_text(p, &to_json(&cv, "cv table")?)?;
     }
     Ok(())
 }
@@ -325,7 +325,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     );
     print_rows(&rows);
     if let Some(p) = &a.json {
-        std::fs::write(p, to_json(&rows, "hold-out table")?).map_err(|e| Error::io(p, e))?;
+        robokrige::output::write_text(p, &to_json(&rows, "hold-out table")?)?;
     }
     Ok(())
 }

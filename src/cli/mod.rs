@@ -78,7 +78,7 @@ pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
 /// Write `value` as pretty JSON (with a final newline) to `path`.
 pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
     let text = to_json(value, context)? + "\n";
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+    robokrige::output::write_text(path, &text)
 }
 
 /// Read a measurement CSV and print its plausibility warnings on stderr.
@@ -119,58 +119,8 @@ pub fn print_coverage(
     }
 }
 
-/// Refuse, before any work, an output that is the same file as an input or
-/// as another output: the same path once resolved (symbolic links, `./`,
-/// `..`), or the same file under another name (a hard link: same device
-/// and inode). Issue 18: `fit data.csv -o data.csv` replaced the
-/// measurements with model JSON.
+/// Refuse, before any work, an output that is an input, another output or
+/// not writable ([`robokrige::output::check_outputs`]).
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
-    fn resolve(p: &Path) -> std::path::PathBuf {
-        if let Ok(c) = std::fs::canonicalize(p) {
-            return c;
-        }
-        // a file still to be written: resolve its folder
-        let parent = p
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        match (std::fs::canonicalize(parent), p.file_name()) {
-            (Ok(d), Some(name)) => d.join(name),
-            _ => p.to_path_buf(),
-        }
-    }
-    #[cfg(unix)]
-    fn same_file(a: &Path, b: &Path) -> bool {
-        use std::os::unix::fs::MetadataExt;
-        match (std::fs::metadata(a), std::fs::metadata(b)) {
-            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
-            _ => false,
-        }
-    }
-    #[cfg(not(unix))]
-    fn same_file(_: &Path, _: &Path) -> bool {
-        false
-    }
-    for (k, out) in outputs.iter().enumerate() {
-        let r = resolve(out);
-        for inp in inputs {
-            if r == resolve(inp) || same_file(out, inp) {
-                return Err(Error::InvalidParameter(format!(
-                    "output {} is the input {}: refusing to overwrite it",
-                    out.display(),
-                    inp.display()
-                )));
-            }
-        }
-        for other in &outputs[..k] {
-            if r == resolve(other) || same_file(out, other) {
-                return Err(Error::InvalidParameter(format!(
-                    "outputs {} and {} are the same file: one would overwrite the other",
-                    other.display(),
-                    out.display()
-                )));
-            }
-        }
-    }
-    Ok(())
+    robokrige::output::check_outputs(inputs, outputs)
 }

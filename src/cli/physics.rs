@@ -172,10 +172,21 @@ pub fn run(a: PhysicsArgs) -> Result<()> {
 }
 
 fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+    robokrige::output::write_text(path, text)
 }
 
 fn run_identify(a: IdentifyArgs) -> Result<()> {
+    let inputs: Vec<&Path> = std::iter::once(&a.indexing)
+        .chain(&a.train)
+        .chain(&a.truth)
+        .map(PathBuf::as_path)
+        .collect();
+    let outputs: Vec<&Path> = std::iter::once(&a.output)
+        .chain(&a.dh_output)
+        .chain(&a.json)
+        .map(PathBuf::as_path)
+        .collect();
+    super::check_outputs(&inputs, &outputs)?;
     let robot = kinematics::preset(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
@@ -292,6 +303,8 @@ fn truth_text(id: &PhysicsIdentification, truth: &Truth) -> String {
 }
 
 fn run_compare(a: CompareArgs) -> Result<()> {
+    let outputs: Vec<&Path> = a.json.iter().chain(&a.report).map(PathBuf::as_path).collect();
+    super::check_outputs(&[], &outputs)?;
     let opts = CompareOptions {
         robot: a.robot.clone(),
         seed: a.seed,
@@ -441,6 +454,8 @@ pub fn compare_text(c: &Comparison, secs: f64) -> String {
 }
 
 fn run_probing(a: ProbingArgs) -> Result<()> {
+    let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
+    super::check_outputs(&[], &outputs)?;
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
     println!(
         "# Probing a 1000 mm straightedge, 100 points: {} (true robot of seed {}{})\n",
@@ -473,6 +488,8 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
 }
 
 fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
+    let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
+    super::check_outputs(&[&a.data, &a.model], &outputs)?;
     let model = robokrige::physics::PhysicsModel::load(&a.model)?;
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;

@@ -105,11 +105,12 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
     spec.circle_diameter_mm = a.diameter;
     spec.indexing_cycles = a.cycles;
-    let (out, truth) = simulate(&robot, &spec)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
+    super::check_outputs(&[], &[&a.output, &truth_path])?;
+    let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;
     let summary = match &out {
         SimOutput::Measurements(d) => {

@@ -7,8 +7,7 @@
 //! an equal [`Dataset`] except that `dir_source` becomes [`DirSource::Given`](super::DirSource::Given)
 //! (and that ids and text cells come back trimmed of surrounding whitespace).
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use super::Dataset;
@@ -20,8 +19,7 @@ use crate::{Error, Result};
 /// written when that fails.
 pub fn write_csv(path: &Path, d: &Dataset) -> Result<()> {
     d.validate()?;
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    write_records(BufWriter::new(file), d).map_err(|e| Error::io(path, e))
+    crate::output::write_atomic(path, |w| write_records(w, d))
 }
 
 /// Write `d` as CSV to any writer. I/O failures are reported as

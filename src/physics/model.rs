@@ -260,10 +260,7 @@ pub(crate) fn save_json<T: Serialize>(path: &Path, v: &T, what: &str) -> Result<
         context: format!("writing {what} {}", path.display()),
         source: e,
     })?;
-    std::fs::write(path, text).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })
+    crate::output::write_text(path, &text)
 }
 
 pub(crate) fn load_json<T: for<'de> Deserialize<'de>>(path: &Path, what: &str) -> Result<T> {
