@@ -126,12 +126,18 @@ impl Feature {
             .map(|n| data.covariate(n).map(|c| c.values.clone()))
             .collect::<Option<Vec<_>>>()
         {
-            return check_complete(&data.source, &names, cols);
+            return check_complete(data, &names, cols);
         }
         match self {
             Feature::Covariate { name, .. } => Err(Error::Input {
                 source_name: data.source.clone(),
-                message: format!("the model needs covariate column '{name}', which is missing"),
+                message: match data.text.iter().find(|t| &t.name == name) {
+                    Some(t) => format!(
+                        "the model needs covariate column '{name}', but it is read as text: {}",
+                        t.note.as_deref().unwrap_or("its cells are not numbers")
+                    ),
+                    None => format!("the model needs covariate column '{name}', which is missing"),
+                },
             }),
             Feature::Row => Ok(vec![(0..data.len()).map(|i| i as f64).collect()]),
             Feature::Step { row } => Ok(vec![
@@ -206,15 +212,24 @@ impl Feature {
     }
 }
 
-fn check_complete(source: &str, names: &[String], cols: Vec<Vec<f64>>) -> Result<Vec<Vec<f64>>> {
+fn check_complete(data: &Dataset, names: &[String], cols: Vec<Vec<f64>>) -> Result<Vec<Vec<f64>>> {
     for (n, c) in names.iter().zip(&cols) {
         let missing = c.iter().filter(|v| !v.is_finite()).count();
-        if missing > 0 {
-            return Err(Error::Input {
-                source_name: source.into(),
-                message: format!(
-                    "column '{n}' has {missing} missing value(s); a model input needs every row (fill or drop them)"
-                ),
+        if let Some(first) = c.iter().position(|v| !v.is_finite()) {
+            let message = format!(
+                "missing value ({missing} in this column); a model input needs every row (fill or drop them)"
+            );
+            return Err(match data.line(first) {
+                Some(line) => Error::Csv {
+                    file: data.source.clone(),
+                    line,
+                    column: Some(n.clone()),
+                    message,
+                },
+                None => Error::Input {
+                    source_name: data.source.clone(),
+                    message: format!("column '{n}', {}: {message}", data.row_label(first)),
+                },
             });
         }
     }

@@ -172,6 +172,30 @@ pub struct Normalizer {
 }
 
 impl Normalizer {
+    /// Check a normaliser read from a file: equal lengths, finite means
+    /// within ±[`crate::dataset::MAX_ABS_COVARIATE`], and scales that
+    /// [`Normalizer::fit`] can give (finite, more than `1e-12·max(1, |mean|)`).
+    /// The message names the first bad entry.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if self.mean.len() != self.std.len() {
+            return Err(format!(
+                "{} means but {} scales",
+                self.mean.len(),
+                self.std.len()
+            ));
+        }
+        let limit = crate::dataset::MAX_ABS_COVARIATE;
+        for (k, (&mu, &s)) in self.mean.iter().zip(&self.std).enumerate() {
+            if !(mu.abs() <= limit) {
+                return Err(format!("mean[{k}] = {mu:e} is not a finite input mean"));
+            }
+            if !(s.is_finite() && s > 1e-12 * mu.abs().max(1.0) && s <= limit) {
+                return Err(format!("std[{k}] = {s:e} is not a valid input scale"));
+            }
+        }
+        Ok(())
+    }
+
     /// Fit on rows (all of equal length; at least one row).
     pub fn fit(rows: &[Vec<f64>]) -> Self {
         let d = rows.first().map_or(0, Vec::len);

@@ -39,6 +39,22 @@ pub use write::{write_csv, write_csv_to};
 use crate::space::derive_directions;
 use crate::{Error, Result};
 
+/// Largest |joint value| accepted (degrees, or mm for a prismatic joint):
+/// a thousand turns, or a kilometre of travel.
+pub const MAX_ABS_JOINT: f64 = 1e6;
+
+/// Largest |TCP error| accepted, in mm. Absolute errors of industrial
+/// robots are 0.1–10 mm; a metre is not an error in mm but a unit or
+/// column mistake (issue 18: one `ex` of `1e300` overflowed the model).
+pub const MAX_ABS_ERROR_MM: f64 = 1e3;
+
+/// Largest |measured TCP coordinate| accepted, in mm (a kilometre).
+pub const MAX_ABS_POSITION_MM: f64 = 1e6;
+
+/// Largest |covariate value| accepted: room for a time stamp in
+/// nanoseconds, far from where squares overflow.
+pub const MAX_ABS_COVARIATE: f64 = 1e20;
+
 /// Column names with a fixed meaning; covariates and text columns may not use them.
 const RESERVED: [&str; 7] = ["ex", "ey", "ez", "x", "y", "z", "id"];
 
@@ -79,12 +95,36 @@ impl PartialEq for Covariate {
 }
 
 /// A covariate column with at least one non-numeric cell, kept as text.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Equality compares names and cells, not the `note`.
+#[derive(Debug, Clone)]
 pub struct TextColumn {
     /// Column name as in the header.
     pub name: String,
     /// One (trimmed) cell per row.
     pub values: Vec<String>,
+    /// For a column that is numeric but for some cells (e.g. one `inf`):
+    /// the first such cell, with its line, so that the user is told why
+    /// the column is not a covariate ([`Dataset::warnings`]).
+    pub note: Option<String>,
+}
+
+impl PartialEq for TextColumn {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name && self.values == other.values
+    }
+}
+
+/// The line of the source file each row was read from (the header is line
+/// 1); empty for a dataset made in memory. Where a row came from is not
+/// part of the data: any two compare equal.
+#[derive(Debug, Clone, Default)]
+pub struct SourceLines(pub Vec<u64>);
+
+impl PartialEq for SourceLines {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// A measurement campaign: poses in visiting order plus what was measured there.
@@ -108,6 +148,8 @@ pub struct Dataset {
     pub covariates: Vec<Covariate>,
     /// Text covariates in header order.
     pub text: Vec<TextColumn>,
+    /// Where each row was read from, for messages ([`Dataset::line`]).
+    pub lines: SourceLines,
 }
 
 impl Dataset {
@@ -131,6 +173,7 @@ impl Dataset {
             ids: None,
             covariates: Vec::new(),
             text: Vec::new(),
+            lines: SourceLines::default(),
         };
         d.check_q()?;
         match dir {
@@ -172,7 +215,12 @@ impl Dataset {
             .iter()
             .zip(&self.dir)
             .filter(|(q, d)| {
-                let key: Vec<u64> = q.iter().chain(d.iter()).map(|v| v.to_bits()).collect();
+                // `+ 0.0` makes −0.0 equal to 0.0 (issue 18 §9)
+                let key: Vec<u64> = q
+                    .iter()
+                    .chain(d.iter())
+                    .map(|v| (v + 0.0).to_bits())
+                    .collect();
                 !seen.insert(key)
             })
             .count();
@@ -182,7 +230,27 @@ impl Dataset {
                 self.source
             ));
         }
+        for t in &self.text {
+            if let Some(note) = &t.note {
+                out.push(format!(
+                    "{}: column '{}' is read as text, not as a numeric covariate: {note}; fix the cell (an empty cell counts as missing)",
+                    self.source, t.name
+                ));
+            }
+        }
         out
+    }
+
+    /// The line of the source file row `row` (0-based) was read from, when
+    /// the dataset was read from a file.
+    pub fn line(&self, row: usize) -> Option<u64> {
+        self.lines.0.get(row).copied()
+    }
+
+    /// "line L" of row `row` when known, else "row k (1-based data row)".
+    pub fn row_label(&self, row: usize) -> String {
+        self.line(row)
+            .map_or_else(|| format!("data row {}", row + 1), |l| format!("line {l}"))
     }
 
     fn unit_warnings(&self) -> Vec<String> {
@@ -256,8 +324,14 @@ impl Dataset {
                 .map(|t| TextColumn {
                     name: t.name.clone(),
                     values: rows.iter().map(|&i| t.values[i].clone()).collect(),
+                    note: t.note.clone(),
                 })
                 .collect(),
+            lines: SourceLines(
+                rows.iter()
+                    .filter_map(|&i| self.lines.0.get(i).copied())
+                    .collect(),
+            ),
         }
     }
 
@@ -271,8 +345,8 @@ impl Dataset {
     pub fn validate(&self) -> Result<()> {
         self.check_q()?;
         self.check_dir()?;
-        self.check_triplets("errors", self.errors.as_deref())?;
-        self.check_triplets("positions", self.positions.as_deref())?;
+        self.check_triplets("errors", self.errors.as_deref(), MAX_ABS_ERROR_MM)?;
+        self.check_triplets("positions", self.positions.as_deref(), MAX_ABS_POSITION_MM)?;
         if let Some(ids) = &self.ids {
             self.check_len("ids", ids.len())?;
         }
@@ -309,6 +383,11 @@ impl Dataset {
             if row.iter().any(|v| !v.is_finite()) {
                 return Err(self.input_err(format!("q row {i} (0-based) has a NaN/inf value")));
             }
+            if let Some(v) = row.iter().find(|v| v.abs() > MAX_ABS_JOINT) {
+                return Err(self.input_err(format!(
+                    "q row {i} (0-based): joint value {v} is beyond ±{MAX_ABS_JOINT:e}"
+                )));
+            }
         }
         Ok(())
     }
@@ -333,12 +412,17 @@ impl Dataset {
         Ok(())
     }
 
-    /// Optional xyz triplets: m rows, all finite.
-    fn check_triplets(&self, what: &str, rows: Option<&[[f64; 3]]>) -> Result<()> {
+    /// Optional xyz triplets: m rows, all finite and within ±`limit` mm.
+    fn check_triplets(&self, what: &str, rows: Option<&[[f64; 3]]>, limit: f64) -> Result<()> {
         let Some(rows) = rows else { return Ok(()) };
         self.check_len(what, rows.len())?;
-        match rows.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
-            Some(i) => Err(self.input_err(format!("{what} row {i} (0-based) has a NaN/inf value"))),
+        if let Some(i) = rows.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
+            return Err(self.input_err(format!("{what} row {i} (0-based) has a NaN/inf value")));
+        }
+        match rows.iter().position(|r| r.iter().any(|v| v.abs() > limit)) {
+            Some(i) => Err(self.input_err(format!(
+                "{what} row {i} (0-based) has a value beyond ±{limit:e} mm"
+            ))),
             None => Ok(()),
         }
     }
@@ -353,8 +437,11 @@ impl Dataset {
                 c.name, c.missing
             )));
         }
-        if c.values.iter().any(|v| v.is_infinite()) {
-            return Err(self.input_err(format!("covariate '{}' has an infinite value", c.name)));
+        if c.values.iter().any(|v| v.abs() > MAX_ABS_COVARIATE) {
+            return Err(self.input_err(format!(
+                "covariate '{}' has a value beyond ±{MAX_ABS_COVARIATE:e} (or infinite)",
+                c.name
+            )));
         }
         Ok(())
     }
@@ -420,6 +507,50 @@ fn number(cell: &str) -> std::result::Result<f64, String> {
     }
 }
 
+/// A number within ±`limit`; `what` and `unit` name it in the message.
+fn bounded(
+    cell: &str,
+    limit: f64,
+    what: &str,
+    hint: &str,
+) -> std::result::Result<f64, String> {
+    let v = number(cell)?;
+    if v.abs() > limit {
+        return Err(format!("{what} '{cell}' is beyond ±{limit:e}; {hint}"));
+    }
+    Ok(v)
+}
+
+/// A joint value: degrees, or mm for a prismatic joint.
+fn joint_value(cell: &str) -> std::result::Result<f64, String> {
+    bounded(
+        cell,
+        MAX_ABS_JOINT,
+        "joint value",
+        "joint values are degrees (mm for a prismatic joint)",
+    )
+}
+
+/// A TCP error in mm.
+fn error_value(cell: &str) -> std::result::Result<f64, String> {
+    bounded(
+        cell,
+        MAX_ABS_ERROR_MM,
+        "TCP error",
+        "that cannot be a TCP error in mm: check the units and the column",
+    )
+}
+
+/// A measured TCP coordinate in mm.
+fn position_value(cell: &str) -> std::result::Result<f64, String> {
+    bounded(
+        cell,
+        MAX_ABS_POSITION_MM,
+        "TCP coordinate",
+        "coordinates are mm in the robot's frame",
+    )
+}
+
 /// A direction coefficient: exactly +1 or -1.
 fn direction(cell: &str) -> std::result::Result<f64, String> {
     if cell.is_empty() {
@@ -431,17 +562,29 @@ fn direction(cell: &str) -> std::result::Result<f64, String> {
     }
 }
 
-/// Values and missing count if every non-empty cell is a finite number.
-fn numeric_column(cells: &[String]) -> Option<(Vec<f64>, usize)> {
+/// Values and missing count if every non-empty cell is a finite number
+/// within ±[`MAX_ABS_COVARIATE`]; otherwise the index of the first cell
+/// that is not and what is wrong with it.
+fn numeric_column(cells: &[String]) -> std::result::Result<(Vec<f64>, usize), (usize, String)> {
     let mut missing = 0;
     let mut values = Vec::with_capacity(cells.len());
-    for cell in cells {
+    for (i, cell) in cells.iter().enumerate() {
         if cell.is_empty() {
             missing += 1;
             values.push(f64::NAN);
-        } else {
-            values.push(cell.parse::<f64>().ok().filter(|v| v.is_finite())?);
+            continue;
+        }
+        match cell.parse::<f64>() {
+            Ok(v) if v.abs() <= MAX_ABS_COVARIATE => values.push(v),
+            Ok(v) if v.is_nan() => return Err((i, format!("'{cell}' is not a number"))),
+            Ok(_) => {
+                return Err((
+                    i,
+                    format!("'{cell}' is infinite or beyond ±{MAX_ABS_COVARIATE:e}"),
+                ));
+            }
+            Err(_) => return Err((i, format!("'{cell}' is not a number"))),
         }
     }
-    Some((values, missing))
+    Ok((values, missing))
 }

@@ -5,8 +5,8 @@ use std::io::Read;
 use std::path::Path;
 
 use super::{
-    CellParser, Covariate, Dataset, DirSource, TextColumn, direction, is_reserved, joint_suffix,
-    number, numeric_column,
+    CellParser, Covariate, Dataset, DirSource, SourceLines, TextColumn, direction, error_value,
+    is_reserved, joint_suffix, joint_value, numeric_column, position_value,
 };
 use crate::space::derive_directions;
 use crate::{Error, Result};
@@ -59,6 +59,7 @@ struct Parser {
     positions: Vec<[f64; 3]>,
     ids: Vec<String>,
     other: Vec<Vec<String>>,
+    lines: Vec<u64>,
 }
 
 impl Parser {
@@ -259,19 +260,20 @@ impl Parser {
         let get = |i: usize, parse: CellParser| {
             parse(cell(i)).map_err(|m| self.cell_err(line, Some(&l.names[i]), m))
         };
-        let xyz = |cols: [usize; 3]| -> Result<[f64; 3]> {
-            let [a, b, c] = cols.map(|i| get(i, number));
+        let xyz = |cols: [usize; 3], parse: CellParser| -> Result<[f64; 3]> {
+            let [a, b, c] = cols.map(|i| get(i, parse));
             Ok([a?, b?, c?])
         };
-        let q: Vec<f64> = l.q.iter().map(|&i| get(i, number)).collect::<Result<_>>()?;
+        let q: Vec<f64> = l.q.iter().map(|&i| get(i, joint_value)).collect::<Result<_>>()?;
         let dir = l
             .dir
             .as_ref()
             .map(|cols| cols.iter().map(|&i| get(i, direction)).collect());
         let dir: Option<Vec<f64>> = dir.transpose()?;
-        let errors = l.errors.map(xyz).transpose()?;
-        let positions = l.positions.map(xyz).transpose()?;
+        let errors = l.errors.map(|c| xyz(c, error_value)).transpose()?;
+        let positions = l.positions.map(|c| xyz(c, position_value)).transpose()?;
         self.q.push(q);
+        self.lines.push(line);
         self.dir.extend(dir);
         self.errors.extend(errors);
         self.positions.extend(positions);
@@ -296,15 +298,21 @@ impl Parser {
         for (cells, &i) in self.other.into_iter().zip(&l.other) {
             let name = l.names[i].clone();
             match numeric_column(&cells) {
-                Some((values, missing)) => covariates.push(Covariate {
+                Ok((values, missing)) => covariates.push(Covariate {
                     name,
                     values,
                     missing,
                 }),
-                None => text.push(TextColumn {
-                    name,
-                    values: cells,
-                }),
+                Err((row, why)) => {
+                    // a column with numbers in it was meant to be numeric
+                    let numeric = cells.iter().any(|c| c.parse::<f64>().is_ok_and(f64::is_finite));
+                    let note = numeric.then(|| format!("line {}: {why}", self.lines[row]));
+                    text.push(TextColumn {
+                        name,
+                        values: cells,
+                        note,
+                    });
+                }
             }
         }
         Dataset {
@@ -317,6 +325,7 @@ impl Parser {
             ids: l.id.map(|_| self.ids),
             covariates,
             text,
+            lines: SourceLines(self.lines),
         }
     }
 

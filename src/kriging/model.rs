@@ -123,6 +123,10 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.theta.iter().any(|t| *t < 0.0) {
             return bad("a correlation parameter ξ is negative");
         }
+        // σ² = (y − Fβ)ᵀγ / m vanishes only with γ
+        if data.sigma2 == 0.0 && data.gamma.iter().any(|g| *g != 0.0) {
+            return bad("σ² is 0 but γ is not");
+        }
         let jitter_ok =
             data.jitter.is_finite() && (0.0..=super::problem::MAX_JITTER).contains(&data.jitter);
         if !data.nugget.is_finite() || data.nugget < 0.0 || !jitter_ok {
@@ -130,7 +134,10 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         }
         // the MSE is σ²·y_std²: it must stay finite
         if data.sigma2 < 0.0 || !(data.y_std * data.y_std * data.sigma2.max(1.0)).is_finite() {
-            return bad("σ² is negative or the output scale is not finite");
+            return bad(&format!(
+                "σ² = {:e} is negative or the output scale y_std = {:e} overflows",
+                data.sigma2, data.y_std
+            ));
         }
         if data.x_train.iter().flatten().any(|v| !v.is_finite()) {
             return bad("non-finite training inputs");
@@ -308,6 +315,12 @@ impl KrigingModel {
                 d.y_mean + d.y_std * dot(&fs, &d.beta)
             })
             .collect()
+    }
+
+    /// The output's mean and standard deviation `(y_mean, y_std)` that
+    /// normalise it, original units.
+    pub fn output_scale(&self) -> (f64, f64) {
+        (self.data.y_mean, self.data.y_std)
     }
 
     /// The process (prior) standard deviation `σ·y_std`, original units:

@@ -523,6 +523,7 @@ fn measure(
         ids: Some((0..m).map(|k| k.to_string()).collect()),
         covariates,
         text: Vec::new(),
+        lines: Default::default(),
     })
 }
 
