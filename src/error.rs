@@ -46,7 +46,7 @@ pub enum Error {
     InvalidParameter(String),
 
     /// A joint vector has the wrong length for the robot or model.
-    #[error("joint count mismatch: expected {expected}, got {got}")]
+    #[error("a joint vector has {got} values but the robot or model has {expected} joints")]
     JointCount { expected: usize, got: usize },
 
     /// A robot preset name that does not exist.

@@ -4,6 +4,8 @@
 //! `roll_deg,pitch_deg,yaw_deg` with `R = Rz(yaw)·Ry(pitch)·Rx(roll)`.
 //! Without orientation columns the points are position-only targets.
 
+use crate::dataset::table::Table;
+use crate::dataset::{number, position_value};
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -63,67 +65,72 @@ impl Trajectory {
         w.flush()
     }
 
-    /// Read a trajectory CSV; errors name the line and column.
+    /// Read a trajectory CSV with the rules of the measurement reader
+    /// ([`crate::dataset`]: BOM, trimming, blank lines, line numbers with any
+    /// line ending, no empty header cell); errors name the line and column.
+    /// The orientation columns are all three or none.
     pub fn read_csv(path: &Path) -> Result<Self> {
-        let file = path.display().to_string();
-        let mut r = csv::ReaderBuilder::new()
-            .trim(csv::Trim::All)
-            .flexible(true)
-            .from_path(path)
-            .map_err(|e| csv_io(path, e))?;
-        let header: Vec<String> = r
-            .headers()
-            .map_err(|e| csv_io(path, e))?
-            .iter()
-            .map(str::to_string)
-            .collect();
-        let col = |name: &str| header.iter().position(|h| h == name);
-        let pos: Vec<usize> = ["x", "y", "z"]
-            .iter()
-            .map(|c| col(c))
-            .collect::<Option<_>>()
-            .ok_or_else(|| Error::Input {
-                source_name: file.clone(),
-                message: "a trajectory needs columns x, y, z (mm)".into(),
-            })?;
-        let rot: Option<Vec<usize>> = ["roll_deg", "pitch_deg", "yaw_deg"]
-            .iter()
-            .map(|c| col(c))
-            .collect();
-        let mut poses = Vec::new();
-        for rec in r.records() {
-            let rec = rec.map_err(|e| csv_io(path, e))?;
-            let line = rec.position().map_or(0, |p| p.line());
-            if rec.len() != header.len() {
-                return Err(Error::Csv {
-                    file: file.clone(),
-                    line,
-                    column: None,
-                    message: format!(
-                        "row has {} cells but the header has {}",
-                        rec.len(),
-                        header.len()
-                    ),
-                });
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::read_csv_from(&bytes, &path.display().to_string())
+    }
+
+    /// [`Trajectory::read_csv`] of a whole file's bytes; `src` names it.
+    pub fn read_csv_from(bytes: &[u8], src: &str) -> Result<Self> {
+        let table = Table::read(bytes, src, "with x,y,z")?;
+        let header_err = |message: String| Error::Csv {
+            file: src.to_string(),
+            line: table.header_line,
+            column: None,
+            message,
+        };
+        let find = |names: [&str; 3]| names.map(|n| table.column(n));
+        let pos = match find(["x", "y", "z"]) {
+            [Some(a), Some(b), Some(c)] => [a, b, c],
+            _ => {
+                return Err(header_err(format!(
+                    "a trajectory needs columns x, y, z (mm) (found: {})",
+                    table.header.join(", ")
+                )));
             }
-            let num = |i: usize| -> Result<f64> {
-                let s = &rec[i];
-                s.parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| Error::Csv {
-                        file: file.clone(),
-                        line,
-                        column: Some(header[i].clone()),
-                        message: format!("expected a finite number, found '{s}'"),
-                    })
+        };
+        let rot = match find(["roll_deg", "pitch_deg", "yaw_deg"]) {
+            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+            [None, None, None] => None,
+            found => {
+                let names = ["roll_deg", "pitch_deg", "yaw_deg"];
+                let pick = |present: bool| -> Vec<&str> {
+                    (0..3)
+                        .filter(|&i| found[i].is_some() == present)
+                        .map(|i| names[i])
+                        .collect()
+                };
+                return Err(header_err(format!(
+                    "found {} but not {}; give all of roll_deg,pitch_deg,yaw_deg or none (position-only targets)",
+                    pick(true).join(","),
+                    pick(false).join(",")
+                )));
+            }
+        };
+        let mut poses = Vec::with_capacity(table.rows.len());
+        for (line, rec) in &table.rows {
+            let cell = |i: usize, parse: fn(&str) -> std::result::Result<f64, String>| {
+                parse(&rec[i]).map_err(|message| Error::Csv {
+                    file: src.to_string(),
+                    line: *line,
+                    column: Some(table.header[i].clone()),
+                    message,
+                })
             };
-            let t = Vector3::new(num(pos[0])?, num(pos[1])?, num(pos[2])?);
-            let q = match &rot {
+            let t = Vector3::new(
+                cell(pos[0], position_value)?,
+                cell(pos[1], position_value)?,
+                cell(pos[2], position_value)?,
+            );
+            let q = match rot {
                 Some(c) => UnitQuaternion::from_euler_angles(
-                    num(c[0])?.to_radians(),
-                    num(c[1])?.to_radians(),
-                    num(c[2])?.to_radians(),
+                    cell(c[0], number)?.to_radians(),
+                    cell(c[1], number)?.to_radians(),
+                    cell(c[2], number)?.to_radians(),
                 ),
                 None => UnitQuaternion::identity(),
             };
@@ -131,8 +138,8 @@ impl Trajectory {
         }
         if poses.is_empty() {
             return Err(Error::Input {
-                source_name: file,
-                message: "trajectory has no points".into(),
+                source_name: src.to_string(),
+                message: "trajectory has no points; add one row per target after the header".into(),
             });
         }
         Ok(Trajectory {
@@ -142,9 +149,28 @@ impl Trajectory {
     }
 }
 
-fn csv_io(path: &Path, e: csv::Error) -> Error {
-    Error::Input {
-        source_name: path.display().to_string(),
-        message: e.to_string(),
+/// What a target file holds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TargetFile {
+    /// TCP poses: columns `x,y,z` and optionally `roll_deg,pitch_deg,yaw_deg`.
+    Tcp(Trajectory),
+    /// Joint poses: columns `q1..qN` (a measurement CSV or a pose list).
+    Joints(crate::dataset::Dataset),
+}
+
+/// Read a target file, telling the two kinds apart by the header (with
+/// the rules of [`Table`]): a `q1` column makes it a joint-pose list — in
+/// a measurement CSV, `x,y,z` are the *measured* positions, not targets.
+pub fn read_target_file(path: &Path) -> Result<TargetFile> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let src = path.display().to_string();
+    let table = Table::read(&bytes, &src, "with x,y,z (TCP targets) or q1..qN (joint poses)")?;
+    if table.column("q1").is_some() {
+        Ok(TargetFile::Joints(crate::dataset::read_csv_from(
+            bytes.as_slice(),
+            &src,
+        )?))
+    } else {
+        Ok(TargetFile::Tcp(Trajectory::read_csv_from(&bytes, &src)?))
     }
 }

@@ -9,7 +9,7 @@ use robokrige::physics::AnyModel;
 use robokrige::plot::{Labels, Series, xy_plot};
 use robokrige::sim::{Truth, execute, rng_for};
 use robokrige::stats::{PositionErrorTable, position_error_table};
-use robokrige::trajectory::Trajectory;
+use robokrige::trajectory::{TargetFile, Trajectory};
 use robokrige::{Error, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -109,28 +109,18 @@ pub(super) fn read_targets(
     orientation: Option<&[f64]>,
     start: &[f64],
 ) -> Result<Targets> {
-    let first = std::fs::read_to_string(path)
-        .map_err(|e| Error::io(path, e))?
-        .lines()
-        .next()
-        .unwrap_or_default()
-        .to_string();
-    let cols: Vec<&str> = first.split(',').map(str::trim).collect();
     let mut hints = None;
-    // q columns win: in a measurement CSV, x,y,z are the *measured* positions
-    let mut t = if cols.contains(&"q1") {
-        let d = super::read_data(path)?;
-        if d.n_joints() != robot.dof() {
-            return Err(Error::JointCount {
-                expected: robot.dof(),
-                got: d.n_joints(),
-            });
+    let mut t = match robokrige::trajectory::read_target_file(path)? {
+        TargetFile::Joints(d) => {
+            for w in d.warnings() {
+                eprintln!("warning: {w}");
+            }
+            robot.check_dataset(&d)?;
+            let t = Trajectory::new(d.q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?);
+            hints = Some(d.q);
+            t
         }
-        let t = Trajectory::new(d.q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?);
-        hints = Some(d.q);
-        t
-    } else {
-        Trajectory::read_csv(path)?
+        TargetFile::Tcp(t) => t,
     };
     if !t.has_orientation && robot.dof() >= 6 {
         let rot = match orientation {

@@ -98,11 +98,8 @@ impl ModelArgs {
             }
             (_, false) => None,
         };
-        if let Some(r) = kinematic.as_ref().filter(|r| r.dof() != data.n_joints()) {
-            return Err(Error::JointCount {
-                expected: r.dof(),
-                got: data.n_joints(),
-            });
+        if let Some(r) = &kinematic {
+            r.check_dataset(data)?;
         }
         Ok(ModelChoice {
             space,

@@ -209,6 +209,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     super::check_outputs(&[&a.data], &outputs)?;
     let data = read_data(&a.data)?;
     let robot = robot_with_tool(&a.robot, a.tool.as_deref())?;
+    robot.check_dataset(&data)?;
     if let Some(k) = a.cv {
         return run_cv(&a, &data, &robot, k);
     }

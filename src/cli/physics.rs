@@ -98,7 +98,7 @@ pub struct IdentifyArgs {
     /// Indexing-test CSV (columns q.., dir.., x,y,z and `axis`).
     indexing: PathBuf,
     /// Robot preset.
-    #[arg(long, default_value = "scara-rh3frh5515")]
+    #[arg(long, default_value = DEFAULT_ROBOT)]
     robot: String,
     /// Measurement campaign with ex,ey,ez for the Levenberg–Marquardt D-H
     /// calibration (needed for a six-axis robot, unused for a SCARA).
@@ -200,6 +200,9 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
             )));
         }
     };
+    for d in [&indexing, &train] {
+        robot.check_dataset(d).map_err(|e| default_robot_hint(e, &a.robot))?;
+    }
     let id = identify_physics(&indexing, &train, &robot)?;
     id.full.save(&a.output)?;
     if let Some(p) = &a.dh_output {
@@ -216,6 +219,24 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     }
     Ok(())
 }
+
+/// The SCARA is the default robot of `physics identify`: say so when a
+/// six-axis campaign meets it.
+fn default_robot_hint(e: Error, robot: &str) -> Error {
+    match e {
+        Error::Input {
+            source_name,
+            message,
+        } if robot == DEFAULT_ROBOT => Error::Input {
+            source_name,
+            message: format!("{message} (the default robot is {DEFAULT_ROBOT})"),
+        },
+        e => e,
+    }
+}
+
+/// `physics identify`'s robot when `--robot` is not given.
+const DEFAULT_ROBOT: &str = "scara-rh3frh5515";
 
 fn identify_text(id: &PhysicsIdentification) -> String {
     let mut s = String::new();
@@ -523,6 +544,7 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     super::check_outputs(&[&a.data], &[&a.output])?;
     let robot = kinematics::preset(&a.robot)?;
     let data = read_data(&a.data)?;
+    robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
     robokrige::dataset::write_csv(&a.output, &out)?;
     let t = reg.transform.translation.vector;

@@ -31,6 +31,7 @@
 //! back as [`DirSource::Given`]; everything else round-trips exactly.
 
 mod read;
+pub(crate) mod table;
 mod write;
 
 pub use read::{read_csv, read_csv_from};
@@ -494,7 +495,7 @@ fn joint_suffix<'a>(name: &'a str, prefix: &str) -> Option<&'a str> {
 type CellParser = fn(&str) -> std::result::Result<f64, String>;
 
 /// A required finite number.
-fn number(cell: &str) -> std::result::Result<f64, String> {
+pub(crate) fn number(cell: &str) -> std::result::Result<f64, String> {
     if cell.is_empty() {
         return Err("missing value; fill in the cell or remove the row".into());
     }
@@ -542,7 +543,7 @@ fn error_value(cell: &str) -> std::result::Result<f64, String> {
 }
 
 /// A measured TCP coordinate in mm.
-fn position_value(cell: &str) -> std::result::Result<f64, String> {
+pub(crate) fn position_value(cell: &str) -> std::result::Result<f64, String> {
     bounded(
         cell,
         MAX_ABS_POSITION_MM,

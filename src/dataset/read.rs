@@ -4,15 +4,13 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
+use super::table::Table;
 use super::{
     CellParser, Covariate, Dataset, DirSource, SourceLines, TextColumn, direction, error_value,
     is_reserved, joint_suffix, joint_value, numeric_column, position_value,
 };
 use crate::space::derive_directions;
 use crate::{Error, Result};
-
-/// The UTF-8 byte-order mark some spreadsheet programs put at the start.
-const BOM: &[u8] = b"\xEF\xBB\xBF";
 
 /// Read a measurement CSV file. Messages name the file by `path` as given.
 pub fn read_csv(path: &Path) -> Result<Dataset> {
@@ -28,12 +26,11 @@ pub fn read_csv_from(mut reader: impl Read, source_name: &str) -> Result<Dataset
         source_name: source_name.to_string(),
         message: format!("reading failed: {e}"),
     })?;
-    let body = bytes.strip_prefix(BOM).unwrap_or(&bytes);
     let parser = Parser {
         src: source_name.to_string(),
         ..Parser::default()
     };
-    parser.parse(body)
+    parser.parse(&bytes)
 }
 
 /// Which cells of a row hold what, worked out from the header.
@@ -63,37 +60,14 @@ struct Parser {
 }
 
 impl Parser {
-    /// Parse the whole file body (BOM already removed).
-    fn parse(mut self, body: &[u8]) -> Result<Dataset> {
-        let mut rdr = csv::ReaderBuilder::new()
-            .has_headers(false)
-            .flexible(true)
-            .trim(csv::Trim::All)
-            .from_reader(body);
-        let mut records = rdr.records();
-        let mut lines = LineCounter {
-            body,
-            offset: 0,
-            line: 1,
-        };
-        let header = match records.next() {
-            None => {
-                return Err(
-                    self.input_err("file is empty; the first line must be a header with q1..qN")
-                );
-            }
-            Some(rec) => rec.map_err(|e| self.csv_lib_err(&e, &mut lines))?,
-        };
-        self.header_line = lines.line_of(&header);
-        let layout = self.layout(&header)?;
+    /// Parse the whole file ([`Table`] rules).
+    fn parse(mut self, bytes: &[u8]) -> Result<Dataset> {
+        let table = Table::read(bytes, &self.src, "with q1..qN")?;
+        self.header_line = table.header_line;
+        let layout = self.layout(&table.header)?;
         self.other = vec![Vec::new(); layout.other.len()];
-        for rec in records {
-            let rec = rec.map_err(|e| self.csv_lib_err(&e, &mut lines))?;
-            if is_blank(&rec) {
-                continue;
-            }
-            let line = lines.line_of(&rec);
-            self.row(&layout, &rec, line)?;
+        for (line, rec) in &table.rows {
+            self.row(&layout, rec, *line)?;
         }
         if self.q.is_empty() {
             return Err(
@@ -106,9 +80,8 @@ impl Parser {
     // ----- header -------------------------------------------------------
 
     /// Classify the header's columns and check that the required ones are there.
-    fn layout(&self, header: &csv::StringRecord) -> Result<Layout> {
-        let names: Vec<String> = header.iter().map(str::to_string).collect();
-        self.check_names(&names)?;
+    fn layout(&self, header: &[String]) -> Result<Layout> {
+        let names = header.to_vec();
         let q_map = self.numbered(&names, "q")?;
         let q = self.joint_columns(&names, &q_map)?;
         let dir_map = self.numbered(&names, "dir")?;
@@ -129,24 +102,6 @@ impl Parser {
             id,
             other,
         })
-    }
-
-    /// No empty and no duplicate column names.
-    fn check_names(&self, names: &[String]) -> Result<()> {
-        for (i, name) in names.iter().enumerate() {
-            if name.is_empty() {
-                let msg = format!(
-                    "header cell {} is empty; name the column or remove the stray comma",
-                    i + 1
-                );
-                return Err(self.header_err(None, msg));
-            }
-            if names[..i].contains(name) {
-                let msg = "column name appears twice in the header; rename or remove one";
-                return Err(self.header_err(Some(name), msg));
-            }
-        }
-        Ok(())
     }
 
     /// Map joint number → cell index for columns named `prefix` + digits.
@@ -248,14 +203,6 @@ impl Parser {
 
     /// Parse one data row into the collected columns.
     fn row(&mut self, l: &Layout, rec: &csv::StringRecord, line: u64) -> Result<()> {
-        if rec.len() != l.names.len() {
-            let msg = format!(
-                "row has {} cells but the header has {}; fix the missing or extra commas",
-                rec.len(),
-                l.names.len()
-            );
-            return Err(self.cell_err(line, None, msg));
-        }
         let cell = |i: usize| rec.get(i).unwrap_or("");
         let get = |i: usize, parse: CellParser| {
             parse(cell(i)).map_err(|m| self.cell_err(line, Some(&l.names[i]), m))
@@ -350,60 +297,4 @@ impl Parser {
     fn header_err(&self, column: Option<&str>, message: impl Into<String>) -> Error {
         self.cell_err(self.header_line, column, message)
     }
-
-    /// Translate an error of the `csv` crate (bad UTF-8, I/O) into ours.
-    fn csv_lib_err(&self, e: &csv::Error, lines: &mut LineCounter) -> Error {
-        match e.kind() {
-            csv::ErrorKind::Utf8 { pos: Some(pos), .. } => self.cell_err(
-                lines.line_at(pos.byte()),
-                None,
-                "text is not valid UTF-8; save the file as UTF-8",
-            ),
-            _ => self.input_err(format!("cannot parse as CSV: {e}")),
-        }
-    }
-}
-
-/// Finds the 1-based line a record starts on.
-///
-/// The `csv` crate's own line numbers go wrong after skipped blank lines and
-/// with CRLF endings, so lines are counted here from the records' byte offsets.
-struct LineCounter<'a> {
-    body: &'a [u8],
-    offset: usize,
-    line: u64,
-}
-
-impl LineCounter<'_> {
-    /// Line of `rec`; records must be passed in file order.
-    fn line_of(&mut self, rec: &csv::StringRecord) -> u64 {
-        self.line_at(rec.position().map_or(0, csv::Position::byte))
-    }
-
-    /// Line of the record the `csv` crate says starts at `byte` (it may
-    /// point at line breaks before the record).
-    fn line_at(&mut self, byte: u64) -> u64 {
-        let mut start = usize::try_from(byte).map_or(self.body.len(), |b| b.min(self.body.len()));
-        start = start.max(self.offset);
-        while self
-            .body
-            .get(start)
-            .is_some_and(|b| matches!(b, b'\r' | b'\n'))
-        {
-            start += 1;
-        }
-        let skipped = &self.body[self.offset..start];
-        let breaks = skipped
-            .iter()
-            .enumerate()
-            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && skipped.get(i + 1) != Some(&b'\n')));
-        self.line += breaks.count() as u64;
-        self.offset = start;
-        self.line
-    }
-}
-
-/// A line holding nothing but whitespace (the csv crate already skips empty lines).
-fn is_blank(rec: &csv::StringRecord) -> bool {
-    rec.len() == 1 && rec.get(0).is_some_and(str::is_empty)
 }

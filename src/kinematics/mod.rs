@@ -136,6 +136,24 @@ impl Robot {
         self.links.len()
     }
 
+    /// Error unless the campaign `data` has one joint column per joint of
+    /// this robot; the message names the file and the robot.
+    pub fn check_dataset(&self, data: &crate::dataset::Dataset) -> Result<()> {
+        if data.n_joints() == self.dof() {
+            return Ok(());
+        }
+        Err(crate::Error::Input {
+            source_name: data.source.clone(),
+            message: format!(
+                "has {} joint columns (q1..q{}) but robot '{}' has {} joints; choose the robot that was measured with --robot",
+                data.n_joints(),
+                data.n_joints(),
+                self.name,
+                self.dof()
+            ),
+        })
+    }
+
     /// Error unless `q` has one value per joint.
     pub fn check_len(&self, q: &[f64]) -> Result<()> {
         if q.len() == self.dof() {
