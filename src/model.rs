@@ -721,7 +721,9 @@ impl ErrorModel {
         for (axis, o) in AXES.iter().zip(&self.outputs) {
             let (mean, scale) = o.output_scale();
             if !(mean.abs() <= MAX_ABS_ERROR_MM) {
-                return Err(format!("output {axis}: y_mean = {mean:e} mm is not a TCP error"));
+                return Err(format!(
+                    "output {axis}: y_mean = {mean:e} mm is not a TCP error"
+                ));
             }
             if !(scale > 0.0 && scale <= 2.0 * MAX_ABS_ERROR_MM) {
                 return Err(format!(

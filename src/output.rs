@@ -21,7 +21,10 @@ use crate::{Error, Result};
 /// temporary file in the same folder, which then replaces `path` by a
 /// rename. On any failure `path` is left as it was and the temporary file
 /// is removed. New files get the usual permissions (`0666` less the umask).
-pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+pub fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<()> {
     let io_err = |e| Error::io(path, e);
     let mut tmp = temp_beside(path).map_err(io_err)?;
     {
@@ -115,7 +118,10 @@ pub fn check_writable(path: &Path) -> Result<()> {
     }
     match temp_beside(path) {
         Ok(_) => Ok(()), // removed on drop
-        Err(e) => refuse(format!("the folder {} does not take a new file ({e})", dir.display())),
+        Err(e) => refuse(format!(
+            "the folder {} does not take a new file ({e})",
+            dir.display()
+        )),
     }
 }
 

@@ -164,7 +164,11 @@ pub enum TargetFile {
 pub fn read_target_file(path: &Path) -> Result<TargetFile> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let src = path.display().to_string();
-    let table = Table::read(&bytes, &src, "with x,y,z (TCP targets) or q1..qN (joint poses)")?;
+    let table = Table::read(
+        &bytes,
+        &src,
+        "with x,y,z (TCP targets) or q1..qN (joint poses)",
+    )?;
     if table.column("q1").is_some() {
         Ok(TargetFile::Joints(crate::dataset::read_csv_from(
             bytes.as_slice(),

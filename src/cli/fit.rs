@@ -163,10 +163,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
-    let plan = robokrige::model::check_fit_memory(data.len(), opts.optimizer)?;
-    if data.len() > robokrige::kriging::SEARCH_ROWS {
-        eprintln!("fit: {plan}");
-    }
+    super::plan_fit("fit", data.len(), opts.optimizer)?;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => {

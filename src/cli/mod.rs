@@ -81,6 +81,20 @@ pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<
     robokrige::output::write_text(path, &text)
 }
 
+/// Refuse a fit of `rows` rows that would exceed the memory limit
+/// ([`robokrige::model::check_fit_memory`]); print the plan for large inputs.
+pub fn plan_fit(
+    command: &str,
+    rows: usize,
+    optimizer: robokrige::kriging::OptimizerKind,
+) -> Result<()> {
+    let plan = robokrige::model::check_fit_memory(rows, optimizer)?;
+    if rows > robokrige::kriging::SEARCH_ROWS {
+        eprintln!("{command}: {plan}");
+    }
+    Ok(())
+}
+
 /// Read a measurement CSV and print its plausibility warnings on stderr.
 pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
     let d = robokrige::dataset::read_csv(path)?;

@@ -201,7 +201,9 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         }
     };
     for d in [&indexing, &train] {
-        robot.check_dataset(d).map_err(|e| default_robot_hint(e, &a.robot))?;
+        robot
+            .check_dataset(d)
+            .map_err(|e| default_robot_hint(e, &a.robot))?;
     }
     let id = identify_physics(&indexing, &train, &robot)?;
     id.full.save(&a.output)?;
@@ -324,7 +326,12 @@ fn truth_text(id: &PhysicsIdentification, truth: &Truth) -> String {
 }
 
 fn run_compare(a: CompareArgs) -> Result<()> {
-    let outputs: Vec<&Path> = a.json.iter().chain(&a.report).map(PathBuf::as_path).collect();
+    let outputs: Vec<&Path> = a
+        .json
+        .iter()
+        .chain(&a.report)
+        .map(PathBuf::as_path)
+        .collect();
     super::check_outputs(&[], &outputs)?;
     let opts = CompareOptions {
         robot: a.robot.clone(),

@@ -509,12 +509,7 @@ pub(crate) fn number(cell: &str) -> std::result::Result<f64, String> {
 }
 
 /// A number within ±`limit`; `what` and `unit` name it in the message.
-fn bounded(
-    cell: &str,
-    limit: f64,
-    what: &str,
-    hint: &str,
-) -> std::result::Result<f64, String> {
+fn bounded(cell: &str, limit: f64, what: &str, hint: &str) -> std::result::Result<f64, String> {
     let v = number(cell)?;
     if v.abs() > limit {
         return Err(format!("{what} '{cell}' is beyond ±{limit:e}; {hint}"));

@@ -211,7 +211,10 @@ impl Parser {
             let [a, b, c] = cols.map(|i| get(i, parse));
             Ok([a?, b?, c?])
         };
-        let q: Vec<f64> = l.q.iter().map(|&i| get(i, joint_value)).collect::<Result<_>>()?;
+        let q: Vec<f64> =
+            l.q.iter()
+                .map(|&i| get(i, joint_value))
+                .collect::<Result<_>>()?;
         let dir = l
             .dir
             .as_ref()
@@ -252,7 +255,9 @@ impl Parser {
                 }),
                 Err((row, why)) => {
                     // a column with numbers in it was meant to be numeric
-                    let numeric = cells.iter().any(|c| c.parse::<f64>().is_ok_and(f64::is_finite));
+                    let numeric = cells
+                        .iter()
+                        .any(|c| c.parse::<f64>().is_ok_and(f64::is_finite));
                     let note = numeric.then(|| format!("line {}: {why}", self.lines[row]));
                     text.push(TextColumn {
                         name,

@@ -57,7 +57,9 @@ impl Table {
                 None => {
                     return Err(Error::Input {
                         source_name: src.to_string(),
-                        message: format!("file is empty; the first line must be a header {empty_hint}"),
+                        message: format!(
+                            "file is empty; the first line must be a header {empty_hint}"
+                        ),
                     });
                 }
                 Some(rec) => {
