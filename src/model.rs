@@ -865,12 +865,7 @@ fn kinematic_trend_set(
     use crate::kinematics::{calib_len, identification_jacobian};
     use crate::kriging::{independent_columns, supported_columns};
     let n = data.n_joints();
-    if robot.dof() != n {
-        return Err(Error::JointCount {
-            expected: robot.dof(),
-            got: n,
-        });
-    }
+    robot.check_dataset(data)?;
     let np = calib_len(n);
     let m = data.len();
     let rows: Vec<[Vec<f64>; 3]> = data

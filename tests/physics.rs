@@ -305,7 +305,7 @@ fn indexing_input_errors_are_clear() {
     let e = identify_scara(&data, &comau, &ScaraOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("joint count") || e.contains("SCARA"), "{e}");
+    assert!(e.contains("robot 'comau-nj220' has 6 joints"), "{e}");
 }
 
 #[test]

@@ -19,11 +19,11 @@
 
 use super::scara::{Row, angle_table, extreme_pair, indexing_rows};
 use super::{AxisReport, BidirectionalTable};
+use crate::Result;
 use crate::dataset::Dataset;
 use crate::frames::{fit_circle_3d, wrap_pi};
 use crate::kinematics::{JointKind, Robot};
 use crate::optim::{LmOptions, levenberg_marquardt, numerical_jacobian};
-use crate::{Error, Result};
 use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -43,12 +43,7 @@ pub fn identify_apd(
     min_radius_mm: f64,
 ) -> Result<ApdIdentification> {
     let n = nominal.dof();
-    if data.n_joints() != n {
-        return Err(Error::JointCount {
-            expected: n,
-            got: data.n_joints(),
-        });
-    }
+    nominal.check_dataset(data)?;
     let by_axis = indexing_rows(data)?;
     let mut out = ApdIdentification {
         apd: vec![None; n],
@@ -153,12 +148,7 @@ pub fn identify_mdh(
     apd: &[Option<BidirectionalTable>],
 ) -> Result<(Robot, LmSummary)> {
     let n = nominal.dof();
-    if data.n_joints() != n {
-        return Err(Error::JointCount {
-            expected: n,
-            got: data.n_joints(),
-        });
-    }
+    nominal.check_dataset(data)?;
     let errors = data.errors_or_err()?;
     let targets: Vec<Vector3<f64>> = data
         .q

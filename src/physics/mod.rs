@@ -131,12 +131,7 @@ pub fn register_campaign(
         source_name: data.source.clone(),
         message: "registration needs the measured positions x,y,z".into(),
     })?;
-    if nominal.dof() != data.n_joints() {
-        return Err(crate::Error::JointCount {
-            expected: nominal.dof(),
-            got: data.n_joints(),
-        });
-    }
+    nominal.check_dataset(data)?;
     let from: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
     let to: Vec<Vector3<f64>> = data
         .q

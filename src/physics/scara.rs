@@ -137,12 +137,7 @@ pub fn identify_scara(
     opts: &ScaraOptions,
 ) -> Result<ScaraIdentification> {
     let n = nominal.dof();
-    if data.n_joints() != n {
-        return Err(Error::JointCount {
-            expected: n,
-            got: data.n_joints(),
-        });
-    }
+    nominal.check_dataset(data)?;
     if n < 2
         || nominal.links[..2]
             .iter()
