@@ -15,7 +15,7 @@
 
 use crate::dataset::Dataset;
 use crate::model::ErrorModel;
-use crate::sim::rng_for;
+use crate::stats::rng_for;
 use crate::stats::{ErrorSummary, summarize};
 use crate::{Error, Result};
 use rand::RngExt;

@@ -704,7 +704,7 @@ impl ErrorModel {
             return Err("n_joints is 0".into());
         }
         self.input_norm
-            .validate()
+            .validate(crate::dataset::MAX_ABS_COVARIATE)
             .map_err(|why| format!("input_norm: {why}"))?;
         if !self.joint_range.is_empty() && self.joint_range.len() != self.n_joints {
             return Err(format!(

@@ -172,11 +172,11 @@ pub struct Normalizer {
 }
 
 impl Normalizer {
-    /// Check a normaliser read from a file: equal lengths, finite means
-    /// within ±[`crate::dataset::MAX_ABS_COVARIATE`], and scales that
-    /// [`Normalizer::fit`] can give (finite, more than `1e-12·max(1, |mean|)`).
-    /// The message names the first bad entry.
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    /// Check a normaliser read from a file: equal lengths, means within
+    /// ±`limit` (the largest input value accepted), and scales that
+    /// [`Normalizer::fit`] can give (at most `limit`, more than
+    /// `1e-12·max(1, |mean|)`). The message names the first bad entry.
+    pub fn validate(&self, limit: f64) -> std::result::Result<(), String> {
         if self.mean.len() != self.std.len() {
             return Err(format!(
                 "{} means but {} scales",
@@ -184,7 +184,6 @@ impl Normalizer {
                 self.std.len()
             ));
         }
-        let limit = crate::dataset::MAX_ABS_COVARIATE;
         for (k, (&mu, &s)) in self.mean.iter().zip(&self.std).enumerate() {
             if !(mu.abs() <= limit) {
                 return Err(format!("mean[{k}] = {mu:e} is not a finite input mean"));

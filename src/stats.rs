@@ -212,3 +212,16 @@ mod tests {
         assert_eq!(box_stats(&[7.0]).median, 7.0);
     }
 }
+
+/// An independent random stream per (seed, purpose), so that e.g. the true
+/// robot of seed 1 is the same whichever campaign kind is simulated.
+pub fn rng_for(seed: u64, stream: &str) -> rand::rngs::StdRng {
+    use rand::SeedableRng;
+    // FNV-1a of the stream name, mixed with the seed
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in stream.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    rand::rngs::StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+}

@@ -78,7 +78,7 @@ where
     F: Fn(&[bool]) -> f64 + Sync,
     P: FnMut(usize, f64),
 {
-    let mut rng = crate::sim::rng_for(opts.seed, "ga");
+    let mut rng = crate::stats::rng_for(opts.seed, "ga");
     let n = opts.population.max(opts.elite + opts.anti_elite + 2);
     let pm = if opts.mutation > 0.0 {
         opts.mutation

@@ -144,7 +144,7 @@ pub fn lhs_starts(bounds: &Bounds, n: usize, seed: u64) -> Vec<Vec<f64>> {
         out.truncate(n);
         return out;
     }
-    let mut rng = crate::sim::rng_for(seed, "optim-lhs-starts");
+    let mut rng = crate::stats::rng_for(seed, "optim-lhs-starts");
     let ranges: Vec<(f64, f64)> = bounds
         .lo
         .iter()

@@ -28,21 +28,9 @@ pub use true_robot::{
     Compliance, ErrorProfile, Harmonic, JointDeviation, NoiseModel, PoseContext, TrueRobot,
 };
 
-use rand::SeedableRng;
-use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
 
-/// An independent random stream per (seed, purpose), so that e.g. the true
-/// robot of seed 1 is the same whichever campaign kind is simulated.
-pub fn rng_for(seed: u64, stream: &str) -> StdRng {
-    // FNV-1a of the stream name, mixed with the seed
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in stream.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
-}
+pub use crate::stats::rng_for;
 
 /// One draw of `N(0, σ²)` (0 when σ ≤ 0).
 pub fn gaussian(rng: &mut impl rand::Rng, sigma: f64) -> f64 {
