@@ -15,32 +15,12 @@
 
 use crate::dataset::Dataset;
 use crate::model::ErrorModel;
-use crate::stats::rng_for;
 use crate::stats::{ErrorSummary, summarize};
 use crate::{Error, Result};
-use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
-/// sizes differ by at most one.
-pub fn kfold_partition(m: usize, k: usize, seed: u64) -> Result<Vec<usize>> {
-    if k < 2 || k > m {
-        return Err(Error::InvalidParameter(format!(
-            "K-fold needs 2 ≤ K ≤ rows, got K = {k} with {m} rows"
-        )));
-    }
-    let mut order: Vec<usize> = (0..m).collect();
-    let mut rng = rng_for(seed, "kfold");
-    for i in (1..m).rev() {
-        order.swap(i, rng.random_range(0..=i));
-    }
-    let mut fold = vec![0; m];
-    for (pos, &row) in order.iter().enumerate() {
-        fold[row] = pos % k;
-    }
-    Ok(fold)
-}
+pub use crate::stats::kfold_partition;
 
 /// Result of a cross-validation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

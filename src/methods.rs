@@ -15,7 +15,7 @@ use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 use crate::kriging::{
     KrigingOptions, Monomials, OptimizerKind, TrainingInputs, Trend, TrendKind, TrendModel,
-    fit_output, fit_output_at,
+    fit_output,
 };
 use crate::model::ErrorModel;
 use crate::optim::{GaOptions, ga};
@@ -182,15 +182,13 @@ pub fn fit_ga(
         let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
         let rmse = |bits: &[bool]| {
             let keep: Vec<usize> = (0..cand.len()).filter(|&j| j == 0 || bits[j]).collect();
-            fit_output_at(
-                &x,
-                &inputs,
-                &y,
-                &cand.subset(&keep),
-                &base.theta,
-                base.nugget,
-                opts.min_jitter,
-            )
+            let at = crate::kriging::Hyperparameters {
+                corr: opts.corr,
+                theta: &base.theta,
+                nugget: base.nugget,
+                min_jitter: opts.min_jitter,
+            };
+            crate::kriging::fit_output_with(&x, &inputs, &y, &cand.subset(&keep), &at)
             .and_then(|model| model.held_out_residuals(&blocks))
             .map_or(f64::INFINITY, |e| {
                 (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()

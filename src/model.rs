@@ -31,11 +31,12 @@ fn joint_range(q: &[Vec<f64>]) -> Vec<(f64, f64)> {
 
 /// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`]),
 /// refused with [`Error::Memory`] when its estimated peak exceeds the
-/// memory limit ([`crate::memory`]); the message names the most rows that
-/// fit.
+/// memory limit ([`crate::memory`]); the message says how to fit the most
+/// rows that fit: `subset(rows)` (e.g. "`--rows 5000`"), or raising the limit.
 pub fn check_fit_memory(
     rows: usize,
     optimizer: crate::kriging::OptimizerKind,
+    subset: impl Fn(usize) -> String,
 ) -> Result<crate::kriging::FitPlan> {
     let threads = rayon::current_num_threads();
     let plan = crate::kriging::FitPlan::new(rows, 3, optimizer, threads);
@@ -45,7 +46,8 @@ pub fn check_fit_memory(
             &format!("a fit of {rows} rows"),
             plan.bytes,
             &format!(
-                "fit at most {fits} rows (a subset, e.g. `--rows {fits}` where the command has it), or raise {}",
+                "fit at most {fits} rows ({}), or raise {}",
+                subset(fits),
                 crate::memory::LIMIT_ENV
             ),
         )?;
@@ -355,10 +357,15 @@ impl ErrorModel {
                 opts.warm_start.len()
             )));
         }
-        let plan = check_fit_memory(data.len(), opts.optimizer)?;
+        let plan = check_fit_memory(data.len(), opts.optimizer, |n| format!("a subset of {n} rows"))?;
         let fit_axis = |a: usize| {
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-            fit_output_from(
+            let fit = if opts.corr_auto {
+                crate::kriging::fit_output_auto
+            } else {
+                fit_output_from
+            };
+            fit(
                 &x,
                 &inputs,
                 &y,
@@ -434,15 +441,13 @@ impl ErrorModel {
             .map(|a| {
                 let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
                 let r = &self.reports[a];
-                crate::kriging::fit_output_at(
-                    &x,
-                    &inputs,
-                    &y,
-                    &trends[a],
-                    &r.theta,
-                    r.nugget,
-                    self.options.min_jitter,
-                )
+                let at = crate::kriging::Hyperparameters {
+                    corr: self.outputs[a].corr(),
+                    theta: &r.theta,
+                    nugget: r.nugget,
+                    min_jitter: self.options.min_jitter,
+                };
+                crate::kriging::fit_output_with(&x, &inputs, &y, &trends[a], &at)
             })
             .collect();
         let mut outputs = Vec::with_capacity(3);

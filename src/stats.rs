@@ -225,3 +225,23 @@ pub fn rng_for(seed: u64, stream: &str) -> rand::rngs::StdRng {
     }
     rand::rngs::StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
 }
+
+/// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
+/// sizes differ by at most one.
+pub fn kfold_partition(m: usize, k: usize, seed: u64) -> crate::Result<Vec<usize>> {
+    if k < 2 || k > m {
+        return Err(crate::Error::InvalidParameter(format!(
+            "K-fold needs 2 ≤ K ≤ rows, got K = {k} with {m} rows"
+        )));
+    }
+    let mut order: Vec<usize> = (0..m).collect();
+    let mut rng = rng_for(seed, "kfold");
+    for i in (1..m).rev() {
+        order.swap(i, rand::RngExt::random_range(&mut rng, 0..=i));
+    }
+    let mut fold = vec![0; m];
+    for (pos, &row) in order.iter().enumerate() {
+        fold[row] = pos % k;
+    }
+    Ok(fold)
+}

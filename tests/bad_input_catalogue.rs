@@ -844,6 +844,21 @@ fn model_cases() -> Vec<Case> {
             fail(&["nj.json"]),
         ),
         predict_case(
+            "model_fused_trend_with_zero_scale",
+            {
+                // found by the model_loader fuzz target (fuzz/seeds)
+                let p = path("fused_std0.json");
+                std::fs::copy(
+                    Path::new(env!("CARGO_MANIFEST_DIR"))
+                        .join("fuzz/seeds/model_loader/crash-fused-std0.json"),
+                    &p,
+                )
+                .unwrap();
+                p
+            },
+            fail(&["fused_std0.json", "trend is not finite"]),
+        ),
+        predict_case(
             "model_bad_options",
             tampered("opts.json", |v| v["options"]["starts"] = json!(0)),
             fail(&["opts.json", "options"]),
@@ -1315,7 +1330,7 @@ fn memory_cases() -> Vec<Case> {
             "memory_fit_over_limit",
             &["fit", &d, "-o", &s(&path("mem.json"))],
             &[data],
-            fail(&["needs about", "ROBOKRIGE_MEMORY_LIMIT", "fit at most"]),
+            fail(&["needs about", "ROBOKRIGE_MEMORY_LIMIT", "fit at most", "head -n"]),
         ),
         case(
             "memory_cv_over_limit",
@@ -1327,7 +1342,7 @@ fn memory_cases() -> Vec<Case> {
             "memory_diagnose_over_limit",
             &["diagnose", &d],
             &[data],
-            fail(&["needs about", "fit at most"]),
+            fail(&["needs about", "fit at most", "`--rows "]),
         ),
     ];
     for c in &mut cases {

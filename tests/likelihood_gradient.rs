@@ -1,11 +1,12 @@
 //! The analytic gradient of the concentrated likelihood ln ψ (issue 16 §1)
 //! against central differences, for constant, linear, kinematic and fused
-//! (PCC+PCA) trends, at several ξ, with and without a nugget.
+//! (PCC+PCA) trends, at several ξ, with and without a nugget, for every
+//! correlation family (issue 17 §2).
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kinematics;
 use robokrige::kriging::{
-    Gaussian, KrigingModel, KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs,
+    Correlation, KrigingModel, KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs,
     Workspace, trend_matrix,
 };
 use robokrige::model::ErrorModel;
@@ -48,7 +49,7 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
     let yn: Vec<f64> = y.iter().map(|v| (v - data.y_mean) / data.y_std).collect();
     let prob = KrigingProblem {
         min_jitter: None,
-        corr: &Gaussian,
+        corr: &data.corr,
         inputs: &inputs,
         f: &f,
         y: &yn,
@@ -111,6 +112,21 @@ fn gradient_matches_central_differences_constant_and_linear_trends() {
         let opts = KrigingOptions { trend, ..quick() };
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
         check_model(&model, &data, &format!("{trend:?}"));
+    }
+}
+
+#[test]
+fn gradient_matches_central_differences_every_correlation_family() {
+    let data = campaign(60);
+    for corr in Correlation::ALL {
+        let opts = KrigingOptions {
+            corr,
+            trend: robokrige::kriging::TrendKind::Linear,
+            ..quick()
+        };
+        let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+        assert!(model.outputs.iter().all(|o| o.corr() == corr));
+        check_model(&model, &data, corr.name());
     }
 }
 

@@ -66,7 +66,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let (space, opts) = (choice.space, &choice.opts);
-    super::plan_fit("cv", data.len(), opts.optimizer)?;
+    super::plan_fit("cv", data.len(), opts.optimizer, None)?;
     if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
         return Err(Error::InvalidParameter(
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),
@@ -178,7 +178,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     let methods = robokrige::methods::parse_methods(list)?;
     let data = super::read_data(&a.data)?;
     let train_rows = data.len() - data.len() / a.folds.max(1);
-    super::plan_fit("cv", train_rows, robokrige::kriging::OptimizerKind::Gps)?;
+    super::plan_fit("cv", train_rows, robokrige::kriging::OptimizerKind::Gps, None)?;
     println!(
         "{}-fold CV (refit: selection and hyperparameters inside every training fold) on {} rows, fold seed {}",
         a.folds,

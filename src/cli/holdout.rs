@@ -138,7 +138,7 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
     let opts = kriging_opts(a, &data.q)?;
-    super::plan_fit("holdout", data.len(), opts.optimizer)?;
+    super::plan_fit("holdout", data.len(), opts.optimizer, None)?;
     let pb = bar(k as u64 + 1, "cv");
     let cv = holdout_cv(data, robot, &opts, k, a.seed, a.train, &|done, msg| {
         pb.set_position(done as u64);
@@ -226,7 +226,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let test = data.select(&(a.train..a.train + a.test).collect::<Vec<_>>());
     let truth = test.errors_or_err()?.to_vec();
     let opts = kriging_opts(&a, &train.q)?;
-    super::plan_fit("holdout", train.len(), opts.optimizer)?;
+    super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
     let periodic = opts.periodic.clone();
     let pb = bar(6, "holdout");
     let mut rows = Vec::new();

@@ -37,7 +37,7 @@
 //! change, so one resample costs one m × m product per axis.
 
 use crate::kriging::{
-    KrigingModel, KrigingOptions, TrainingInputs, Trend, WarmStart, fit_output_at, fit_output_from,
+    KrigingModel, KrigingOptions, TrainingInputs, Trend, WarmStart, fit_output_from,
 };
 use crate::model::ErrorModel;
 use crate::{Error, Result};
@@ -434,15 +434,13 @@ pub fn refit_systems(
                 opts,
                 Some(&start),
             )?;
-            let at = fit_output_at(
-                x,
-                &inputs,
-                &y,
-                &km.data.trend,
-                &report.theta[..corr],
-                report.nugget,
-                opts.min_jitter,
-            )?;
+            let hyper = crate::kriging::Hyperparameters {
+                corr: opts.corr,
+                theta: &report.theta[..corr],
+                nugget: report.nugget,
+                min_jitter: opts.min_jitter,
+            };
+            let at = crate::kriging::fit_output_with(x, &inputs, &y, &km.data.trend, &hyper)?;
             AxisSystem::new(&at)
         })
         .collect()
@@ -451,7 +449,7 @@ pub fn refit_systems(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kriging::{Monomials, fit_output};
+    use crate::kriging::{Monomials, fit_output, fit_output_at};
 
     /// A small GP problem: 2 correlated inputs, one trend-only column.
     fn problem() -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {

@@ -1,5 +1,20 @@
 //! Correlation models `R(s, s')` (seed 003 eqs 7–8) and the fill of the
 //! correlation matrix R.
+//!
+//! Every family here is stationary and anisotropic, with one parameter
+//! ξ_k ≥ 0 per normalised input: with the scaled distance
+//! `h = √(Σ_k ξ_k (s_k − s'_k)²)` (ξ_k = 1/ℓ_k², a length scale ℓ_k per input)
+//!
+//! | family | `R(h)` |
+//! |---|---|
+//! | [`Correlation::Gaussian`] (seed 003 eq 8) | `exp(−h²)` |
+//! | [`Correlation::Matern52`] | `(1 + u + u²/3)·exp(−u)`, `u = √5·h` |
+//! | [`Correlation::Matern32`] | `(1 + u)·exp(−u)`, `u = √3·h` |
+//! | [`Correlation::Exponential`] | `exp(−h)` |
+//!
+//! and `∂R/∂ln ξ_k = q(h)·ξ_k (s_k − s'_k)²` with `q = R′(h)/(2h)`:
+//! `−R`, `−(5/6)(1 + u)·exp(−u)`, `−(3/2)·exp(−u)` and `−exp(−h)/(2h)`
+//! (0 at h = 0, where every weighted difference vanishes).
 
 use serde::{Deserialize, Serialize};
 
@@ -32,6 +47,190 @@ pub trait CorrelationModel: Send + Sync {
         w: &mut [f64],
         grad: &mut [f64],
     );
+
+    /// `out[j] = R(s, s_j)` for every training row j: the correlation vector
+    /// of a prediction point. Override it with a vectorised version.
+    fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = self.corr(theta, s, &x.row(j));
+        }
+    }
+}
+
+/// The correlation families, saved by name in model files (`"gaussian"`,
+/// `"matern52"`, `"matern32"`, `"exponential"`); files without one are
+/// Gaussian. See the [module docs](self) for the formulas.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Correlation {
+    /// `exp(−h²)`, seed 003 eq 8: the papers' family.
+    #[default]
+    Gaussian,
+    /// Matérn ν = 5/2: twice differentiable.
+    Matern52,
+    /// Matérn ν = 3/2: once differentiable.
+    Matern32,
+    /// `exp(−h)` (Matérn ν = 1/2): continuous, not differentiable.
+    Exponential,
+}
+
+impl Correlation {
+    /// Every family, Gaussian first.
+    pub const ALL: [Correlation; 4] = [
+        Correlation::Gaussian,
+        Correlation::Matern52,
+        Correlation::Matern32,
+        Correlation::Exponential,
+    ];
+
+    /// The name used in model files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Correlation::Gaussian => "gaussian",
+            Correlation::Matern52 => "matern52",
+            Correlation::Matern32 => "matern32",
+            Correlation::Exponential => "exponential",
+        }
+    }
+
+    /// The family called `name` ([`Correlation::name`]).
+    pub fn parse(name: &str) -> Option<Correlation> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// `R` from the squared scaled distance `s = h²` (non-Gaussian families).
+    #[inline]
+    fn radial(self, s: f64) -> f64 {
+        match self {
+            Correlation::Gaussian => (-s).exp(),
+            Correlation::Matern52 => {
+                let u = (5.0 * s).sqrt();
+                (1.0 + u + u * u / 3.0) * (-u).exp()
+            }
+            Correlation::Matern32 => {
+                let u = (3.0 * s).sqrt();
+                (1.0 + u) * (-u).exp()
+            }
+            Correlation::Exponential => (-s.sqrt()).exp(),
+        }
+    }
+
+    /// `q(h) = R′(h)/(2h)` from `s = h²` (see the module docs).
+    #[inline]
+    fn slope(self, s: f64) -> f64 {
+        match self {
+            Correlation::Gaussian => -(-s).exp(),
+            Correlation::Matern52 => {
+                let u = (5.0 * s).sqrt();
+                -(5.0 / 6.0) * (1.0 + u) * (-u).exp()
+            }
+            Correlation::Matern32 => -1.5 * (-(3.0 * s).sqrt()).exp(),
+            Correlation::Exponential if s > 0.0 => {
+                let h = s.sqrt();
+                -(-h).exp() / (2.0 * h)
+            }
+            Correlation::Exponential => 0.0,
+        }
+    }
+}
+
+impl std::fmt::Display for Correlation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// `out[k] = Σ_d ξ_d (x_id − x_{i+1+k,d})²` for the rows after row `i`.
+fn sq_dist_column(theta: &[f64], x: &TrainingInputs, i: usize, out: &mut [f64]) {
+    out.fill(0.0);
+    for (k, t) in theta.iter().enumerate() {
+        let col = x.dim_values(k);
+        let a = col[i];
+        for (o, b) in out.iter_mut().zip(&col[i + 1..]) {
+            let diff = b - a;
+            *o += t * diff * diff;
+        }
+    }
+}
+
+/// `out[j] = Σ_d ξ_d (s_d − x_jd)²` for every training row j.
+fn sq_dist_row(theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for (k, (t, sk)) in theta.iter().zip(s).enumerate() {
+        for (o, v) in out.iter_mut().zip(x.dim_values(k)) {
+            let diff = sk - v;
+            *o += t * diff * diff;
+        }
+    }
+}
+
+/// `grad[k] −= ξ_k Σ_j w_j (x_ik − x_{i+1+j,k})²`.
+fn weighted_sq_diffs(theta: &[f64], x: &TrainingInputs, i: usize, w: &[f64], grad: &mut [f64]) {
+    for (k, (t, g)) in theta.iter().zip(grad.iter_mut()).enumerate() {
+        let col = x.dim_values(k);
+        let a = col[i];
+        let s: f64 = w
+            .iter()
+            .zip(&col[i + 1..])
+            .map(|(v, b)| {
+                let diff = b - a;
+                v * diff * diff
+            })
+            .sum();
+        *g -= t * s;
+    }
+}
+
+impl CorrelationModel for Correlation {
+    fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
+        let s: f64 = theta
+            .iter()
+            .zip(a.iter().zip(b))
+            .map(|(t, (x, y))| t * (x - y) * (x - y))
+            .sum();
+        self.radial(s)
+    }
+
+    fn fill_column(&self, theta: &[f64], x: &TrainingInputs, i: usize, out: &mut [f64]) {
+        if *self == Correlation::Gaussian {
+            return Gaussian.fill_column(theta, x, i, out);
+        }
+        sq_dist_column(theta, x, i, out);
+        for v in out.iter_mut() {
+            *v = self.radial(*v);
+        }
+    }
+
+    fn accumulate_gradient(
+        &self,
+        theta: &[f64],
+        x: &TrainingInputs,
+        i: usize,
+        r: &[f64],
+        w: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        if *self == Correlation::Gaussian {
+            return Gaussian.accumulate_gradient(theta, x, i, r, w, grad);
+        }
+        let mut s = vec![0.0; w.len()];
+        sq_dist_column(theta, x, i, &mut s);
+        // −q ≥ 0 takes the place of R in the Gaussian's pass
+        for (v, sj) in w.iter_mut().zip(&s) {
+            *v *= -self.slope(*sj);
+        }
+        weighted_sq_diffs(theta, x, i, w, grad);
+    }
+
+    fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
+        if *self == Correlation::Gaussian {
+            return Gaussian.fill_row(theta, x, s, out);
+        }
+        sq_dist_row(theta, x, s, out);
+        for v in out.iter_mut() {
+            *v = self.radial(*v);
+        }
+    }
 }
 
 /// Gaussian correlation, seed 003 eq 8: `R = exp(−Σ_k ξ_k (s_k − s'_k)²)`.
@@ -78,20 +277,16 @@ impl CorrelationModel for Gaussian {
         for (v, b) in w.iter_mut().zip(r) {
             *v *= b;
         }
-        let wr = &*w;
-        for (k, (t, g)) in theta.iter().zip(grad.iter_mut()).enumerate() {
-            let col = x.dim_values(k);
-            let a = col[i];
-            let s: f64 = wr
-                .iter()
-                .zip(&col[i + 1..])
-                .map(|(v, b)| {
-                    let diff = b - a;
-                    v * diff * diff
-                })
-                .sum();
-            *g -= t * s;
+        weighted_sq_diffs(theta, x, i, w, grad);
+    }
+
+    /// `−Σ_k ξ_k (s_k − x_jk)²` over contiguous rows, then one vectorised `exp`.
+    fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
+        sq_dist_row(theta, x, s, out);
+        for v in out.iter_mut() {
+            *v = -*v;
         }
+        super::fastexp::exp_in_place(out);
     }
 }
 
@@ -162,19 +357,6 @@ impl TrainingInputs {
                 .as_slice_mut();
             corr.fill_column(theta, self, i, &mut slice[i + 1..]);
         }
-    }
-}
-
-/// Correlation vector `r(s) = [R(s, s_1) … R(s, s_m)]` into `out`.
-pub fn corr_vector(
-    corr: &dyn CorrelationModel,
-    theta: &[f64],
-    s: &[f64],
-    train: &[Vec<f64>],
-    out: &mut [f64],
-) {
-    for (o, t) in out.iter_mut().zip(train) {
-        *o = corr.corr(theta, s, t);
     }
 }
 

@@ -10,12 +10,14 @@
 //! Hooke–Jeeves or multistart GPS, then solve at the optimum.
 
 pub mod corr;
+mod family;
 mod fastexp;
 pub mod model;
 pub mod problem;
 pub mod trend;
 
-pub use corr::{CorrelationModel, Gaussian, TrainingInputs};
+pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
+pub use family::{FAMILY_FOLDS, FamilyScore, fit_output_auto};
 pub use model::{KrigingModel, KrigingModelData, Pred};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
 pub use trend::{
@@ -86,6 +88,13 @@ impl OptimizerKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingOptions {
     pub trend: TrendKind,
+    /// Correlation family ([`Correlation`]; Gaussian, eq 8, by default).
+    #[serde(default)]
+    pub corr: Correlation,
+    /// Choose the family per output by closed-form K-fold CV
+    /// ([`fit_output_auto`]); `corr` is then ignored.
+    #[serde(default)]
+    pub corr_auto: bool,
     pub optimizer: OptimizerKind,
     /// Estimate a nugget ν (noise-to-signal variance ratio) with ξ.
     pub nugget: bool,
@@ -148,6 +157,8 @@ impl Default for KrigingOptions {
     fn default() -> Self {
         KrigingOptions {
             trend: TrendKind::Constant,
+            corr: Correlation::Gaussian,
+            corr_auto: false,
             optimizer: OptimizerKind::Bfgs,
             nugget: false,
             log10_theta: (-6.0, 2.0),
@@ -223,6 +234,10 @@ pub struct FitReport {
     /// start ([`WarmStart::of`]); not saved.
     #[serde(skip)]
     pub inverse_hessian: Option<Vec<Vec<f64>>>,
+    /// With [`KrigingOptions::corr_auto`]: every family's closed-form
+    /// K-fold score, the chosen one lowest ([`fit_output_auto`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub families: Vec<FamilyScore>,
 }
 
 impl PartialEq for FitReport {
@@ -238,6 +253,7 @@ impl PartialEq for FitReport {
             && self.starts == o.starts
             && self.evals == o.evals
             && self.search_rows == o.search_rows
+            && self.families == o.families
     }
 }
 
@@ -309,6 +325,42 @@ pub fn fit_output_at(
     nugget: f64,
     min_jitter: Option<f64>,
 ) -> Result<KrigingModel> {
+    let at = Hyperparameters {
+        corr: Correlation::Gaussian,
+        theta,
+        nugget,
+        min_jitter,
+    };
+    fit_output_with(x, inputs, y, trend, &at)
+}
+
+/// Fixed hyperparameters of a fit: family, ξ, ν and the least jitter.
+#[derive(Debug, Clone, Copy)]
+pub struct Hyperparameters<'a> {
+    /// Correlation family.
+    pub corr: Correlation,
+    /// ξ, one per correlation input.
+    pub theta: &'a [f64],
+    /// Nugget ν (0: interpolation).
+    pub nugget: f64,
+    /// Least jitter, as in [`KrigingOptions`].
+    pub min_jitter: Option<f64>,
+}
+
+/// [`fit_output_at`] with any correlation family.
+pub fn fit_output_with(
+    x: &[Vec<f64>],
+    inputs: &TrainingInputs,
+    y: &[f64],
+    trend: &Trend,
+    at: &Hyperparameters,
+) -> Result<KrigingModel> {
+    let Hyperparameters {
+        corr,
+        theta,
+        nugget,
+        min_jitter,
+    } = *at;
     let names: Vec<String> = (1..=theta.len()).map(|k| format!("s{k}")).collect();
     let p = prepare(x, y, trend, &names)?;
     if theta.len() != inputs.d
@@ -322,7 +374,7 @@ pub fn fit_output_at(
     }
     let problem = KrigingProblem {
         min_jitter,
-        corr: &Gaussian,
+        corr: &corr,
         inputs,
         f: &p.f,
         y: &p.y_norm,
@@ -331,6 +383,7 @@ pub fn fit_output_at(
     let mut theta = theta.to_vec();
     theta.resize(x.first().map_or(theta.len(), Vec::len), 0.0);
     KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)
+        .map(|m| m.with_corr(corr))
 }
 
 /// Fit one output at normalised inputs `x` (m rows) on response `y` (original
@@ -371,7 +424,7 @@ pub fn fit_output_from(
     let p = prepare(x, y, trend, names)?;
     let problem = KrigingProblem {
         min_jitter: opts.min_jitter,
-        corr: &Gaussian,
+        corr: &opts.corr,
         inputs,
         f: &p.f,
         y: &p.y_norm,
@@ -459,9 +512,11 @@ pub fn fit_output_from(
         search_rows: search.as_ref().map_or(0, |s| s.rows),
         seconds: t0.elapsed().as_secs_f64(),
         inverse_hessian: search.and_then(|s| s.inverse_hessian),
+        families: Vec::new(),
     };
     let model =
-        KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?;
+        KrigingModel::from_solution(sol, p.trend, theta, nugget, x.to_vec(), p.y_mean, p.y_std)?
+            .with_corr(opts.corr);
     Ok((model, report))
 }
 

@@ -6,8 +6,7 @@
 //! (DACE's form of eq 12), all in normalised units and scaled back by the
 //! output's mean and standard deviation.
 
-use super::corr::{CorrelationModel, Gaussian, TrainingInputs, corr_vector};
-use super::fastexp::exp_in_place;
+use super::corr::{Correlation, CorrelationModel, TrainingInputs};
 use super::problem::{Solution, storable_ln_psi};
 use super::trend::{Trend, TrendModel, trend_matrix};
 use crate::{Error, Result};
@@ -24,6 +23,9 @@ const BLOCK: usize = 128;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingModelData {
     pub trend: Trend,
+    /// Correlation family, by name (files without one are Gaussian).
+    #[serde(default)]
+    pub corr: Correlation,
     /// Correlation parameters ξ, one per input dimension (normalised inputs).
     pub theta: Vec<f64>,
     /// Nugget ν added to R's diagonal (0: interpolation).
@@ -142,6 +144,12 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.x_train.iter().flatten().any(|v| !v.is_finite()) {
             return bad("non-finite training inputs");
         }
+        // a trend whose parameters divide by zero (e.g. a fused basis's
+        // std of 0, found by fuzzing) shows at the training inputs
+        let f = trend_matrix(&data.trend, &data.x_train);
+        if (0..f.ncols()).any(|j| f.col(j).iter().any(|v| !v.is_finite())) {
+            return bad("the trend is not finite at the training inputs");
+        }
         let g = unpack_upper(&data.g_upper, p);
         let xt = TrainingInputs::new(&data.x_train);
         let factors = std::sync::OnceLock::new();
@@ -222,6 +230,7 @@ impl KrigingModel {
         }
         KrigingModel::try_from(KrigingModelData {
             trend,
+            corr: Correlation::Gaussian,
             theta,
             nugget,
             jitter: sol.value.jitter,
@@ -243,6 +252,20 @@ impl KrigingModel {
         })
     }
 
+    /// The same model labelled with the correlation family its solution
+    /// was computed with (a [`Solution`] does not carry it; Gaussian
+    /// unless set).
+    #[must_use]
+    pub fn with_corr(mut self, corr: Correlation) -> Self {
+        self.data.corr = corr;
+        self
+    }
+
+    /// The correlation family.
+    pub fn corr(&self) -> Correlation {
+        self.data.corr
+    }
+
     /// The factors of the fit in normalised units: `C` (lower Cholesky
     /// factor of R + νI), `F̃ = C⁻¹F` and `G` (upper, `F̃ = QG`). C is
     /// recomputed from ξ, ν, ε and the training inputs on the first call
@@ -250,7 +273,7 @@ impl KrigingModel {
     pub fn factors(&self) -> Result<(&Mat<f64>, &Mat<f64>, &Mat<f64>)> {
         let f = self.factors.get_or_init(|| {
             let d = &self.data;
-            super::problem::factor_at(&Gaussian, &self.xt, &d.theta, d.nugget, d.jitter)
+            super::problem::factor_at(&d.corr, &self.xt, &d.theta, d.nugget, d.jitter)
                 .map(|c| {
                     let ftilde = ftilde(&c, &d.trend, &d.x_train);
                     Factors { c, ftilde }
@@ -288,14 +311,7 @@ impl KrigingModel {
                 let mut fs = vec![0.0; d.trend.len()];
                 blk.iter()
                     .map(|x| {
-                        acc.fill(0.0);
-                        for (k, (&t, &xk)) in d.theta.iter().zip(x).enumerate() {
-                            for (a, v) in acc.iter_mut().zip(self.xt.dim_values(k)) {
-                                let h = xk - v;
-                                *a -= t * h * h;
-                            }
-                        }
-                        exp_in_place(&mut acc);
+                        d.corr.fill_row(&d.theta, &self.xt, x, &mut acc);
                         d.trend.eval_into(x, &mut fs);
                         d.y_mean + d.y_std * (dot(&fs, &d.beta) + dot(&acc, &d.gamma))
                     })
@@ -348,13 +364,7 @@ impl KrigingModel {
         let mut col = vec![0.0; m];
         let mut means = Vec::with_capacity(b);
         for (k, x) in s.iter().enumerate() {
-            corr_vector(
-                &Gaussian as &dyn CorrelationModel,
-                &d.theta,
-                x,
-                &d.x_train,
-                &mut col,
-            );
+            d.corr.fill_row(&d.theta, &self.xt, x, &mut col);
             d.trend.eval_into(x, &mut fs);
             let mean = dot(&fs, &d.beta) + dot(&col, &d.gamma);
             means.push(mean);

@@ -1,0 +1,124 @@
+//! Correlation families (issue 17 §2–3): the vectorised fills agree with
+//! the scalar definition, every family is saved by name and loads back to
+//! the same predictions, files without a family load as Gaussian, and
+//! `corr_auto` keeps the family with the lowest closed-form CV error.
+
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::kriging::{Correlation, CorrelationModel, KrigingOptions, TrainingInputs};
+use robokrige::model::ErrorModel;
+use robokrige::space::Space;
+use std::path::Path;
+
+fn campaign(rows: usize) -> Dataset {
+    let d = read_csv(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_lhs.csv"
+    )))
+    .unwrap();
+    d.select(&(0..rows).collect::<Vec<_>>())
+}
+
+#[test]
+fn vectorised_fills_match_the_scalar_definition() {
+    let rows: Vec<Vec<f64>> = (0..23)
+        .map(|i| {
+            let t = i as f64;
+            vec![(t * 0.37).sin(), (t * 1.3).cos(), if i % 2 == 0 { 1.0 } else { -1.0 }]
+        })
+        .collect();
+    let x = TrainingInputs::new(&rows);
+    let theta = [0.7, 0.05, 2.0];
+    let point = [0.1, -0.4, 1.0];
+    for corr in Correlation::ALL {
+        let mut r = faer::Mat::<f64>::zeros(23, 23);
+        x.fill_lower(&corr, &theta, 0.0, r.as_mut());
+        let mut row = vec![0.0; 23];
+        corr.fill_row(&theta, &x, &point, &mut row);
+        for i in 0..23 {
+            let want = corr.corr(&theta, &point, &rows[i]);
+            assert!((row[i] - want).abs() <= 1e-15 + 4e-16 * want, "{corr} row {i}");
+            for j in i + 1..23 {
+                let want = corr.corr(&theta, &rows[i], &rows[j]);
+                assert!((r[(j, i)] - want).abs() <= 1e-15 + 4e-16 * want, "{corr} ({j},{i})");
+                assert!(want > 0.0 && want < 1.0, "{corr}: a correlation in (0, 1)");
+            }
+        }
+        // R(h) decreases with distance, and is 1 at distance 0
+        assert_eq!(corr.corr(&theta, &point, &point), 1.0);
+    }
+}
+
+#[test]
+fn every_family_saves_by_name_and_predicts_the_same_after_loading() {
+    let data = campaign(60);
+    let test = campaign(80).select(&(60..80).collect::<Vec<_>>());
+    let dir = std::env::temp_dir().join(format!("robokrige-families-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut means = Vec::new();
+    for corr in Correlation::ALL {
+        let opts = KrigingOptions {
+            corr,
+            ..KrigingOptions::default()
+        };
+        let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+        let path = dir.join(format!("{corr}.json"));
+        model.save(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains(&format!("\"corr\":\"{}\"", corr.name())));
+        let back = ErrorModel::load(&path).unwrap();
+        assert!(back.outputs.iter().all(|o| o.corr() == corr));
+        let a = model.predict_dataset(&test).unwrap();
+        let b = back.predict_dataset(&test).unwrap();
+        assert_eq!(a.mean, b.mean, "{corr}");
+        // an interpolator passes through its training data
+        let fit = model.predict_dataset(&data).unwrap();
+        let e = data.errors.as_ref().unwrap();
+        for (p, m) in fit.mean.iter().zip(e) {
+            for k in 0..3 {
+                assert!((p[k] - m[k]).abs() < 1e-5, "{corr}: {p:?} vs {m:?}");
+            }
+        }
+        means.push(a.mean);
+    }
+    // the families are different models
+    assert_ne!(means[0], means[1]);
+    assert_ne!(means[1], means[3]);
+}
+
+#[test]
+fn files_without_a_family_load_as_gaussian() {
+    let data = campaign(40);
+    let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default()).unwrap();
+    let text = model.to_json().unwrap();
+    let old = text.replace("\"corr\":\"gaussian\",", "");
+    assert!(!old.contains("\"corr\""));
+    let back = ErrorModel::from_json(&old, "old.json").unwrap();
+    assert!(back.outputs.iter().all(|o| o.corr() == Correlation::Gaussian));
+    assert_eq!(back.outputs, model.outputs);
+}
+
+#[test]
+fn auto_keeps_the_family_with_the_lowest_cv_error() {
+    let data = campaign(80);
+    let opts = KrigingOptions {
+        corr_auto: true,
+        nugget: true,
+        ..KrigingOptions::default()
+    };
+    let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+    for (out, rep) in model.outputs.iter().zip(&model.reports) {
+        assert_eq!(rep.families.len(), Correlation::ALL.len());
+        let best = rep
+            .families
+            .iter()
+            .min_by(|a, b| a.cv_rmse.total_cmp(&b.cv_rmse))
+            .unwrap();
+        assert!(best.cv_rmse.is_finite());
+        assert_eq!(out.corr(), best.corr);
+    }
+    // deterministic, and the table is saved with the model
+    let again = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+    assert_eq!(again.reports, model.reports);
+    let back = ErrorModel::from_json(&model.to_json().unwrap(), "auto.json").unwrap();
+    assert_eq!(back.reports[0].families, model.reports[0].families);
+}
