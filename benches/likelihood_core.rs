@@ -18,10 +18,17 @@
 //! recomputed then); the previous GPS default beside it up to `--old-max`
 //! rows (default 1200). The train/test CSVs are written to
 //! `target/bench-data/` for `benches/reference_scale.py`.
+//!
+//! `-- --families` prints the correlation-family table of issue 17 instead:
+//! simulated campaigns of 300 poses (robot seeds 931–932, not used
+//! elsewhere; three robots), each family and `corr_auto`, with and without
+//! a nugget: fit wall time and held-out RMS 3D / floor. The splits are
+//! written to `target/bench-data/fam_*` for
+//! `benches/reference_scale.py --families`.
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kinematics;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
 use robokrige::sim::campaign::{measurements, noise_floor};
 use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot};
@@ -174,8 +181,70 @@ fn scale(args: &[String]) {
     }
 }
 
+/// The correlation-family table (see the module docs).
+fn families() {
+    let dir = Path::new("target/bench-data");
+    std::fs::create_dir_all(dir).unwrap();
+    println!("| campaign | family | nugget | fit s | held-out RMS 3D / floor | chosen (x/y/z) |");
+    println!("|---|---|---|---|---|---|");
+    let cases = [
+        ("comau-nj220", 931),
+        ("comau-nj220", 932),
+        ("kuka-kr30ha", 931),
+        ("ur10", 931),
+    ];
+    for (i, (robot, seed)) in cases.into_iter().enumerate() {
+        let case = simulated(robot, seed, 300);
+        let (test, floor) = case.test.as_ref().unwrap();
+        robokrige::dataset::write_csv(&dir.join(format!("fam_{i}_train.csv")), &case.train)
+            .unwrap();
+        robokrige::dataset::write_csv(&dir.join(format!("fam_{i}_test.csv")), test).unwrap();
+        std::fs::write(
+            dir.join(format!("fam_{i}_floor.txt")),
+            format!("{floor} {}", case.name),
+        )
+        .unwrap();
+        let choices: Vec<Option<Correlation>> = Correlation::ALL
+            .into_iter()
+            .map(Some)
+            .chain(std::iter::once(None))
+            .collect();
+        for nugget in [false, true] {
+            for corr in &choices {
+                let opts = KrigingOptions {
+                    corr: corr.unwrap_or_default(),
+                    corr_auto: corr.is_none(),
+                    nugget,
+                    ..KrigingOptions::default()
+                };
+                let t0 = Instant::now();
+                let model = ErrorModel::fit(&case.train, Space::Ejs, &opts).expect("fit");
+                let secs = t0.elapsed().as_secs_f64();
+                let ho = held_out(&model, test) / floor;
+                let chosen: Vec<String> =
+                    model.outputs.iter().map(|o| o.corr().to_string()).collect();
+                println!(
+                    "| {} | {} | {} | {secs:.2} | {ho:.2}× | {} |",
+                    case.name,
+                    corr.map_or("auto".to_string(), |c| c.to_string()),
+                    if nugget { "yes" } else { "no" },
+                    if corr.is_none() {
+                        chosen.join(" / ")
+                    } else {
+                        String::new()
+                    }
+                );
+            }
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--families") {
+        families();
+        return;
+    }
     if args.iter().any(|a| a == "--scale") {
         scale(&args);
         return;

@@ -62,7 +62,33 @@ def egobox_fit_predict(xt, yt, xv):
     return np.column_stack(out)
 
 
+def families(libs):
+    """The splits of `cargo bench --bench likelihood_core -- --families`."""
+    import glob
+
+    print("| campaign | library | fit s | held-out RMS 3D / floor |")
+    print("|---|---|---|---|")
+    for train in sorted(glob.glob("target/bench-data/fam_*_train.csv")):
+        base = train[: -len("_train.csv")]
+        xt, yt = load(train)
+        xv, yv = load(base + "_test.csv")
+        floor, name = open(base + "_floor.txt").read().split(" ", 1)
+        floor = float(floor)
+        mu, sd = xt.mean(axis=0), xt.std(axis=0, ddof=1)
+        sd[sd == 0] = 1.0
+        xt, xv = (xt - mu) / sd, (xv - mu) / sd
+        for lib, f in libs.items():
+            t0 = time.perf_counter()
+            p = f(xt, yt, xv)
+            secs = time.perf_counter() - t0
+            rms = np.sqrt(np.mean(np.sum((p - yv) ** 2, axis=1)))
+            print(f"| {name.strip()} | {lib} | {secs:.1f} | {rms / floor:.2f}× |", flush=True)
+
+
 def main():
+    if "--families" in sys.argv:
+        families({"sklearn": sklearn_fit_predict, "egobox": egobox_fit_predict})
+        return
     sizes = [int(v) for v in (sys.argv[1] if len(sys.argv) > 1 else "300,600,1200").split(",")]
     only = None
     if "--only" in sys.argv:

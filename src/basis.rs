@@ -198,6 +198,29 @@ impl TrendModel for FusedBasis {
 }
 
 impl FusedBasis {
+    /// Shapes consistent with its candidates (for trends read from files).
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let c = match &self.kinematic {
+            Some(k) => {
+                k.validate()?;
+                k.len()
+            }
+            None => {
+                self.candidates.validate()?;
+                self.candidates.len()
+            }
+        };
+        if self.mean.len() != c
+            || self.std.len() != c
+            || self.components.iter().any(|e| e.len() != c)
+        {
+            return Err(format!(
+                "fused basis: means, scales or components do not match its {c} candidates"
+            ));
+        }
+        Ok(())
+    }
+
     fn new(selected: Trend, mean: Vec<f64>, std: Vec<f64>, components: Vec<Vec<f64>>) -> Self {
         let (candidates, kinematic) = match selected {
             Trend::Kinematic(k) => (

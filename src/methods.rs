@@ -189,10 +189,10 @@ pub fn fit_ga(
                 min_jitter: opts.min_jitter,
             };
             crate::kriging::fit_output_with(&x, &inputs, &y, &cand.subset(&keep), &at)
-            .and_then(|model| model.held_out_residuals(&blocks))
-            .map_or(f64::INFINITY, |e| {
-                (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
-            })
+                .and_then(|model| model.held_out_residuals(&blocks))
+                .map_or(f64::INFINITY, |e| {
+                    (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
+                })
         };
         let ga_opts = GaOptions {
             max_ones: cap.saturating_sub(1),

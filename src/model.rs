@@ -357,7 +357,9 @@ impl ErrorModel {
                 opts.warm_start.len()
             )));
         }
-        let plan = check_fit_memory(data.len(), opts.optimizer, |n| format!("a subset of {n} rows"))?;
+        let plan = check_fit_memory(data.len(), opts.optimizer, |n| {
+            format!("a subset of {n} rows")
+        })?;
         let fit_axis = |a: usize| {
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
             let fit = if opts.corr_auto {
@@ -725,7 +727,7 @@ impl ErrorModel {
         }
         for (axis, o) in AXES.iter().zip(&self.outputs) {
             let (mean, scale) = o.output_scale();
-            if !(mean.abs() <= MAX_ABS_ERROR_MM) {
+            if mean.is_nan() || mean.abs() > MAX_ABS_ERROR_MM {
                 return Err(format!(
                     "output {axis}: y_mean = {mean:e} mm is not a TCP error"
                 ));

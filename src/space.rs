@@ -185,7 +185,7 @@ impl Normalizer {
             ));
         }
         for (k, (&mu, &s)) in self.mean.iter().zip(&self.std).enumerate() {
-            if !(mu.abs() <= limit) {
+            if mu.is_nan() || mu.abs() > limit {
                 return Err(format!("mean[{k}] = {mu:e} is not a finite input mean"));
             }
             if !(s.is_finite() && s > 1e-12 * mu.abs().max(1.0) && s <= limit) {

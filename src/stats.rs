@@ -178,6 +178,39 @@ pub fn summarize(errors: &[[f64; 3]]) -> ErrorSummary {
     }
 }
 
+/// An independent random stream per (seed, purpose), so that e.g. the true
+/// robot of seed 1 is the same whichever campaign kind is simulated.
+pub fn rng_for(seed: u64, stream: &str) -> rand::rngs::StdRng {
+    use rand::SeedableRng;
+    // FNV-1a of the stream name, mixed with the seed
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in stream.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    rand::rngs::StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+}
+
+/// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
+/// sizes differ by at most one.
+pub fn kfold_partition(m: usize, k: usize, seed: u64) -> crate::Result<Vec<usize>> {
+    if k < 2 || k > m {
+        return Err(crate::Error::InvalidParameter(format!(
+            "K-fold needs 2 ≤ K ≤ rows, got K = {k} with {m} rows"
+        )));
+    }
+    let mut order: Vec<usize> = (0..m).collect();
+    let mut rng = rng_for(seed, "kfold");
+    for i in (1..m).rev() {
+        order.swap(i, rand::RngExt::random_range(&mut rng, 0..=i));
+    }
+    let mut fold = vec![0; m];
+    for (pos, &row) in order.iter().enumerate() {
+        fold[row] = pos % k;
+    }
+    Ok(fold)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -211,37 +244,4 @@ mod tests {
         assert_eq!((b.whisker_lo, b.whisker_hi, b.outliers), (1.0, 5.0, 1));
         assert_eq!(box_stats(&[7.0]).median, 7.0);
     }
-}
-
-/// An independent random stream per (seed, purpose), so that e.g. the true
-/// robot of seed 1 is the same whichever campaign kind is simulated.
-pub fn rng_for(seed: u64, stream: &str) -> rand::rngs::StdRng {
-    use rand::SeedableRng;
-    // FNV-1a of the stream name, mixed with the seed
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in stream.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    rand::rngs::StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
-}
-
-/// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
-/// sizes differ by at most one.
-pub fn kfold_partition(m: usize, k: usize, seed: u64) -> crate::Result<Vec<usize>> {
-    if k < 2 || k > m {
-        return Err(crate::Error::InvalidParameter(format!(
-            "K-fold needs 2 ≤ K ≤ rows, got K = {k} with {m} rows"
-        )));
-    }
-    let mut order: Vec<usize> = (0..m).collect();
-    let mut rng = rng_for(seed, "kfold");
-    for i in (1..m).rev() {
-        order.swap(i, rand::RngExt::random_range(&mut rng, 0..=i));
-    }
-    let mut fold = vec![0; m];
-    for (pos, &row) in order.iter().enumerate() {
-        fold[row] = pos % k;
-    }
-    Ok(fold)
 }

@@ -859,6 +859,22 @@ fn model_cases() -> Vec<Case> {
             fail(&["fused_std0.json", "trend is not finite"]),
         ),
         predict_case(
+            "model_kinematic_trend_with_short_scales",
+            {
+                // found by the model_loader fuzz target (fuzz/seeds): it
+                // indexed out of bounds before the trend was validated
+                let p = path("kin_scales.json");
+                std::fs::copy(
+                    Path::new(env!("CARGO_MANIFEST_DIR"))
+                        .join("fuzz/seeds/model_loader/crash-kinematic-scales.json"),
+                    &p,
+                )
+                .unwrap();
+                p
+            },
+            fail(&["kin_scales.json", "kinematic trend"]),
+        ),
+        predict_case(
             "model_bad_options",
             tampered("opts.json", |v| v["options"]["starts"] = json!(0)),
             fail(&["opts.json", "options"]),
@@ -992,7 +1008,7 @@ fn trajectory_cases() -> Vec<Case> {
         traj_case(
             "traj_invalid_utf8",
             "t_utf8.csv",
-            b"x,y,z\n1500,0,1200\n1500,0,\xff\n".to_vec(),
+            b"x,y,z\n1500,0,1200\n1500,0,\xff\n",
             fail(&["t_utf8.csv:3", "UTF-8"]),
         ),
         traj_case(
@@ -1330,7 +1346,12 @@ fn memory_cases() -> Vec<Case> {
             "memory_fit_over_limit",
             &["fit", &d, "-o", &s(&path("mem.json"))],
             &[data],
-            fail(&["needs about", "ROBOKRIGE_MEMORY_LIMIT", "fit at most", "head -n"]),
+            fail(&[
+                "needs about",
+                "ROBOKRIGE_MEMORY_LIMIT",
+                "fit at most",
+                "head -n",
+            ]),
         ),
         case(
             "memory_cv_over_limit",

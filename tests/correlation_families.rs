@@ -23,7 +23,11 @@ fn vectorised_fills_match_the_scalar_definition() {
     let rows: Vec<Vec<f64>> = (0..23)
         .map(|i| {
             let t = i as f64;
-            vec![(t * 0.37).sin(), (t * 1.3).cos(), if i % 2 == 0 { 1.0 } else { -1.0 }]
+            vec![
+                (t * 0.37).sin(),
+                (t * 1.3).cos(),
+                if i % 2 == 0 { 1.0 } else { -1.0 },
+            ]
         })
         .collect();
     let x = TrainingInputs::new(&rows);
@@ -36,10 +40,16 @@ fn vectorised_fills_match_the_scalar_definition() {
         corr.fill_row(&theta, &x, &point, &mut row);
         for i in 0..23 {
             let want = corr.corr(&theta, &point, &rows[i]);
-            assert!((row[i] - want).abs() <= 1e-15 + 4e-16 * want, "{corr} row {i}");
+            assert!(
+                (row[i] - want).abs() <= 1e-15 + 4e-16 * want,
+                "{corr} row {i}"
+            );
             for j in i + 1..23 {
                 let want = corr.corr(&theta, &rows[i], &rows[j]);
-                assert!((r[(j, i)] - want).abs() <= 1e-15 + 4e-16 * want, "{corr} ({j},{i})");
+                assert!(
+                    (r[(j, i)] - want).abs() <= 1e-15 + 4e-16 * want,
+                    "{corr} ({j},{i})"
+                );
                 assert!(want > 0.0 && want < 1.0, "{corr}: a correlation in (0, 1)");
             }
         }
@@ -93,7 +103,11 @@ fn files_without_a_family_load_as_gaussian() {
     let old = text.replace("\"corr\":\"gaussian\",", "");
     assert!(!old.contains("\"corr\""));
     let back = ErrorModel::from_json(&old, "old.json").unwrap();
-    assert!(back.outputs.iter().all(|o| o.corr() == Correlation::Gaussian));
+    assert!(
+        back.outputs
+            .iter()
+            .all(|o| o.corr() == Correlation::Gaussian)
+    );
     assert_eq!(back.outputs, model.outputs);
 }
 

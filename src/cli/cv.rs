@@ -178,7 +178,12 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     let methods = robokrige::methods::parse_methods(list)?;
     let data = super::read_data(&a.data)?;
     let train_rows = data.len() - data.len() / a.folds.max(1);
-    super::plan_fit("cv", train_rows, robokrige::kriging::OptimizerKind::Gps, None)?;
+    super::plan_fit(
+        "cv",
+        train_rows,
+        robokrige::kriging::OptimizerKind::Gps,
+        None,
+    )?;
     println!(
         "{}-fold CV (refit: selection and hyperparameters inside every training fold) on {} rows, fold seed {}",
         a.folds,

@@ -154,7 +154,12 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         data = data.select(&(0..n).collect::<Vec<_>>());
     }
     let opts = options(&a, &data)?;
-    super::plan_fit("diagnose", data.len(), opts.kriging.optimizer, Some("--rows"))?;
+    super::plan_fit(
+        "diagnose",
+        data.len(),
+        opts.kriging.optimizer,
+        Some("--rows"),
+    )?;
     let pb = spinner("diagnose");
     let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
     pb.finish_and_clear();

@@ -58,10 +58,12 @@ pub fn fit_output_auto(
     let k = FAMILY_FOLDS.min(m);
     let blocks = fold_blocks(m, k, opts.seed)?;
     let score = |model: &KrigingModel| -> f64 {
-        model.held_out_residuals(&blocks).map_or(f64::INFINITY, |e| {
-            let s = (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-            if s.is_finite() { s } else { f64::INFINITY }
-        })
+        model
+            .held_out_residuals(&blocks)
+            .map_or(f64::INFINITY, |e| {
+                let s = (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
+                if s.is_finite() { s } else { f64::INFINITY }
+            })
     };
     let warm = WarmStart {
         theta: first.1.theta[..inputs.d].to_vec(),

@@ -144,6 +144,9 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.x_train.iter().flatten().any(|v| !v.is_finite()) {
             return bad("non-finite training inputs");
         }
+        if let Err(why) = data.trend.validate() {
+            return bad(&why);
+        }
         // a trend whose parameters divide by zero (e.g. a fused basis's
         // std of 0, found by fuzzing) shows at the training inputs
         let f = trend_matrix(&data.trend, &data.x_train);

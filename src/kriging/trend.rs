@@ -31,6 +31,22 @@ pub struct Monomials {
 }
 
 impl Monomials {
+    /// Every exponent vector has `dim` entries, each at most 8 (the
+    /// shapes [`Self::eval_into`] relies on; for trends read from files).
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        match self
+            .exponents
+            .iter()
+            .find(|e| e.len() != self.dim || e.iter().any(|&p| p > 8))
+        {
+            Some(e) => Err(format!(
+                "monomial exponents {e:?} do not fit {} inputs of degree ≤ 8",
+                self.dim
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// All monomials of total degree ≤ `degree` in `dim` variables, ordered by
     /// degree, then lexicographically (1, s1, …, sd, s1², s1s2, …, sd²):
     /// `C(dim + degree, degree)` terms (seed 003 eq 15).
@@ -148,6 +164,43 @@ pub struct KinematicTrend {
     pub poly: Monomials,
 }
 
+impl KinematicTrend {
+    /// Shapes and indices consistent with the robot (for trends read from
+    /// files): encoded joint columns `n + |periodic|` with a finite
+    /// normalisation, periodic joints and calibration parameters in range.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let n = self.robot.dof();
+        let cols = n + self.periodic.len();
+        let mut periodic = self.periodic.clone();
+        periodic.sort_unstable();
+        periodic.dedup();
+        if n == 0 || periodic.len() != self.periodic.len() || periodic.iter().any(|&j| j >= n) {
+            return Err("kinematic trend: periodic joints out of range".into());
+        }
+        if self.joint_mean.len() != cols || self.joint_std.len() != cols || self.poly.dim < cols {
+            return Err(format!(
+                "kinematic trend: {} joint means, {} scales and {} inputs for {cols} joint columns",
+                self.joint_mean.len(),
+                self.joint_std.len(),
+                self.poly.dim
+            ));
+        }
+        let bad_scale = |(m, s): (&f64, &f64)| !(m.is_finite() && s.is_finite() && *s > 0.0);
+        if self.joint_mean.iter().zip(&self.joint_std).any(bad_scale) {
+            return Err("kinematic trend: a joint normalisation is not finite and positive".into());
+        }
+        if self.axis > 2
+            || self
+                .params
+                .iter()
+                .any(|&p| p >= crate::kinematics::calib_len(n))
+        {
+            return Err("kinematic trend: axis or calibration parameter out of range".into());
+        }
+        self.poly.validate()
+    }
+}
+
 impl TrendModel for KinematicTrend {
     fn len(&self) -> usize {
         self.poly.len() + self.params.len()
@@ -226,6 +279,17 @@ impl Trend {
                     ..k.as_ref().clone()
                 }))
             }
+        }
+    }
+
+    /// Structural consistency of a trend read from a file, so that
+    /// evaluating it cannot index out of bounds (found by fuzzing the
+    /// model loader).
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        match self {
+            Trend::Monomials(m) => m.validate(),
+            Trend::Fused(f) => f.validate(),
+            Trend::Kinematic(k) => k.validate(),
         }
     }
 
