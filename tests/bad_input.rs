@@ -39,17 +39,7 @@ fn campaign(rows: usize, f: impl Fn(usize) -> String) -> String {
 }
 
 fn row(i: usize) -> String {
-    let t = i as f64;
-    let q: Vec<String> = (0..6)
-        .map(|j| format!("{:.4}", 20.0 * ((t * 0.37 + j as f64) * 1.3).sin()))
-        .collect();
-    format!(
-        "{},{:.4},{:.4},{:.4}",
-        q.join(","),
-        0.1 * (t * 0.3).sin(),
-        0.1 * (t * 0.2).cos(),
-        0.05 * t / 24.0
-    )
+    common::synthetic_row(i)
 }
 
 /// Exit 1 with `needle` in the one-line error.

@@ -85,19 +85,8 @@ fn hash(p: &Path) -> Option<u64> {
 
 const HEADER: &str = "q1,q2,q3,q4,q5,q6,ex,ey,ez";
 
-/// Row `i` of a smooth synthetic six-joint campaign.
 fn row(i: usize) -> String {
-    let t = i as f64;
-    let q: Vec<String> = (0..6)
-        .map(|j| format!("{:.4}", 20.0 * ((t * 0.37 + j as f64) * 1.3).sin()))
-        .collect();
-    format!(
-        "{},{:.4},{:.4},{:.4}",
-        q.join(","),
-        0.1 * (t * 0.3).sin(),
-        0.1 * (t * 0.2).cos(),
-        0.05 * t / 24.0
-    )
+    common::synthetic_row(i)
 }
 
 /// `rows` rows under `header`, each row edited by `edit(i, row)`.

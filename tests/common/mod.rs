@@ -14,3 +14,20 @@ pub fn rk(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// Row `i` of a smooth synthetic six-joint campaign (q1..q6 in degrees,
+/// then ex,ey,ez in mm), for the bad-input catalogues.
+#[allow(dead_code)] // not every test binary that shares this module uses it
+pub fn synthetic_row(i: usize) -> String {
+    let t = i as f64;
+    let q: Vec<String> = (0..6)
+        .map(|j| format!("{:.4}", 20.0 * ((t * 0.37 + j as f64) * 1.3).sin()))
+        .collect();
+    format!(
+        "{},{:.4},{:.4},{:.4}",
+        q.join(","),
+        0.1 * (t * 0.3).sin(),
+        0.1 * (t * 0.2).cos(),
+        0.05 * t / 24.0
+    )
+}
