@@ -58,8 +58,13 @@ pub struct ModelArgs {
     corr: CorrArg,
     #[arg(long, value_enum, default_value = "bfgs")]
     optimizer: OptimizerArg,
-    /// Estimate a nugget (measurement noise) with the correlation parameters.
-    #[arg(long)]
+    /// Interpolate the measurements exactly (no nugget), as the papers' Kriging.
+    /// By default a nugget (measurement-noise variance) is estimated with the
+    /// correlation parameters: tracker data is noisy.
+    #[arg(long, conflicts_with = "nugget")]
+    no_nugget: bool,
+    /// Estimate a nugget: the default; kept so that older scripts still run.
+    #[arg(long, hide = true)]
     nugget: bool,
     /// Starting points (centre + LHS points) [default: 8 for bfgs, 4 for gps].
     #[arg(long)]
@@ -148,7 +153,7 @@ impl ModelArgs {
             },
             corr_auto: matches!(self.corr, CorrArg::Auto),
             optimizer,
-            nugget: self.nugget,
+            nugget: !self.no_nugget,
             starts: self.starts.unwrap_or(optimizer.default_starts()),
             seed: self.seed,
             ..KrigingOptions::default()

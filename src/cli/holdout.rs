@@ -52,8 +52,12 @@ pub struct HoldoutArgs {
     /// hj (Hooke–Jeeves) or gps (4 starts).
     #[arg(long, default_value = "bfgs")]
     optimizer: String,
-    /// Estimate a nugget in the Kriging fits (real data has noise).
-    #[arg(long)]
+    /// Interpolate exactly (no nugget) in the Kriging fits. By default a
+    /// nugget is estimated: real data has noise.
+    #[arg(long, conflicts_with = "nugget")]
+    no_nugget: bool,
+    /// Estimate a nugget: the default; kept so that older scripts still run.
+    #[arg(long, hide = true)]
     nugget: bool,
     /// Joints entered as (sin θ, cos θ): "auto" (range > 180° in the training
     /// rows), "none", or a list like "1,4,6".
@@ -129,7 +133,7 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
         optimizer,
         starts: optimizer.default_starts(),
         seed: a.seed,
-        nugget: a.nugget,
+        nugget: !a.no_nugget,
         periodic: parse_periodic(&a.periodic, q)?,
         ..KrigingOptions::default()
     })
@@ -150,7 +154,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         a.data.display(),
         a.seed,
         data.len(),
-        if a.nugget { " and nugget" } else { "" },
+        if a.no_nugget { "" } else { " and nugget" },
         cv.hyper_rows,
         cv.hyper_seconds,
         if opts.periodic.is_empty() {
@@ -308,7 +312,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
             "hj" => "Hooke–Jeeves",
             _ => "BFGS (analytic gradient)",
         },
-        if a.nugget { ", nugget estimated" } else { "" },
+        if a.no_nugget { "" } else { ", nugget estimated" },
         if periodic.is_empty() {
             "none".to_string()
         } else {
