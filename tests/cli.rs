@@ -380,3 +380,57 @@ fn outputs_never_overwrite_inputs() {
     assert!(err.contains("same file"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 17 §1: the default (a nugget estimated) cross-validates better than
+/// the papers' interpolator on a noisy simulated campaign (by > 5 %), and
+/// both stay above the simulator's noise floor (the RMS of the noise
+/// alone, from the truth file).
+#[test]
+fn default_nugget_cross_validates_no_worse_than_the_interpolator() {
+    let dir = std::env::temp_dir().join(format!("robokrige-cli-nugget-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+    let text = std::fs::read_to_string(src).unwrap();
+    let head: Vec<&str> = text.lines().take(151).collect();
+    let data = dir.join("lhs150.csv");
+    std::fs::write(&data, head.join("\n") + "\n").unwrap();
+    let cv = |extra: &[&str], name: &str| -> [f64; 3] {
+        let json = dir.join(name);
+        let mut args = vec![
+            "cv",
+            data.to_str().unwrap(),
+            "--mode",
+            "closed-form",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let (c, _, err) = rk(&args);
+        assert_eq!(c, 0, "{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let r = &v["summary"]["rms_mm"];
+        [0, 1, 2].map(|k| r[k].as_f64().unwrap())
+    };
+    let default = cv(&[], "default.json");
+    let interp = cv(&["--no-nugget"], "interp.json");
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/datasets/comau_lhs.truth.json"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let floor = &truth["noise_floor_mm"];
+    let norm = |r: [f64; 3]| r.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let floor3 = norm([0, 1, 2].map(|k| floor[k].as_f64().unwrap()));
+    assert!(
+        norm(default) < 0.95 * norm(interp),
+        "default {default:?} vs interpolator {interp:?}"
+    );
+    assert!(
+        norm(default) > floor3,
+        "{default:?} below the noise floor {floor3}"
+    );
+}

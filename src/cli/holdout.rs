@@ -312,7 +312,11 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
             "hj" => "Hooke–Jeeves",
             _ => "BFGS (analytic gradient)",
         },
-        if a.no_nugget { "" } else { ", nugget estimated" },
+        if a.no_nugget {
+            ""
+        } else {
+            ", nugget estimated"
+        },
         if periodic.is_empty() {
             "none".to_string()
         } else {
