@@ -3,8 +3,8 @@
 //!
 //! Each family of [`Correlation::ALL`] is fitted by maximum likelihood —
 //! the Gaussian by the full search of the options (or from the caller's
-//! warm start), the others by a local BFGS from the Gaussian's ξ and ν,
-//! which costs a fraction of a search — and scored by the RMSE of its
+//! warm start), the others by a local BFGS from the Gaussian's ξ, ν and
+//! inverse Hessian, which costs a fraction of a search — and scored by the RMSE of its
 //! closed-form leave-fold-out residuals
 //! ([`KrigingModel::held_out_residuals`]: ξ and ν held at the fitted
 //! values, β re-estimated without the fold), on the same
@@ -68,7 +68,7 @@ pub fn fit_output_auto(
     let warm = WarmStart {
         theta: first.1.theta[..inputs.d].to_vec(),
         nugget: first.1.nugget,
-        inverse_hessian: None,
+        inverse_hessian: first.1.inverse_hessian.clone(),
     };
     let mut table = vec![FamilyScore {
         corr: Correlation::Gaussian,
