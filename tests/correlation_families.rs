@@ -3,19 +3,15 @@
 //! the same predictions, files without a family load as Gaussian, and
 //! `corr_auto` keeps the family with the lowest closed-form CV error.
 
-use robokrige::dataset::{Dataset, read_csv};
+use robokrige::dataset::Dataset;
 use robokrige::kriging::{Correlation, CorrelationModel, KrigingOptions, TrainingInputs};
 use robokrige::model::ErrorModel;
 use robokrige::space::Space;
-use std::path::Path;
+
+mod common;
 
 fn campaign(rows: usize) -> Dataset {
-    let d = read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .unwrap();
-    d.select(&(0..rows).collect::<Vec<_>>())
+    common::comau_lhs(rows)
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! (PCC+PCA) trends, at several ξ, with and without a nugget, for every
 //! correlation family (issue 17 §2).
 
-use robokrige::dataset::{Dataset, read_csv};
+use robokrige::dataset::Dataset;
 use robokrige::kinematics;
 use robokrige::kriging::{
     Correlation, KrigingModel, KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs,
@@ -11,15 +11,11 @@ use robokrige::kriging::{
 };
 use robokrige::model::ErrorModel;
 use robokrige::space::Space;
-use std::path::Path;
+
+mod common;
 
 fn campaign(rows: usize) -> Dataset {
-    let d = read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .unwrap();
-    d.select(&(0..rows).collect::<Vec<_>>())
+    common::comau_lhs(rows)
 }
 
 /// A quick fit whose only purpose is to produce each kind of trend.

@@ -1,18 +1,14 @@
 //! The method registry: names, parsing, and the GA method's selection.
 
 use robokrige::basis::Selection;
-use robokrige::dataset::{Dataset, read_csv};
+use robokrige::dataset::Dataset;
 use robokrige::kriging::TrendModel;
 use robokrige::methods::{ALL_METHODS, Method, parse_methods};
-use std::path::Path;
+
+mod common;
 
 fn campaign(rows: usize) -> Dataset {
-    let d = read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .unwrap();
-    d.select(&(0..rows).collect::<Vec<_>>())
+    common::comau_lhs(rows)
 }
 
 #[test]

@@ -1,8 +1,9 @@
-//! Shared by the binary-level tests.
+//! Shared by the integration tests.
 
 use std::process::Command;
 
 /// Run the `robokrige` binary: (exit code, stdout, stderr).
+#[allow(dead_code)] // not every test binary that shares this module uses it
 pub fn rk(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_robokrige"))
         .args(args)
@@ -30,4 +31,15 @@ pub fn synthetic_row(i: usize) -> String {
         0.1 * (t * 0.2).cos(),
         0.05 * t / 24.0
     )
+}
+
+/// The first `rows` rows of the shipped `datasets/comau_lhs.csv`.
+#[allow(dead_code)] // not every test binary that shares this module uses it
+pub fn comau_lhs(rows: usize) -> robokrige::dataset::Dataset {
+    let d = robokrige::dataset::read_csv(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_lhs.csv"
+    )))
+    .unwrap();
+    d.select(&(0..rows).collect::<Vec<_>>())
 }
