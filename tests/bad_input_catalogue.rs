@@ -850,8 +850,9 @@ fn model_cases() -> Vec<Case> {
         predict_case(
             "model_kinematic_trend_with_short_scales",
             {
-                // found by the model_loader fuzz target (fuzz/seeds): it
-                // indexed out of bounds before the trend was validated
+                // found by the model_loader fuzz target (fuzz/seeds): the
+                // load-time evaluation of an unvalidated kinematic trend
+                // indexed out of bounds
                 let p = path("kin_scales.json");
                 std::fs::copy(
                     Path::new(env!("CARGO_MANIFEST_DIR"))
