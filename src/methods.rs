@@ -30,6 +30,11 @@ pub const PAPER_GPS_STARTS: usize = OptimizerKind::Gps.default_starts();
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
+    /// Not a paper's method: the engine's recommendation for tracker data
+    /// (issue 17): EJS, constant trend, BFGS, a nugget estimated, and each
+    /// output's correlation family chosen by closed-form CV
+    /// ([`crate::kriging::fit_output_auto`]).
+    Recommended,
     JsHj,
     EjsHj,
     EjsGps,
@@ -37,8 +42,9 @@ pub enum Method {
     EjsGa,
 }
 
-/// All methods, in the papers' order.
-pub const ALL_METHODS: [Method; 5] = [
+/// All methods: the recommended one first, then the papers' in their order.
+pub const ALL_METHODS: [Method; 6] = [
+    Method::Recommended,
     Method::JsHj,
     Method::EjsHj,
     Method::EjsGps,
@@ -50,6 +56,7 @@ impl Method {
     /// The paper-style name (`ejs-gps`, …).
     pub fn name(self) -> &'static str {
         match self {
+            Method::Recommended => "recommended",
             Method::JsHj => "js-hj",
             Method::EjsHj => "ejs-hj",
             Method::EjsGps => "ejs-gps",
@@ -88,7 +95,8 @@ impl Method {
     }
 
     /// [`Method::fit_with_progress`], optionally estimating a nugget (noise
-    /// variance ratio) with the correlation parameters.
+    /// variance ratio) with the correlation parameters. [`Method::Recommended`]
+    /// always estimates one: `nugget` only switches the papers' methods.
     pub fn fit_with(
         self,
         data: &Dataset,
@@ -108,6 +116,15 @@ impl Method {
             ..gps.clone()
         };
         match self {
+            Method::Recommended => {
+                let opts = KrigingOptions {
+                    seed,
+                    nugget: true,
+                    corr_auto: true,
+                    ..KrigingOptions::default()
+                };
+                ErrorModel::fit(data, Space::Ejs, &opts)
+            }
             Method::JsHj => ErrorModel::fit(data, Space::Js, &hj),
             Method::EjsHj => ErrorModel::fit(data, Space::Ejs, &hj),
             Method::EjsGps => ErrorModel::fit(data, Space::Ejs, &gps),

@@ -26,6 +26,22 @@ fn names_parse_and_round_trip() {
 }
 
 #[test]
+fn the_recommended_method_comes_first_with_a_nugget_and_the_family_by_cv() {
+    assert_eq!(ALL_METHODS[0], Method::Recommended);
+    assert_eq!(Method::parse("recommended").unwrap(), Method::Recommended);
+    let m = Method::Recommended.fit(&campaign(60), 1).unwrap();
+    assert!(m.options.nugget && m.options.corr_auto);
+    for (out, rep) in m.outputs.iter().zip(&m.reports) {
+        assert_eq!(rep.families.len(), 4);
+        assert!(rep.nugget > 0.0);
+        assert!(rep.families.iter().any(|f| f.corr == out.corr()));
+    }
+    // the papers' methods keep interpolating
+    let paper = Method::EjsHj.fit(&campaign(60), 1).unwrap();
+    assert!(!paper.options.nugget && !paper.options.corr_auto);
+}
+
+#[test]
 fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
     let d = campaign(50);
     let a = Method::EjsGa.fit(&d, 3).unwrap();

@@ -25,7 +25,7 @@ pub struct CvArgs {
     #[arg(long, default_value_t = 10)]
     folds: usize,
     /// Compare named methods instead of one model choice: `all` or a list of
-    /// js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga (refit mode: each method's
+    /// recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga (refit mode: each method's
     /// selection and hyperparameters inside every training fold).
     #[arg(long)]
     methods: Option<String>,
@@ -191,7 +191,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         a.cv_seed
     );
     println!(
-        "{:<8} {:>18} {:>9} {:>9} {:>26} {:>8}",
+        "{:<11} {:>18} {:>9} {:>9} {:>26} {:>8}",
         "method", "range (mm)", "mean", "std", "RMSE x / y / z (mm)", "time"
     );
     let mut rows = Vec::new();
@@ -214,7 +214,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         groups.push((m.name().to_string(), norms(&res.residuals)));
         let s = &res.summary;
         println!(
-            "{:<8} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
+            "{:<11} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
             m.name(),
             s.min_3d_mm,
             s.max_3d_mm,

@@ -176,7 +176,7 @@ pub struct FitArgs {
     data: PathBuf,
     #[command(flatten)]
     model: ModelArgs,
-    /// Fit a named method instead (js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga);
+    /// Fit a named method instead (recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga);
     /// overrides --space/--trend/--optimizer.
     #[arg(long)]
     method: Option<String>,
