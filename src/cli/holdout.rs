@@ -10,7 +10,7 @@ use robokrige::compensate::ErrorPredictor;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
 use robokrige::kinematics::{self, Robot};
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
 use robokrige::physics::HybridModel;
 use robokrige::space::Space;
@@ -52,6 +52,10 @@ pub struct HoldoutArgs {
     /// hj (Hooke–Jeeves) or gps (4 starts).
     #[arg(long, default_value = "bfgs")]
     optimizer: String,
+    /// Correlation family of the Kriging fits: gaussian, matern52, matern32,
+    /// exponential, or auto (each output's family by closed-form 10-fold CV).
+    #[arg(long, default_value = "gaussian")]
+    corr: String,
     /// Interpolate exactly (no nugget) in the Kriging fits. By default a
     /// nugget is estimated: real data has noise.
     #[arg(long, conflicts_with = "nugget")]
@@ -129,8 +133,21 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
             )));
         }
     };
+    let corr_auto = a.corr == "auto";
+    let corr = match Correlation::parse(&a.corr) {
+        Some(c) => c,
+        None if corr_auto => Correlation::Gaussian,
+        None => {
+            return Err(Error::InvalidParameter(format!(
+                "--corr '{}': expected gaussian, matern52, matern32, exponential or auto",
+                a.corr
+            )));
+        }
+    };
     Ok(KrigingOptions {
         optimizer,
+        corr,
+        corr_auto,
         starts: optimizer.default_starts(),
         seed: a.seed,
         nugget: !a.no_nugget,
