@@ -91,9 +91,7 @@ pub fn cross_validate_closed_form(
         )));
     }
     let fold = kfold_partition(m, k, seed)?;
-    let blocks: Vec<Vec<usize>> = (0..k)
-        .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
-        .collect();
+    let blocks = crate::stats::fold_blocks(&fold);
     let mut residuals = vec![[0.0; 3]; m];
     for (a, out) in model.outputs.iter().enumerate() {
         let e = out.held_out_residuals(&blocks)?;

@@ -177,9 +177,7 @@ pub fn fit_ga(
     let inputs = TrainingInputs::new(&x);
     let names = Space::Ejs.encoded_names(n, &opts.periodic);
     let fold = kfold_partition(m, k, seed)?;
-    let blocks: Vec<Vec<usize>> = (0..k)
-        .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
-        .collect();
+    let blocks = crate::stats::fold_blocks(&fold);
     let quad = KrigingOptions {
         trend: TrendKind::Quadratic,
         ..opts.clone()

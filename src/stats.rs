@@ -191,6 +191,18 @@ pub fn rng_for(seed: u64, stream: &str) -> rand::rngs::StdRng {
     rand::rngs::StdRng::seed_from_u64(h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15))
 }
 
+/// The rows of every fold of a partition (fold index per row, as from
+/// [`kfold_partition`]), in fold order; empty folds are left out. One pass.
+pub fn fold_blocks(fold: &[usize]) -> Vec<Vec<usize>> {
+    let folds = fold.iter().max().map_or(0, |f| f + 1);
+    let mut blocks = vec![Vec::new(); folds];
+    for (row, &f) in fold.iter().enumerate() {
+        blocks[f].push(row);
+    }
+    blocks.retain(|b| !b.is_empty());
+    blocks
+}
+
 /// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
 /// sizes differ by at most one.
 pub fn kfold_partition(m: usize, k: usize, seed: u64) -> crate::Result<Vec<usize>> {

@@ -264,7 +264,7 @@ impl FamilyTest {
                     .clone()
                     .map(|c| (0..sys.rows()).map(|i| prep.q[(i, c)] * sys.rt[i]).sum())
                     .collect();
-                blocks(fold)
+                crate::stats::fold_blocks(fold)
                     .iter()
                     .map(|idx| {
                         let n = idx.len();
@@ -287,19 +287,6 @@ impl FamilyTest {
     }
 }
 
-/// Rows of every fold.
-fn blocks(fold: &[usize]) -> Vec<Vec<usize>> {
-    let folds = fold.iter().max().map_or(0, |f| f + 1);
-    (0..folds)
-        .map(|f| {
-            (0..fold.len())
-                .filter(|&i| fold[i] == f)
-                .collect::<Vec<_>>()
-        })
-        .filter(|b| !b.is_empty())
-        .collect()
-}
-
 /// `‖A_bb⁻¹ γ_b‖²`.
 fn block_sse(a: Mat<f64>, gamma: Mat<f64>) -> f64 {
     let e = faer::linalg::solvers::Solve::solve(&a.partial_piv_lu(), &gamma);
@@ -311,7 +298,7 @@ pub fn kfold_sse_before(systems: &[AxisSystem], fold: &[usize]) -> f64 {
     systems
         .iter()
         .map(|sys| {
-            blocks(fold)
+            crate::stats::fold_blocks(fold)
                 .iter()
                 .map(|idx| {
                     let n = idx.len();

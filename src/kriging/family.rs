@@ -58,7 +58,7 @@ pub fn fit_output_auto(
     let first = fit_output_from(x, inputs, y, trend, names, &gaussian, start)?;
     let m = y.len();
     let k = FAMILY_FOLDS.min(m);
-    let blocks = fold_blocks(m, k, opts.seed)?;
+    let blocks = crate::stats::fold_blocks(&crate::stats::kfold_partition(m, k, opts.seed)?);
     let score = |model: &KrigingModel| -> f64 {
         model
             .held_out_residuals(&blocks)
@@ -110,14 +110,4 @@ pub fn fit_output_auto(
     best.1.evals = evals;
     best.1.seconds = t0.elapsed().as_secs_f64();
     Ok(best)
-}
-
-/// The rows of each of `k` seeded folds ([`crate::stats::kfold_partition`]).
-fn fold_blocks(m: usize, k: usize, seed: u64) -> Result<Vec<Vec<usize>>> {
-    let fold = crate::stats::kfold_partition(m, k, seed)?;
-    let mut blocks = vec![Vec::new(); k];
-    for (row, f) in fold.into_iter().enumerate() {
-        blocks[f].push(row);
-    }
-    Ok(blocks)
 }
