@@ -91,7 +91,19 @@ impl From<KrigingModel> for KrigingModelData {
 impl TryFrom<KrigingModelData> for KrigingModel {
     type Error = Error;
 
-    fn try_from(mut data: KrigingModelData) -> Result<Self> {
+    /// Data read from a file: every check, the trend's too.
+    fn try_from(data: KrigingModelData) -> Result<Self> {
+        KrigingModel::checked(data, true)
+    }
+}
+
+impl KrigingModel {
+    /// Assemble a model after checking sizes, ranges and finiteness; with
+    /// `trend_from_file` also the trend's structure and its values at the
+    /// training inputs (a fit builds its trend itself and has just
+    /// evaluated it, so its models skip that O(m·p) pass — one per GA
+    /// fitness evaluation).
+    fn checked(mut data: KrigingModelData, trend_from_file: bool) -> Result<Self> {
         let m = data.x_train.len();
         let p = data.trend.len();
         let d = data.theta.len();
@@ -144,14 +156,16 @@ impl TryFrom<KrigingModelData> for KrigingModel {
         if data.x_train.iter().flatten().any(|v| !v.is_finite()) {
             return bad("non-finite training inputs");
         }
-        if let Err(why) = data.trend.validate() {
-            return bad(&why);
-        }
-        // a trend whose parameters divide by zero (e.g. a fused basis's
-        // std of 0, found by fuzzing) shows at the training inputs
-        let f = trend_matrix(&data.trend, &data.x_train);
-        if (0..f.ncols()).any(|j| f.col(j).iter().any(|v| !v.is_finite())) {
-            return bad("the trend is not finite at the training inputs");
+        if trend_from_file {
+            if let Err(why) = data.trend.validate() {
+                return bad(&why);
+            }
+            // a trend whose parameters divide by zero (e.g. a fused basis's
+            // std of 0, found by fuzzing) shows at the training inputs
+            let f = trend_matrix(&data.trend, &data.x_train);
+            if (0..f.ncols()).any(|j| f.col(j).iter().any(|v| !v.is_finite())) {
+                return bad("the trend is not finite at the training inputs");
+            }
         }
         let g = unpack_upper(&data.g_upper, p);
         let xt = TrainingInputs::new(&data.x_train);
@@ -231,22 +245,25 @@ impl KrigingModel {
                 g_upper.push(sol.g[(i, j)]);
             }
         }
-        KrigingModel::try_from(KrigingModelData {
-            trend,
-            corr: Correlation::Gaussian,
-            theta,
-            nugget,
-            jitter: sol.value.jitter,
-            x_train,
-            y_mean,
-            y_std,
-            beta: sol.beta,
-            gamma: sol.gamma,
-            sigma2: sol.value.sigma2,
-            ln_psi: storable_ln_psi(sol.value.ln_psi),
-            chol_lower: Vec::new(),
-            g_upper,
-        })
+        KrigingModel::checked(
+            KrigingModelData {
+                trend,
+                corr: Correlation::Gaussian,
+                theta,
+                nugget,
+                jitter: sol.value.jitter,
+                x_train,
+                y_mean,
+                y_std,
+                beta: sol.beta,
+                gamma: sol.gamma,
+                sigma2: sol.value.sigma2,
+                ln_psi: storable_ln_psi(sol.value.ln_psi),
+                chol_lower: Vec::new(),
+                g_upper,
+            },
+            false,
+        )
         .inspect(|model| {
             if m <= KEEP_FACTOR_MAX_M {
                 let ftilde = ftilde(&sol.c, &model.data.trend, &model.data.x_train);
