@@ -412,17 +412,24 @@ pub fn refit_systems(
                 nugget: km.data.nugget,
                 inverse_hessian: model.reports[a].inverse_hessian.clone(),
             };
+            // the refit continues the model's own family (with
+            // `corr_auto` it may differ from `opts.corr`)
+            let same_family = KrigingOptions {
+                corr: km.corr(),
+                corr_auto: false,
+                ..opts.clone()
+            };
             let (_, report) = fit_output_from(
                 &x_aug,
                 &inputs,
                 &y,
                 &Trend::Monomials(terms),
                 &names,
-                opts,
+                &same_family,
                 Some(&start),
             )?;
             let hyper = crate::kriging::Hyperparameters {
-                corr: opts.corr,
+                corr: km.corr(),
                 theta: &report.theta[..corr],
                 nugget: report.nugget,
                 min_jitter: opts.min_jitter,
