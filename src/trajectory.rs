@@ -4,7 +4,7 @@
 //! `roll_deg,pitch_deg,yaw_deg` with `R = Rz(yaw)·Ry(pitch)·Rx(roll)`.
 //! Without orientation columns the points are position-only targets.
 
-use crate::dataset::table::Table;
+use crate::dataset::table::{Table, triplet};
 use crate::dataset::{number, position_value};
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -76,41 +76,25 @@ impl Trajectory {
 
     /// [`Trajectory::read_csv`] of a whole file's bytes; `src` names it.
     pub fn read_csv_from(bytes: &[u8], src: &str) -> Result<Self> {
-        let table = Table::read(bytes, src, "with x,y,z")?;
+        Self::from_table(&Table::read(bytes, src, "with x,y,z")?, src)
+    }
+
+    /// The trajectory of an already read [`Table`].
+    fn from_table(table: &Table, src: &str) -> Result<Self> {
         let header_err = |message: String| Error::Csv {
             file: src.to_string(),
             line: table.header_line,
             column: None,
             message,
         };
-        let find = |names: [&str; 3]| names.map(|n| table.column(n));
-        let pos = match find(["x", "y", "z"]) {
-            [Some(a), Some(b), Some(c)] => [a, b, c],
-            _ => {
-                return Err(header_err(format!(
-                    "a trajectory needs columns x, y, z (mm) (found: {})",
-                    table.header.join(", ")
-                )));
-            }
+        let Ok(Some(pos)) = triplet(&table.header, ["x", "y", "z"]) else {
+            return Err(header_err(format!(
+                "a trajectory needs columns x, y, z (mm) (found: {})",
+                table.header.join(", ")
+            )));
         };
-        let rot = match find(["roll_deg", "pitch_deg", "yaw_deg"]) {
-            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-            [None, None, None] => None,
-            found => {
-                let names = ["roll_deg", "pitch_deg", "yaw_deg"];
-                let pick = |present: bool| -> Vec<&str> {
-                    (0..3)
-                        .filter(|&i| found[i].is_some() == present)
-                        .map(|i| names[i])
-                        .collect()
-                };
-                return Err(header_err(format!(
-                    "found {} but not {}; give all of roll_deg,pitch_deg,yaw_deg or none (position-only targets)",
-                    pick(true).join(","),
-                    pick(false).join(",")
-                )));
-            }
-        };
+        let rot = triplet(&table.header, ["roll_deg", "pitch_deg", "yaw_deg"])
+            .map_err(|msg| header_err(format!("{msg} (position-only targets)")))?;
         let mut poses = Vec::with_capacity(table.rows.len());
         for (line, rec) in &table.rows {
             let cell = |i: usize, parse: fn(&str) -> std::result::Result<f64, String>| {
@@ -170,11 +154,10 @@ pub fn read_target_file(path: &Path) -> Result<TargetFile> {
         "with x,y,z (TCP targets) or q1..qN (joint poses)",
     )?;
     if table.column("q1").is_some() {
-        Ok(TargetFile::Joints(crate::dataset::read_csv_from(
-            bytes.as_slice(),
-            &src,
+        Ok(TargetFile::Joints(crate::dataset::from_table(
+            &table, &src,
         )?))
     } else {
-        Ok(TargetFile::Tcp(Trajectory::read_csv_from(&bytes, &src)?))
+        Ok(TargetFile::Tcp(Trajectory::from_table(&table, &src)?))
     }
 }

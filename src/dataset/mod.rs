@@ -34,6 +34,7 @@ mod read;
 pub(crate) mod table;
 mod write;
 
+pub(crate) use read::from_table;
 pub use read::{read_csv, read_csv_from};
 pub use write::{write_csv, write_csv_to};
 
@@ -508,7 +509,7 @@ pub(crate) fn number(cell: &str) -> std::result::Result<f64, String> {
     }
 }
 
-/// A number within ±`limit`; `what` and `unit` name it in the message.
+/// A number within ±`limit`; `what` names it in the message, `hint` says what to check.
 fn bounded(cell: &str, limit: f64, what: &str, hint: &str) -> std::result::Result<f64, String> {
     let v = number(cell)?;
     if v.abs() > limit {

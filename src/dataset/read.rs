@@ -26,11 +26,17 @@ pub fn read_csv_from(mut reader: impl Read, source_name: &str) -> Result<Dataset
         source_name: source_name.to_string(),
         message: format!("reading failed: {e}"),
     })?;
+    let table = Table::read(&bytes, source_name, "with q1..qN")?;
+    from_table(&table, source_name)
+}
+
+/// The dataset of an already read [`Table`] (`source_name` for messages).
+pub(crate) fn from_table(table: &Table, source_name: &str) -> Result<Dataset> {
     let parser = Parser {
         src: source_name.to_string(),
         ..Parser::default()
     };
-    parser.parse(&bytes)
+    parser.parse(table)
 }
 
 /// Which cells of a row hold what, worked out from the header.
@@ -61,8 +67,7 @@ struct Parser {
 
 impl Parser {
     /// Parse the whole file ([`Table`] rules).
-    fn parse(mut self, bytes: &[u8]) -> Result<Dataset> {
-        let table = Table::read(bytes, &self.src, "with q1..qN")?;
+    fn parse(mut self, table: &Table) -> Result<Dataset> {
         self.header_line = table.header_line;
         let layout = self.layout(&table.header)?;
         self.other = vec![Vec::new(); layout.other.len()];
@@ -177,26 +182,7 @@ impl Parser {
 
     /// Cell indices of a column triplet such as ex,ey,ez: all three or none.
     fn triplet(&self, names: &[String], want: [&str; 3]) -> Result<Option<[usize; 3]>> {
-        let found = want.map(|w| names.iter().position(|n| n == w));
-        match found {
-            [Some(a), Some(b), Some(c)] => Ok(Some([a, b, c])),
-            [None, None, None] => Ok(None),
-            _ => {
-                let pick = |present: bool| -> Vec<&str> {
-                    (0..3)
-                        .filter(|&i| found[i].is_some() == present)
-                        .map(|i| want[i])
-                        .collect()
-                };
-                let msg = format!(
-                    "found {} but not {}; give all of {} or none",
-                    pick(true).join(","),
-                    pick(false).join(","),
-                    want.join(",")
-                );
-                Err(self.header_err(None, msg))
-            }
-        }
+        super::table::triplet(names, want).map_err(|msg| self.header_err(None, msg))
     }
 
     // ----- rows ---------------------------------------------------------

@@ -107,6 +107,33 @@ impl Table {
     }
 }
 
+/// Column indices of a triplet such as `ex,ey,ez` in `names`: all three or
+/// none; otherwise what is found and what is missing (the message).
+pub(crate) fn triplet(
+    names: &[String],
+    want: [&str; 3],
+) -> std::result::Result<Option<[usize; 3]>, String> {
+    let found = want.map(|w| names.iter().position(|n| n == w));
+    match found {
+        [Some(a), Some(b), Some(c)] => Ok(Some([a, b, c])),
+        [None, None, None] => Ok(None),
+        _ => {
+            let pick = |present: bool| -> Vec<&str> {
+                (0..3)
+                    .filter(|&i| found[i].is_some() == present)
+                    .map(|i| want[i])
+                    .collect()
+            };
+            Err(format!(
+                "found {} but not {}; give all of {} or none",
+                pick(true).join(","),
+                pick(false).join(","),
+                want.join(",")
+            ))
+        }
+    }
+}
+
 /// No empty and no duplicate column names.
 fn check_names(names: &[String], src: &str, line: u64) -> Result<()> {
     let err = |column: Option<&str>, message: String| Error::Csv {
