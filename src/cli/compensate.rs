@@ -265,7 +265,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let mut outputs = vec![a.output.as_path()];
     outputs.extend(a.plot.as_deref());
     outputs.extend(a.json.as_deref());
-    super::check_outputs(&inputs, &outputs)?;
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = kinematics::preset(&a.robot)?;
     let model = AnyModel::load(&a.model)?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
@@ -412,7 +412,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let mut inputs = vec![a.traj.as_path(), a.truth.as_path()];
     inputs.extend(a.compensated.iter().map(PathBuf::as_path));
     let outputs: Vec<&Path> = a.plot.iter().chain(&a.json).map(PathBuf::as_path).collect();
-    super::check_outputs(&inputs, &outputs)?;
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let truth = load_truth(&a.truth)?;
     let robot = match &a.robot {
         Some(name) => {

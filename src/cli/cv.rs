@@ -59,7 +59,7 @@ pub fn run(a: CvArgs) -> Result<()> {
         .into_iter()
         .flatten()
         .collect();
-    super::check_outputs(&[&a.data], &outputs)?;
+    robokrige::output::check_outputs(&[&a.data], &outputs)?;
     if let Some(list) = &a.methods {
         return run_methods(&a, list);
     }

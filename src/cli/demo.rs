@@ -96,7 +96,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let outputs: Vec<&Path> = std::iter::once(report_md.as_path())
         .chain(a.json.as_deref())
         .collect();
-    super::check_outputs(&[], &outputs)?;
+    robokrige::output::check_outputs(&[], &outputs)?;
     let robot = kinematics::preset("comau-nj220")?;
     let pb = bar(9, "demo");
     pb.set_message("simulating the COMAU campaigns");

@@ -148,7 +148,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     .into_iter()
     .flatten()
     .collect();
-    super::check_outputs(&inputs, &outputs)?;
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let mut data = super::read_data(&a.data)?;
     if let Some(n) = a.rows.filter(|&n| n < data.len()) {
         data = data.select(&(0..n).collect::<Vec<_>>());

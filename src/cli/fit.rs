@@ -36,6 +36,19 @@ pub enum CorrArg {
     Auto,
 }
 
+impl CorrArg {
+    /// The options' `(corr, corr_auto)`.
+    pub fn resolve(self) -> (Correlation, bool) {
+        match self {
+            CorrArg::Gaussian => (Correlation::Gaussian, false),
+            CorrArg::Matern52 => (Correlation::Matern52, false),
+            CorrArg::Matern32 => (Correlation::Matern32, false),
+            CorrArg::Exponential => (Correlation::Exponential, false),
+            CorrArg::Auto => (Correlation::Gaussian, true),
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum OptimizerArg {
     /// Projected BFGS on the analytic likelihood gradient, 8 starts (default).
@@ -133,6 +146,7 @@ impl ModelArgs {
     /// The space and fitting options these arguments select (no periodic
     /// joints: see [`ModelArgs::resolve`]).
     pub fn options(&self) -> (Space, KrigingOptions) {
+        let (corr, corr_auto) = self.corr.resolve();
         let optimizer = match self.optimizer {
             OptimizerArg::Bfgs => OptimizerKind::Bfgs,
             OptimizerArg::Gps => OptimizerKind::Gps,
@@ -144,14 +158,8 @@ impl ModelArgs {
                 TrendArg::Linear => TrendKind::Linear,
                 TrendArg::Quadratic => TrendKind::Quadratic,
             },
-            corr: match self.corr {
-                CorrArg::Gaussian => Correlation::Gaussian,
-                CorrArg::Matern52 => Correlation::Matern52,
-                CorrArg::Matern32 => Correlation::Matern32,
-                CorrArg::Exponential => Correlation::Exponential,
-                CorrArg::Auto => Correlation::Gaussian,
-            },
-            corr_auto: matches!(self.corr, CorrArg::Auto),
+            corr,
+            corr_auto,
             optimizer,
             nugget: !self.no_nugget,
             starts: self.starts.unwrap_or(optimizer.default_starts()),
@@ -189,7 +197,7 @@ pub struct FitArgs {
 }
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
-    super::check_outputs(&[&a.data], &[&a.output])?;
+    robokrige::output::check_outputs(&[&a.data], &[&a.output])?;
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
@@ -337,7 +345,7 @@ pub struct PredictArgs {
 pub fn run_predict(a: PredictArgs) -> Result<()> {
     let mut outputs = vec![a.output.as_path()];
     outputs.extend(a.json.as_deref());
-    super::check_outputs(&[&a.model, &a.poses], &outputs)?;
+    robokrige::output::check_outputs(&[&a.model, &a.poses], &outputs)?;
     let model = ErrorModel::load(&a.model)?;
     let data = super::read_data(&a.poses)?;
     if data.n_joints() != model.n_joints {

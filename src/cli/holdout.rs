@@ -10,7 +10,7 @@ use robokrige::compensate::ErrorPredictor;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
 use robokrige::kinematics::{self, Robot};
-use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
 use robokrige::physics::HybridModel;
 use robokrige::space::Space;
@@ -54,8 +54,8 @@ pub struct HoldoutArgs {
     optimizer: String,
     /// Correlation family of the Kriging fits: gaussian, matern52, matern32,
     /// exponential, or auto (each output's family by closed-form 10-fold CV).
-    #[arg(long, default_value = "gaussian")]
-    corr: String,
+    #[arg(long, value_enum, default_value = "gaussian")]
+    corr: super::fit::CorrArg,
     /// Interpolate exactly (no nugget) in the Kriging fits. By default a
     /// nugget is estimated: real data has noise.
     #[arg(long, conflicts_with = "nugget")]
@@ -133,17 +133,7 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
             )));
         }
     };
-    let corr_auto = a.corr == "auto";
-    let corr = match Correlation::parse(&a.corr) {
-        Some(c) => c,
-        None if corr_auto => Correlation::Gaussian,
-        None => {
-            return Err(Error::InvalidParameter(format!(
-                "--corr '{}': expected gaussian, matern52, matern32, exponential or auto",
-                a.corr
-            )));
-        }
-    };
+    let (corr, corr_auto) = a.corr.resolve();
     Ok(KrigingOptions {
         optimizer,
         corr,
@@ -228,7 +218,7 @@ fn print_rows(rows: &[HoldoutRow]) {
 
 pub fn run(a: HoldoutArgs) -> Result<()> {
     let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
-    super::check_outputs(&[&a.data], &outputs)?;
+    robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = read_data(&a.data)?;
     let robot = robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;

@@ -143,9 +143,3 @@ pub fn print_coverage(
         );
     }
 }
-
-/// Refuse, before any work, an output that is an input, another output or
-/// not writable ([`robokrige::output::check_outputs`]).
-pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
-    robokrige::output::check_outputs(inputs, outputs)
-}

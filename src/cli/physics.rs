@@ -186,7 +186,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         .chain(&a.json)
         .map(PathBuf::as_path)
         .collect();
-    super::check_outputs(&inputs, &outputs)?;
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = kinematics::preset(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
@@ -332,7 +332,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         .chain(&a.report)
         .map(PathBuf::as_path)
         .collect();
-    super::check_outputs(&[], &outputs)?;
+    robokrige::output::check_outputs(&[], &outputs)?;
     let opts = CompareOptions {
         robot: a.robot.clone(),
         seed: a.seed,
@@ -483,7 +483,7 @@ pub fn compare_text(c: &Comparison, secs: f64) -> String {
 
 fn run_probing(a: ProbingArgs) -> Result<()> {
     let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
-    super::check_outputs(&[], &outputs)?;
+    robokrige::output::check_outputs(&[], &outputs)?;
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
     println!(
         "# Probing a 1000 mm straightedge, 100 points: {} (true robot of seed {}{})\n",
@@ -517,7 +517,7 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
 
 fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
     let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
-    super::check_outputs(&[&a.data, &a.model], &outputs)?;
+    robokrige::output::check_outputs(&[&a.data, &a.model], &outputs)?;
     let model = robokrige::physics::PhysicsModel::load(&a.model)?;
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;
@@ -548,7 +548,7 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
 }
 
 fn run_register(a: RegisterArgs) -> Result<()> {
-    super::check_outputs(&[&a.data], &[&a.output])?;
+    robokrige::output::check_outputs(&[&a.data], &[&a.output])?;
     let robot = kinematics::preset(&a.robot)?;
     let data = read_data(&a.data)?;
     robot.check_dataset(&data)?;

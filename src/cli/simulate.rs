@@ -109,7 +109,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
-    super::check_outputs(&[], &[&a.output, &truth_path])?;
+    robokrige::output::check_outputs(&[], &[&a.output, &truth_path])?;
     let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;
     let summary = match &out {
