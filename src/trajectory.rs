@@ -143,7 +143,7 @@ pub enum TargetFile {
 }
 
 /// Read a target file, telling the two kinds apart by the header (with
-/// the rules of [`Table`]): a `q1` column makes it a joint-pose list — in
+/// the rules of the CSV table reader): a `q1` column makes it a joint-pose list — in
 /// a measurement CSV, `x,y,z` are the *measured* positions, not targets.
 pub fn read_target_file(path: &Path) -> Result<TargetFile> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;

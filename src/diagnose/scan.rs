@@ -3,7 +3,7 @@
 //! A *family* is one named effect scanned over a parameter grid (a step over
 //! the split row, a harmonic over the period, …); each grid point is a set of
 //! regressor columns. Every grid point is tried *inside* the current model
-//! ([`gls`](super::gls)): its columns join the trend at the model's ξ and
+//! ([`super::gls`]): its columns join the trend at the model's ξ and
 //! nugget, and the statistic is the pooled leave-one-out gain, maximised
 //! over the grid; the strongest few families are tried again at the ξ the
 //! model would choose with them. Significance is a test of that maximum
@@ -360,7 +360,7 @@ struct Trial {
 }
 
 /// Test every family inside the current model (`systems`, one per output,
-/// [`gls`](super::gls)): statistic, the pooled leave-one-out gain of the best
+/// [`super::gls`]): statistic, the pooled leave-one-out gain of the best
 /// grid point at the model's ξ. The `refine` families with the largest
 /// statistic are tried again at the ξ the model would choose with their best
 /// grid point (`refit` returns the systems there; `None` keeps the first
@@ -370,7 +370,7 @@ struct Trial {
 /// `LOO(model) − LOO(model + candidate at its ξ)`. The
 /// null distribution is always that of the model's ξ: pseudo-campaigns
 /// (seeded, the same for every family, sequential: a family stops once
-/// [`SETTLED`] resamples reach its statistic, `p = (1 + exceed)/(1 + run)`).
+/// `SETTLED` resamples reach its statistic, `p = (1 + exceed)/(1 + run)`).
 /// The re-estimated statistic has no re-estimation in its null, so its
 /// p-value is optimistic (in a 160-row control, a step reached p = 0.001
 /// and the refit CV showed no gain); [`super::diagnose`] therefore counts

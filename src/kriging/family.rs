@@ -37,7 +37,10 @@ pub struct FamilyScore {
 }
 
 /// Fit one output with every family and keep the best by closed-form
-/// K-fold CV (see the [module docs](self)); the report lists the scores
+/// K-fold CV: the Gaussian by the options' full search (or from `start`),
+/// the others by a local BFGS from the Gaussian's ξ, ν and inverse
+/// Hessian; the lowest RMSE of the leave-fold-out residuals on
+/// [`FAMILY_FOLDS`] folds wins, ties to the earlier family. The report lists the scores
 /// ([`FitReport::families`]), and its evaluations and seconds are those of
 /// the whole choice. Arguments as [`fit_output_from`], whose `opts.corr` is
 /// ignored.

@@ -12,12 +12,14 @@
 pub mod corr;
 mod family;
 mod fastexp;
+mod fused;
 pub mod model;
 pub mod problem;
 pub mod trend;
 
 pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
 pub use family::{FAMILY_FOLDS, FamilyScore, fit_output_auto};
+pub use fused::FusedBasis;
 pub use model::{KrigingModel, KrigingModelData, Pred};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
 pub use trend::{
@@ -405,7 +407,7 @@ pub fn fit_output(
 
 /// [`fit_output`] with an optional warm start `(ξ, ν)`: a local search from
 /// there instead of the multistart — BFGS on the analytic gradient with the
-/// default optimiser ([`converge_bfgs`]), Hooke–Jeeves (initial step 0.25 in
+/// default optimiser (`converge_bfgs`), Hooke–Jeeves (initial step 0.25 in
 /// log10 units) with the papers' — for re-estimating ξ after a small change
 /// of the data or the model (a CV fold, one more trend term). `ν` is ignored
 /// without a nugget; values are clamped into the box.

@@ -245,12 +245,13 @@ impl TrendModel for KinematicTrend {
 }
 
 /// A trend a fitted model can carry: plain monomials, a PCC+PCA fused
-/// basis ([`crate::basis`]), or the kinematic-error basis.
+/// basis ([`FusedBasis`](super::FusedBasis), chosen by the `basis`
+/// module's selection), or the kinematic-error basis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Trend {
     Monomials(Monomials),
-    Fused(crate::basis::FusedBasis),
+    Fused(super::fused::FusedBasis),
     Kinematic(Box<KinematicTrend>),
 }
 

@@ -180,7 +180,7 @@ impl Effect {
 
     /// Extra joint deviation that depends on the move history: `dir` the
     /// approach directions λ, `since_reversal` every joint's travel since its
-    /// last reversal ([`travel_since_reversal`]).
+    /// last reversal (`travel_since_reversal`).
     pub fn history_deviation(&self, dir: &[f64], since_reversal: &[f64], out: &mut [f64]) {
         if let Effect::Hysteresis {
             joint,
