@@ -33,9 +33,8 @@
 //! Points the IK cannot reach are reported by index ([`Error::Unreachable`]),
 //! never passed through uncorrected.
 
-use crate::kinematics::{IkOptions, IkTarget, Robot};
-use crate::model::ErrorModel;
-use crate::physics::{AnyModel, HybridModel, PhysicsModel};
+use crate::kinematics::{IkOptions, Robot, all_reached, first_pass_joints, path_target};
+use crate::predictor::ErrorPredictor;
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
 use crate::{Error, Result};
@@ -136,14 +135,6 @@ pub struct Compensated {
     pub unsettled: Vec<usize>,
 }
 
-fn target(t: &Trajectory, p: &Isometry3<f64>) -> IkTarget {
-    if t.has_orientation {
-        IkTarget::pose(p)
-    } else {
-        IkTarget::position(p.translation.vector)
-    }
-}
-
 /// Nominal IK of every command (see [`first_pass_joints`] for the first
 /// pass); later passes seed each point from its own previous solution (the
 /// commands moved by a fraction of a millimetre), in parallel. Failures are
@@ -158,125 +149,14 @@ fn solve_joints(
     opts: &IkOptions,
 ) -> Result<Vec<Vec<f64>>> {
     let results: Vec<Result<Vec<f64>>> = match previous {
-        None => first_pass_joints(robot, traj, poses, start, hints, opts),
+        None => first_pass_joints(robot, traj.has_orientation, poses, start, hints, opts),
         Some(prev) => poses
             .par_iter()
             .zip(prev)
-            .map(|(p, q0)| robot.ik(&target(traj, p), q0, opts))
+            .map(|(p, q0)| robot.ik(&path_target(traj.has_orientation, p), q0, opts))
             .collect(),
     };
     all_reached(results)
-}
-
-/// The joints of every point, or [`Error::Unreachable`] listing the points
-/// whose IK failed (with the first failure's message).
-pub fn all_reached(results: Vec<Result<Vec<f64>>>) -> Result<Vec<Vec<f64>>> {
-    let mut joints = Vec::with_capacity(results.len());
-    let mut failed = Vec::new();
-    let mut first = String::new();
-    for (i, r) in results.into_iter().enumerate() {
-        match r {
-            Ok(q) => joints.push(q),
-            Err(e) => {
-                if failed.is_empty() {
-                    first = e.to_string();
-                }
-                failed.push(i);
-            }
-        }
-    }
-    if failed.is_empty() {
-        Ok(joints)
-    } else {
-        Err(Error::Unreachable {
-            indices: failed,
-            first,
-        })
-    }
-}
-
-/// Sequential IK along `poses`: each point seeded from its hint (if given),
-/// then from the previous point's solution (the paper's rule), then from the
-/// start pose.
-pub fn first_pass_joints(
-    robot: &Robot,
-    traj: &Trajectory,
-    poses: &[Isometry3<f64>],
-    start: &[f64],
-    hints: Option<&[Vec<f64>]>,
-    opts: &IkOptions,
-) -> Vec<Result<Vec<f64>>> {
-    let mut prev = start.to_vec();
-    poses
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let mut seeds: Vec<&[f64]> = Vec::with_capacity(3);
-            if let Some(h) = hints.and_then(|h| h.get(i)) {
-                seeds.push(h);
-            }
-            seeds.push(&prev);
-            seeds.push(start);
-            let r = robot.ik_from_any(&target(traj, p), &seeds, opts);
-            if let Ok(q) = &r {
-                prev.clone_from(q);
-            }
-            r
-        })
-        .collect()
-}
-
-/// Anything that predicts the TCP error `δ̂(θ, λ)` (mm, measurement frame) of
-/// commanded poses: a Kriging [`ErrorModel`], a physics [`PhysicsModel`]
-/// (seed 000 eq 3, seed 002 eq 1) or their [`HybridModel`].
-pub trait ErrorPredictor: Sync {
-    /// Joint count the model was built for.
-    fn n_joints(&self) -> usize;
-    /// Predicted errors `[ex, ey, ez]` at commanded joints `q` approached in
-    /// directions `dir` (one row per pose).
-    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>>;
-}
-
-impl ErrorPredictor for ErrorModel {
-    fn n_joints(&self) -> usize {
-        self.n_joints
-    }
-    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        self.predict_mean(q, dir)
-    }
-}
-
-impl ErrorPredictor for PhysicsModel {
-    fn n_joints(&self) -> usize {
-        self.nominal.dof()
-    }
-    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        self.predict(q, dir)
-    }
-}
-
-impl ErrorPredictor for HybridModel {
-    fn n_joints(&self) -> usize {
-        self.physics.nominal.dof()
-    }
-    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        self.predict(q, dir)
-    }
-}
-
-impl ErrorPredictor for AnyModel {
-    fn n_joints(&self) -> usize {
-        match self {
-            AnyModel::Kriging(m) => m.n_joints(),
-            AnyModel::Physics(m) => ErrorPredictor::n_joints(m.as_ref()),
-        }
-    }
-    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        match self {
-            AnyModel::Kriging(m) => m.predict_mean(q, dir),
-            AnyModel::Physics(m) => m.predict(q, dir),
-        }
-    }
 }
 
 /// Compensate the target trajectory `targets` for `robot` with `model`.

@@ -37,6 +37,7 @@ pub mod optim;
 pub mod output;
 pub mod physics;
 pub mod plot;
+pub mod predictor;
 pub mod sim;
 pub mod space;
 pub mod stats;

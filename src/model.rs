@@ -942,3 +942,12 @@ fn kinematic_trend_set(
     };
     Ok([make(0), make(1), make(2)])
 }
+
+impl crate::predictor::ErrorPredictor for ErrorModel {
+    fn n_joints(&self) -> usize {
+        self.n_joints
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict_mean(q, dir)
+    }
+}

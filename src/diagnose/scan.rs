@@ -16,7 +16,7 @@
 use super::gls::{self, AxisSystem, FamilyTest};
 use crate::dataset::Dataset;
 use crate::features::Feature;
-use crate::sim::rng_for;
+use crate::stats::rng_for;
 use rand::RngExt;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

@@ -16,12 +16,14 @@
 
 mod calib;
 mod ik;
+mod path;
 mod presets;
 
 pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
+pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset};
 
 use crate::{Error, Result};

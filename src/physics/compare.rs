@@ -14,10 +14,11 @@
 //! Scores are 3D and, as in seed 000 (a 2D model), XY only.
 
 use super::{HybridModel, identify_physics};
-use crate::compensate::{CompensationOptions, ErrorPredictor, compensate};
+use crate::compensate::{CompensationOptions, compensate};
 use crate::dataset::Dataset;
 use crate::kinematics::{self, Robot};
 use crate::methods::Method;
+use crate::predictor::ErrorPredictor;
 use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot, campaign, execute, rng_for};
 use crate::stats::spread;
 use crate::trajectory::Trajectory;

@@ -3,6 +3,7 @@
 use super::BidirectionalTable;
 use crate::kinematics::{JointKind, Robot};
 use crate::model::ErrorModel;
+use crate::predictor::ErrorPredictor;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -323,6 +324,39 @@ impl AnyModel {
                     "D-H only"
                 }
             ),
+        }
+    }
+}
+
+impl ErrorPredictor for PhysicsModel {
+    fn n_joints(&self) -> usize {
+        self.nominal.dof()
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict(q, dir)
+    }
+}
+
+impl ErrorPredictor for HybridModel {
+    fn n_joints(&self) -> usize {
+        self.physics.nominal.dof()
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict(q, dir)
+    }
+}
+
+impl ErrorPredictor for AnyModel {
+    fn n_joints(&self) -> usize {
+        match self {
+            AnyModel::Kriging(m) => m.n_joints(),
+            AnyModel::Physics(m) => ErrorPredictor::n_joints(m.as_ref()),
+        }
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        match self {
+            AnyModel::Kriging(m) => m.predict_mean(q, dir),
+            AnyModel::Physics(m) => m.predict(q, dir),
         }
     }
 }

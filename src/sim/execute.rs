@@ -7,8 +7,7 @@
 
 use super::{Effect, TrueRobot, gaussian};
 use crate::Result;
-use crate::compensate::{all_reached, first_pass_joints};
-use crate::kinematics::IkOptions;
+use crate::kinematics::{IkOptions, all_reached, first_pass_joints};
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
 use nalgebra::Vector3;
@@ -43,7 +42,7 @@ pub fn execute(
     nominal.check_len(start)?;
     let joints = all_reached(first_pass_joints(
         nominal,
-        commands,
+        commands.has_orientation,
         &commands.poses,
         start,
         hints,
