@@ -119,9 +119,7 @@ impl Method {
             Method::Recommended => {
                 let opts = KrigingOptions {
                     seed,
-                    nugget: true,
-                    corr_auto: true,
-                    ..KrigingOptions::default()
+                    ..KrigingOptions::recommended()
                 };
                 ErrorModel::fit(data, Space::Ejs, &opts)
             }

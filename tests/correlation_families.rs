@@ -64,6 +64,7 @@ fn every_family_saves_by_name_and_predicts_the_same_after_loading() {
     for corr in Correlation::ALL {
         let opts = KrigingOptions {
             corr,
+            nugget: false,
             ..KrigingOptions::default()
         };
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
@@ -117,7 +118,28 @@ fn auto_keeps_the_family_with_the_lowest_cv_error() {
     };
     let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
     for (out, rep) in model.outputs.iter().zip(&model.reports) {
-        assert_eq!(rep.families.len(), Correlation::ALL.len());
+        // tried from the smoothest, stopping after the first rougher family
+        // that scored worse than the best so far
+        let tried: Vec<Correlation> = rep.families.iter().map(|f| f.corr).collect();
+        assert!(tried.len() >= 2, "{tried:?}");
+        assert_eq!(tried, Correlation::ALL[..tried.len()]);
+        let best_before_last = rep.families[..tried.len() - 1]
+            .iter()
+            .map(|f| f.cv_rmse)
+            .fold(f64::INFINITY, f64::min);
+        for (i, f) in rep.families.iter().enumerate().skip(1) {
+            let best_before = rep.families[..i]
+                .iter()
+                .map(|f| f.cv_rmse)
+                .fold(f64::INFINITY, f64::min);
+            if i + 1 < tried.len() {
+                assert!(f.cv_rmse <= best_before, "went on after a worse family");
+            }
+        }
+        if tried.len() < Correlation::ALL.len() {
+            assert!(rep.families.last().unwrap().cv_rmse > best_before_last);
+        }
+        assert!(rep.families.iter().all(|f| f.rows == data.len()));
         let best = rep
             .families
             .iter()

@@ -10,9 +10,11 @@ use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, SimOutput, TrueRo
 use robokrige::space::{Space, periodic_joints};
 use std::path::Path;
 
+/// The papers' set-up: Hooke–Jeeves, interpolating.
 fn hj() -> KrigingOptions {
     KrigingOptions {
         optimizer: OptimizerKind::HookeJeeves,
+        nugget: false,
         ..KrigingOptions::default()
     }
 }

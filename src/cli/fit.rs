@@ -66,8 +66,10 @@ pub struct ModelArgs {
     space: SpaceArg,
     #[arg(long, value_enum, default_value = "constant")]
     trend: TrendArg,
-    /// Correlation family, one length scale per input (h² = Σ ξ_k Δs_k²).
-    #[arg(long, value_enum, default_value = "gaussian")]
+    /// Correlation family, one length scale per input (h² = Σ ξ_k Δs_k²);
+    /// by default each output's family is chosen by closed-form 10-fold CV
+    /// (the `recommended` method). `gaussian` is the papers'.
+    #[arg(long, value_enum, default_value = "auto")]
     corr: CorrArg,
     #[arg(long, value_enum, default_value = "bfgs")]
     optimizer: OptimizerArg,

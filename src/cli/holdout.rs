@@ -53,8 +53,9 @@ pub struct HoldoutArgs {
     #[arg(long, default_value = "bfgs")]
     optimizer: String,
     /// Correlation family of the Kriging fits: gaussian, matern52, matern32,
-    /// exponential, or auto (each output's family by closed-form 10-fold CV).
-    #[arg(long, value_enum, default_value = "gaussian")]
+    /// exponential, or auto (each output's family by closed-form 10-fold CV,
+    /// the default).
+    #[arg(long, value_enum, default_value = "auto")]
     corr: super::fit::CorrArg,
     /// Interpolate exactly (no nugget) in the Kriging fits. By default a
     /// nugget is estimated: real data has noise.

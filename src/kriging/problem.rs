@@ -60,14 +60,19 @@ pub struct Workspace {
     mem: MemBuffer,
     /// C⁻¹ for the gradient; allocated by the first [`KrigingProblem::psi_grad`].
     cinv: Mat<f64>,
+    /// Parallelism of the m × m work ([`par_for`]): from [`PAR_MIN_ROWS`]
+    /// rows every evaluation uses all threads, so that three outputs on
+    /// two cores never leave one idle.
+    par: Par,
 }
 
 impl Workspace {
     /// Buffers for `m` rows and `p` trend terms.
     pub fn new(m: usize, p: usize) -> Self {
         let bs = recommended_block_size::<f64>(m, p + 1);
+        let par = par_for(m);
         let req = StackReq::any_of(&[
-            cholesky_in_place_scratch::<f64>(m, Par::Seq, Default::default()),
+            cholesky_in_place_scratch::<f64>(m, par, Default::default()),
             qr_in_place_scratch::<f64>(m, p + 1, bs, Par::Seq, Default::default()),
         ]);
         Workspace {
@@ -78,6 +83,7 @@ impl Workspace {
             qcoef: Mat::zeros(bs, (p + 1).min(m)),
             mem: MemBuffer::new(req),
             cinv: Mat::zeros(0, 0),
+            par,
         }
     }
 }
@@ -129,7 +135,7 @@ impl KrigingProblem<'_> {
             cholesky_in_place(
                 ws.r.as_mut(),
                 LltRegularization::default(),
-                Par::Seq,
+                ws.par,
                 stack,
                 Default::default(),
             )
@@ -190,7 +196,7 @@ impl KrigingProblem<'_> {
             &mut ws.aug,
             &mut ws.qcoef,
             &mut ws.mem,
-            Par::Seq,
+            ws.par,
         );
         Ok(PsiValue {
             ln_psi: ln_det_r / self.m() as f64 + sigma2.ln(),
@@ -275,7 +281,7 @@ impl KrigingProblem<'_> {
         if ws.cinv.nrows() != m {
             ws.cinv = Mat::zeros(m, m);
         }
-        invert_lower_triangular(ws.cinv.as_mut(), ws.r.as_ref(), Par::Seq);
+        invert_lower_triangular(ws.cinv.as_mut(), ws.r.as_ref(), ws.par);
         tri_matmul(
             ws.r.as_mut(),
             BlockStructure::TriangularLower,
@@ -285,7 +291,7 @@ impl KrigingProblem<'_> {
             ws.cinv.as_ref(),
             BlockStructure::TriangularLower,
             1.0,
-            Par::Seq,
+            ws.par,
         );
         let rinv = &ws.r;
         // γ = R⁻¹ e from the lower triangle
