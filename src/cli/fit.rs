@@ -247,13 +247,14 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "fitted {} rows in {:?} space ({} correlation, {}) in {secs:.2} s -> {}",
+        "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
         if model.options.corr_auto {
-            "auto".to_string()
+            let c: Vec<String> = model.outputs.iter().map(|o| o.corr().to_string()).collect();
+            format!("correlation by CV: {}", c.join(" / "))
         } else {
-            model.outputs[0].corr().to_string()
+            format!("{} correlation", model.outputs[0].corr())
         },
         if model.options.nugget {
             "nugget estimated"
