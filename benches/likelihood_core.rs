@@ -21,7 +21,8 @@
 //!
 //! `-- --families` prints the correlation-family table of issue 17 instead:
 //! simulated campaigns of 300 poses (robot seeds 931–932, not used
-//! elsewhere; three robots), each family and `corr_auto`, with and without
+//! elsewhere; three robots) and the shipped campaign (`comau_lhs.csv`, its
+//! 30 verification poses held out), each family and `corr_auto`, with and without
 //! a nugget: fit wall time and held-out RMS 3D / floor. The splits are
 //! written to `target/bench-data/fam_*` for
 //! `benches/reference_scale.py --families`.
@@ -58,6 +59,31 @@ fn simulated(robot_name: &str, seed: u64, m: usize) -> Case {
     let floor = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     Case {
         name: format!("sim {robot_name} seed {seed}, m={m}"),
+        train,
+        test: Some((test, floor)),
+    }
+}
+
+/// The shipped campaign: `comau_lhs.csv` (300 poses) to train, the 30
+/// verification poses of `comau_verify.csv` held out, the floor from its
+/// truth file (the simulator's per-axis noise RMS).
+fn shipped() -> Case {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets");
+    let train = read_csv(&root.join("comau_lhs.csv")).unwrap();
+    let test = read_csv(&root.join("comau_verify.csv")).unwrap();
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("comau_verify.truth.json")).unwrap(),
+    )
+    .unwrap();
+    let floor = truth["noise_floor_mm"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap().powi(2))
+        .sum::<f64>()
+        .sqrt();
+    Case {
+        name: "shipped comau_lhs.csv → comau_verify.csv (30)".into(),
         train,
         test: Some((test, floor)),
     }
@@ -187,14 +213,17 @@ fn families() {
     std::fs::create_dir_all(dir).unwrap();
     println!("| campaign | family | nugget | fit s | held-out RMS 3D / floor | chosen (x/y/z) |");
     println!("|---|---|---|---|---|---|");
-    let cases = [
+    let cases: Vec<Case> = [
         ("comau-nj220", 931),
         ("comau-nj220", 932),
         ("kuka-kr30ha", 931),
         ("ur10", 931),
-    ];
-    for (i, (robot, seed)) in cases.into_iter().enumerate() {
-        let case = simulated(robot, seed, 300);
+    ]
+    .into_iter()
+    .map(|(robot, seed)| simulated(robot, seed, 300))
+    .chain(std::iter::once(shipped()))
+    .collect();
+    for (i, case) in cases.iter().enumerate() {
         let (test, floor) = case.test.as_ref().unwrap();
         robokrige::dataset::write_csv(&dir.join(format!("fam_{i}_train.csv")), &case.train)
             .unwrap();
