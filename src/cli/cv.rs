@@ -110,31 +110,13 @@ pub fn run(a: CvArgs) -> Result<()> {
     };
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
+    let words = super::fit::settings_line(space, opts, choice.kinematic.is_some());
     println!(
-        "{}-fold CV ({}) of {:?} {:?}{} {:?} on {} rows{}, {:.1} s",
+        "{}-fold CV ({}) of {} on {} rows ({words}), {:.1} s",
         a.folds,
         res.mode,
-        space,
-        opts.trend,
-        if choice.kinematic.is_some() {
-            " + kinematic"
-        } else {
-            ""
-        },
-        opts.optimizer,
+        a.data.display(),
         data.len(),
-        if opts.periodic.is_empty() {
-            String::new()
-        } else {
-            format!(
-                ", periodic {}",
-                opts.periodic
-                    .iter()
-                    .map(|j| format!("q{}", j + 1))
-                    .collect::<Vec<_>>()
-                    .join(",")
-            )
-        },
         res.seconds
     );
     println!(
@@ -146,7 +128,18 @@ pub fn run(a: CvArgs) -> Result<()> {
         s.mean_3d_mm, s.std_3d_mm, s.min_3d_mm, s.max_3d_mm
     );
     if let Some(path) = &a.json {
-        super::write_json(path, &res, "cv result")?;
+        let mut v = serde_json::to_value(&res)
+            .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("data".into(), serde_json::json!(a.data));
+            let s: serde_json::Map<String, serde_json::Value> =
+                super::fit::settings(space, opts, choice.kinematic.is_some())
+                    .into_iter()
+                    .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+                    .collect();
+            o.insert("settings".into(), serde_json::Value::Object(s));
+        }
+        super::write_json(path, &v, "cv result")?;
     }
     if let Some(path) = &a.plot {
         let axis = |k: usize| res.residuals.iter().map(|e| e[k].abs()).collect();

@@ -103,6 +103,67 @@ pub struct ModelArgs {
     kinematic: bool,
 }
 
+/// The model settings in the CLI's own words (`--space ejs`, `--trend
+/// constant`, …), for reports: `(name, value)` pairs.
+pub fn settings(
+    space: Space,
+    opts: &KrigingOptions,
+    kinematic: bool,
+) -> Vec<(&'static str, String)> {
+    let mut v = vec![
+        ("space", format!("{space:?}").to_lowercase()),
+        (
+            "trend",
+            format!("{:?}", opts.trend).to_lowercase()
+                + if kinematic { " + kinematic" } else { "" },
+        ),
+        (
+            "corr",
+            if opts.corr_auto {
+                "auto".to_string()
+            } else {
+                opts.corr.to_string()
+            },
+        ),
+        (
+            "optimizer",
+            match opts.optimizer {
+                OptimizerKind::Bfgs => "bfgs",
+                OptimizerKind::Gps => "gps",
+                OptimizerKind::HookeJeeves => "hj",
+            }
+            .to_string(),
+        ),
+        (
+            "nugget",
+            if opts.nugget {
+                "estimated"
+            } else {
+                "none (interpolating)"
+            }
+            .to_string(),
+        ),
+    ];
+    if !opts.periodic.is_empty() {
+        let p: Vec<String> = opts
+            .periodic
+            .iter()
+            .map(|j| format!("q{}", j + 1))
+            .collect();
+        v.push(("periodic", p.join(",")));
+    }
+    v
+}
+
+/// [`settings`] as one line: `space ejs, trend constant, …`.
+pub fn settings_line(space: Space, opts: &KrigingOptions, kinematic: bool) -> String {
+    settings(space, opts, kinematic)
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// What [`ModelArgs::resolve`] gives: space, options, and the robot of the
 /// kinematic trend.
 pub struct ModelChoice {
