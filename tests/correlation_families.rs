@@ -154,3 +154,50 @@ fn auto_keeps_the_family_with_the_lowest_cv_error() {
     let back = ErrorModel::from_json(&model.to_json().unwrap(), "auto.json").unwrap();
     assert_eq!(back.reports[0].families, model.reports[0].families);
 }
+
+/// Over `SEARCH_ROWS` rows the family is chosen on the search subset and
+/// only the chosen family converges on all rows (a rough 2-input response
+/// with noise, 1 100 rows).
+#[test]
+fn auto_on_a_large_campaign_chooses_on_the_search_subset() {
+    use rand::{RngExt, SeedableRng};
+    use robokrige::kriging::{Monomials, SEARCH_ROWS, Trend, fit_output_auto};
+    let m = SEARCH_ROWS + 100;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let x: Vec<Vec<f64>> = (0..m)
+        .map(|_| vec![rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)])
+        .collect();
+    // a kink (|x|) is rough: a Gaussian is not the obvious choice
+    let y: Vec<f64> = x
+        .iter()
+        .map(|r: &Vec<f64>| (3.0 * r[0]).abs() + 0.5 * r[1] + 0.02 * rng.random_range(-1.0..1.0))
+        .collect();
+    let inputs = TrainingInputs::new(&x);
+    let names = vec!["a".to_string(), "b".to_string()];
+    // two starts keep the test fast; the path is the same
+    let opts = KrigingOptions {
+        starts: 2,
+        ..KrigingOptions::recommended()
+    };
+    let trend = Trend::Monomials(Monomials::constant(2));
+    let (model, rep) = fit_output_auto(&x, &inputs, &y, &trend, &names, &opts, None).unwrap();
+    assert!(rep.families.len() >= 2);
+    assert!(rep.families.iter().all(|f| f.rows == SEARCH_ROWS));
+    let best = rep
+        .families
+        .iter()
+        .min_by(|a, b| a.cv_rmse.total_cmp(&b.cv_rmse))
+        .unwrap();
+    assert_eq!(model.corr(), best.corr);
+    // ξ converged on all rows, and the model holds all of them
+    assert_eq!(rep.search_rows, m);
+    let fit = model.predict_mean(&x[..50]);
+    let rms = (fit
+        .iter()
+        .zip(&y)
+        .map(|(p, t)| (p - t).powi(2))
+        .sum::<f64>()
+        / 50.0)
+        .sqrt();
+    assert!(rms < 0.05, "in-sample RMS {rms}");
+}
