@@ -160,6 +160,21 @@ fn solve_joints(
 }
 
 /// Compensate the target trajectory `targets` for `robot` with `model`.
+///
+/// ```
+/// use robokrige::compensate::{CompensationOptions, compensate};
+/// use robokrige::{dataset::read_csv, kinematics, trajectory::Trajectory};
+/// use robokrige::{kriging::KrigingOptions, model::ErrorModel, space::Space};
+/// let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/");
+/// let data = read_csv(format!("{dir}comau_lhs.csv").as_ref())?;
+/// let model = ErrorModel::fit(&data.select(&(0..60).collect::<Vec<_>>()), Space::Ejs,
+///     &KrigingOptions::default())?;
+/// let robot = kinematics::preset("comau-nj220")?;
+/// let circle = Trajectory::read_csv(format!("{dir}comau_circle.csv").as_ref())?;
+/// let out = compensate(&robot, &model, &circle, &CompensationOptions::default())?;
+/// assert_eq!(out.commands.poses.len(), circle.poses.len()); // send these instead
+/// # Ok::<(), robokrige::Error>(())
+/// ```
 pub fn compensate<M: ErrorPredictor + ?Sized>(
     robot: &Robot,
     model: &M,

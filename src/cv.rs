@@ -39,6 +39,18 @@ pub struct CvResult {
 }
 
 /// K-fold CV refitting the model on every training fold with `fit`.
+///
+/// ```
+/// use robokrige::{cv::cross_validate_refit, dataset::read_csv};
+/// use robokrige::{kriging::KrigingOptions, model::ErrorModel, space::Space};
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+/// let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+/// let opts = KrigingOptions::default();
+/// let cv = cross_validate_refit(&data, 5, 1, |t| ErrorModel::fit(t, Space::Ejs, &opts))?;
+/// assert_eq!(cv.residuals.len(), 60); // one out-of-fold residual per row
+/// println!("mean 3D error {:.4} mm", cv.summary.mean_3d_mm);
+/// # Ok::<(), robokrige::Error>(())
+/// ```
 pub fn cross_validate_refit<F>(data: &Dataset, k: usize, seed: u64, fit: F) -> Result<CvResult>
 where
     F: Fn(&Dataset) -> Result<ErrorModel>,

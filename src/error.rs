@@ -5,8 +5,9 @@
 
 use std::path::PathBuf;
 
-/// The crate's error.
+/// The crate's error. New variants may be added: match with a `_` arm.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// A problem at a definite place in a CSV file.
     /// `line` is 1-based and counts the header as line 1.

@@ -5,19 +5,33 @@
 //! joint last moved), and everything around them: kinematics, a measurement
 //! simulator, dataset I/O.
 //!
-//! Module map (see `DESIGN.md` of the project):
+//! Module map, bottom layer first (the layers and their rules:
+//! `docs/ARCHITECTURE.md`; the papers cited as "seed 00N": `REFERENCES.md`):
 //!
-//! | module | owns |
-//! |---|---|
-//! | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK, presets |
-//! | [`space`] | direction coefficients λ (seed 003 eq 5) |
-//! | [`dataset`] | the measurement CSV: read, validate, write |
-//! | [`sim`] | a "true robot" with geometric errors, angular positioning deviation, backlash, compliance, noise and undeclared effects; campaigns |
-//! | [`stats`] | summaries of error sets |
-//! | [`memory`] | memory estimates and the limit checked before large allocations |
-//! | [`kriging`] | universal Kriging: trend, correlation, fit, predict |
-//! | [`basis`], [`methods`], [`cv`] | trend selection, the papers' model variants, K-fold CV |
-//! | [`plot`] | SVG charts (box plots, x–y plots) |
+//! | layer | module | owns |
+//! |---|---|---|
+//! | data | [`error`] | the crate's one error type |
+//! | data | [`dataset`] | the measurement CSV: read, validate, write |
+//! | data | [`trajectory`] | commanded TCP paths (CSV) |
+//! | data | [`space`] | direction coefficients λ (seed 003 eq 5), JS/EJS encoding, input normalisation |
+//! | data | [`stats`] | summaries of error sets, seeded RNG streams, fold partitions |
+//! | data | [`memory`], [`output`] | memory estimates before large allocations; checked, atomic output files |
+//! | data | [`predictor`] | the `ErrorPredictor` trait every error model implements |
+//! | geometry | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK (also along a path), presets |
+//! | geometry | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
+//! | geometry | [`optim`] | box-constrained minimisers (BFGS, GPS, Hooke–Jeeves, GA, Levenberg–Marquardt) |
+//! | engine | [`kriging`] | universal Kriging: trend, correlation families, likelihood, fit, predict |
+//! | engine | [`basis`] | trend selection: PCC + PCA fusion (seed 003 eqs 15–20) |
+//! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
+//! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
+//! | model | [`methods`] | the papers' model variants by name, and `recommended` |
+//! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
+//! | studies | [`compensate`] | single-step and iterative feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22) |
+//! | studies | [`diagnose`] | closing the loop: what the model still misses |
+//! | studies | [`sim`] | a "true robot" and its campaigns (checks the engine; never used inside it) |
+//! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, hybrid, comparisons |
+//! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
+//! | output | [`plot`] | SVG charts (box plots, x–y plots) |
 
 pub mod basis;
 pub mod compensate;

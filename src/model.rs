@@ -181,6 +181,15 @@ pub struct Prediction {
 impl ErrorModel {
     /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
     /// with the given options' trend. Outputs and starts run in parallel.
+    ///
+    /// ```
+    /// use robokrige::{dataset::read_csv, kriging::KrigingOptions, model::ErrorModel, space::Space};
+    /// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+    /// let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+    /// let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
+    /// assert!(model.options.nugget); // tracker data is noisy
+    /// # Ok::<(), robokrige::Error>(())
+    /// ```
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
         let trend = opts
             .trend
@@ -569,6 +578,19 @@ impl ErrorModel {
 
     /// The predicted error only (no standard deviation), mm: the fast path
     /// for compensation.
+    ///
+    /// ```
+    /// # use robokrige::{dataset::read_csv, kriging::KrigingOptions, model::ErrorModel, space::Space};
+    /// # let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+    /// # let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+    /// # let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
+    /// // joints (degrees) and directions λ = ±1 of two commanded poses
+    /// let q = vec![vec![5.0, -10.0, 20.0, 0.0, 30.0, 0.0]; 2];
+    /// let dir = vec![vec![1.0; 6], vec![-1.0; 6]];
+    /// let errors = model.predict_mean(&q, &dir)?; // [ex, ey, ez] in mm per pose
+    /// assert_eq!(errors.len(), 2);
+    /// # Ok::<(), robokrige::Error>(())
+    /// ```
     pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.check_rows(q, dir)?;
         let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);

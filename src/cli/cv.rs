@@ -33,11 +33,11 @@ pub struct CvArgs {
     /// on all rows, fold residuals from the bordered system (fast).
     #[arg(long, value_enum, default_value = "refit")]
     mode: Mode,
-    /// Seed of the fold partition.
     /// Closed-form mode at scale: choose ξ (and the nugget) on the first N
     /// rows, then factorise all rows once at those values.
     #[arg(long)]
     hyper_rows: Option<usize>,
+    /// Seed of the fold partition.
     #[arg(long = "cv-seed", default_value_t = 1)]
     cv_seed: u64,
     /// Write the result (residuals, statistics) as JSON.

@@ -252,6 +252,17 @@ fn cross_validated(
 
 /// Run the loop on `data` (which needs `ex,ey,ez`). `progress` receives one
 /// line per step.
+///
+/// ```no_run
+/// use robokrige::{dataset::read_csv, diagnose::{DiagnoseOptions, diagnose}};
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_tracker_step.csv");
+/// let data = read_csv(path.as_ref())?;
+/// let found = diagnose(&data, &DiagnoseOptions::default(), &|line| eprintln!("{line}"))?;
+/// for e in found.effects.iter().filter(|e| e.accepted) {
+///     println!("added {} (q {:.4})", e.label, e.q_value); // the step at row 150
+/// }
+/// # Ok::<(), robokrige::Error>(())
+/// ```
 pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
     o.validate()?;
     let t0 = std::time::Instant::now();
