@@ -434,3 +434,49 @@ fn default_nugget_cross_validates_no_worse_than_the_interpolator() {
         "{default:?} below the noise floor {floor3}"
     );
 }
+
+/// `predict` says when it assumed the first pose's λ (issue 20), and
+/// `cv --methods` refuses the model options it would not honour.
+#[test]
+fn predict_warns_about_derived_directions_and_cv_methods_refuses_unused_options() {
+    let dir = std::env::temp_dir().join(format!("robokrige-cli-dir-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let lhs = format!("{root}/datasets/comau_lhs.csv");
+    let (c, _, err) = rk(&["fit", &lhs, "--corr", "gaussian", "-o", &p("m.json")]);
+    assert_eq!(c, 0, "{err}");
+    // the verification poses without their dir columns
+    let text = std::fs::read_to_string(format!("{root}/datasets/comau_verify.csv")).unwrap();
+    let cut: String = text
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            [&f[..7], &f[13..16]].concat().join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(dir.join("nodir.csv"), cut).unwrap();
+    let (c, _, err) = rk(&["predict", &p("m.json"), &p("nodir.csv"), "-o", &p("a.csv")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(
+        err.contains("no dir1..dir6 columns") && err.contains("λ = +1"),
+        "{err}"
+    );
+    let verify = format!("{root}/datasets/comau_verify.csv");
+    let (c, _, err) = rk(&["predict", &p("m.json"), &verify, "-o", &p("b.csv")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(!err.contains("dir1..dir6"), "{err}");
+    for extra in [
+        &["--mode", "closed-form"][..],
+        &["--no-nugget"],
+        &["--space", "js"],
+        &["--hyper-rows", "100"],
+    ] {
+        let mut args = vec!["cv", lhs.as_str(), "--methods", "js-hj"];
+        args.extend_from_slice(extra);
+        let (c, _, err) = rk(&args);
+        assert_eq!(c, 2, "{extra:?}: {err}");
+        assert!(err.contains("cannot be used with"), "{err}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

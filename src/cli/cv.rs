@@ -26,8 +26,15 @@ pub struct CvArgs {
     folds: usize,
     /// Compare named methods instead of one model choice: `all` or a list of
     /// recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga (refit mode: each method's
-    /// selection and hyperparameters inside every training fold).
-    #[arg(long)]
+    /// selection and hyperparameters inside every training fold). Each method
+    /// carries its own settings (and `--cv-seed` seeds its search): the model
+    /// options (`--space`, `--trend`, `--corr`, `--optimizer`, `--no-nugget`,
+    /// `--starts`, `--seed`, `--periodic`, `--robot`, `--tool`, `--kinematic`)
+    /// and `--mode`, `--hyper-rows` are refused with it, not ignored.
+    #[arg(long, conflicts_with_all = [
+        "space", "trend", "corr", "optimizer", "no_nugget", "nugget", "starts", "seed",
+        "periodic", "robot", "tool", "kinematic", "mode", "hyper_rows",
+    ])]
     methods: Option<String>,
     /// refit: re-optimise ξ on every training fold; closed-form: ξ from one fit
     /// on all rows, fold residuals from the bordered system (fast).
