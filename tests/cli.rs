@@ -480,3 +480,70 @@ fn predict_warns_about_derived_directions_and_cv_methods_refuses_unused_options(
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Every subcommand has an example and every option a help text (issue 20).
+#[test]
+fn every_subcommand_has_an_example_and_every_option_a_help_text() {
+    let subcommands = |args: &[&str]| -> Vec<String> {
+        let mut a = args.to_vec();
+        a.push("--help");
+        let (_, out, _) = rk(&a);
+        out.lines()
+            .skip_while(|l| !l.starts_with("Commands:"))
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .filter_map(|l| l.split_whitespace().next())
+            .filter(|c| *c != "help")
+            .map(String::from)
+            .collect()
+    };
+    let mut checked = 0;
+    let mut missing = Vec::new();
+    for top in subcommands(&[]) {
+        let subs = subcommands(&[&top]);
+        let paths: Vec<Vec<String>> = if subs.is_empty() {
+            vec![vec![top.clone()]]
+        } else {
+            subs.into_iter().map(|s| vec![top.clone(), s]).collect()
+        };
+        for path in paths {
+            let mut args: Vec<&str> = path.iter().map(String::as_str).collect();
+            args.push("--help");
+            let (c, out, _) = rk(&args);
+            assert_eq!(c, 0, "{path:?}");
+            assert!(out.contains("Example"), "{path:?} has no example:\n{out}");
+            // the Options section only (the examples after it are not options)
+            let lines: Vec<&str> = out
+                .lines()
+                .skip_while(|l| !l.starts_with("Options:"))
+                .skip(1)
+                .take_while(|l| l.is_empty() || l.starts_with(' '))
+                .collect();
+            assert!(!lines.is_empty(), "{path:?}: no options section");
+            for (i, l) in lines.iter().enumerate() {
+                let t = l.trim_start();
+                if !(l.starts_with("  ") && t.starts_with('-')) || t.starts_with("-h, --help") {
+                    continue;
+                }
+                // the text follows on the same line after two spaces, or on
+                // the next, indented further
+                let same = t.split_once("  ").is_some_and(|(_, r)| {
+                    !r.trim().is_empty() && !r.trim().starts_with("[default")
+                });
+                let next = lines
+                    .get(i + 1)
+                    .is_some_and(|n| n.starts_with("          ") && !n.trim().is_empty());
+                if !(same || next) {
+                    missing.push(format!("{path:?} {t}"));
+                }
+            }
+            checked += 1;
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "options without help:\n{}",
+        missing.join("\n")
+    );
+    assert!(checked >= 14, "{checked} subcommands checked");
+}

@@ -90,8 +90,11 @@ pub struct EvaluateArgs {
     /// Seed of the measurement noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Plot the 3D error along the path, nominal and each compensated
+    /// trajectory (SVG).
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Write the errors (mean, max, RMS per axis) of every trajectory as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
 }

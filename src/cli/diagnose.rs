@@ -52,16 +52,19 @@ pub struct DiagnoseArgs {
     /// structure that makes smooth candidates look significant.
     #[arg(long)]
     no_nugget: bool,
+    /// Folds K of the cross-validation every candidate is judged by.
     #[arg(long, default_value_t = 10)]
     folds: usize,
     /// Seed of the fold partition, the permutations and the fits.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Sign-flip resamples of each candidate's null distribution (its p-value).
     #[arg(long, default_value_t = 1999)]
     permutations: usize,
     /// False-discovery rate (Benjamini–Hochberg).
     #[arg(long, default_value_t = 0.05)]
     fdr: f64,
+    /// Effects added at most (one per round).
     #[arg(long, default_value_t = 3)]
     max_effects: usize,
     /// Joints entered as (sin θ, cos θ): "none" (default), "auto" (range >
@@ -89,8 +92,12 @@ pub struct DiagnoseArgs {
     /// before and after and reports the errors.
     #[arg(long)]
     robot: Option<String>,
+    /// Trajectory to compensate with the model before and after the effects
+    /// were added (TCP x,y,z CSV, or joints q1..qN), with --robot and --truth.
     #[arg(long, requires = "robot")]
     traj: Option<PathBuf>,
+    /// Simulator truth JSON of the campaign (`robokrige simulate` writes it):
+    /// runs the compensated trajectory on the simulated robot to measure it.
     #[arg(long, requires = "robot")]
     truth: Option<PathBuf>,
 }

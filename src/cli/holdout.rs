@@ -36,16 +36,22 @@ Example (the public UR10 data, series C):
 pub struct HoldoutArgs {
     /// Measurement CSV with ex,ey,ez.
     data: PathBuf,
+    /// Robot preset: the nominal kinematics of the D-H calibration and of the
+    /// kinematic trend.
     #[arg(long)]
     robot: String,
     /// TCP offset in the flange frame, mm ("x,y,z"), if the errors were
     /// computed with one.
     #[arg(long)]
     tool: Option<String>,
+    /// Training rows (the first ones); with --cv, the rows the Kriging
+    /// hyperparameters are chosen on (up to all rows).
     #[arg(long, default_value_t = 600)]
     train: usize,
+    /// Held-out rows after the training ones (without --cv).
     #[arg(long, default_value_t = 300)]
     test: usize,
+    /// Seed of the hyperparameter starts and, with --cv, of the fold partition.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Kriging hyperparameter search: bfgs (analytic gradient, 8 starts),
@@ -80,6 +86,7 @@ pub struct HoldoutArgs {
     /// Kriging at the ξ chosen on the first --train rows, refitted per fold).
     #[arg(long)]
     cv: Option<usize>,
+    /// Write the table (and with --cv the per-fold figures) as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
 }

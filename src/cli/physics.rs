@@ -54,14 +54,24 @@ pub struct CrosstalkArgs {
     /// Physics model identified from the indexing tests of the same set-up.
     #[arg(long)]
     model: PathBuf,
+    /// Write the cross-talk tables and the fit as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+The tracker frame is found by SVD registration of the measured points onto
+the nominal robot's (seed 004 eqs 29–35); the errors are then recomputed in
+the base frame.
+
+Example:
+  robokrige simulate --robot comau-nj220 --poses 200 --seed 1 -o c.csv
+  robokrige physics register c.csv --robot comau-nj220 -o c_base.csv")]
 pub struct RegisterArgs {
     /// Campaign with q.. and the measured x,y,z in the tracker's frame.
     data: PathBuf,
+    /// Robot preset whose nominal kinematics give the base frame.
     #[arg(long)]
     robot: String,
     /// Output CSV: the same rows, x,y,z in the base frame, ex,ey,ez recomputed.
@@ -70,14 +80,20 @@ pub struct RegisterArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige physics probing --robot kuka-kr30ha --seed 1 --json probing.json")]
 pub struct ProbingArgs {
+    /// Six-axis robot preset of the simulated set-up.
     #[arg(long, default_value = "kuka-kr30ha")]
     robot: String,
+    /// Seed of the simulated robot and its noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Switch the tracker and repeatability noise off (the systematic part alone).
     #[arg(long)]
     noise_free: bool,
+    /// Write the straightness table as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
 }
@@ -129,16 +145,22 @@ them (iterative feed-forward; score: measured − target on the true robot).
 Example:
   robokrige physics compare --robot scara-rh3frh5515 --seed 1 --report compare.md")]
 pub struct CompareArgs {
+    /// Robot preset of the simulated set-up (SCARA: seed 000; six-axis: seed 002).
     #[arg(long, default_value = "scara-rh3frh5515")]
     robot: String,
+    /// Seed of everything simulated.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Poses of the Latin-hypercube campaign the Kriging models train on.
     #[arg(long, default_value_t = 300)]
     train_poses: usize,
+    /// Points of the circle path.
     #[arg(long, default_value_t = 72)]
     path_points: usize,
+    /// Diameter of the circle path, mm.
     #[arg(long, default_value_t = 100.0)]
     path_mm: f64,
+    /// Random verification poses.
     #[arg(long, default_value_t = 50)]
     verify_poses: usize,
     /// Kriging method of the JS row.
@@ -150,6 +172,7 @@ pub struct CompareArgs {
     /// Estimate a nugget in every Kriging fit (default: interpolate, as the papers).
     #[arg(long)]
     nugget: bool,
+    /// Write the comparison table as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
     /// Markdown report.
