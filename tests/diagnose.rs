@@ -233,3 +233,44 @@ fn bad_options_are_errors() {
         assert!(diagnose(&data, &o, &|_| {}).is_err());
     }
 }
+
+/// A covariate that does not vary over the rows used is left out of the
+/// candidates and reported (issue 22): "temp_c × joint angles" with a
+/// constant temp_c is only a joint-angle trend under a wrong name.
+#[test]
+fn constant_covariates_are_left_out_and_reported() {
+    use robokrige::diagnose::scan::{dropped_covariates, families};
+    let mut data = campaign(60, 3, None);
+    let k = data
+        .covariates
+        .iter()
+        .position(|c| c.name == "temp_c")
+        .expect("temp_c column");
+    let varying = families(&data, &[], None);
+    assert!(varying.iter().any(|f| f.source == ["temp_c"]));
+    assert!(dropped_covariates(&data, &[]).is_empty());
+    // constant, as in the first 600 rows of UR10 series C
+    data.covariates[k].values = vec![21.68; 60];
+    let fams = families(&data, &[], None);
+    assert!(!fams.iter().any(|f| f.source == ["temp_c"]));
+    let dropped = dropped_covariates(&data, &[]);
+    assert_eq!(dropped.len(), 1);
+    assert!(
+        dropped[0].reason.contains("constant (21.68)"),
+        "{dropped:?}"
+    );
+    // nearly constant: an indicator of 3 rows is not a covariate either
+    for i in [5, 17, 40] {
+        data.covariates[k].values[i] = 22.5;
+    }
+    assert!(
+        !families(&data, &[], None)
+            .iter()
+            .any(|f| f.source == ["temp_c"])
+    );
+    assert!(
+        dropped_covariates(&data, &[])[0]
+            .reason
+            .contains("all but 3")
+    );
+}

@@ -228,6 +228,9 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         d.fdr,
         d.seconds
     );
+    for c in &d.dropped_covariates {
+        println!("  left out: covariate {}: {}", c.name, c.reason);
+    }
     println!(
         "  before: CV RMSE x/y/z {} mm, mean 3D {:.4}",
         rmse3(&d.before.cv_rmse_mm),
@@ -447,6 +450,13 @@ fn report(
          the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
         a.method, d.folds, d.seed, d.permutations, d.fdr, d.seconds
     );
+    for c in &d.dropped_covariates {
+        let _ = writeln!(
+            s,
+            "Covariate `{}` left out of the candidates: {} (it cannot explain anything here).\n",
+            c.name, c.reason
+        );
+    }
     let _ = writeln!(
         s,
         "| model | extra inputs | CV RMSE x / y / z (mm) | mean 3D (mm) | max 3D (mm) |"

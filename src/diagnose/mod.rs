@@ -190,6 +190,10 @@ pub struct Diagnosis {
     pub effects: Vec<EffectReport>,
     /// Extra inputs of the final model.
     pub extras: Vec<Feature>,
+    /// Covariates left out of the candidates because they do not vary over
+    /// the rows used ([`scan::constant_covariate`]).
+    #[serde(default)]
+    pub dropped_covariates: Vec<scan::DroppedCovariate>,
     pub seconds: f64,
 }
 
@@ -427,6 +431,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         steps,
         effects,
         extras,
+        dropped_covariates: scan::dropped_covariates(data, &[]),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

@@ -14,7 +14,7 @@
 //! of the best grid point.
 
 use super::gls::{self, AxisSystem, FamilyTest};
-use crate::dataset::Dataset;
+use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
 use crate::stats::rng_for;
 use rand::RngExt;
@@ -67,9 +67,64 @@ fn params(kv: &[(&str, f64)]) -> BTreeMap<String, f64> {
     kv.iter().map(|(k, v)| (k.to_string(), *v)).collect()
 }
 
+/// Rows that must differ from a covariate's median for it to be a
+/// candidate: a column that varies in fewer rows is an indicator of those
+/// rows, not a covariate.
+pub const MIN_VARYING_ROWS: usize = 5;
+
+/// A covariate left out of the candidates because it does not vary over the
+/// rows used (issue 22): with a constant covariate, "covariate × joint
+/// angles" is only a linear trend in the joint angles, and its name would
+/// claim an effect the data cannot show.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DroppedCovariate {
+    /// Column name.
+    pub name: String,
+    /// Why, in words, with the value.
+    pub reason: String,
+}
+
+/// `Some(reason)` when covariate `c` is constant or nearly constant over its
+/// rows: fewer than [`MIN_VARYING_ROWS`] rows differ from its median by more
+/// than 1e-9 of its magnitude.
+pub fn constant_covariate(c: &Covariate) -> Option<String> {
+    let mut v: Vec<f64> = c.values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let median = v[v.len() / 2];
+    let tol = 1e-9 * median.abs().max(1.0);
+    let varying = v.iter().filter(|x| (**x - median).abs() > tol).count();
+    let m = c.values.len();
+    if varying == 0 {
+        Some(format!("constant ({median}) in all {m} rows used"))
+    } else if varying < MIN_VARYING_ROWS.min(m) {
+        Some(format!(
+            "nearly constant: {median} in all but {varying} of the {m} rows used"
+        ))
+    } else {
+        None
+    }
+}
+
+/// The covariates [`families`] leaves out as constant, with the reason.
+pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCovariate> {
+    data.covariates
+        .iter()
+        .filter(|c| !exclude.contains(&c.name) && c.missing == 0 && !c.name.starts_with('@'))
+        .filter_map(|c| {
+            constant_covariate(c).map(|reason| DroppedCovariate {
+                name: c.name.clone(),
+                reason,
+            })
+        })
+        .collect()
+}
+
 /// The candidate families a campaign supports. Covariates named in
-/// `exclude` (already in the model) and columns with missing values are left
-/// out; the harmonic periods run from 2° to half the joint's range, in steps
+/// `exclude` (already in the model), columns with missing values and
+/// constant ones ([`constant_covariate`]) are left out; the harmonic periods run from 2° to half the joint's range, in steps
 /// of a tenth of a cycle over the range (a phase error of at most 1/20
 /// cycle at the ends). With a robot preset (`robot`), joint cross-talk
 /// candidates mapped through its Jacobian are added.
@@ -89,10 +144,12 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
         if exclude.contains(&c.name) || c.missing > 0 || c.name.starts_with('@') {
             continue;
         }
-        let z = zscore(&c.values);
-        if z.iter().all(|v| *v == 0.0) {
+        // a constant column z-scores to round-off (or to ±1 everywhere):
+        // "c × joint angles" would then be a joint-angle trend in c's name
+        if constant_covariate(c).is_some() {
             continue;
         }
+        let z = zscore(&c.values);
         let add = Feature::Covariate {
             name: c.name.clone(),
             reference: Some(c.values[0]),
