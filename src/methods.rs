@@ -193,14 +193,14 @@ pub fn fit_ga(
         let cand = all[a].subset(&screen.kept);
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         let (_, base) = fit_output(&x, &inputs, &y, &constant, &names, opts)?;
+        let at = crate::kriging::Hyperparameters {
+            corr: opts.corr,
+            theta: &base.theta,
+            nugget: base.nugget,
+            min_jitter: opts.min_jitter,
+        };
         let rmse = |bits: &[bool]| {
             let keep: Vec<usize> = (0..cand.len()).filter(|&j| j == 0 || bits[j]).collect();
-            let at = crate::kriging::Hyperparameters {
-                corr: opts.corr,
-                theta: &base.theta,
-                nugget: base.nugget,
-                min_jitter: opts.min_jitter,
-            };
             crate::kriging::fit_output_with(&x, &inputs, &y, &cand.subset(&keep), &at)
                 .and_then(|model| model.held_out_residuals(&blocks))
                 .map_or(f64::INFINITY, |e| {

@@ -576,6 +576,21 @@ impl ErrorModel {
         Ok(Prediction { mean, std })
     }
 
+    /// How far (mm, 3D) the predicted error at joints `q` moves when every
+    /// joint's direction `dir` is reversed: what an assumed λ can be worth
+    /// (0 in joint space, which ignores λ).
+    pub fn direction_sensitivity(&self, q: &[f64], dir: &[f64]) -> Result<f64> {
+        if self.space == Space::Js {
+            return Ok(0.0);
+        }
+        let flipped: Vec<f64> = dir.iter().map(|v| -v).collect();
+        let p = self.predict_mean(&[q.to_vec(), q.to_vec()], &[dir.to_vec(), flipped])?;
+        Ok((0..3)
+            .map(|k| (p[0][k] - p[1][k]).powi(2))
+            .sum::<f64>()
+            .sqrt())
+    }
+
     /// The predicted error only (no standard deviation), mm: the fast path
     /// for compensation.
     ///

@@ -423,21 +423,16 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         });
     }
     let pred = model.predict_dataset(&data)?;
-    if data.dir_source == robokrige::dataset::DirSource::Derived
-        && model.space == Space::Ejs
-        && !data.is_empty()
-    {
-        // what the assumed λ of the first pose can be worth, by the model
-        let flipped = vec![data.dir[0].iter().map(|v| -v).collect::<Vec<f64>>()];
-        let other = model.predict_mean(&data.q[..1], &flipped)?;
-        let d: f64 = (0..3)
-            .map(|k| (other[0][k] - pred.mean[0][k]).powi(2))
-            .sum::<f64>()
-            .sqrt();
+    let derived = data.dir_source == robokrige::dataset::DirSource::Derived;
+    let assumed = match data.q.first() {
+        Some(q0) if derived => model.direction_sensitivity(q0, &data.dir[0])?,
+        _ => 0.0,
+    };
+    if assumed > 0.0 {
         eprintln!(
             "warning: {} has no dir1..dir{} columns: λ is derived from the row order, and the \
              first pose gets λ = +1 on every joint (assumed; a joint that has not moved yet keeps it). \
-             Reversing it changes that pose's prediction by {d:.3} mm: give the dir columns, or put \
+             Reversing it changes that pose's prediction by {assumed:.3} mm: give the dir columns, or put \
              the pose the robot came from first.",
             a.poses.display(),
             data.n_joints()

@@ -85,7 +85,7 @@ pub struct HoldoutArgs {
     #[arg(long)]
     pca: bool,
     /// Instead: K-fold CV on all rows (D-H calibration refitted per fold;
-    /// Kriging at the ξ chosen on the first --train rows, refitted per fold).
+    /// Kriging at the ξ chosen on all rows, or the first --train rows, refitted per fold).
     #[arg(long)]
     cv: Option<usize>,
     /// Write the table (and with --cv the per-fold figures) as JSON.

@@ -108,11 +108,20 @@ pub fn constant_covariate(c: &Covariate) -> Option<String> {
     }
 }
 
-/// The covariates [`families`] leaves out as constant, with the reason.
-pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCovariate> {
+/// The covariates that may become candidates: not in `exclude` (already
+/// in the model), no missing values, not a precomputed feature column (`@…`).
+fn usable_covariates<'a>(
+    data: &'a Dataset,
+    exclude: &'a [String],
+) -> impl Iterator<Item = &'a Covariate> {
     data.covariates
         .iter()
         .filter(|c| !exclude.contains(&c.name) && c.missing == 0 && !c.name.starts_with('@'))
+}
+
+/// The covariates [`families`] leaves out as constant, with the reason.
+pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCovariate> {
+    usable_covariates(data, exclude)
         .filter_map(|c| {
             constant_covariate(c).map(|reason| DroppedCovariate {
                 name: c.name.clone(),
@@ -140,15 +149,9 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
         add: vec![add],
     };
     let mut out = Vec::new();
-    for c in &data.covariates {
-        if exclude.contains(&c.name) || c.missing > 0 || c.name.starts_with('@') {
-            continue;
-        }
-        // a constant column z-scores to round-off (or to ±1 everywhere):
-        // "c × joint angles" would then be a joint-angle trend in c's name
-        if constant_covariate(c).is_some() {
-            continue;
-        }
+    // a constant column z-scores to round-off (or to ±1 everywhere): "c ×
+    // joint angles" would then be a joint-angle trend in c's name
+    for c in usable_covariates(data, exclude).filter(|c| constant_covariate(c).is_none()) {
         let z = zscore(&c.values);
         let add = Feature::Covariate {
             name: c.name.clone(),

@@ -98,7 +98,7 @@ impl Correlation {
         Self::ALL.into_iter().find(|c| c.name() == name)
     }
 
-    /// `R` from the squared scaled distance `s = h²` (non-Gaussian families).
+    /// `R` from the squared scaled distance `s = h²`.
     #[inline]
     fn radial(self, s: f64) -> f64 {
         match self {

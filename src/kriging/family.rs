@@ -93,11 +93,7 @@ pub fn fit_output_auto(
                 if s.is_finite() { s } else { f64::INFINITY }
             })
     };
-    let warm = WarmStart {
-        theta: first.1.theta[..inputs.d].to_vec(),
-        nugget: first.1.nugget,
-        inverse_hessian: first.1.inverse_hessian.clone(),
-    };
+    let warm = WarmStart::of(&first.1, inputs.d);
     let mut table = vec![FamilyScore {
         corr: Correlation::Gaussian,
         ln_psi: first.1.ln_psi,
@@ -112,35 +108,26 @@ pub fn fit_output_auto(
             corr,
             ..opts.clone()
         };
-        let rmse = match fit_output_from(x, inputs, y, trend, names, &o, Some(&warm)) {
-            Ok(fit) => {
-                evals += fit.1.evals;
-                let rmse = score(&fit.0);
-                table.push(FamilyScore {
-                    corr,
-                    ln_psi: fit.1.ln_psi,
-                    cv_rmse: rmse,
-                    rows: m,
-                });
-                if rmse < best_rmse {
-                    best_rmse = rmse;
-                    best = fit;
-                }
-                rmse
+        // a family whose fit fails scores ∞ (and stops the search)
+        let fit = fit_output_from(x, inputs, y, trend, names, &o, Some(&warm)).ok();
+        let (ln_psi, rmse) = fit
+            .as_ref()
+            .map_or((f64::NAN, f64::INFINITY), |f| (f.1.ln_psi, score(&f.0)));
+        evals += fit.as_ref().map_or(0, |f| f.1.evals);
+        table.push(FamilyScore {
+            corr,
+            ln_psi,
+            cv_rmse: rmse,
+            rows: m,
+        });
+        match fit {
+            Some(f) if rmse < best_rmse => {
+                best_rmse = rmse;
+                best = f;
             }
-            Err(_) => {
-                table.push(FamilyScore {
-                    corr,
-                    ln_psi: f64::NAN,
-                    cv_rmse: f64::INFINITY,
-                    rows: m,
-                });
-                f64::INFINITY
-            }
-        };
-        // rougher than the best and worse: the rougher ones are not tried
-        if rmse > best_rmse {
-            break;
+            // rougher than the best and worse: the rougher ones are not tried
+            _ if rmse > best_rmse => break,
+            _ => {}
         }
     }
     // the report counts the whole choice, not only the winner's search

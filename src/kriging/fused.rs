@@ -28,26 +28,13 @@ impl TrendModel for FusedBasis {
     }
 
     fn dim(&self) -> usize {
-        match &self.kinematic {
-            Some(k) => k.dim(),
-            None => self.candidates.dim,
-        }
+        self.selected().dim()
     }
 
     fn eval_into(&self, s: &[f64], out: &mut [f64]) {
-        let u = match &self.kinematic {
-            Some(k) => {
-                let mut u = vec![0.0; k.len()];
-                k.eval_into(s, &mut u);
-                u
-            }
-            None => {
-                let mut u = vec![0.0; self.candidates.len()];
-                self.candidates.eval_into(s, &mut u);
-                u
-            }
-        };
-        let mut u = u;
+        let sel = self.selected();
+        let mut u = vec![0.0; sel.len()];
+        sel.eval_into(s, &mut u);
         for ((v, m), sd) in u.iter_mut().zip(&self.mean).zip(&self.std) {
             *v = (*v - m) / sd;
         }
@@ -63,6 +50,14 @@ impl TrendModel for FusedBasis {
 }
 
 impl FusedBasis {
+    /// The selected candidates u: the kinematic-error rows, or the monomials.
+    fn selected(&self) -> &dyn TrendModel {
+        match &self.kinematic {
+            Some(k) => k.as_ref(),
+            None => &self.candidates,
+        }
+    }
+
     /// Shapes consistent with its candidates (for trends read from files).
     pub fn validate(&self) -> std::result::Result<(), String> {
         let c = match &self.kinematic {

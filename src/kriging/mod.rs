@@ -699,13 +699,7 @@ fn optimise_bfgs(
 ) -> Search {
     let m = problem.m();
     if m <= SEARCH_ROWS {
-        let (best, starts, hinv) = multistart_bfgs(
-            problem,
-            bounds,
-            unpack,
-            opts,
-            optim::QuasiNewtonOptions::default(),
-        );
+        let (best, starts, hinv) = multistart_bfgs(problem, bounds, unpack, opts);
         return Search {
             best,
             starts,
@@ -714,13 +708,7 @@ fn optimise_bfgs(
         };
     }
     let sub = SubsetData::new(problem, &row_subset(m, SEARCH_ROWS, opts.seed));
-    let (found, starts, hinv) = multistart_bfgs(
-        &sub.problem(problem),
-        bounds,
-        unpack,
-        opts,
-        optim::QuasiNewtonOptions::default(),
-    );
+    let (found, starts, hinv) = multistart_bfgs(&sub.problem(problem), bounds, unpack, opts);
     // the subset's curvature is a far better start than the identity (on
     // 2 773 UR10 rows: 40 full-data iterations instead of 67)
     let mut r = converge_bfgs(problem, &found.x, Some(hinv), bounds, unpack, opts);
@@ -848,7 +836,6 @@ fn multistart_bfgs(
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
-    finish: optim::QuasiNewtonOptions,
 ) -> (OptimResult, usize, Hessian) {
     let d = problem.inputs.d;
     let mut start_box = bounds.clone();
@@ -862,16 +849,13 @@ fn multistart_bfgs(
         start_box.hi[k] = hi.clamp(bounds.lo[k], bounds.hi[k]);
     }
     let starts = optim::lhs_starts(&start_box, opts.starts, opts.seed);
-    // a pool of `n` runs stops after `iters` iterations, or converges (to
-    // `finish`'s tolerances) once only the finalists are left
+    let full_iter = optim::QuasiNewtonOptions::default().max_iter;
+    // a pool of `n` runs stops after `iters` iterations, or converges once
+    // only the finalists are left
     let limit = |n: usize, iters: usize| optim::QuasiNewtonOptions {
-        max_iter: if n <= FINALISTS {
-            finish.max_iter
-        } else {
-            iters
-        },
+        max_iter: if n <= FINALISTS { full_iter } else { iters },
         max_evals: opts.max_evals,
-        ..finish
+        ..optim::QuasiNewtonOptions::default()
     };
     // (start index, from, inverse Hessian) → (start index, result, its
     // inverse Hessian): runs continue where they stopped
