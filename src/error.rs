@@ -50,8 +50,10 @@ pub enum Error {
     #[error("a joint vector has {got} values but the robot or model has {expected} joints")]
     JointCount { expected: usize, got: usize },
 
-    /// A robot preset name that does not exist.
-    #[error("unknown robot '{name}' (known: {known})")]
+    /// A robot that is neither a preset nor a robot file.
+    #[error(
+        "unknown robot '{name}': neither a preset ({known}) nor a robot file (TOML or JSON, see `robokrige robot --help`)"
+    )]
     UnknownRobot { name: String, known: String },
 
     /// Numerical inverse kinematics did not reach the target.

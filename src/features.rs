@@ -46,9 +46,11 @@ pub enum Feature {
     /// Joint j deviating with the angle of joint k (cross-talk, seed 000
     /// §5.2): `∂P/∂θ_j(q) · sin θ_k` and `· cos θ_k`, the TCP displacement a
     /// deviation `a·sin θ_k + b·cos θ_k` of joint j causes (six columns: x, y, z
-    /// of each). Needs the robot preset for the Jacobian.
+    /// of each). Carries the robot for the Jacobian (files written before
+    /// robot files name a preset instead).
     Crosstalk {
-        robot: String,
+        #[serde(deserialize_with = "crate::kinematics::robot_or_preset_name")]
+        robot: Box<crate::kinematics::Robot>,
         joint: usize,
         from: usize,
     },
@@ -176,8 +178,7 @@ impl Feature {
             Feature::PreviousDirection { joint } => {
                 vec![col(&|i| if i == 0 { 1.0 } else { dir[i - 1][joint - 1] })]
             }
-            Feature::Crosstalk { robot, joint, from } => {
-                let r = crate::kinematics::preset(robot)?;
+            Feature::Crosstalk { robot: r, joint, from } => {
                 let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
                 for qi in q {
                     let jac = r.position_jacobian(qi)?;

@@ -269,7 +269,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     outputs.extend(a.plot.as_deref());
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&inputs, &outputs)?;
-    let robot = kinematics::preset(&a.robot)?;
+    let robot = kinematics::load_robot(&a.robot)?;
     let model = AnyModel::load(&a.model)?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
@@ -420,7 +420,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let robot = match &a.robot {
         Some(name) => {
             check_robot(&truth, name, &a.truth)?;
-            kinematics::preset(name)?
+            kinematics::load_robot(name)?
         }
         None => truth.robot.nominal.clone(),
     };

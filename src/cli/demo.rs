@@ -97,7 +97,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         .chain(a.json.as_deref())
         .collect();
     robokrige::output::check_outputs(&[], &outputs)?;
-    let robot = kinematics::preset("comau-nj220")?;
+    let robot = kinematics::load_robot("comau-nj220")?;
     let pb = bar(9, "demo");
     pb.set_message("simulating the COMAU campaigns");
     let (lhs, _) = campaign(&robot, CampaignKind::Lhs, 300, None)?;

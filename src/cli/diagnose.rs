@@ -129,7 +129,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         permutations: a.permutations,
         fdr: a.fdr,
         max_effects: a.max_effects,
-        robot: a.robot.clone(),
+        robot: a.robot.as_deref().map(kinematics::load_robot).transpose()?,
         ..DiagnoseOptions::default()
     })
 }
@@ -408,7 +408,7 @@ fn compare_compensation(
     after: &ErrorModel,
     seed: u64,
 ) -> Result<(Comparison, Comparison)> {
-    let robot = kinematics::preset(robot)?;
+    let robot = kinematics::load_robot(robot)?;
     let truth = load_truth(truth_path)?;
     let start = robot.home.clone();
     let targets = read_targets(traj, &robot, None, &start)?;

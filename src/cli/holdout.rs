@@ -113,7 +113,7 @@ pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
 
 /// `--tool "x,y,z"` on top of a preset.
 pub fn robot_with_tool(name: &str, tool: Option<&str>) -> Result<Robot> {
-    let mut robot = kinematics::preset(name)?;
+    let mut robot = kinematics::load_robot(name)?;
     if let Some(t) = tool {
         let v: Vec<f64> = t
             .split(',')

@@ -210,7 +210,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         .map(PathBuf::as_path)
         .collect();
     robokrige::output::check_outputs(&inputs, &outputs)?;
-    let robot = kinematics::preset(&a.robot)?;
+    let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
     let train = match &a.train {
@@ -572,7 +572,7 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
 
 fn run_register(a: RegisterArgs) -> Result<()> {
     robokrige::output::check_outputs(&[&a.data], &[&a.output])?;
-    let robot = kinematics::preset(&a.robot)?;
+    let robot = kinematics::load_robot(&a.robot)?;
     let data = read_data(&a.data)?;
     robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;

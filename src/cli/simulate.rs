@@ -92,7 +92,7 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let robot = kinematics::preset(&a.robot)?;
+    let robot = kinematics::load_robot(&a.robot)?;
     let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
     if let Some(p) = a.poses {
         spec.poses = p;

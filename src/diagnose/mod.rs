@@ -65,8 +65,8 @@ pub struct DiagnoseOptions {
     /// CV confirms the drop. A candidate whose statistic comes from
     /// re-estimated ξ stays significant only if that confirmation succeeds.
     pub min_gain: f64,
-    /// Robot preset name: enables the joint cross-talk candidates (Jacobian).
-    pub robot: Option<String>,
+    /// The measured robot: enables the joint cross-talk candidates (Jacobian).
+    pub robot: Option<crate::kinematics::Robot>,
     /// Candidates (largest statistic first) tested again at the ξ the model
     /// would choose with them ([`gls::refit_systems`]).
     pub refine: usize,
@@ -94,9 +94,6 @@ impl Default for DiagnoseOptions {
 
 impl DiagnoseOptions {
     fn validate(&self) -> Result<()> {
-        if let Some(r) = &self.robot {
-            crate::kinematics::preset(r)?;
-        }
         if self.permutations < 19 || !(self.fdr > 0.0 && self.fdr < 1.0) || self.min_gain < 0.0 {
             return Err(Error::InvalidParameter(
                 "diagnose needs ≥ 19 permutations, 0 < fdr < 1 and min_gain ≥ 0".into(),
@@ -288,7 +285,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 _ => None,
             })
             .collect();
-        let fams = scan::families(data, &used, o.robot.as_deref());
+        let fams = scan::families(data, &used, o.robot.as_ref());
         progress(&format!(
             "round {round}: testing {} candidate effects with {} permutations",
             fams.len(),

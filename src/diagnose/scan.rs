@@ -16,6 +16,7 @@
 use super::gls::{self, AxisSystem, FamilyTest};
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
+use crate::kinematics::Robot;
 use crate::stats::rng_for;
 use rand::RngExt;
 use rayon::prelude::*;
@@ -137,7 +138,7 @@ pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCova
 /// of a tenth of a cycle over the range (a phase error of at most 1/20
 /// cycle at the ends). With a robot preset (`robot`), joint cross-talk
 /// candidates mapped through its Jacobian are added.
-pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<Family> {
+pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
     let u: Vec<Vec<f64>> = (0..n)
@@ -266,11 +267,11 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&str>) -> Vec<
         }
     }
     // joint cross-talk through the Jacobian (needs the robot)
-    if let Some(name) = robot {
+    if let Some(robot) = robot {
         for j in 1..=n {
             for k in (1..=n).filter(|&k| k != j) {
                 let f = Feature::Crosstalk {
-                    robot: name.to_string(),
+                    robot: Box::new(robot.clone()),
                     joint: j,
                     from: k,
                 };

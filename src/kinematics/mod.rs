@@ -18,13 +18,18 @@ mod calib;
 mod ik;
 mod path;
 mod presets;
+mod robot_file;
 
 pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
 pub use path::{all_reached, first_pass_joints, path_target};
-pub use presets::{PRESET_NAMES, preset};
+pub use presets::{PRESET_NAMES, preset, preset_file};
+pub use robot_file::{
+    DEFAULT_REVOLUTE_LIMITS, FrameSpec, JointSpec, RobotFile, load_robot, read_robot_file,
+    robot_or_preset_name, table_digest,
+};
 
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Matrix3xX, Matrix6xX, Translation3, UnitQuaternion, Vector3};

@@ -164,7 +164,7 @@ fn minus(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<[f64; 3]> {
 
 /// Run the whole comparison; `progress(step, total, what)` after each step.
 pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> Result<Comparison> {
-    let nominal = kinematics::preset(&opts.robot)?;
+    let nominal = kinematics::load_robot(&opts.robot)?;
     let robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), opts.seed);
     // 6 set-up steps, then one per model row (6)
     let total = 12;

@@ -219,7 +219,7 @@ pub struct ProbingRow {
 /// part of the probing error alone.
 pub fn probing_example(name: &str, seed: u64, noise: bool) -> Result<(Vec<ProbingRow>, String)> {
     use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, campaign, rng_for};
-    let nominal = crate::kinematics::preset(name)?;
+    let nominal = crate::kinematics::load_robot(name)?;
     let mut robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), seed);
     if !noise {
         robot = robot.noise_free();
