@@ -178,7 +178,11 @@ impl Feature {
             Feature::PreviousDirection { joint } => {
                 vec![col(&|i| if i == 0 { 1.0 } else { dir[i - 1][joint - 1] })]
             }
-            Feature::Crosstalk { robot: r, joint, from } => {
+            Feature::Crosstalk {
+                robot: r,
+                joint,
+                from,
+            } => {
                 let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
                 for qi in q {
                     let jac = r.position_jacobian(qi)?;

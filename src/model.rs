@@ -89,7 +89,76 @@ pub struct ErrorModel {
     /// (empty in files written before it was recorded).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub joint_range: Vec<(f64, f64)>,
+    /// The robot the campaign was measured on, when the fit was told
+    /// ([`ErrorModel::record_robot`]; the kinematic trend records it itself).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<RobotRecord>,
+    /// The robokrige version that fitted the model (empty in older files).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub software: String,
 }
+
+/// Which robot a model was fitted for: its name, the digest of its kinematic
+/// table ([`crate::kinematics::table_digest`]) and its tool. A model predicts
+/// the TCP error of that robot with that tool only.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobotRecord {
+    /// The robot's name.
+    pub name: String,
+    /// Digest of the MD-H table and base frame.
+    pub table_digest: String,
+    /// Flange ← TCP: translation (mm) and roll–pitch–yaw (degrees).
+    pub tool: crate::kinematics::FrameSpec,
+}
+
+/// Tool frames closer than this (mm, and degrees) are the same tool.
+const TOOL_TOLERANCE: f64 = 1e-6;
+
+impl RobotRecord {
+    /// The record of `robot`.
+    pub fn of(robot: &crate::kinematics::Robot) -> Self {
+        RobotRecord {
+            name: robot.name.clone(),
+            table_digest: crate::kinematics::table_digest(robot),
+            tool: crate::kinematics::FrameSpec::of(&robot.tool),
+        }
+    }
+
+    /// Error unless `robot` has this record's kinematic table and tool; the
+    /// message names both robots (`source_name`: the model file).
+    pub fn check(&self, robot: &crate::kinematics::Robot, source_name: &str) -> Result<()> {
+        let other = RobotRecord::of(robot);
+        let refuse = |what: String| {
+            Err(Error::Input {
+                source_name: source_name.into(),
+                message: format!(
+                    "the model was fitted for robot '{}' but the robot given is '{}': {what}; give the robot (and --tool) the campaign was measured with, or refit",
+                    self.name, other.name
+                ),
+            })
+        };
+        if other.table_digest != self.table_digest {
+            return refuse(format!(
+                "their kinematic tables differ (digest {} vs {})",
+                self.table_digest, other.table_digest
+            ));
+        }
+        let dist =
+            |a: [f64; 3], b: [f64; 3]| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max);
+        if dist(self.tool.xyz_mm, other.tool.xyz_mm) > TOOL_TOLERANCE
+            || dist(self.tool.rpy_deg, other.tool.rpy_deg) > TOOL_TOLERANCE
+        {
+            return refuse(format!(
+                "their tools differ ({:?} mm vs {:?} mm)",
+                self.tool.xyz_mm, other.tool.xyz_mm
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// This crate's version, recorded in every model it fits.
+pub const SOFTWARE: &str = concat!("robokrige ", env!("CARGO_PKG_VERSION"));
 
 /// Why a prediction point is outside what the training data covers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -211,7 +280,44 @@ impl ErrorModel {
         robot: &crate::kinematics::Robot,
     ) -> Result<Self> {
         let trends = kinematic_trends(data, space, opts, robot)?;
-        Self::fit_with_trend(data, space, opts, &trends)
+        let mut model = Self::fit_with_trend(data, space, opts, &trends)?;
+        model.record_robot(robot)?;
+        Ok(model)
+    }
+
+    /// Record the robot (and tool) the campaign was measured with, so that
+    /// commands given another robot refuse the model ([`RobotRecord::check`]).
+    /// Error if the robot's joint count differs from the model's.
+    pub fn record_robot(&mut self, robot: &crate::kinematics::Robot) -> Result<()> {
+        if robot.dof() != self.n_joints {
+            return Err(Error::JointCount {
+                expected: self.n_joints,
+                got: robot.dof(),
+            });
+        }
+        self.robot = Some(RobotRecord::of(robot));
+        Ok(())
+    }
+
+    /// Error if the model records a robot other than `robot`, or has another
+    /// joint count (`source_name`: the model file, for the message). A model
+    /// that records no robot passes on its joint count alone.
+    pub fn check_robot(&self, robot: &crate::kinematics::Robot, source_name: &str) -> Result<()> {
+        if robot.dof() != self.n_joints {
+            return Err(Error::Input {
+                source_name: source_name.into(),
+                message: format!(
+                    "the model has {} joints but robot '{}' has {}",
+                    self.n_joints,
+                    robot.name,
+                    robot.dof()
+                ),
+            });
+        }
+        match &self.robot {
+            Some(r) => r.check(robot, source_name),
+            None => Ok(()),
+        }
     }
 
     /// EJS&PCA of seed 003: for each output, PCC + PCA fusion
@@ -416,6 +522,8 @@ impl ErrorModel {
             extras: extras.to_vec(),
             selection: None,
             joint_range: joint_range(&data.q),
+            robot: None,
+            software: SOFTWARE.into(),
         })
     }
 

@@ -69,9 +69,13 @@ fn folder(path: &Path) -> &Path {
 /// as another output — the same path once resolved (symbolic links, `./`,
 /// `..`) or the same file under another name (a hard link: same device and
 /// inode) — or that cannot be written: its folder is missing or does not
-/// take a new file, or it is a folder or a read-only file.
+/// take a new file, or it is a folder or a read-only file. `-` (standard
+/// output) is always fine.
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
     for (k, out) in outputs.iter().enumerate() {
+        if *out == Path::new("-") {
+            continue;
+        }
         let r = resolve(out);
         for inp in inputs {
             if r == resolve(inp) || same_file(out, inp) {

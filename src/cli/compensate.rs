@@ -30,9 +30,13 @@ pub struct CompensateArgs {
     /// Fitted model JSON (`robokrige fit`).
     #[arg(long)]
     model: PathBuf,
-    /// Robot preset whose nominal kinematics the controller uses.
+    /// The robot whose nominal kinematics the controller uses: a preset name
+    /// or a robot file (TOML/JSON). Must be the robot the model records.
     #[arg(long)]
     robot: String,
+    /// TCP offset in the flange frame, mm ("x,y,z"), replacing the robot's tool.
+    #[arg(long)]
+    tool: Option<String>,
     /// Output: the corrected commands as a trajectory CSV.
     #[arg(short, long)]
     output: PathBuf,
@@ -269,8 +273,11 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     outputs.extend(a.plot.as_deref());
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&inputs, &outputs)?;
-    let robot = kinematics::load_robot(&a.robot)?;
+    let robot = super::holdout::robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
+    if let AnyModel::Kriging(m) = &model {
+        m.check_robot(&robot, &a.model.display().to_string())?;
+    }
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
     let targets = read_targets(&a.traj, &robot, a.orientation.as_deref(), &start)?;
@@ -331,7 +338,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let truth = load_truth(tp)?;
-        check_robot(&truth, &robot.name, tp)?;
+        check_robot(&truth, &robot, tp)?;
         let (ev, (before, after)) =
             evaluation(tp, &truth, &targets, &res.commands, &start, a.seed)?;
         println!(
@@ -398,13 +405,15 @@ fn list(v: &[usize]) -> String {
     s.join(", ")
 }
 
-fn check_robot(truth: &Truth, name: &str, path: &Path) -> Result<()> {
-    if truth.robot.nominal.name != name {
+/// Error unless the truth's nominal robot has `robot`'s kinematic table.
+fn check_robot(truth: &Truth, robot: &Robot, path: &Path) -> Result<()> {
+    let nominal = &truth.robot.nominal;
+    if kinematics::table_digest(nominal) != kinematics::table_digest(robot) {
         return Err(Error::Input {
             source_name: path.display().to_string(),
             message: format!(
-                "the truth is for robot '{}', not '{name}'",
-                truth.robot.nominal.name
+                "the truth is for robot '{}', not '{}' (their kinematic tables differ)",
+                nominal.name, robot.name
             ),
         });
     }
@@ -419,8 +428,9 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let truth = load_truth(&a.truth)?;
     let robot = match &a.robot {
         Some(name) => {
-            check_robot(&truth, name, &a.truth)?;
-            kinematics::load_robot(name)?
+            let robot = kinematics::load_robot(name)?;
+            check_robot(&truth, &robot, &a.truth)?;
+            robot
         }
         None => truth.robot.nominal.clone(),
     };

@@ -91,7 +91,9 @@ pub struct ModelArgs {
     /// (those whose range in the data exceeds 180°), "none", or "1,4,6".
     #[arg(long, default_value = "auto")]
     periodic: String,
-    /// Robot preset for the kinematic trend (`--kinematic`).
+    /// The measured robot: a preset name or a robot file (TOML/JSON). The
+    /// model records it, and `compensate` refuses another; `--kinematic` uses
+    /// its Jacobian.
     #[arg(long)]
     robot: Option<String>,
     /// TCP offset in the flange frame, mm ("x,y,z"), for `--robot`.
@@ -164,20 +166,36 @@ pub fn settings_line(space: Space, opts: &KrigingOptions, kinematic: bool) -> St
         .join(", ")
 }
 
-/// What [`ModelArgs::resolve`] gives: space, options, and the robot of the
-/// kinematic trend.
+/// What [`ModelArgs::resolve`] gives: space, options, the measured robot
+/// (recorded in the model) and whether it forms the kinematic trend.
 pub struct ModelChoice {
     pub space: Space,
     pub opts: KrigingOptions,
-    pub kinematic: Option<robokrige::kinematics::Robot>,
+    pub robot: Option<robokrige::kinematics::Robot>,
+    pub kinematic: bool,
 }
 
 impl ModelChoice {
+    /// The robot of the kinematic trend, if there is one.
+    pub fn kinematic_robot(&self) -> Option<&robokrige::kinematics::Robot> {
+        self.robot.as_ref().filter(|_| self.kinematic)
+    }
+
     /// Fit on `data` with this choice.
     pub fn fit(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModel> {
-        match &self.kinematic {
-            Some(r) => ErrorModel::fit_kinematic(data, self.space, &self.opts, r),
-            None => ErrorModel::fit(data, self.space, &self.opts),
+        let mut model = match self.kinematic_robot() {
+            Some(r) => ErrorModel::fit_kinematic(data, self.space, &self.opts, r)?,
+            None => ErrorModel::fit(data, self.space, &self.opts)?,
+        };
+        self.record(&mut model)?;
+        Ok(model)
+    }
+
+    /// Record the robot in `model`, if one was given.
+    pub fn record(&self, model: &mut ErrorModel) -> Result<()> {
+        match &self.robot {
+            Some(r) => model.record_robot(r),
+            None => Ok(()),
         }
     }
 }
@@ -187,22 +205,23 @@ impl ModelArgs {
     pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ModelChoice> {
         let (space, mut opts) = self.options();
         opts.periodic = super::holdout::parse_periodic(&self.periodic, &data.q)?;
-        let kinematic = match (&self.robot, self.kinematic) {
-            (Some(r), true) => Some(super::holdout::robot_with_tool(r, self.tool.as_deref())?),
-            (None, true) => {
-                return Err(Error::InvalidParameter(
-                    "--kinematic needs --robot (the preset whose Jacobian forms the trend)".into(),
-                ));
-            }
-            (_, false) => None,
+        if self.kinematic && self.robot.is_none() {
+            return Err(Error::InvalidParameter(
+                "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
+            ));
+        }
+        let robot = match &self.robot {
+            Some(r) => Some(super::holdout::robot_with_tool(r, self.tool.as_deref())?),
+            None => None,
         };
-        if let Some(r) = &kinematic {
+        if let Some(r) = &robot {
             r.check_dataset(data)?;
         }
         Ok(ModelChoice {
             space,
             opts,
-            kinematic,
+            robot,
+            kinematic: self.kinematic,
         })
     }
 
@@ -276,7 +295,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                     AXES[axis]
                 ));
             };
-            let model = match (&choice.kinematic, method) {
+            let model = match (choice.kinematic_robot(), method) {
                 (Some(robot), robokrige::methods::Method::EjsGa) => {
                     robokrige::methods::fit_ga(&data, opts, 10, opts.seed, &progress, Some(robot))
                 }
@@ -291,7 +310,9 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                 (None, _) => method.fit_with_progress(&data, opts.seed, &progress),
             };
             pb.finish_and_clear();
-            model?
+            let mut model = model?;
+            choice.record(&mut model)?;
+            model
         }
         None => choice.fit(&data)?,
     };

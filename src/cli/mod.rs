@@ -9,6 +9,7 @@ mod fit;
 mod holdout;
 mod physics;
 mod progress;
+mod robot;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -49,6 +50,8 @@ pub enum Command {
     /// Train on the first rows of a campaign, score on the next: nominal, D-H
     /// calibration, hybrid, Kriging with the kinematic trend (JS and EJS).
     Holdout(holdout::HoldoutArgs),
+    /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
+    Robot(robot::RobotArgs),
 }
 
 /// Run a parsed command.
@@ -57,6 +60,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),
+        Command::Robot(a) => robot::run(a),
         Command::Predict(a) => fit::run_predict(a),
         Command::Cv(a) => cv::run(a),
         Command::Compensate(a) => compensate::run_compensate(a),
@@ -76,9 +80,19 @@ pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
 }
 
 /// Write `value` as pretty JSON (with a final newline) to `path`.
+/// Every `--json FILE` option: `-` is standard output.
 pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
     let text = to_json(value, context)? + "\n";
+    if is_stdout(path) {
+        print!("{text}");
+        return Ok(());
+    }
     robokrige::output::write_text(path, &text)
+}
+
+/// Whether an output path is `-` (standard output).
+pub fn is_stdout(path: &Path) -> bool {
+    path == Path::new("-")
 }
 
 /// Refuse a fit of `rows` rows that would exceed the memory limit

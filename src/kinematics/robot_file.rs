@@ -64,9 +64,11 @@ impl FrameSpec {
     /// The frame spec of an isometry (inverse of [`FrameSpec::isometry`]).
     pub fn of(iso: &Isometry3<f64>) -> Self {
         let (r, p, y) = iso.rotation.euler_angles();
+        // `+ 0.0` turns −0 into 0 (files say 0.0, not -0.0)
+        let xyz: [f64; 3] = iso.translation.vector.into();
         FrameSpec {
-            xyz_mm: iso.translation.vector.into(),
-            rpy_deg: [r, p, y].map(f64::to_degrees),
+            xyz_mm: xyz.map(|v| v + 0.0),
+            rpy_deg: [r, p, y].map(|v| v.to_degrees() + 0.0),
         }
     }
 }
@@ -182,6 +184,12 @@ impl RobotFile {
         }
     }
 
+    /// The file as TOML text.
+    pub fn to_toml(&self) -> Result<String> {
+        toml::to_string(self)
+            .map_err(|e| Error::InvalidParameter(format!("robot file as TOML: {e}")))
+    }
+
     /// The robot, after checking every value (`source_name` for messages).
     pub fn robot(&self, source_name: &str) -> Result<Robot> {
         let bad = |message: String| Error::Input {
@@ -204,13 +212,7 @@ impl RobotFile {
         let (mut limits, mut work_ranges, mut home) = (vec![], vec![], vec![]);
         for (i, j) in self.joints.iter().enumerate() {
             let at = |m: String| bad(format!("joint {}: {m}", i + 1));
-            let values = [
-                j.theta_offset_deg,
-                j.d_mm,
-                j.a_mm,
-                j.alpha_deg,
-                j.beta_deg,
-            ];
+            let values = [j.theta_offset_deg, j.d_mm, j.a_mm, j.alpha_deg, j.beta_deg];
             if values.iter().any(|v| !v.is_finite()) {
                 return Err(at("every MD-H value must be finite".into()));
             }
@@ -320,7 +322,9 @@ where
     }
     match Stored::deserialize(d)? {
         Stored::Table(r) => Ok(r),
-        Stored::Name(n) => super::preset(&n).map(Box::new).map_err(serde::de::Error::custom),
+        Stored::Name(n) => super::preset(&n)
+            .map(Box::new)
+            .map_err(serde::de::Error::custom),
     }
 }
 
@@ -377,16 +381,31 @@ mod tests {
             .to_string();
         assert!(e.contains("f.toml") && e.contains("alpha"), "{e}");
         let f = RobotFile::from_toml("name = \"x\"\n[[joints]]\nsign = 2.0\n", "f").unwrap();
-        assert!(f.robot("f").unwrap_err().to_string().contains("joint 1: sign"));
-        let f = RobotFile::from_toml("name = \"x\"\n[[joints]]\nkind = \"prismatic\"\n", "f")
-            .unwrap();
-        assert!(f.robot("f").unwrap_err().to_string().contains("needs limits"));
+        assert!(
+            f.robot("f")
+                .unwrap_err()
+                .to_string()
+                .contains("joint 1: sign")
+        );
+        let f =
+            RobotFile::from_toml("name = \"x\"\n[[joints]]\nkind = \"prismatic\"\n", "f").unwrap();
+        assert!(
+            f.robot("f")
+                .unwrap_err()
+                .to_string()
+                .contains("needs limits")
+        );
         let f = RobotFile::from_toml(
             "name = \"x\"\n[[joints]]\nlimits = [-10.0, 10.0]\nwork_range = [-20.0, 5.0]\n",
             "f",
         )
         .unwrap();
-        assert!(f.robot("f").unwrap_err().to_string().contains("leaves the limits"));
+        assert!(
+            f.robot("f")
+                .unwrap_err()
+                .to_string()
+                .contains("leaves the limits")
+        );
     }
 
     #[test]

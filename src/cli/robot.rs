@@ -1,0 +1,75 @@
+//! `robot`: show a robot file (a preset's or your own), checked.
+
+use clap::{Args, Subcommand};
+use robokrige::Result;
+use robokrige::kinematics::{self, RobotFile};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+A robot file describes a serial robot for every --robot option: its MD-H
+table (one [[joints]] entry per axis: kind, theta_offset_deg, d_mm, a_mm,
+alpha_deg, beta_deg, sign, limits, work_range, home), its tool and its base.
+TOML, or JSON when the name ends in .json. Unknown keys are refused.
+
+Examples:
+  robokrige robot show ur10 -o myrobot.toml     # start from a preset
+  robokrige robot show examples/robots/abb-irb2600.toml
+  robokrige simulate --robot examples/robots/abb-irb2600.toml -o abb.csv")]
+pub struct RobotArgs {
+    #[command(subcommand)]
+    command: RobotCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum RobotCommand {
+    /// Check a robot (preset name or file) and print it as a robot file,
+    /// every default written out, with its kinematic-table digest.
+    Show(ShowArgs),
+}
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  robokrige robot show comau-nj220
+  robokrige robot show myrobot.toml --json -")]
+struct ShowArgs {
+    /// A preset name (comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515) or a
+    /// robot file.
+    robot: String,
+    /// Write the robot file (TOML) here instead of printing it.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Write it as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+pub fn run(a: RobotArgs) -> Result<()> {
+    match a.command {
+        RobotCommand::Show(s) => show(s),
+    }
+}
+
+fn show(a: ShowArgs) -> Result<()> {
+    let robot = kinematics::load_robot(&a.robot)?;
+    let file = RobotFile::of(&robot);
+    let digest = kinematics::table_digest(&robot);
+    if let Some(path) = &a.json {
+        super::write_json(path, &file, "robot file")?;
+    }
+    let text = format!(
+        "# {} joints, kinematic-table digest {digest}\n{}",
+        robot.dof(),
+        file.to_toml()?
+    );
+    match &a.output {
+        Some(path) => {
+            robokrige::output::write_text(path, &text)?;
+            eprintln!("robot '{}' ({digest}) -> {}", robot.name, path.display());
+        }
+        None if a.json.as_deref() != Some(std::path::Path::new("-")) => print!("{text}"),
+        None => {}
+    }
+    Ok(())
+}
