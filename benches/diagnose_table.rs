@@ -99,7 +99,7 @@ fn main() {
             let t0 = Instant::now();
             let opts = DiagnoseOptions {
                 seed,
-                robot: Some("comau-nj220".into()),
+                robot: Some(robokrige::kinematics::preset("comau-nj220").unwrap()),
                 ..DiagnoseOptions::default()
             };
             let d = diagnose(&data, &opts, &|_| {}).expect("diagnose");
