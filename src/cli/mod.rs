@@ -7,6 +7,7 @@ mod demo;
 mod diagnose;
 mod fit;
 mod holdout;
+mod import;
 mod physics;
 mod progress;
 mod robot;
@@ -50,6 +51,9 @@ pub enum Command {
     /// Train on the first rows of a campaign, score on the next: nominal, D-H
     /// calibration, hybrid, Kriging with the kinematic trend (JS and EJS).
     Holdout(holdout::HoldoutArgs),
+    /// Turn a tracker or controller export (own columns, delimiter, decimal
+    /// comma, units) into a measurement CSV; locate the tracker for errors.
+    Import(import::ImportArgs),
     /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
     Robot(robot::RobotArgs),
 }
@@ -61,6 +65,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),
         Command::Robot(a) => robot::run(a),
+        Command::Import(a) => import::run(a),
         Command::Predict(a) => fit::run_predict(a),
         Command::Cv(a) => cv::run(a),
         Command::Compensate(a) => compensate::run_compensate(a),

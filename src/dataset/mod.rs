@@ -30,6 +30,7 @@
 //! written, so a dataset whose directions were [`DirSource::Derived`] reads
 //! back as [`DirSource::Given`]; everything else round-trips exactly.
 
+pub mod import;
 mod read;
 pub(crate) mod table;
 mod write;

@@ -16,6 +16,7 @@
 
 mod calib;
 mod ik;
+mod locate;
 mod path;
 mod presets;
 mod robot_file;
@@ -24,6 +25,7 @@ pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
+pub use locate::{TrackerFit, locate_tracker};
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
 pub use robot_file::{

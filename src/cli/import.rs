@@ -1,0 +1,203 @@
+//! `import`: a tracker or controller export → a measurement CSV.
+
+use clap::{Args, ValueEnum};
+use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
+use robokrige::dataset::write_csv;
+use robokrige::kinematics::{self, JointKind, locate_tracker};
+use robokrige::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Maps the export's columns onto the measurement format: q1..qN (required),
+dir1..dirN (else derived from the row order), ex,ey,ez (errors) or x,y,z
+(measured TCP positions), id, and any other name as a covariate. Export
+columns no target names are listed, not silently dropped.
+
+With measured positions and --robot, the tracker-to-base frame and the TCP
+offset are identified by least squares over all rows and the errors
+ex,ey,ez = measured − nominal (base frame) are written instead of x,y,z.
+
+Example (the original UR10 export of the IPA data set):
+  robokrige import measurements_random_poses.csv --angles rad --robot ur10 \\
+      --map q1=shoulder_pan_joint,q2=shoulder_lift_joint,q3=elbow_joint \\
+      --map q4=wrist_1_joint,q5=wrist_2_joint,q6=wrist_3_joint \\
+      --map x=measurement_x,y=measurement_y,z=measurement_z \\
+      --map temp_c=measurement_temperature -o series_c.csv
+The same as a mapping file (--map-file ur10_map.toml):
+  angles = \"rad\"
+  [columns]
+  q1 = \"shoulder_pan_joint\"   # … q6, x, y, z likewise
+  temp_c = \"measurement_temperature\"")]
+pub struct ImportArgs {
+    /// The export (CSV-like text).
+    export: PathBuf,
+    /// Output measurement CSV.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Column map target=column, comma-separated; repeat as needed. Overrides
+    /// the same targets in --map-file.
+    #[arg(long, value_name = "PAIRS")]
+    map: Vec<String>,
+    /// Mapping file (TOML): delimiter, decimal, angles, lengths, [columns].
+    #[arg(long, value_name = "FILE")]
+    map_file: Option<PathBuf>,
+    /// Field separator [default: the mapping file's, else sniffed from the header].
+    #[arg(long)]
+    delimiter: Option<char>,
+    /// Decimal separator, . or , [default: "," when the delimiter is not a comma and cells use it].
+    #[arg(long)]
+    decimal: Option<char>,
+    /// Unit of revolute joint values [default: the mapping file's, else deg].
+    #[arg(long, value_enum)]
+    angles: Option<AngleArg>,
+    /// Unit of lengths: positions, errors, prismatic joints [default: the mapping file's, else mm].
+    #[arg(long, value_enum)]
+    lengths: Option<LengthArg>,
+    /// The measured robot (preset or robot file): gives prismatic joints their
+    /// unit and, with x,y,z, turns positions into errors.
+    #[arg(long)]
+    robot: Option<String>,
+    /// Write the import report (mapping, units, identified frame and tool) as
+    /// JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum AngleArg {
+    Deg,
+    Rad,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum LengthArg {
+    Mm,
+    M,
+}
+
+pub fn run(a: ImportArgs) -> Result<()> {
+    let mut inputs = vec![a.export.as_path()];
+    inputs.extend(a.map_file.as_deref());
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&inputs, &outputs)?;
+    let mut spec = match &a.map_file {
+        Some(p) => ImportSpec::from_file(p)?,
+        None => ImportSpec::default(),
+    };
+    for m in &a.map {
+        spec.map(m)?;
+    }
+    if a.delimiter.is_some() {
+        spec.delimiter = a.delimiter;
+    }
+    if a.decimal.is_some() {
+        spec.decimal = a.decimal;
+    }
+    if let Some(u) = a.angles {
+        spec.angles = match u {
+            AngleArg::Deg => AngleUnit::Deg,
+            AngleArg::Rad => AngleUnit::Rad,
+        };
+    }
+    if let Some(u) = a.lengths {
+        spec.lengths = match u {
+            LengthArg::Mm => LengthUnit::Mm,
+            LengthArg::M => LengthUnit::M,
+        };
+    }
+    let robot = a.robot.as_deref().map(kinematics::load_robot).transpose()?;
+    let prismatic: Vec<bool> = robot
+        .as_ref()
+        .map(|r| {
+            r.links
+                .iter()
+                .map(|l| l.kind == JointKind::Prismatic)
+                .collect()
+        })
+        .unwrap_or_default();
+    let imported = import(&a.export, &spec, &prismatic)?;
+    let mut data = imported.data;
+    if let Some(r) = &robot {
+        r.check_dataset(&data)?;
+    }
+    println!(
+        "read {} rows, {} joints from {} (delimiter {:?}, decimal {:?}, angles {}, lengths {})",
+        data.len(),
+        data.n_joints(),
+        a.export.display(),
+        imported.delimiter,
+        imported.decimal,
+        match spec.angles {
+            AngleUnit::Deg => "deg",
+            AngleUnit::Rad => "rad",
+        },
+        match spec.lengths {
+            LengthUnit::Mm => "mm",
+            LengthUnit::M => "m",
+        }
+    );
+    if !imported.ignored.is_empty() {
+        println!(
+            "  not imported (no target names them): {}",
+            imported.ignored.join(", ")
+        );
+    }
+    let mut located = None;
+    match (&robot, data.positions.take()) {
+        (Some(r), Some(pos)) => {
+            if data.errors.is_some() {
+                return Err(Error::InvalidParameter(
+                    "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one".into(),
+                ));
+            }
+            let fit = locate_tracker(r, &data.q, &pos)?;
+            let t = fit.tracker_to_base.translation.vector;
+            let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
+            println!(
+                "  tracker → base of '{}' by least squares over all {} rows ({} iterations): translation ({:.3}, {:.3}, {:.3}) mm, rpy ({:.4}, {:.4}, {:.4})°",
+                r.name,
+                data.len(),
+                fit.iterations,
+                t.x,
+                t.y,
+                t.z,
+                roll.to_degrees(),
+                pitch.to_degrees(),
+                yaw.to_degrees()
+            );
+            println!(
+                "  TCP offset in the flange frame: ({:.4}, {:.4}, {:.4}) mm; errors measured − nominal: rms |e| {:.4} mm",
+                fit.tool_xyz_mm.x, fit.tool_xyz_mm.y, fit.tool_xyz_mm.z, fit.rms_mm
+            );
+            data.errors = Some(fit.errors.clone());
+            located = Some(fit);
+        }
+        (None, Some(pos)) => {
+            println!(
+                "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
+            );
+            data.positions = Some(pos);
+        }
+        (_, None) => {}
+    }
+    write_csv(&a.output, &data)?;
+    println!("wrote {}", a.output.display());
+    if let Some(path) = &a.json {
+        let v = serde_json::json!({
+            "export": a.export, "output": a.output, "rows": data.len(),
+            "joints": data.n_joints(), "delimiter": imported.delimiter.to_string(),
+            "decimal": imported.decimal.to_string(), "angles": spec.angles,
+            "lengths": spec.lengths, "columns": spec.columns, "ignored": imported.ignored,
+            "directions": format!("{:?}", data.dir_source).to_lowercase(),
+            "robot": robot.as_ref().map(|r| &r.name),
+            "located": located.as_ref().map(|f| serde_json::json!({
+                "tracker_to_base": f.tracker_to_base, "tool_xyz_mm": f.tool_xyz_mm,
+                "rms_mm": f.rms_mm, "iterations": f.iterations,
+            })),
+        });
+        super::write_json(path, &v, "import report")?;
+    }
+    Ok(())
+}

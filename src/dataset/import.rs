@@ -1,0 +1,445 @@
+//! Reading a tracker's or controller's own export: any delimiter, a decimal
+//! comma, radians or degrees, metres or millimetres, and its own column names.
+//!
+//! An [`ImportSpec`] maps the export's columns onto the measurement format
+//! (see the [module docs](super)): `q1..qN` (required), `dir1..dirN`,
+//! `ex,ey,ez`, `x,y,z`, `id`, and any other target name as a covariate
+//! (`temp_c = "measurement_temperature"`). Columns of the export that no
+//! target names are listed in [`Imported::ignored`], never dropped unsaid.
+//! Every cell a target reads must be a number; an empty covariate cell is
+//! missing (NaN). Directions absent from the export are derived from the row
+//! order ([`super::derive_directions`]).
+
+use super::{Covariate, Dataset, DirSource, SourceLines, derive_directions};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Unit of the export's joint angles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AngleUnit {
+    /// Degrees (the format's unit).
+    #[default]
+    Deg,
+    /// Radians.
+    Rad,
+}
+
+/// Unit of the export's lengths (positions, errors, prismatic joints).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LengthUnit {
+    /// Millimetres (the format's unit).
+    #[default]
+    Mm,
+    /// Metres.
+    M,
+}
+
+impl LengthUnit {
+    fn to_mm(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::M => 1000.0,
+        }
+    }
+}
+
+/// How to read an export: a mapping file (TOML) or command-line options.
+///
+/// ```toml
+/// delimiter = ";"          # default: sniffed from the header (; tab ,)
+/// decimal = ","            # default: "," when the delimiter is not a comma and cells use it
+/// angles = "rad"           # deg (default) or rad
+/// lengths = "mm"           # mm (default) or m
+/// [columns]                # target = export column
+/// q1 = "shoulder_pan_joint"
+/// x = "measurement_x"
+/// temp_c = "measurement_temperature"
+/// ```
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImportSpec {
+    /// Field separator (one character); `None`: sniffed from the header.
+    #[serde(default)]
+    pub delimiter: Option<char>,
+    /// Decimal separator, `.` or `,`; `None`: `,` when the delimiter is not a
+    /// comma and a mapped cell contains one.
+    #[serde(default)]
+    pub decimal: Option<char>,
+    /// Unit of revolute joint values.
+    #[serde(default)]
+    pub angles: AngleUnit,
+    /// Unit of lengths.
+    #[serde(default)]
+    pub lengths: LengthUnit,
+    /// Target column name → export column name.
+    #[serde(default)]
+    pub columns: BTreeMap<String, String>,
+}
+
+/// What [`import`] read.
+#[derive(Debug, Clone)]
+pub struct Imported {
+    /// The campaign in the measurement format.
+    pub data: Dataset,
+    /// The delimiter and decimal separator used.
+    pub delimiter: char,
+    /// The decimal separator used.
+    pub decimal: char,
+    /// Export columns no target names, in file order.
+    pub ignored: Vec<String>,
+}
+
+impl ImportSpec {
+    /// Read a mapping file (TOML).
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        toml::from_str(&text).map_err(|e| Error::Input {
+            source_name: path.display().to_string(),
+            message: format!("not an import mapping: {}", e.message()),
+        })
+    }
+
+    /// Add `target=column` pairs (comma-separated), overriding the same targets.
+    pub fn map(&mut self, pairs: &str) -> Result<()> {
+        for pair in pairs.split(',').filter(|p| !p.trim().is_empty()) {
+            let Some((t, c)) = pair.split_once('=') else {
+                return Err(Error::InvalidParameter(format!(
+                    "--map '{pair}': expected target=column, e.g. q1=shoulder_pan_joint"
+                )));
+            };
+            self.columns.insert(t.trim().into(), c.trim().into());
+        }
+        Ok(())
+    }
+}
+
+/// Column names with a fixed meaning in the measurement format.
+fn fixed_target(name: &str) -> bool {
+    ["ex", "ey", "ez", "x", "y", "z", "id"].contains(&name) || numbered(name).is_some()
+}
+
+/// `("q", 3)` for `q3`, `("dir", 2)` for `dir2`.
+fn numbered(name: &str) -> Option<(&str, usize)> {
+    for prefix in ["dir", "q"] {
+        if let Some(rest) = name.strip_prefix(prefix)
+            && !rest.starts_with('0')
+            && let Ok(k) = rest.parse::<usize>()
+        {
+            return Some((prefix, k));
+        }
+    }
+    None
+}
+
+/// Sniff the delimiter from the header line: the most frequent of `;`, tab, `,`.
+fn sniff(header: &str) -> char {
+    [';', '\t', ',']
+        .into_iter()
+        .max_by_key(|c| header.matches(*c).count())
+        .unwrap_or(',')
+}
+
+/// Read the export at `path` with `spec`. `prismatic[j]` marks joint j + 1 as
+/// prismatic (its values are lengths); empty: every joint is revolute.
+pub fn import(path: &Path, spec: &ImportSpec, prismatic: &[bool]) -> Result<Imported> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    import_text(&text, &path.display().to_string(), spec, prismatic)
+}
+
+/// [`import`] from text (`source` names it in messages).
+pub fn import_text(
+    text: &str,
+    source: &str,
+    spec: &ImportSpec,
+    prismatic: &[bool],
+) -> Result<Imported> {
+    let bad = |message: String| Error::Input {
+        source_name: source.into(),
+        message,
+    };
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let header_line = text.lines().next().unwrap_or("");
+    let delimiter = spec.delimiter.unwrap_or_else(|| sniff(header_line));
+    if !delimiter.is_ascii() || delimiter == '"' {
+        return Err(Error::InvalidParameter(format!(
+            "delimiter '{delimiter}': expected one ASCII character"
+        )));
+    }
+    let mut rdr = csv::ReaderBuilder::new()
+        .delimiter(delimiter as u8)
+        .has_headers(true)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = rdr
+        .headers()
+        .map_err(|e| bad(format!("header: {e}")))?
+        .iter()
+        .map(|h| h.trim().to_string())
+        .collect();
+    // targets → export column index
+    if spec.columns.is_empty() {
+        return Err(Error::InvalidParameter(
+            "no column map: give --map target=column,… or --map-file (q1..qN are required)".into(),
+        ));
+    }
+    let mut index: BTreeMap<&str, usize> = BTreeMap::new();
+    for (target, column) in &spec.columns {
+        let Some(k) = header.iter().position(|h| h == column) else {
+            return Err(bad(format!(
+                "no column '{column}' (for {target}); found: {}",
+                header.join(", ")
+            )));
+        };
+        index.insert(target, k);
+    }
+    let n = (1..)
+        .take_while(|k| index.contains_key(format!("q{k}").as_str()))
+        .count();
+    for t in index.keys() {
+        if let Some((prefix, k)) = numbered(t)
+            && (k == 0 || k > n)
+        {
+            return Err(bad(format!(
+                "target {t}: joints must be q1..qN without gaps (found q1..q{n}){}",
+                if prefix == "dir" {
+                    ", with a dir for each"
+                } else {
+                    ""
+                }
+            )));
+        }
+    }
+    if n == 0 {
+        return Err(bad("the column map has no q1 (joint 1)".into()));
+    }
+    if !prismatic.is_empty() && prismatic.len() != n {
+        return Err(Error::JointCount {
+            expected: prismatic.len(),
+            got: n,
+        });
+    }
+    let triple = |names: [&str; 3]| -> Result<Option<[usize; 3]>> {
+        let found: Vec<usize> = names.iter().filter_map(|t| index.get(t).copied()).collect();
+        match found.len() {
+            0 => Ok(None),
+            3 => Ok(Some([found[0], found[1], found[2]])),
+            _ => Err(bad(format!("map all of {} or none", names.join(", ")))),
+        }
+    };
+    let err_cols = triple(["ex", "ey", "ez"])?;
+    let pos_cols = triple(["x", "y", "z"])?;
+    let dir_cols: Vec<usize> = (1..=n)
+        .filter_map(|k| index.get(format!("dir{k}").as_str()).copied())
+        .collect();
+    if !dir_cols.is_empty() && dir_cols.len() != n {
+        return Err(bad(format!("map all of dir1..dir{n} or none")));
+    }
+    let covariates: Vec<(&str, usize)> = index
+        .iter()
+        .filter(|(t, _)| !fixed_target(t))
+        .map(|(t, &k)| (*t, k))
+        .collect();
+    let records: Vec<(u64, csv::StringRecord)> = rdr
+        .records()
+        .enumerate()
+        .map(|(i, r)| {
+            r.map(|r| (i as u64 + 2, r))
+                .map_err(|e| bad(format!("line {}: {e}", i + 2)))
+        })
+        .collect::<Result<_>>()?;
+    if records.is_empty() {
+        return Err(bad("no data rows after the header".into()));
+    }
+    let mapped: Vec<usize> = index.values().copied().collect();
+    let decimal = spec.decimal.unwrap_or_else(|| {
+        let comma = delimiter != ','
+            && records.iter().take(20).any(|(_, r)| {
+                mapped
+                    .iter()
+                    .any(|&k| r.get(k).is_some_and(|c| c.contains(',')))
+            });
+        if comma { ',' } else { '.' }
+    });
+    if decimal != '.' && decimal != ',' {
+        return Err(Error::InvalidParameter(format!(
+            "decimal separator '{decimal}': expected . or ,"
+        )));
+    }
+    let cell = |line: u64, r: &csv::StringRecord, k: usize, missing_ok: bool| -> Result<f64> {
+        let raw = r.get(k).unwrap_or("").trim();
+        if raw.is_empty() && missing_ok {
+            return Ok(f64::NAN);
+        }
+        let s = if decimal == ',' {
+            raw.replace(',', ".")
+        } else {
+            raw.to_string()
+        };
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(bad(format!(
+                "line {line}, column '{}': '{raw}' is not a finite number (decimal separator '{decimal}')",
+                header[k]
+            ))),
+        }
+    };
+    let mm = spec.lengths.to_mm();
+    let joint_value = |j: usize, raw: f64| {
+        if prismatic.get(j).copied().unwrap_or(false) {
+            raw * mm
+        } else if spec.angles == AngleUnit::Rad {
+            raw.to_degrees()
+        } else {
+            raw
+        }
+    };
+    let mut q = Vec::with_capacity(records.len());
+    let mut dir = Vec::with_capacity(records.len());
+    let mut errors = Vec::new();
+    let mut positions = Vec::new();
+    let mut cov: Vec<Vec<f64>> = vec![Vec::with_capacity(records.len()); covariates.len()];
+    let mut ids = Vec::new();
+    let mut lines = Vec::with_capacity(records.len());
+    for (line, r) in &records {
+        let mut qi = Vec::with_capacity(n);
+        for j in 0..n {
+            let raw = cell(*line, r, index[format!("q{}", j + 1).as_str()], false)?;
+            qi.push(joint_value(j, raw));
+        }
+        q.push(qi);
+        if !dir_cols.is_empty() {
+            let d: Vec<f64> = dir_cols
+                .iter()
+                .map(|&k| {
+                    let v = cell(*line, r, k, false)?;
+                    if v == 1.0 || v == -1.0 {
+                        Ok(v)
+                    } else {
+                        Err(bad(format!(
+                            "line {line}, column '{}': a direction is +1 or -1, not {v}",
+                            header[k]
+                        )))
+                    }
+                })
+                .collect::<Result<_>>()?;
+            dir.push(d);
+        }
+        for (cols, out) in [(&err_cols, &mut errors), (&pos_cols, &mut positions)] {
+            if let Some(c) = cols {
+                let mut v = [0.0; 3];
+                for a in 0..3 {
+                    v[a] = cell(*line, r, c[a], false)? * mm;
+                }
+                out.push(v);
+            }
+        }
+        for (c, (_, k)) in cov.iter_mut().zip(&covariates) {
+            c.push(cell(*line, r, *k, true)?);
+        }
+        if let Some(&k) = index.get("id") {
+            ids.push(r.get(k).unwrap_or("").trim().to_string());
+        }
+        lines.push(*line);
+    }
+    let (dir, dir_source) = if dir_cols.is_empty() {
+        (derive_directions(&q, None), DirSource::Derived)
+    } else {
+        (dir, DirSource::Given)
+    };
+    let data = Dataset {
+        source: source.into(),
+        q,
+        dir,
+        dir_source,
+        errors: err_cols.map(|_| errors),
+        positions: pos_cols.map(|_| positions),
+        ids: index.contains_key("id").then_some(ids),
+        covariates: covariates
+            .iter()
+            .zip(cov)
+            .map(|((name, _), values)| Covariate {
+                name: name.to_string(),
+                missing: values.iter().filter(|v| v.is_nan()).count(),
+                values,
+            })
+            .collect(),
+        text: Vec::new(),
+        lines: SourceLines(lines),
+    };
+    data.validate()?;
+    let ignored = header
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| !mapped.contains(k))
+        .map(|(_, h)| h.clone())
+        .collect();
+    Ok(Imported {
+        data,
+        delimiter,
+        decimal,
+        ignored,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(map: &str) -> ImportSpec {
+        let mut s = ImportSpec {
+            angles: AngleUnit::Rad,
+            lengths: LengthUnit::M,
+            ..ImportSpec::default()
+        };
+        s.map(map).unwrap();
+        s
+    }
+
+    #[test]
+    fn semicolons_decimal_commas_radians_and_metres() {
+        let text = "t;a;b;px;py;pz;temp\n1;0,5;-1;1;2;3;21,5\n2;0,25;-1;1,5;2;3;\n";
+        let got = import_text(
+            text,
+            "e.csv",
+            &spec("q1=a,q2=b,x=px,y=py,z=pz,temp_c=temp"),
+            &[],
+        )
+        .unwrap();
+        assert_eq!((got.delimiter, got.decimal), (';', ','));
+        assert_eq!(got.ignored, vec!["t".to_string()]);
+        let d = got.data;
+        assert!((d.q[0][0] - 0.5f64.to_degrees()).abs() < 1e-12);
+        assert_eq!(d.positions.as_ref().unwrap()[1], [1500.0, 2000.0, 3000.0]);
+        assert_eq!(d.dir[1], vec![-1.0, 1.0]);
+        assert_eq!(d.dir_source, DirSource::Derived);
+        assert_eq!(d.covariates[0].name, "temp_c");
+        assert_eq!(d.covariates[0].missing, 1);
+    }
+
+    #[test]
+    fn a_bad_cell_names_its_line_and_column_and_a_missing_column_lists_the_header() {
+        let text = "a;b\n1;2\n1;x\n";
+        let e = import_text(text, "e.csv", &spec("q1=a,q2=b"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 3") && e.contains("column 'b'"), "{e}");
+        let e = import_text(text, "e.csv", &spec("q1=a,q2=c"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no column 'c'") && e.contains("found: a, b"),
+            "{e}"
+        );
+        let e = import_text(text, "e.csv", &spec("q1=a,q3=b"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("without gaps"), "{e}");
+        let e = import_text(text, "e.csv", &spec("q1=a,ex=b"), &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("ex, ey, ez"), "{e}");
+    }
+}
