@@ -512,6 +512,10 @@ fn every_subcommand_has_an_example_and_every_option_a_help_text() {
             let (c, out, _) = rk(&args);
             assert_eq!(c, 0, "{path:?}");
             assert!(out.contains("Example"), "{path:?} has no example:\n{out}");
+            assert!(
+                out.contains("--json <FILE>"),
+                "{path:?} has no --json FILE:\n{out}"
+            );
             // the Options section only (the examples after it are not options)
             let lines: Vec<&str> = out
                 .lines()
@@ -546,4 +550,169 @@ fn every_subcommand_has_an_example_and_every_option_a_help_text() {
         missing.join("\n")
     );
     assert!(checked >= 14, "{checked} subcommands checked");
+}
+
+/// One grammar: every subcommand has `--json FILE`, and `--json -` puts the
+/// JSON, and only the JSON, on standard output (the text report goes to
+/// standard error). Run on every subcommand but the two slow ones (`demo`,
+/// `physics compare`), whose help is checked.
+#[test]
+fn json_dash_writes_only_json_to_stdout_on_every_subcommand() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let export = p("export.csv");
+    std::fs::write(&export, "J1;J2;T\n0,5;1;20\n0,25;1,5;21\n0,75;2;22\n").unwrap();
+    let setup: [&[&str]; 5] = [
+        &[
+            "simulate",
+            "--poses",
+            "40",
+            "--seed",
+            "3",
+            "-o",
+            &p("s.csv"),
+        ],
+        &[
+            "simulate",
+            "--kind",
+            "circle",
+            "--seed",
+            "3",
+            "-o",
+            &p("circle.csv"),
+        ],
+        &["fit", &p("s.csv"), "--optimizer", "hj", "-o", &p("m.json")],
+        &[
+            "compensate",
+            "--model",
+            &p("m.json"),
+            "--robot",
+            "comau-nj220",
+            &p("circle.csv"),
+            "-o",
+            &p("comp.csv"),
+        ],
+        &[
+            "simulate",
+            "--robot",
+            "scara-rh3frh5515",
+            "--kind",
+            "crosstalk",
+            "--seed",
+            "1",
+            "-o",
+            &p("xt.csv"),
+        ],
+    ];
+    for args in setup {
+        let (c, _, err) = rk(args);
+        assert_eq!(c, 0, "{args:?}: {err}");
+    }
+    let runs: Vec<Vec<String>> = [
+        vec![
+            "simulate",
+            "--poses",
+            "20",
+            "--seed",
+            "4",
+            "-o",
+            &p("s2.csv"),
+        ],
+        vec!["fit", &p("s.csv"), "--optimizer", "hj", "-o", &p("m2.json")],
+        vec!["predict", &p("m.json"), &p("s.csv"), "-o", &p("pred.csv")],
+        vec!["cv", &p("s.csv"), "--folds", "4", "--optimizer", "hj"],
+        vec![
+            "compensate",
+            "--model",
+            &p("m.json"),
+            "--robot",
+            "comau-nj220",
+            &p("circle.csv"),
+            "-o",
+            &p("comp2.csv"),
+        ],
+        vec![
+            "evaluate",
+            "--truth",
+            &p("circle.truth.json"),
+            &p("circle.csv"),
+            &p("comp.csv"),
+        ],
+        vec!["diagnose", &p("s.csv"), "--permutations", "19"],
+        vec![
+            "physics",
+            "register",
+            &p("s.csv"),
+            "--robot",
+            "comau-nj220",
+            "-o",
+            &p("reg.csv"),
+        ],
+        vec![
+            "physics",
+            "probing",
+            "--robot",
+            "kuka-kr30ha",
+            "--seed",
+            "1",
+        ],
+        vec![
+            "physics",
+            "identify",
+            &ds("scara_indexing.csv"),
+            "-o",
+            &p("sp.json"),
+        ],
+        vec![
+            "physics",
+            "crosstalk",
+            &p("xt.csv"),
+            "--model",
+            &p("sp.json"),
+        ],
+        vec![
+            "holdout",
+            &p("s.csv"),
+            "--robot",
+            "comau-nj220",
+            "--train",
+            "30",
+            "--test",
+            "10",
+        ],
+        vec![
+            "import",
+            &export,
+            "--map",
+            "q1=J1,q2=J2,temp_c=T",
+            "-o",
+            &p("imp.csv"),
+        ],
+        vec!["robot", "show", "ur10"],
+    ]
+    .into_iter()
+    .map(|v| v.into_iter().map(String::from).collect())
+    .collect();
+    for mut args in runs {
+        args.extend(["--json".to_string(), "-".to_string()]);
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (c, out, err) = rk(&a);
+        assert_eq!(c, 0, "{args:?}: {err}");
+        let v: Result<serde_json::Value, _> = serde_json::from_str(&out);
+        assert!(
+            v.is_ok(),
+            "{args:?}: stdout is not one JSON document:\n{out}"
+        );
+        assert!(
+            !err.is_empty() || args[0] == "robot",
+            "{args:?}: the text report is gone"
+        );
+    }
+    for path in [&["demo"][..], &["physics", "compare"]] {
+        let mut a = path.to_vec();
+        a.push("--help");
+        let (_, out, _) = rk(&a);
+        assert!(out.contains("--json <FILE>"), "{path:?}");
+    }
 }

@@ -66,8 +66,8 @@ pub struct CompensateArgs {
     /// Before/after plot (SVG, with --truth).
     #[arg(long)]
     plot: Option<PathBuf>,
-    /// Write the iteration history (and the evaluation) as JSON.
-    #[arg(long)]
+    /// Write the iteration history (and the evaluation) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -85,7 +85,7 @@ pub struct EvaluateArgs {
     /// Simulator truth JSON (`robokrige simulate` writes it).
     #[arg(long)]
     truth: PathBuf,
-    /// Robot preset (checked against the truth's nominal robot) [default: the truth's].
+    /// Robot: preset name or robot file (checked against the truth's nominal robot) [default: the truth's].
     #[arg(long)]
     robot: Option<String>,
     /// Joint values the robot starts from [default: home].
@@ -98,8 +98,8 @@ pub struct EvaluateArgs {
     /// trajectory (SVG).
     #[arg(long)]
     plot: Option<PathBuf>,
-    /// Write the errors (mean, max, RMS per axis) of every trajectory as JSON.
-    #[arg(long)]
+    /// Write the errors (mean, max, RMS per axis) of every trajectory as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -239,7 +239,7 @@ fn norms(e: &[[f64; 3]]) -> Vec<(f64, f64)> {
 }
 
 fn print_table(label: &str, t: &PositionErrorTable) {
-    println!(
+    say!(
         "  {label:<22} mean x/y/z {:>8.4} {:>8.4} {:>8.4}   |δ| mean {:.4}  std {:.4}  min {:.4}  max {:.4}",
         t.mean_mm[0],
         t.mean_mm[1],
@@ -262,7 +262,7 @@ fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()
         y: "measured 3D position error (mm)",
     };
     xy_plot(path, &labels, &series, false)?;
-    println!("plot: {}", path.display());
+    say!("plot: {}", path.display());
     Ok(())
 }
 
@@ -302,7 +302,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         super::print_coverage(&coverage, res.joints.len(), None);
     }
     res.commands.write_csv(&a.output)?;
-    println!(
+    say!(
         "{} {} points with {} in {secs:.3} s -> {}",
         if a.iterative {
             "iteratively compensated"
@@ -314,7 +314,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         a.output.display()
     );
     for it in &res.history {
-        println!(
+        say!(
             "  iteration {:>2}: RMSE of the change {:.5} mm (max {:.5}), mean predicted |δ̂| {:.4} mm, λ flips {}",
             it.iteration,
             it.rmse_change_mm,
@@ -341,15 +341,16 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         check_robot(&truth, &robot, tp)?;
         let (ev, (before, after)) =
             evaluation(tp, &truth, &targets, &res.commands, &start, a.seed)?;
-        println!(
+        say!(
             "on the simulated robot ({}), measured error vs target (mm):",
             tp.display()
         );
         print_table("before (nominal)", &ev.before);
         print_table("after (compensated)", &ev.after);
-        println!(
+        say!(
             "  reduction: mean |δ| {:.1} %, max |δ| {:.1} %",
-            ev.reduction_mean_abs_pct, ev.reduction_max_abs_pct
+            ev.reduction_mean_abs_pct,
+            ev.reduction_max_abs_pct
         );
         if let Some(p) = &a.plot {
             let name = a
@@ -439,7 +440,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let targets = read_targets(&a.traj, &robot, None, &start)?;
     let mut runs = Vec::new();
     let mut reports = Vec::new();
-    println!("measured error vs target on the simulated robot (mm):");
+    say!("measured error vs target on the simulated robot (mm):");
     for (k, path) in a.compensated.iter().enumerate() {
         let commands = Trajectory::read_csv(path)?;
         if commands.len() != targets.traj.len() {
@@ -464,9 +465,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             .unwrap_or("compensated")
             .to_string();
         print_table(&name, &ev.after);
-        println!(
+        say!(
             "  {:<22} reduction: mean |δ| {:.1} %, max |δ| {:.1} %",
-            "", ev.reduction_mean_abs_pct, ev.reduction_max_abs_pct
+            "",
+            ev.reduction_mean_abs_pct,
+            ev.reduction_max_abs_pct
         );
         runs.push((name.clone(), after));
         reports.push(serde_json::json!({"file": path, "evaluation": ev}));

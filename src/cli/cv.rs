@@ -47,8 +47,8 @@ pub struct CvArgs {
     /// Seed of the fold partition.
     #[arg(long = "cv-seed", default_value_t = 1)]
     cv_seed: u64,
-    /// Write the result (residuals, statistics) as JSON.
-    #[arg(long)]
+    /// Write the result (residuals, statistics) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
     /// Draw box plots of the out-of-fold 3D errors (SVG).
     #[arg(long)]
@@ -118,7 +118,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
     let words = super::fit::settings_line(space, opts, choice.kinematic);
-    println!(
+    say!(
         "{}-fold CV ({}) of {} on {} rows ({words}), {:.1} s",
         a.folds,
         res.mode,
@@ -126,13 +126,18 @@ pub fn run(a: CvArgs) -> Result<()> {
         data.len(),
         res.seconds
     );
-    println!(
+    say!(
         "  RMSE x / y / z (mm): {:.4} / {:.4} / {:.4}",
-        s.rms_mm[0], s.rms_mm[1], s.rms_mm[2]
+        s.rms_mm[0],
+        s.rms_mm[1],
+        s.rms_mm[2]
     );
-    println!(
+    say!(
         "  3D error (mm): mean {:.4}  std {:.4}  range [{:.4}, {:.4}]",
-        s.mean_3d_mm, s.std_3d_mm, s.min_3d_mm, s.max_3d_mm
+        s.mean_3d_mm,
+        s.std_3d_mm,
+        s.min_3d_mm,
+        s.max_3d_mm
     );
     if let Some(path) = &a.json {
         let mut v = serde_json::to_value(&res)
@@ -161,7 +166,7 @@ pub fn run(a: CvArgs) -> Result<()> {
             a.folds, res.mode, space
         );
         box_plot(path, &title, "error (mm)", &groups)?;
-        println!("plot: {}", path.display());
+        say!("plot: {}", path.display());
     }
     Ok(())
 }
@@ -184,15 +189,20 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         robokrige::kriging::OptimizerKind::Gps,
         None,
     )?;
-    println!(
+    say!(
         "{}-fold CV (refit: selection and hyperparameters inside every training fold) on {} rows, fold seed {}",
         a.folds,
         data.len(),
         a.cv_seed
     );
-    println!(
+    say!(
         "{:<11} {:>18} {:>9} {:>9} {:>26} {:>8}",
-        "method", "range (mm)", "mean", "std", "RMSE x / y / z (mm)", "time"
+        "method",
+        "range (mm)",
+        "mean",
+        "std",
+        "RMSE x / y / z (mm)",
+        "time"
     );
     let mut rows = Vec::new();
     let mut groups = Vec::new();
@@ -213,7 +223,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         let res = res?;
         groups.push((m.name().to_string(), norms(&res.residuals)));
         let s = &res.summary;
-        println!(
+        say!(
             "{:<11} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
             m.name(),
             s.min_3d_mm,
@@ -238,7 +248,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     if let Some(path) = &a.plot {
         let title = format!("{}-fold CV (refit) 3D error by method", a.folds);
         box_plot(path, &title, "out-of-fold 3D error (mm)", &groups)?;
-        println!("plot: {}", path.display());
+        say!("plot: {}", path.display());
     }
     Ok(())
 }

@@ -35,8 +35,8 @@ pub struct DemoArgs {
     /// Output folder.
     #[arg(short, long, default_value = "robokrige-demo")]
     output: PathBuf,
-    /// Also write the figures as JSON.
-    #[arg(long)]
+    /// Also write the figures as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -312,7 +312,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     robokrige::output::write_text(&report_path, &report)?;
     pb.inc(1);
     pb.finish_and_clear();
-    print!("{}", summary(&rows, &comp, &diag, secs));
+    say_part!("{}", summary(&rows, &comp, &diag, secs));
     if let Some(path) = &a.json {
         let v = serde_json::json!({
             "output": out, "seconds": secs,
@@ -330,7 +330,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         });
         super::write_json(path, &v, "demo summary")?;
     }
-    println!(
+    say!(
         "\nwrote {} (report.md, plots/, models/, data/)",
         out.display()
     );

@@ -75,8 +75,8 @@ pub struct DiagnoseArgs {
     /// Use only the first N rows (each CV fit is O(m³): keep m in the hundreds).
     #[arg(long)]
     rows: Option<usize>,
-    /// Write the result as JSON.
-    #[arg(long)]
+    /// Write the result as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
     /// Write a Markdown report.
     #[arg(long)]
@@ -87,7 +87,7 @@ pub struct DiagnoseArgs {
     /// Save the final model (with the added effects) here.
     #[arg(long)]
     model_out: Option<PathBuf>,
-    /// Robot preset: adds joint cross-talk candidates (through its Jacobian);
+    /// Robot (preset name or robot file): adds joint cross-talk candidates (through its Jacobian);
     /// with --traj and --truth, also compensates the trajectory with the model
     /// before and after and reports the errors.
     #[arg(long)]
@@ -177,7 +177,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         plots = draw_plots(dir, &data, &d)?;
         for p in &plots {
-            println!("plot: {}", p.display());
+            say!("plot: {}", p.display());
         }
     }
     let need_models = a.model_out.is_some() || a.traj.is_some();
@@ -187,7 +187,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         let after = ErrorModel::fit_with_extras(&work, opts.space, &opts.kriging, &d.extras)?;
         if let Some(p) = &a.model_out {
             after.save(p)?;
-            println!("model with the added effects: {}", p.display());
+            say!("model with the added effects: {}", p.display());
         }
         if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
             // (--traj and --truth without --robot are rejected by clap)
@@ -212,13 +212,13 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     if let Some(path) = &a.report {
         let text = report(&a, &d, &plots, compensation.as_ref());
         robokrige::output::write_text(path, &text)?;
-        println!("report: {}", path.display());
+        say!("report: {}", path.display());
     }
     Ok(())
 }
 
 fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
-    println!(
+    say!(
         "{} ({} rows): {}-fold CV ({}), {} permutations, FDR {}, {:.1} s",
         a.data.display(),
         d.before.residuals.len(),
@@ -229,9 +229,9 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         d.seconds
     );
     for c in &d.dropped_covariates {
-        println!("  left out: covariate {}: {}", c.name, c.reason);
+        say!("  left out: covariate {}: {}", c.name, c.reason);
     }
-    println!(
+    say!(
         "  before: CV RMSE x/y/z {} mm, mean 3D {:.4}",
         rmse3(&d.before.cv_rmse_mm),
         d.before.mean_3d_mm
@@ -240,7 +240,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
     for e in &d.effects {
         if e.round != round {
             round = e.round;
-            println!(
+            say!(
                 "  round {round} (best 5 of {}):",
                 d.effects.iter().filter(|x| x.round == round).count()
             );
@@ -252,7 +252,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
             .position(|x| x == e)
             .unwrap_or(0);
         if rank < 5 || e.accepted {
-            println!(
+            say!(
                 "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}{}{}",
                 describe(e),
                 e.score,
@@ -274,7 +274,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         }
     }
     for (k, s) in d.steps.iter().enumerate() {
-        println!(
+        say!(
             "  after effect {}: CV RMSE x/y/z {} mm, mean 3D {:.4}",
             k + 1,
             rmse3(&s.cv_rmse_mm),
@@ -283,9 +283,9 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
     }
     if d.steps.is_empty() {
         if d.effects.iter().any(|e| e.significant) {
-            println!("  significant candidates, but none lowered the CV RMSE enough to be added");
+            say!("  significant candidates, but none lowered the CV RMSE enough to be added");
         } else {
-            println!("  no significant effect: nothing to add");
+            say!("  no significant effect: nothing to add");
         }
     }
 }
@@ -424,7 +424,7 @@ fn compare_compensation(
         Ok((ev.before, ev.after))
     };
     let (b, a) = (run(before)?, run(after)?);
-    println!(
+    say!(
         "compensation of {} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
         traj.display(),
         b.0.mean_abs_mm,

@@ -273,13 +273,16 @@ pub struct FitArgs {
     /// Output model JSON.
     #[arg(short, long)]
     output: PathBuf,
-    /// Print the fit report as JSON.
-    #[arg(long)]
-    json: bool,
+    /// Write the fit report (input, settings, per-axis fits) as JSON to FILE
+    /// ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
-    robokrige::output::check_outputs(&[&a.data], &[&a.output])?;
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
@@ -322,13 +325,18 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     model.save(&a.output)?;
-    if a.json {
-        let v = serde_json::json!({"model": a.output, "rows": data.len(), "seconds": secs,
-            "outputs": model.reports, "selection": model.selection});
-        println!("{}", super::to_json(&v, "fit report")?);
-        return Ok(());
+    if let Some(path) = &a.json {
+        let settings: serde_json::Map<String, serde_json::Value> =
+            settings(model.space, &model.options, choice.kinematic)
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v.into()))
+                .collect();
+        let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
+            "settings": settings, "method": a.method, "robot": model.robot,
+            "seconds": secs, "outputs": model.reports, "selection": model.selection});
+        super::write_json(path, &v, "fit report")?;
     }
-    println!(
+    say!(
         "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
@@ -352,14 +360,14 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                 .iter()
                 .map(|f| format!("{} {:.4}", f.corr, f.cv_rmse))
                 .collect();
-            println!("  {ax}: family by 10-fold CV RMSE (mm): {}", t.join(", "));
+            say!("  {ax}: family by 10-fold CV RMSE (mm): {}", t.join(", "));
         }
         let lt: Vec<String> = r
             .theta
             .iter()
             .map(|t| format!("{:.2}", t.log10()))
             .collect();
-        println!(
+        say!(
             "  {ax}: ln ψ {:.4}  σ² {:.4}  nugget {:.2e}  trend terms {} (dropped {})  evals {}  {:.2} s\n      log10 ξ = [{}]",
             r.ln_psi,
             r.sigma2,
@@ -381,7 +389,7 @@ fn print_selection(model: &ErrorModel) {
     match &model.selection {
         Some(Selection::PccPca { outputs }) => {
             for (ax, r) in AXES.iter().zip(outputs) {
-                println!(
+                say!(
                     "  {ax} PCC+PCA: {} candidates ranked ({} dependent dropped), {} with |r| > {}, {} components ({:.1} % of variance)",
                     r.ranking.len(),
                     r.dropped.len(),
@@ -394,7 +402,7 @@ fn print_selection(model: &ErrorModel) {
         }
         Some(Selection::Ga { outputs }) => {
             for (ax, r) in AXES.iter().zip(outputs) {
-                println!(
+                say!(
                     "  {ax} GA: {} of {} candidates ({} dependent dropped), CV RMSE {:.4} mm after {} generations: {}",
                     r.selected.len(),
                     r.candidates,
@@ -422,8 +430,8 @@ pub struct PredictArgs {
     /// Output CSV: id, q, dir, pred_ex.., std_ex.. (and the measured ex.. if given).
     #[arg(short, long)]
     output: PathBuf,
-    /// Write a summary (and, with measured errors, before/after statistics) as JSON.
-    #[arg(long)]
+    /// Write a summary (and, with measured errors, before/after statistics) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -501,7 +509,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
                 "coverage_warnings": coverage});
             super::write_json(path, &v, "prediction summary")?;
         }
-        println!(
+        say!(
             "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
             data.len(),
             before.mean_3d_mm,
@@ -515,6 +523,6 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             "coverage_warnings": coverage});
         super::write_json(path, &v, "prediction summary")?;
     }
-    println!("wrote {}", a.output.display());
+    say!("wrote {}", a.output.display());
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! with the kinematic trend, in JS and EJS (issue 10's real-data table).
 
 use super::progress::bar;
-use super::{read_data, to_json};
+use super::read_data;
 use clap::Args;
 use nalgebra::{Isometry3, Translation3};
 use robokrige::dataset::Dataset;
@@ -36,7 +36,7 @@ Example (the public UR10 data, series C):
 pub struct HoldoutArgs {
     /// Measurement CSV with ex,ey,ez.
     data: PathBuf,
-    /// Robot preset: the nominal kinematics of the D-H calibration and of the
+    /// Robot (preset name or robot file): the nominal kinematics of the D-H calibration and of the
     /// kinematic trend.
     #[arg(long)]
     robot: String,
@@ -88,8 +88,8 @@ pub struct HoldoutArgs {
     /// Kriging at the ξ chosen on all rows, or the first --train rows, refitted per fold).
     #[arg(long)]
     cv: Option<usize>,
-    /// Write the table (and with --cv the per-fold figures) as JSON.
-    #[arg(long)]
+    /// Write the table (and with --cv the per-fold figures) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -167,7 +167,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         pb.set_message(msg.to_string());
     })?;
     pb.finish_and_clear();
-    println!(
+    say!(
         "{}: {k}-fold CV (fold seed {}) on all {} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}",
         a.data.display(),
         a.seed,
@@ -198,23 +198,23 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         .skip(1)
     {
         if !rows.is_empty() {
-            println!(
+            say!(
                 "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
                 rows.len()
             );
         }
     }
     if let Some(p) = &a.json {
-        robokrige::output::write_text(p, &to_json(&cv, "cv table")?)?;
+        super::write_json(p, &cv, "cv table")?;
     }
     Ok(())
 }
 
 fn print_rows(rows: &[HoldoutRow]) {
-    println!("| model | mean 3D (mm) | max 3D (mm) | RMS x / y / z (mm) | time |");
-    println!("|---|---|---|---|---|");
+    say!("| model | mean 3D (mm) | max 3D (mm) | RMS x / y / z (mm) | time |");
+    say!("|---|---|---|---|---|");
     for r in rows {
-        println!(
+        say!(
             "| {} | {:.4} | {:.4} | {:.4} / {:.4} / {:.4} | {:.1} s |",
             r.model,
             r.mean_mm,
@@ -323,7 +323,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         ));
     }
     pb.finish_and_clear();
-    println!(
+    say!(
         "{}: train rows 1–{}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}",
         a.data.display(),
         n_train,
@@ -349,7 +349,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
                 .join(", ")
         }
     );
-    println!(
+    say!(
         "D-H calibration: {} parameters fitted ({} frozen as unidentifiable), rms {:.4} → {:.4} mm on the training rows",
         lm.parameters,
         lm.frozen.len(),
@@ -358,7 +358,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     );
     print_rows(&rows);
     if let Some(p) = &a.json {
-        robokrige::output::write_text(p, &to_json(&rows, "hold-out table")?)?;
+        super::write_json(p, &rows, "hold-out table")?;
     }
     Ok(())
 }

@@ -122,7 +122,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     if let Some(r) = &robot {
         r.check_dataset(&data)?;
     }
-    println!(
+    say!(
         "read {} rows, {} joints from {} (delimiter {:?}, decimal {:?}, angles {}, lengths {})",
         data.len(),
         data.n_joints(),
@@ -139,7 +139,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         }
     );
     if !imported.ignored.is_empty() {
-        println!(
+        say!(
             "  not imported (no target names them): {}",
             imported.ignored.join(", ")
         );
@@ -155,7 +155,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
             let fit = locate_tracker(r, &data.q, &pos)?;
             let t = fit.tracker_to_base.translation.vector;
             let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
-            println!(
+            say!(
                 "  tracker → base of '{}' by least squares over all {} rows ({} iterations): translation ({:.3}, {:.3}, {:.3}) mm, rpy ({:.4}, {:.4}, {:.4})°",
                 r.name,
                 data.len(),
@@ -167,15 +167,18 @@ pub fn run(a: ImportArgs) -> Result<()> {
                 pitch.to_degrees(),
                 yaw.to_degrees()
             );
-            println!(
+            say!(
                 "  TCP offset in the flange frame: ({:.4}, {:.4}, {:.4}) mm; errors measured − nominal: rms |e| {:.4} mm",
-                fit.tool_xyz_mm.x, fit.tool_xyz_mm.y, fit.tool_xyz_mm.z, fit.rms_mm
+                fit.tool_xyz_mm.x,
+                fit.tool_xyz_mm.y,
+                fit.tool_xyz_mm.z,
+                fit.rms_mm
             );
             data.errors = Some(fit.errors.clone());
             located = Some(fit);
         }
         (None, Some(pos)) => {
-            println!(
+            say!(
                 "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
             );
             data.positions = Some(pos);
@@ -183,7 +186,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         (_, None) => {}
     }
     write_csv(&a.output, &data)?;
-    println!("wrote {}", a.output.display());
+    say!("wrote {}", a.output.display());
     if let Some(path) = &a.json {
         let v = serde_json::json!({
             "export": a.export, "output": a.output, "rows": data.len(),

@@ -1,6 +1,29 @@
 //! Subcommands. Exit codes: 0 ok, 1 failed (bad data, numerical failure),
 //! 2 bad usage (clap).
 
+/// A line of the text report: standard output, or standard error when a
+/// `--json -` has claimed standard output for the JSON.
+macro_rules! say {
+    ($($t:tt)*) => {
+        if $crate::cli::text_to_stderr() {
+            eprintln!($($t)*)
+        } else {
+            println!($($t)*)
+        }
+    };
+}
+
+/// [`say!`] without the newline.
+macro_rules! say_part {
+    ($($t:tt)*) => {
+        if $crate::cli::text_to_stderr() {
+            eprint!($($t)*)
+        } else {
+            print!($($t)*)
+        }
+    };
+}
+
 mod compensate;
 mod cv;
 mod demo;
@@ -58,8 +81,22 @@ pub enum Command {
     Robot(robot::RobotArgs),
 }
 
+static TEXT_TO_STDERR: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether text reports go to standard error (see [`say!`]).
+pub fn text_to_stderr() -> bool {
+    TEXT_TO_STDERR.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Whether the command line sends JSON to standard output (`--json -`).
+fn json_to_stdout(args: &[String]) -> bool {
+    args.iter().any(|a| a == "--json=-") || args.windows(2).any(|w| w[0] == "--json" && w[1] == "-")
+}
+
 /// Run a parsed command.
 pub fn run(cli: Cli) -> Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);
     match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Simulate(a) => simulate::run(a),

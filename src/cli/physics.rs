@@ -1,7 +1,7 @@
 //! `robokrige physics identify | compare`.
 
 use super::progress::bar;
-use super::{read_data, to_json};
+use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::kinematics;
 use robokrige::methods::Method;
@@ -54,8 +54,8 @@ pub struct CrosstalkArgs {
     /// Physics model identified from the indexing tests of the same set-up.
     #[arg(long)]
     model: PathBuf,
-    /// Write the cross-talk tables and the fit as JSON.
-    #[arg(long)]
+    /// Write the cross-talk tables and the fit as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -71,12 +71,16 @@ Example:
 pub struct RegisterArgs {
     /// Campaign with q.. and the measured x,y,z in the tracker's frame.
     data: PathBuf,
-    /// Robot preset whose nominal kinematics give the base frame.
+    /// The robot (preset or robot file) whose nominal kinematics give the base frame.
     #[arg(long)]
     robot: String,
     /// Output CSV: the same rows, x,y,z in the base frame, ex,ey,ez recomputed.
     #[arg(short, long)]
     output: PathBuf,
+    /// Write the registration (transform, residuals) as JSON to FILE ("-":
+    /// standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -93,8 +97,8 @@ pub struct ProbingArgs {
     /// Switch the tracker and repeatability noise off (the systematic part alone).
     #[arg(long)]
     noise_free: bool,
-    /// Write the straightness table as JSON.
-    #[arg(long)]
+    /// Write the straightness table as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -113,7 +117,7 @@ Example:
 pub struct IdentifyArgs {
     /// Indexing-test CSV (columns q.., dir.., x,y,z and `axis`).
     indexing: PathBuf,
-    /// Robot preset.
+    /// Robot: preset name or robot file.
     #[arg(long, default_value = DEFAULT_ROBOT)]
     robot: String,
     /// Measurement campaign with ex,ey,ez for the Levenberg–Marquardt D-H
@@ -129,8 +133,8 @@ pub struct IdentifyArgs {
     /// Simulator truth of the indexing campaign: print identified vs true.
     #[arg(long)]
     truth: Option<PathBuf>,
-    /// Write the identification report as JSON.
-    #[arg(long)]
+    /// Write the identification report as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -145,7 +149,7 @@ them (iterative feed-forward; score: measured − target on the true robot).
 Example:
   robokrige physics compare --robot scara-rh3frh5515 --seed 1 --report compare.md")]
 pub struct CompareArgs {
-    /// Robot preset of the simulated set-up (SCARA: seed 000; six-axis: seed 002).
+    /// Robot (preset name or robot file) of the simulated set-up (SCARA: seed 000; six-axis: seed 002).
     #[arg(long, default_value = "scara-rh3frh5515")]
     robot: String,
     /// Seed of everything simulated.
@@ -172,8 +176,8 @@ pub struct CompareArgs {
     /// Estimate a nugget in every Kriging fit (default: interpolate, as the papers).
     #[arg(long)]
     nugget: bool,
-    /// Write the comparison table as JSON.
-    #[arg(long)]
+    /// Write the comparison table as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
     /// Markdown report.
     #[arg(long)]
@@ -233,14 +237,14 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     if let Some(p) = &a.dh_output {
         id.dh.save(p)?;
     }
-    print!("{}", identify_text(&id));
+    say_part!("{}", identify_text(&id));
     if let Some(tp) = &a.truth {
         let truth = super::compensate::load_truth(tp)?;
-        print!("{}", truth_text(&id, &truth));
+        say_part!("{}", truth_text(&id, &truth));
     }
-    println!("model: {}", a.output.display());
+    say!("model: {}", a.output.display());
     if let Some(p) = &a.json {
-        write(p, &to_json(&id, "identification report")?)?;
+        super::write_json(p, &id, "identification report")?;
     }
     Ok(())
 }
@@ -377,16 +381,16 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     pb.finish_and_clear();
     let res = res?;
     let text = compare_text(&res, t0.elapsed().as_secs_f64());
-    print!("{text}");
+    say_part!("{text}");
     if let Some(p) = &a.report {
         write(p, &text)?;
     }
     if let Some(p) = &a.json {
-        write(p, &to_json(&res, "comparison")?)?;
+        super::write_json(p, &res, "comparison")?;
     }
     if let Some(dir) = &a.plots {
         for f in path_plots(&res, dir)? {
-            println!("plot: {}", f.display());
+            say!("plot: {}", f.display());
         }
     }
     Ok(())
@@ -508,22 +512,22 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
     let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
     robokrige::output::check_outputs(&[], &outputs)?;
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
-    println!(
+    say!(
         "# Probing a 1000 mm straightedge, 100 points: {} (true robot of seed {}{})\n",
         a.robot,
         a.seed,
         if a.noise_free { ", noise off" } else { "" }
     );
-    println!("Physics model: {how}.\n");
-    println!(
+    say!("Physics model: {how}.\n");
+    say!(
         "| location / face | nominal: straightness / std (mm) | D-H only | D-H + APD | reduction (straightness), D-H + APD vs nominal |"
     );
-    println!("|---|---|---|---|---|");
+    say!("|---|---|---|---|---|");
     for r in &rows {
         let f = |s: &robokrige::physics::Straightness| {
             format!("{:.4} / {:.4}", s.straightness_mm, s.std_mm)
         };
-        println!(
+        say!(
             "| {} | {} | {} | {} | {:.0} % |",
             r.edge,
             f(&r.nominal),
@@ -533,7 +537,7 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
         );
     }
     if let Some(p) = &a.json {
-        write(p, &to_json(&rows, "probing table")?)?;
+        super::write_json(p, &rows, "probing table")?;
     }
     Ok(())
 }
@@ -544,15 +548,18 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
     let model = robokrige::physics::PhysicsModel::load(&a.model)?;
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;
-    println!("J1 deviation the model misses, by J2 angle (seed 000 §5.2), degrees:");
-    println!("  J2      rows   mean shift   peak-to-peak");
+    say!("J1 deviation the model misses, by J2 angle (seed 000 §5.2), degrees:");
+    say!("  J2      rows   mean shift   peak-to-peak");
     for g in &r.groups {
-        println!(
+        say!(
             "  {:>6.1} {:>6} {:>+12.5} {:>14.5}",
-            g.j2_deg, g.rows, g.mean_deg, g.peak_to_peak_deg
+            g.j2_deg,
+            g.rows,
+            g.mean_deg,
+            g.peak_to_peak_deg
         );
     }
-    println!(
+    say!(
         "largest shift vs J2 = {:.1}°: {:.5}° (standard error {:.5}°, one entry {:.5}°): {}",
         r.groups[0].j2_deg,
         r.max_shift_deg,
@@ -565,13 +572,15 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
         }
     );
     if let Some(p) = &a.json {
-        write(p, &to_json(&r, "cross-talk report")?)?;
+        super::write_json(p, &r, "cross-talk report")?;
     }
     Ok(())
 }
 
 fn run_register(a: RegisterArgs) -> Result<()> {
-    robokrige::output::check_outputs(&[&a.data], &[&a.output])?;
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let robot = kinematics::load_robot(&a.robot)?;
     let data = read_data(&a.data)?;
     robot.check_dataset(&data)?;
@@ -583,7 +592,7 @@ fn run_register(a: RegisterArgs) -> Result<()> {
         .rotation
         .axis_angle()
         .map_or(([0.0, 0.0, 1.0], 0.0), |(ax, an)| ([ax.x, ax.y, ax.z], an));
-    println!(
+    say!(
         "base ← tracker: translation ({:.3}, {:.3}, {:.3}) mm, rotation {:.5}° about ({:.4}, {:.4}, {:.4}){}",
         t.x,
         t.y,
@@ -598,12 +607,21 @@ fn run_register(a: RegisterArgs) -> Result<()> {
             ""
         }
     );
-    println!(
+    say!(
         "residual |registered − nominal| over {} rows: rms {:.4} mm, max {:.4} mm -> {}",
         out.len(),
         reg.rms,
         reg.max,
         a.output.display()
     );
+    if let Some(p) = &a.json {
+        let v = serde_json::json!({
+            "data": a.data, "output": a.output, "robot": robot.name, "rows": out.len(),
+            "base_from_tracker": reg.transform, "rotation_axis": axis,
+            "rotation_deg": angle.to_degrees(), "reflection_guarded": reg.reflection_guarded,
+            "rms_mm": reg.rms, "max_mm": reg.max,
+        });
+        super::write_json(p, &v, "registration")?;
+    }
     Ok(())
 }

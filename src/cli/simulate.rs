@@ -56,7 +56,7 @@ Effects (repeatable --effect NAME[:key=value,...]; defaults in brackets):
   hysteresis   joint [2], amp_deg [0.01], travel_deg [20]  (joint deviates by
                λ*amp*(1 - exp(-s/travel)), s its travel since its last reversal)")]
 pub struct SimulateArgs {
-    /// Robot preset: comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515.
+    /// Robot: a preset (comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515) or a robot file (TOML/JSON; see `robokrige robot --help`).
     #[arg(long, default_value = "comau-nj220")]
     robot: String,
     /// Campaign kind.
@@ -86,9 +86,9 @@ pub struct SimulateArgs {
     /// Truth sidecar JSON [default: OUTPUT with .truth.json].
     #[arg(long)]
     truth: Option<PathBuf>,
-    /// Print the summary as JSON instead of text.
-    #[arg(long)]
-    json: bool,
+    /// Write the summary as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
@@ -109,7 +109,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
-    robokrige::output::check_outputs(&[], &[&a.output, &truth_path])?;
+    let mut outputs = vec![a.output.as_path(), truth_path.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;
     let summary = match &out {
@@ -128,10 +130,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             serde_json::json!({"output": a.output, "truth": truth_path, "points": t.len()})
         }
     };
-    if a.json {
-        println!("{}", super::to_json(&summary, "summary")?);
-    } else {
-        print_summary(&summary);
+    print_summary(&summary);
+    if let Some(path) = &a.json {
+        super::write_json(path, &summary, "summary")?;
     }
     Ok(())
 }
@@ -143,7 +144,7 @@ fn print_summary(s: &serde_json::Value) {
             a.iter().map(&f).collect::<Vec<_>>().join(" / ")
         })
     };
-    println!(
+    say!(
         "wrote {} ({})",
         s["output"].as_str().unwrap_or(""),
         s["truth"]
@@ -151,24 +152,24 @@ fn print_summary(s: &serde_json::Value) {
             .map_or(String::new(), |t| format!("truth: {t}"))
     );
     if let Some(n) = s.get("points") {
-        println!("trajectory points: {n}");
+        say!("trajectory points: {n}");
         return;
     }
     let e = &s["error"];
-    println!("rows: {}", s["rows"]);
-    println!(
+    say!("rows: {}", s["rows"]);
+    say!(
         "3D error (mm): mean {}  std {}  min {}  max {}",
         f(&e["mean_3d_mm"]),
         f(&e["std_3d_mm"]),
         f(&e["min_3d_mm"]),
         f(&e["max_3d_mm"])
     );
-    println!("per-axis RMS x / y / z (mm): {}", v3(&e["rms_mm"]));
-    println!(
+    say!("per-axis RMS x / y / z (mm): {}", v3(&e["rms_mm"]));
+    say!(
         "direction spread |δ(λ=+1) − δ(λ=−1)| x / y / z (mm, truth, mean over poses): {}",
         v3(&s["direction_spread_mm"])
     );
-    println!(
+    say!(
         "noise floor σ x / y / z (mm, truth): {}",
         v3(&s["noise_floor_mm"])
     );
