@@ -31,9 +31,15 @@
 //! | studies | [`sim`] | a "true robot" and its campaigns (checks the engine; never used inside it) |
 //! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, hybrid, comparisons |
 //! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
-//! | output | [`plot`] | SVG charts (box plots, x–y plots) |
+//! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
+//! | output | `plot` | SVG charts (box plots, x–y plots); Cargo feature `plot` (default) |
+//!
+//! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
+//! `plot` (plotters), both on by default; `default-features = false` gives
+//! the library alone.
 
 pub mod basis;
+pub mod batch;
 pub mod compensate;
 pub mod cv;
 pub mod dataset;
@@ -50,6 +56,7 @@ pub mod model;
 pub mod optim;
 pub mod output;
 pub mod physics;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod predictor;
 pub mod sim;

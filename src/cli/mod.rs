@@ -24,6 +24,7 @@ macro_rules! say_part {
     };
 }
 
+mod batch;
 mod compensate;
 mod cv;
 mod demo;
@@ -34,6 +35,7 @@ mod import;
 mod physics;
 mod progress;
 mod robot;
+mod run;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -77,6 +79,12 @@ pub enum Command {
     /// Turn a tracker or controller export (own columns, delimiter, decimal
     /// comma, units) into a measurement CSV; locate the tracker for errors.
     Import(import::ImportArgs),
+    /// Run the steps of a config file (robokrige.toml): each a subcommand
+    /// with its options, exactly as on the command line.
+    Run(run::RunArgs),
+    /// Fit and cross-validate every campaign of a folder (one robot each), in
+    /// parallel: a report per campaign and a summary table.
+    Batch(batch::BatchArgs),
     /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
     Robot(robot::RobotArgs),
 }
@@ -97,7 +105,14 @@ fn json_to_stdout(args: &[String]) -> bool {
 pub fn run(cli: Cli) -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);
-    match cli.command {
+    dispatch(cli.command)
+}
+
+/// Run one subcommand (also each step of `run CONFIG`).
+fn dispatch(command: Command) -> Result<()> {
+    match command {
+        Command::Run(a) => run::run(a),
+        Command::Batch(a) => batch::run(a),
         Command::Demo(a) => demo::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fit(a) => fit::run_fit(a),

@@ -1,0 +1,144 @@
+//! A fleet: one campaign per robot, each fitted and cross-validated the same
+//! way, in parallel, with one report per campaign and a summary table.
+//!
+//! Every campaign `NAME.csv` of a folder is fitted with the recommended
+//! settings ([`KrigingOptions::recommended`]: nugget, correlation family by
+//! CV, periodic joints where the data spans more than 180°) and scored by
+//! K-fold CV at the fitted hyperparameters (closed form, eq 21 of seed 003
+//! without the refit). Its robot is `NAME.robot.toml` (or `.json`) beside it
+//! when that exists, else the batch's robot, else none; a given robot is
+//! recorded in the model ([`ErrorModel::record_robot`]). A campaign that
+//! fails is reported with its error and does not stop the others.
+
+use crate::cv::cross_validate_closed_form;
+use crate::dataset::read_csv;
+use crate::kinematics::{Robot, read_robot_file};
+use crate::kriging::KrigingOptions;
+use crate::model::ErrorModel;
+use crate::space::{Space, periodic_joints};
+use crate::stats::{ErrorSummary, summarize};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What a batch does with each campaign.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BatchOptions {
+    /// CV folds.
+    pub folds: usize,
+    /// Seed of the folds and of the fit's starts.
+    pub seed: u64,
+    /// Robot of campaigns without their own robot file.
+    pub robot: Option<Robot>,
+}
+
+impl Default for BatchOptions {
+    fn default() -> Self {
+        BatchOptions {
+            folds: 10,
+            seed: 1,
+            robot: None,
+        }
+    }
+}
+
+/// The report of one campaign.
+#[derive(Debug, Clone, Serialize)]
+pub struct CampaignReport {
+    /// The campaign file.
+    pub campaign: PathBuf,
+    /// Rows fitted.
+    pub rows: usize,
+    /// The robot's name and where it came from (`NAME.robot.toml` or the batch's).
+    pub robot: Option<String>,
+    /// The measured errors before any model (what a compensation starts from).
+    pub measured: ErrorSummary,
+    /// Out-of-fold residuals of the model.
+    pub cv: ErrorSummary,
+    /// The correlation family chosen per axis.
+    pub correlation: Vec<String>,
+    /// Wall time of fit and CV, s.
+    pub seconds: f64,
+    /// The fitted model (saved by the caller).
+    #[serde(skip)]
+    pub model: ErrorModel,
+}
+
+/// The campaign files of `folder`: every `*.csv`, sorted by name.
+pub fn campaigns(folder: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(folder).map_err(|e| Error::io(folder, e))?;
+    let mut out: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|x| x.eq_ignore_ascii_case("csv")))
+        .collect();
+    out.sort();
+    if out.is_empty() {
+        return Err(Error::Input {
+            source_name: folder.display().to_string(),
+            message: "no campaign (*.csv) in this folder".into(),
+        });
+    }
+    Ok(out)
+}
+
+/// The robot file beside a campaign (`NAME.robot.toml` or `NAME.robot.json`).
+pub fn robot_beside(campaign: &Path) -> Option<PathBuf> {
+    let stem = campaign.file_stem()?.to_str()?;
+    ["toml", "json"]
+        .into_iter()
+        .map(|ext| campaign.with_file_name(format!("{stem}.robot.{ext}")))
+        .find(|p| p.is_file())
+}
+
+/// Fit and cross-validate one campaign (see the module docs).
+pub fn run_campaign(campaign: &Path, opts: &BatchOptions) -> Result<CampaignReport> {
+    let t0 = Instant::now();
+    let data = read_csv(campaign)?;
+    let errors = data.errors_or_err()?.to_vec();
+    let robot = match robot_beside(campaign) {
+        Some(p) => Some(read_robot_file(&p)?),
+        None => opts.robot.clone(),
+    };
+    if let Some(r) = &robot {
+        r.check_dataset(&data)?;
+    }
+    let kriging = KrigingOptions {
+        seed: opts.seed,
+        periodic: periodic_joints(&data.q),
+        ..KrigingOptions::recommended()
+    };
+    let mut model = ErrorModel::fit(&data, Space::Ejs, &kriging)?;
+    if let Some(r) = &robot {
+        model.record_robot(r)?;
+    }
+    let cv = cross_validate_closed_form(&data, &model, opts.folds, opts.seed)?;
+    Ok(CampaignReport {
+        campaign: campaign.to_path_buf(),
+        rows: data.len(),
+        robot: robot.as_ref().map(|r| r.name.clone()),
+        measured: summarize(&errors),
+        cv: cv.summary,
+        correlation: model.outputs.iter().map(|o| o.corr().to_string()).collect(),
+        seconds: t0.elapsed().as_secs_f64(),
+        model,
+    })
+}
+
+/// [`run_campaign`] on every campaign, in parallel; `done` is called as each
+/// finishes (in any order). The results are in the order of `campaigns`.
+pub fn run_batch(
+    campaigns: &[PathBuf],
+    opts: &BatchOptions,
+    done: &(dyn Fn(&Path, &Result<CampaignReport>) + Sync),
+) -> Vec<Result<CampaignReport>> {
+    campaigns
+        .par_iter()
+        .map(|c| {
+            let r = run_campaign(c, opts);
+            done(c, &r);
+            r
+        })
+        .collect()
+}

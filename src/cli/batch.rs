@@ -1,0 +1,166 @@
+//! `batch`: every campaign of a folder, one robot each, in parallel.
+
+use clap::Args;
+use robokrige::batch::{BatchOptions, CampaignReport, campaigns, run_batch};
+use robokrige::{Error, Result};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Fits every campaign NAME.csv of FOLDER with the recommended settings (EJS,
+nugget, correlation family by CV, periodic joints auto) and scores it by
+K-fold CV at the fitted hyperparameters. A campaign's robot is
+NAME.robot.toml (or .json) beside it, else --robot. Writes OUT/NAME.model.json
+and OUT/NAME.report.json per campaign and OUT/summary.csv; a campaign that
+fails is listed with its error and does not stop the others (exit 1 at the end).
+
+Example:
+  robokrige batch fleet/ -o fleet_results/ --robot comau-nj220
+
+Many machines: run the same command per campaign folder as a job array, e.g.
+Slurm `#SBATCH --array=0-99` with `robokrige batch fleet/cell_$SLURM_ARRAY_TASK_ID
+-o results/cell_$SLURM_ARRAY_TASK_ID` (docs/FLEET.md).")]
+pub struct BatchArgs {
+    /// Folder of campaign CSVs.
+    folder: PathBuf,
+    /// Output folder (created; must not be FOLDER).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Robot (preset name or robot file) of campaigns without NAME.robot.toml.
+    #[arg(long)]
+    robot: Option<String>,
+    /// CV folds.
+    #[arg(long, default_value_t = 10)]
+    folds: usize,
+    /// Seed of the folds and of the fit's starts.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Write the summary (every campaign's report) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+pub fn run(a: BatchArgs) -> Result<()> {
+    let files = campaigns(&a.folder)?;
+    let same = |x: &Path, y: &Path| match (x.canonicalize(), y.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    };
+    if same(&a.folder, &a.output) {
+        return Err(Error::InvalidParameter(
+            "the output folder is the campaign folder: its files would be read as campaigns next time; choose another".into(),
+        ));
+    }
+    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(&a.output, e))?;
+    let summary_csv = a.output.join("summary.csv");
+    let mut outputs = vec![summary_csv.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&[], &outputs)?;
+    let opts = BatchOptions {
+        folds: a.folds,
+        seed: a.seed,
+        robot: a
+            .robot
+            .as_deref()
+            .map(robokrige::kinematics::load_robot)
+            .transpose()?,
+    };
+    eprintln!(
+        "batch: {} campaign(s) in {}, in parallel",
+        files.len(),
+        a.folder.display()
+    );
+    let pb = super::progress::bar(files.len() as u64, "campaigns");
+    let results = run_batch(&files, &opts, &|c, r| {
+        pb.inc(1);
+        if let Err(e) = r {
+            pb.println(format!("  {}: failed: {e}", c.display()));
+        }
+    });
+    pb.finish_and_clear();
+    let stem = |p: &Path| {
+        p.file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("campaign")
+            .to_string()
+    };
+    let mut rows = vec![
+        "campaign,rows,robot,measured_mean_3d_mm,cv_rmse_x_mm,cv_rmse_y_mm,cv_rmse_z_mm,cv_mean_3d_mm,correlation,seconds,status"
+            .to_string(),
+    ];
+    say!(
+        "{:<28} {:>6} {:<20} {:>10} {:>26} {:>9} {:>7}",
+        "campaign",
+        "rows",
+        "robot",
+        "measured",
+        "CV RMSE x / y / z (mm)",
+        "CV mean",
+        "s"
+    );
+    let mut failed = 0;
+    let mut reports = Vec::new();
+    for (file, r) in files.iter().zip(&results) {
+        let name = stem(file);
+        match r {
+            Ok(rep) => {
+                write_campaign(&a.output, &name, rep)?;
+                let cv = rep.cv.rms_mm;
+                say!(
+                    "{:<28} {:>6} {:<20} {:>10.4} {:>8.4} / {:.4} / {:.4} {:>9.4} {:>7.1}",
+                    name,
+                    rep.rows,
+                    rep.robot.as_deref().unwrap_or("-"),
+                    rep.measured.mean_3d_mm,
+                    cv[0],
+                    cv[1],
+                    cv[2],
+                    rep.cv.mean_3d_mm,
+                    rep.seconds
+                );
+                rows.push(format!(
+                    "{name},{},{},{},{},{},{},{},{},{},ok",
+                    rep.rows,
+                    rep.robot.as_deref().unwrap_or(""),
+                    rep.measured.mean_3d_mm,
+                    cv[0],
+                    cv[1],
+                    cv[2],
+                    rep.cv.mean_3d_mm,
+                    rep.correlation.join("/"),
+                    rep.seconds
+                ));
+                reports.push(serde_json::json!({"campaign": name, "report": rep}));
+            }
+            Err(e) => {
+                failed += 1;
+                say!("{name:<28} failed: {e}");
+                let msg = e.to_string().replace('"', "'");
+                rows.push(format!("{name},,,,,,,,,,\"failed: {msg}\""));
+                reports.push(serde_json::json!({"campaign": name, "error": e.to_string()}));
+            }
+        }
+    }
+    robokrige::output::write_text(&summary_csv, &(rows.join("\n") + "\n"))?;
+    say!("summary -> {}", summary_csv.display());
+    if let Some(p) = &a.json {
+        super::write_json(p, &reports, "batch summary")?;
+    }
+    if failed > 0 {
+        return Err(Error::InvalidParameter(format!(
+            "{failed} of {} campaign(s) failed (listed above and in {})",
+            files.len(),
+            summary_csv.display()
+        )));
+    }
+    Ok(())
+}
+
+fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
+    rep.model.save(&out.join(format!("{name}.model.json")))?;
+    super::write_json(
+        &out.join(format!("{name}.report.json")),
+        rep,
+        "campaign report",
+    )
+}

@@ -1,0 +1,127 @@
+//! `run CONFIG` does what the flags do; `batch` fits a folder of campaigns,
+//! one robot each, and reports every campaign, failures included.
+
+mod common;
+
+use common::rk;
+
+fn ds(f: &str) -> String {
+    format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn a_config_step_gives_the_same_model_as_its_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let config = format!(
+        "data = \"{}\"\nrobot = \"comau-nj220\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"a.json\"\noptimizer = \"hj\"\ncorr = \"gaussian\"\nno-nugget = true\n",
+        ds("comau_lhs.csv")
+    );
+    std::fs::write(p("robokrige.toml"), config).unwrap();
+    let (c, out, err) = rk(&["run", &p("robokrige.toml")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("robokrige fit"), "{out}");
+    let (c, _, err) = rk(&[
+        "fit",
+        &ds("comau_lhs.csv"),
+        "--robot",
+        "comau-nj220",
+        "--optimizer",
+        "hj",
+        "--corr",
+        "gaussian",
+        "--no-nugget",
+        "-o",
+        &p("b.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let read = |f: &str| -> serde_json::Value {
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p(f)).unwrap()).unwrap();
+        for r in v["reports"].as_array_mut().unwrap() {
+            r["seconds"] = 0.0.into();
+        }
+        v
+    };
+    // written relative to the config's folder, equal to the flags' model
+    assert_eq!(read("a.json"), read("b.json"));
+}
+
+#[test]
+fn a_config_with_an_unknown_option_names_the_step_and_the_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        "[[step]]\ncommand = \"fit\"\ndata = \"x.csv\"\nfolds = 3\n",
+    )
+    .unwrap();
+    let (c, _, err) = rk(&["run", &cfg.display().to_string()]);
+    assert_eq!(c, 1);
+    assert!(
+        err.contains("step 1: fit has no option 'folds'") && err.contains("optimizer"),
+        "{err}"
+    );
+    std::fs::write(&cfg, "[[step]]\ncommand = \"fly\"\n").unwrap();
+    let (c, _, err) = rk(&["run", &cfg.display().to_string()]);
+    assert_eq!(c, 1);
+    assert!(err.contains("no subcommand 'fly'"), "{err}");
+}
+
+#[test]
+fn a_batch_reports_every_campaign_with_its_own_robot_and_lists_failures() {
+    let dir = tempfile::tempdir().unwrap();
+    let fleet = dir.path().join("fleet");
+    std::fs::create_dir(&fleet).unwrap();
+    let text = std::fs::read_to_string(ds("comau_lhs.csv")).unwrap();
+    let first: String = text.lines().take(81).collect::<Vec<_>>().join("\n") + "\n";
+    std::fs::write(fleet.join("cell_a.csv"), &first).unwrap();
+    std::fs::write(fleet.join("cell_b.csv"), &first).unwrap();
+    // cell_b's own robot file wins over --robot
+    let abb = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/robots/abb-irb2600.toml"
+    );
+    std::fs::copy(abb, fleet.join("cell_b.robot.toml")).unwrap();
+    std::fs::write(fleet.join("empty.csv"), "q1,q2,ex,ey,ez\n").unwrap();
+    let out = dir.path().join("out");
+    let (c, stdout, err) = rk(&[
+        "batch",
+        &fleet.display().to_string(),
+        "-o",
+        &out.display().to_string(),
+        "--robot",
+        "comau-nj220",
+        "--folds",
+        "4",
+    ]);
+    assert_eq!(c, 1, "one campaign fails: {err}");
+    assert!(err.contains("1 of 3 campaign(s) failed"), "{err}");
+    assert!(
+        stdout.contains("empty") && stdout.contains("failed"),
+        "{stdout}"
+    );
+    let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    let lines: Vec<&str> = summary.lines().collect();
+    assert_eq!(lines.len(), 4, "{summary}");
+    assert!(lines[1].starts_with("cell_a,80,comau-nj220,") && lines[1].ends_with(",ok"));
+    assert!(lines[2].starts_with("cell_b,80,abb-irb2600-12-165,"));
+    assert!(lines[3].starts_with("empty,") && lines[3].contains("failed"));
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("cell_b.model.json")).unwrap())
+            .unwrap();
+    assert_eq!(model["robot"]["name"], "abb-irb2600-12-165");
+    assert!(out.join("cell_a.report.json").exists());
+    // the campaign folder is not an output folder
+    let (c, _, err) = rk(&[
+        "batch",
+        &fleet.display().to_string(),
+        "-o",
+        &fleet.display().to_string(),
+    ]);
+    assert_eq!(c, 1);
+    assert!(
+        err.contains("output folder is the campaign folder"),
+        "{err}"
+    );
+}
