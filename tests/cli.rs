@@ -136,8 +136,9 @@ fn compensate_and_evaluate_report_before_and_after() {
         "--plot",
         &p("x.svg"),
     ]);
-    assert_eq!(c, 1, "{err}");
-    assert!(err.contains("--plot needs --truth"), "{err}");
+    assert_eq!(c, 2, "{err}");
+    assert!(err.contains("--truth <TRUTH>"), "{err}");
+    assert!(!dir.join("x.csv").exists(), "refused before any work");
     let (c, _, err) = rk(&[
         "evaluate",
         "--robot",
@@ -714,5 +715,214 @@ fn json_dash_writes_only_json_to_stdout_on_every_subcommand() {
         a.push("--help");
         let (_, out, _) = rk(&a);
         assert!(out.contains("--json <FILE>"), "{path:?}");
+    }
+}
+
+/// Options a mode does not use are refused, not silently ignored (issue 20's
+/// sweep): each case exits 1 or 2 with a message naming the option.
+#[test]
+fn options_a_mode_does_not_use_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--poses",
+        "40",
+        "--seed",
+        "3",
+        "-o",
+        &p("s.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let (c, _, err) = rk(&[
+        "fit",
+        &p("s.csv"),
+        "--optimizer",
+        "hj",
+        "--robot",
+        "comau-nj220",
+        "-o",
+        &p("m.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let export = p("e.csv");
+    std::fs::write(&export, "a,b\n1,2\n2,3\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "simulate",
+                "--robot",
+                "scara-rh3frh5515",
+                "--kind",
+                "indexing",
+                "--poses",
+                "5",
+            ],
+            "--poses",
+        ),
+        (
+            vec!["simulate", "--poses", "20", "--diameter", "7"],
+            "--diameter",
+        ),
+        (
+            vec!["simulate", "--poses", "20", "--cycles", "2"],
+            "--cycles",
+        ),
+        (
+            vec![
+                "simulate",
+                "--kind",
+                "circle",
+                "--ranges=-1:1,-1:1,-1:1,-1:1,-1:1,-1:1",
+            ],
+            "--ranges",
+        ),
+        (
+            vec!["simulate", "--kind", "circle", "--effect", "temperature"],
+            "--effect temperature",
+        ),
+        (
+            vec!["fit", &p("s.csv"), "--method", "ejs-hj", "--space", "js"],
+            "--space",
+        ),
+        (vec!["fit", &p("s.csv"), "--tool", "1,2,3"], "--robot"),
+        (
+            vec!["fit", &p("s.csv"), "--optimizer", "hj", "--starts", "3"],
+            "--starts",
+        ),
+        (
+            vec![
+                "compensate",
+                "--model",
+                &p("m.json"),
+                "--robot",
+                "comau-nj220",
+                &ds("comau_circle.csv"),
+                "--tol",
+                "5",
+            ],
+            "--iterative",
+        ),
+        (
+            vec![
+                "compensate",
+                "--model",
+                &p("m.json"),
+                "--robot",
+                "comau-nj220",
+                &ds("comau_circle.csv"),
+                "--seed",
+                "5",
+            ],
+            "--truth",
+        ),
+        (
+            vec![
+                "compensate",
+                "--model",
+                &p("m.json"),
+                "--robot",
+                "comau-nj220",
+                &ds("comau_circle.csv"),
+                "--orientation=1,2,3",
+            ],
+            "--orientation",
+        ),
+        (
+            vec![
+                "diagnose",
+                &p("s.csv"),
+                "--robot",
+                "comau-nj220",
+                "--traj",
+                &ds("comau_circle.csv"),
+            ],
+            "--truth",
+        ),
+        (
+            vec![
+                "holdout",
+                &p("s.csv"),
+                "--robot",
+                "comau-nj220",
+                "--cv",
+                "3",
+                "--ga",
+            ],
+            "--ga",
+        ),
+        (
+            vec![
+                "holdout",
+                &p("s.csv"),
+                "--robot",
+                "comau-nj220",
+                "--cv",
+                "3",
+                "--test",
+                "5",
+            ],
+            "--test",
+        ),
+        (
+            vec![
+                "physics",
+                "identify",
+                &ds("scara_indexing.csv"),
+                "--train",
+                &p("s.csv"),
+            ],
+            "--train",
+        ),
+        (
+            vec![
+                "physics",
+                "compare",
+                "--js",
+                "recommended",
+                "--ejs",
+                "recommended",
+                "--nugget",
+            ],
+            "--nugget",
+        ),
+        (
+            vec![
+                "cv",
+                &p("s.csv"),
+                "--mode",
+                "closed-form",
+                "--hyper-rows",
+                "500",
+            ],
+            "--hyper-rows",
+        ),
+        (vec!["import", &export, "--map", "q1=a,q1=b"], "given twice"),
+        (
+            vec!["import", &export, "--map", "q1=a", "--decimal", ","],
+            "decimal comma",
+        ),
+    ]
+    .into_iter()
+    .map(|(v, w)| (v.into_iter().map(String::from).collect(), w))
+    .collect();
+    for (mut args, word) in cases {
+        if !args.iter().any(|a| a == "-o")
+            && args[0] != "cv"
+            && args[0] != "holdout"
+            && args[0] != "diagnose"
+            && args[1] != "compare"
+        {
+            args.extend(["-o".to_string(), p("out.csv")]);
+        }
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (c, _, err) = rk(&a);
+        assert!(c == 1 || c == 2, "{args:?} was accepted");
+        assert!(err.contains(word), "{args:?}: {err}");
+        assert!(
+            !dir.path().join("out.csv").exists(),
+            "{args:?} wrote its output"
+        );
     }
 }

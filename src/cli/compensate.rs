@@ -43,11 +43,11 @@ pub struct CompensateArgs {
     /// Iterate (seed 004) instead of the single step (seed 003).
     #[arg(long)]
     iterative: bool,
-    /// Stop iterating when the RMSE of the change is below this (mm).
-    #[arg(long, default_value_t = 1e-3)]
+    /// Stop iterating when the RMSE of the change is below this (mm; with --iterative).
+    #[arg(long, default_value_t = 1e-3, requires = "iterative")]
     tol: f64,
-    /// Maximum iterations (the single step counts as one).
-    #[arg(long, default_value_t = 10)]
+    /// Maximum iterations (with --iterative).
+    #[arg(long, default_value_t = 10, requires = "iterative")]
     max_iter: usize,
     /// Joint values the robot starts from, comma-separated [default: home].
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
@@ -61,10 +61,10 @@ pub struct CompensateArgs {
     #[arg(long)]
     truth: Option<PathBuf>,
     /// Seed of the simulated measurement noise (with --truth).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, requires = "truth")]
     seed: u64,
     /// Before/after plot (SVG, with --truth).
-    #[arg(long)]
+    #[arg(long, requires = "truth")]
     plot: Option<PathBuf>,
     /// Write the iteration history (and the evaluation) as JSON to FILE ("-": standard output).
     #[arg(long, value_name = "FILE")]
@@ -129,6 +129,19 @@ pub(super) fn read_targets(
         }
         TargetFile::Tcp(t) => t,
     };
+    if orientation.is_some() && (t.has_orientation || hints.is_some() || robot.dof() < 6) {
+        return Err(Error::InvalidParameter(format!(
+            "--orientation is for position-only (x,y,z) trajectories of a six-axis robot; {} {}",
+            path.display(),
+            if hints.is_some() {
+                "is a pose list (its orientations come from the joints)"
+            } else if t.has_orientation {
+                "has its own roll,pitch,yaw columns"
+            } else {
+                "is for a robot with fewer than six joints"
+            }
+        )));
+    }
     if !t.has_orientation && robot.dof() >= 6 {
         let rot = match orientation {
             Some(&[r, p, y]) => {
@@ -275,8 +288,12 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = super::holdout::robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
-    if let AnyModel::Kriging(m) = &model {
-        m.check_robot(&robot, &a.model.display().to_string())?;
+    let model_name = a.model.display().to_string();
+    match &model {
+        AnyModel::Kriging(m) => m.check_robot(&robot, &model_name)?,
+        AnyModel::Physics(m) => {
+            robokrige::model::RobotRecord::of(&m.nominal).check(&robot, &model_name)?
+        }
     }
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
@@ -372,10 +389,6 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
             )?;
         }
         eval = Some(ev);
-    } else if a.plot.is_some() {
-        return Err(Error::InvalidParameter(
-            "--plot needs --truth (measured errors to draw)".into(),
-        ));
     }
     if let Some(path) = &a.json {
         let mut v = serde_json::json!({

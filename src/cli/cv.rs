@@ -79,6 +79,12 @@ pub fn run(a: CvArgs) -> Result<()> {
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),
         ));
     }
+    if let Some(n) = a.hyper_rows.filter(|&n| n >= data.len()) {
+        return Err(Error::InvalidParameter(format!(
+            "--hyper-rows {n}: the campaign has only {} rows; give fewer, or leave it out to choose ξ on all rows",
+            data.len()
+        )));
+    }
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
         Mode::Refit => {

@@ -94,11 +94,12 @@ pub struct DiagnoseArgs {
     robot: Option<String>,
     /// Trajectory to compensate with the model before and after the effects
     /// were added (TCP x,y,z CSV, or joints q1..qN), with --robot and --truth.
-    #[arg(long, requires = "robot")]
+    #[arg(long, requires_all = ["robot", "truth"])]
     traj: Option<PathBuf>,
     /// Simulator truth JSON of the campaign (`robokrige simulate` writes it):
-    /// runs the compensated trajectory on the simulated robot to measure it.
-    #[arg(long, requires = "robot")]
+    /// runs the compensated trajectory on the simulated robot to measure it
+    /// (with --traj).
+    #[arg(long, requires_all = ["robot", "traj"])]
     truth: Option<PathBuf>,
 }
 
@@ -178,6 +179,9 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         plots = draw_plots(dir, &data, &d)?;
         for p in &plots {
             say!("plot: {}", p.display());
+        }
+        if plots.is_empty() {
+            say!("no plots in {}: no effect was added", dir.display());
         }
     }
     let need_models = a.model_out.is_some() || a.traj.is_some();

@@ -97,7 +97,7 @@ pub struct ModelArgs {
     #[arg(long)]
     robot: Option<String>,
     /// TCP offset in the flange frame, mm ("x,y,z"), for `--robot`.
-    #[arg(long)]
+    #[arg(long, requires = "robot")]
     tool: Option<String>,
     /// Add the kinematic-error basis (rows of the robot's identification
     /// Jacobian, seed 003 eq 4) to the trend: one fit calibrates and krigs.
@@ -203,6 +203,11 @@ impl ModelChoice {
 impl ModelArgs {
     /// The full choice for `data` (periodic joints resolved on its rows).
     pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ModelChoice> {
+        if self.starts.is_some() && matches!(self.optimizer, OptimizerArg::Hj) {
+            return Err(Error::InvalidParameter(
+                "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
+            ));
+        }
         let (space, mut opts) = self.options();
         opts.periodic = super::holdout::parse_periodic(&self.periodic, &data.q)?;
         if self.kinematic && self.robot.is_none() {
@@ -266,9 +271,12 @@ pub struct FitArgs {
     data: PathBuf,
     #[command(flatten)]
     model: ModelArgs,
-    /// Fit a named method instead (recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga);
-    /// overrides --space/--trend/--optimizer.
-    #[arg(long)]
+    /// Fit a named method instead (recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga):
+    /// each fixes its own settings, so the model options (--space, --trend,
+    /// --corr, --optimizer, --no-nugget, --starts, --periodic) are refused with it.
+    #[arg(long, conflicts_with_all = [
+        "space", "trend", "corr", "optimizer", "no_nugget", "nugget", "starts", "periodic",
+    ])]
     method: Option<String>,
     /// Output model JSON.
     #[arg(short, long)]

@@ -50,9 +50,9 @@ pub struct HoldoutArgs {
     /// 0.01–0.04 mm against 600, at about 3× the time].
     #[arg(long)]
     train: Option<usize>,
-    /// Held-out rows after the training ones (without --cv).
-    #[arg(long, default_value_t = 300)]
-    test: usize,
+    /// Held-out rows after the training ones (without --cv) [default: 300].
+    #[arg(long)]
+    test: Option<usize>,
     /// Seed of the hyperparameter starts and, with --cv, of the fold partition.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -86,7 +86,8 @@ pub struct HoldoutArgs {
     pca: bool,
     /// Instead: K-fold CV on all rows (D-H calibration refitted per fold;
     /// Kriging at the ξ chosen on all rows, or the first --train rows, refitted per fold).
-    #[arg(long)]
+    /// Not with --test, --ga or --pca.
+    #[arg(long, conflicts_with_all = ["test", "ga", "pca"])]
     cv: Option<usize>,
     /// Write the table (and with --cv the per-fold figures) as JSON to FILE ("-": standard output).
     #[arg(long, value_name = "FILE")]
@@ -229,6 +230,8 @@ fn print_rows(rows: &[HoldoutRow]) {
 
 /// Training rows of a hold-out split when `--train` is not given.
 const DEFAULT_TRAIN: usize = 600;
+/// Held-out rows after the training ones.
+const DEFAULT_TEST: usize = 300;
 
 pub fn run(a: HoldoutArgs) -> Result<()> {
     let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
@@ -240,16 +243,17 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         return run_cv(&a, &data, &robot, k);
     }
     let n_train = a.train.unwrap_or(DEFAULT_TRAIN);
-    if n_train < 10 || a.test < 1 || n_train + a.test > data.len() {
+    let n_test = a.test.unwrap_or(DEFAULT_TEST);
+    if n_train < 10 || n_test < 1 || n_train + n_test > data.len() {
         return Err(Error::InvalidParameter(format!(
             "--train {} --test {} need at least 10 + 1 and at most {} rows",
             n_train,
-            a.test,
+            n_test,
             data.len()
         )));
     }
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
-    let test = data.select(&(n_train..n_train + a.test).collect::<Vec<_>>());
+    let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
     let truth = test.errors_or_err()?.to_vec();
     let opts = kriging_opts(&a, &train.q)?;
     super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
@@ -328,7 +332,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         a.data.display(),
         n_train,
         n_train + 1,
-        n_train + a.test,
+        n_train + n_test,
         match a.optimizer.as_str() {
             "gps" => "GPS",
             "hj" => "Hooke–Jeeves",

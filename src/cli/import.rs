@@ -86,8 +86,9 @@ pub fn run(a: ImportArgs) -> Result<()> {
         Some(p) => ImportSpec::from_file(p)?,
         None => ImportSpec::default(),
     };
+    let mut given = Vec::new();
     for m in &a.map {
-        spec.map(m)?;
+        spec.map(m, &mut given)?;
     }
     if a.delimiter.is_some() {
         spec.delimiter = a.delimiter;

@@ -173,7 +173,8 @@ pub struct CompareArgs {
     /// Kriging method of the EJS row and of the hybrid's residual model.
     #[arg(long, default_value = "ejs-gps")]
     ejs: String,
-    /// Estimate a nugget in every Kriging fit (default: interpolate, as the papers).
+    /// Estimate a nugget in the papers' Kriging methods too (default: they
+    /// interpolate; `recommended` always estimates one).
     #[arg(long)]
     nugget: bool,
     /// Write the comparison table as JSON to FILE ("-": standard output).
@@ -218,6 +219,12 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
     let train = match &a.train {
+        Some(_) if is_scara(&robot) => {
+            return Err(Error::InvalidParameter(format!(
+                "--train is for six-axis robots; '{}' is a SCARA, identified from its indexing tests alone",
+                robot.name
+            )));
+        }
         Some(p) => read_data(p)?,
         None if is_scara(&robot) => indexing.clone(),
         None => {
@@ -371,6 +378,11 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::parse(&a.ejs)?,
         nugget: a.nugget,
     };
+    if a.nugget && opts.js == Method::Recommended && opts.ejs == Method::Recommended {
+        return Err(Error::InvalidParameter(
+            "--nugget changes the papers' methods only; --js and --ejs are both `recommended`, which always estimates one".into(),
+        ));
+    }
     let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
     let res = compare(&opts, &|k, total, what| {

@@ -62,7 +62,7 @@ pub struct SimulateArgs {
     /// Campaign kind.
     #[arg(long, value_enum, default_value = "lhs")]
     kind: Kind,
-    /// Number of poses (lhs 300, verify 30) or circle points (72); ignored by indexing.
+    /// Number of poses (lhs 300, verify 30) or circle points (72); not for indexing or crosstalk.
     #[arg(long)]
     poses: Option<usize>,
     /// Seed of the true robot and of the campaign.
@@ -74,12 +74,12 @@ pub struct SimulateArgs {
     /// Joint ranges overriding the preset's, e.g. "-20:20,-40:0,-150:-100,-15:15,-55:15,-15:15" (degrees).
     #[arg(long, allow_hyphen_values = true)]
     ranges: Option<String>,
-    /// Circle diameter, mm.
-    #[arg(long, default_value_t = 100.0)]
-    diameter: f64,
-    /// Forward/backward passes per indexed joint.
-    #[arg(long, default_value_t = 3)]
-    cycles: usize,
+    /// Circle diameter, mm (--kind circle) [default: 100].
+    #[arg(long)]
+    diameter: Option<f64>,
+    /// Forward/backward passes per indexed joint (--kind indexing, crosstalk) [default: 3].
+    #[arg(long)]
+    cycles: Option<usize>,
     /// Output CSV.
     #[arg(short, long)]
     output: PathBuf,
@@ -91,7 +91,46 @@ pub struct SimulateArgs {
     json: Option<PathBuf>,
 }
 
+/// Refuse the options `a.kind` does not use (each would be silently ignored).
+fn check_kind_options(a: &SimulateArgs) -> Result<()> {
+    let kind = format!("{:?}", a.kind).to_lowercase();
+    let refuse = |what: &str| {
+        Err(Error::InvalidParameter(format!(
+            "{what} (here --kind {kind})"
+        )))
+    };
+    let grid = matches!(a.kind, Kind::Indexing | Kind::Crosstalk);
+    if grid && a.poses.is_some() {
+        return refuse(
+            "--poses is not used by an indexing or cross-talk campaign: its poses come from the joint grid and --cycles",
+        );
+    }
+    if a.diameter.is_some() && !matches!(a.kind, Kind::Circle) {
+        return refuse("--diameter is for --kind circle");
+    }
+    if a.cycles.is_some() && !grid {
+        return refuse("--cycles is for --kind indexing or crosstalk");
+    }
+    if matches!(a.kind, Kind::Circle) {
+        if a.ranges.is_some() {
+            return refuse(
+                "--ranges does not apply to a circle trajectory (it is drawn around the robot's home TCP)",
+            );
+        }
+        for spec in &a.effects {
+            let name = spec.split(':').next().unwrap_or("");
+            if ["temperature", "payload", "tracker-step"].contains(&name) {
+                return refuse(&format!(
+                    "--effect {name} acts on measurements, and a circle is a trajectory to compensate, not measured; evaluate runs it without that effect"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 pub fn run(a: SimulateArgs) -> Result<()> {
+    check_kind_options(&a)?;
     let robot = kinematics::load_robot(&a.robot)?;
     let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
     if let Some(p) = a.poses {
@@ -103,8 +142,12 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         .map(|s| Effect::parse(s))
         .collect::<Result<_>>()?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
-    spec.circle_diameter_mm = a.diameter;
-    spec.indexing_cycles = a.cycles;
+    if let Some(d) = a.diameter {
+        spec.circle_diameter_mm = d;
+    }
+    if let Some(c) = a.cycles {
+        spec.indexing_cycles = c;
+    }
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }

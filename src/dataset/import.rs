@@ -103,15 +103,26 @@ impl ImportSpec {
         })
     }
 
-    /// Add `target=column` pairs (comma-separated), overriding the same targets.
-    pub fn map(&mut self, pairs: &str) -> Result<()> {
+    /// Add `target=column` pairs (comma-separated), overriding the same
+    /// targets of a mapping file. Error if one call's pairs, or
+    /// `already` (targets set by earlier calls), name a target twice.
+    pub fn map(&mut self, pairs: &str, already: &mut Vec<String>) -> Result<()> {
         for pair in pairs.split(',').filter(|p| !p.trim().is_empty()) {
             let Some((t, c)) = pair.split_once('=') else {
                 return Err(Error::InvalidParameter(format!(
                     "--map '{pair}': expected target=column, e.g. q1=shoulder_pan_joint"
                 )));
             };
-            self.columns.insert(t.trim().into(), c.trim().into());
+            let t = t.trim().to_string();
+            if already.contains(&t) {
+                return Err(Error::InvalidParameter(format!(
+                    "--map: target {t} is given twice ({} and {})",
+                    self.columns[&t],
+                    c.trim()
+                )));
+            }
+            already.push(t.clone());
+            self.columns.insert(t, c.trim().into());
         }
         Ok(())
     }
@@ -263,6 +274,11 @@ pub fn import_text(
             });
         if comma { ',' } else { '.' }
     });
+    if decimal == ',' && delimiter == ',' {
+        return Err(Error::InvalidParameter(
+            "a decimal comma needs another delimiter than ',' (give --delimiter ';' or tab)".into(),
+        ));
+    }
     if decimal != '.' && decimal != ',' {
         return Err(Error::InvalidParameter(format!(
             "decimal separator '{decimal}': expected . or ,"
@@ -394,7 +410,7 @@ mod tests {
             lengths: LengthUnit::M,
             ..ImportSpec::default()
         };
-        s.map(map).unwrap();
+        s.map(map, &mut Vec::new()).unwrap();
         s
     }
 

@@ -307,13 +307,22 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     if scara {
         notes.push("random poses: the first of a uniform draw with the elbow bent by at least 15° (|q2| ≥ 15°; a stretched SCARA is singular)".into());
     }
+    // `recommended` always estimates a nugget; the papers' methods only when asked
+    let nugget = |m: Method| {
+        if opts.nugget || m == Method::Recommended {
+            "with a nugget"
+        } else {
+            "interpolating, as in the papers"
+        }
+    };
     notes.push(format!(
-        "Kriging: JS {} and EJS {} fitted on the {}-pose Latin-hypercube campaign; the hybrid's residual model is {} on the same poses; {}",
+        "Kriging: JS {} ({}) and EJS {} ({}) fitted on the {}-pose Latin-hypercube campaign; the hybrid's residual model is {} on the same poses",
         opts.js.name(),
+        nugget(opts.js),
         opts.ejs.name(),
+        nugget(opts.ejs),
         train.len(),
         opts.ejs.name(),
-        if opts.nugget { "every fit estimates a nugget" } else { "no nugget (interpolating, as in the papers)" }
     ));
     step(total, "done");
     // E‖n‖ for n ~ N(0, σ² I): 2σ√(2/π) in 3D, σ√(π/2) in 2D

@@ -156,7 +156,13 @@ pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput,
     };
     if visits.iter().all(|v| !v.measured) {
         return Err(Error::InvalidParameter(
-            "campaign has no poses (use --poses > 0)".into(),
+            match spec.kind {
+                CampaignKind::Indexing | CampaignKind::Crosstalk => {
+                    "campaign has no poses (indexing needs --cycles > 0)"
+                }
+                _ => "campaign has no poses (use --poses > 0)",
+            }
+            .into(),
         ));
     }
     let data = measure(robot, spec, &visits, &mut rng)?;
