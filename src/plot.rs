@@ -206,8 +206,9 @@ pub struct Labels<'a> {
     pub y: &'a str,
 }
 
-/// An x–y plot of several series with a legend; `equal_aspect` gives both
-/// axes the same scale (for paths in a plane).
+/// An x–y plot of several series with a legend below the axes (never over
+/// the data); `equal_aspect` gives both axes the same scale (for paths in a
+/// plane).
 pub fn xy_plot(path: &Path, labels: &Labels, series: &[Series], equal_aspect: bool) -> Result<()> {
     let mut svg = String::new();
     draw_xy_plot(&mut svg, path, labels, series, equal_aspect)?;
@@ -222,8 +223,12 @@ fn draw_xy_plot(
     equal_aspect: bool,
 ) -> Result<()> {
     let err = plot_err(path);
-    let root = SVGBackend::with_string(svg, (640, 520)).into_drawing_area();
+    let cols = series.len().clamp(1, 2);
+    let rows = series.len().div_ceil(cols);
+    let legend_h = 22 * rows as u32 + 12;
+    let root = SVGBackend::with_string(svg, (640, 520 + legend_h)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+    let (root, legend) = root.split_vertically(520);
     let mut xr = span(
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         false,
@@ -259,7 +264,7 @@ fn draw_xy_plot(
         .map_err(|e| err(e.to_string()))?;
     for (i, s) in series.iter().enumerate() {
         let c = color(i);
-        let drawn = match s.mark {
+        match s.mark {
             Mark::Line => {
                 chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
             }
@@ -268,16 +273,23 @@ fn draw_xy_plot(
             }
         }
         .map_err(|e| err(e.to_string()))?;
-        drawn
-            .label(s.name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3)));
+        // the legend: its own strip below the chart, `cols` entries a row
+        let (col, row) = ((i % cols) as i32, (i / cols) as i32);
+        let (x, y) = (84 + col * 280, 12 + row * 22);
+        legend
+            .draw(&PathElement::new(
+                vec![(x, y), (x + 18, y)],
+                c.stroke_width(3),
+            ))
+            .map_err(|e| err(e.to_string()))?;
+        legend
+            .draw(&Text::new(
+                s.name.clone(),
+                (x + 24, y - 8),
+                ("sans-serif", 14),
+            ))
+            .map_err(|e| err(e.to_string()))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(|e| err(e.to_string()))?;
-    root.present().map_err(|e| err(e.to_string()))
+    root.present().map_err(|e| err(e.to_string()))?;
+    legend.present().map_err(|e| err(e.to_string()))
 }
