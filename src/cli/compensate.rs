@@ -286,7 +286,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     outputs.extend(a.plot.as_deref());
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&inputs, &outputs)?;
-    let robot = super::holdout::robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let robot = super::robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
     let model_name = a.model.display().to_string();
     match &model {

@@ -216,7 +216,7 @@ impl ModelArgs {
             ));
         }
         let robot = match &self.robot {
-            Some(r) => Some(super::holdout::robot_with_tool(r, self.tool.as_deref())?),
+            Some(r) => Some(super::robot_with_tool(r, self.tool.as_deref())?),
             None => None,
         };
         if let Some(r) = &robot {

@@ -5,10 +5,9 @@
 use super::progress::bar;
 use super::read_data;
 use clap::Args;
-use nalgebra::{Isometry3, Translation3};
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
-use robokrige::kinematics::{self, Robot};
+use robokrige::kinematics::Robot;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
 use robokrige::physics::HybridModel;
@@ -110,26 +109,6 @@ pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
             })
             .collect(),
     }
-}
-
-/// `--tool "x,y,z"` on top of a preset.
-pub fn robot_with_tool(name: &str, tool: Option<&str>) -> Result<Robot> {
-    let mut robot = kinematics::load_robot(name)?;
-    if let Some(t) = tool {
-        let v: Vec<f64> = t
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::InvalidParameter(format!("--tool '{t}': expected x,y,z in mm")))?;
-        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(Error::InvalidParameter(format!(
-                "--tool '{t}': expected x,y,z in mm"
-            )));
-        }
-        robot.tool =
-            Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), robot.tool.rotation);
-    }
-    Ok(robot)
 }
 
 /// The Kriging options of `a` for training rows `q`.
@@ -237,7 +216,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
     robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = read_data(&a.data)?;
-    let robot = robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let robot = super::robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
     if let Some(k) = a.cv {
         return run_cv(&a, &data, &robot, k);
