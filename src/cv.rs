@@ -92,11 +92,7 @@ pub fn cross_validate_closed_form(
     let t0 = Instant::now();
     data.errors_or_err()?;
     let m = data.len();
-    let x = model.input_norm.apply_rows(&model.space.encode_rows(
-        &model.options.periodic,
-        &data.q,
-        &data.dir,
-    ));
+    let x = model.input_map().encode_dataset(data)?;
     if model.outputs.iter().any(|o| o.data.x_train != x) {
         return Err(Error::InvalidParameter(format!(
             "closed-form CV needs the model fitted on exactly these {m} rows, in order"

@@ -23,6 +23,7 @@
 //! | engine | [`kriging`] | universal Kriging: trend, correlation families, likelihood, fit, predict |
 //! | engine | [`basis`] | trend selection: PCC + PCA fusion (seed 003 eqs 15–20) |
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
+//! | engine | [`inputs`] | `InputMap`: encoding, extras and normalisation of a model's inputs, in one place |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
 //! | model | [`methods`] | the papers' model variants by name, and `recommended` |
 //! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
@@ -48,6 +49,7 @@ pub mod error;
 pub mod features;
 pub mod frames;
 pub mod holdout;
+pub mod inputs;
 pub mod kinematics;
 pub mod kriging;
 pub mod memory;

@@ -19,7 +19,7 @@ use crate::kriging::{
 };
 use crate::model::ErrorModel;
 use crate::optim::{GaOptions, ga};
-use crate::space::{Normalizer, Space};
+use crate::space::Space;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -168,12 +168,10 @@ pub fn fit_ga(
 ) -> Result<ErrorModel> {
     let errors = data.errors_or_err()?;
     let m = data.len();
-    let n = data.n_joints();
-    let d = Space::Ejs.encoded_dim(n, &opts.periodic);
-    let rows = Space::Ejs.encode_rows(&opts.periodic, &data.q, &data.dir);
-    let x = Normalizer::fit(&rows).apply_rows(&rows);
+    let map = crate::inputs::InputMap::fit(data, Space::Ejs, &opts.periodic, &[])?;
+    let (d, x) = (map.dim(), map.encode_dataset(data)?);
     let inputs = TrainingInputs::new(&x);
-    let names = Space::Ejs.encoded_names(n, &opts.periodic);
+    let names = map.names().to_vec();
     let fold = kfold_partition(m, k, seed)?;
     let blocks = crate::stats::fold_blocks(&fold);
     let quad = KrigingOptions {

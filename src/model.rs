@@ -6,7 +6,8 @@
 //! JSON that predicts bit-identically after loading.
 
 use crate::dataset::Dataset;
-use crate::features::{Feature, append_columns};
+use crate::features::Feature;
+use crate::inputs::InputMap;
 use crate::kriging::{
     FitReport, KrigingModel, KrigingOptions, Pred, TrainingInputs, fit_output_from,
 };
@@ -345,10 +346,9 @@ impl ErrorModel {
         kinematic: Option<&crate::kinematics::Robot>,
     ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
         let errors = data.errors_or_err()?;
-        let d = space.encoded_dim(data.n_joints(), &opts.periodic);
-        let rows = space.encode_rows(&opts.periodic, &data.q, &data.dir);
-        let x = Normalizer::fit(&rows).apply_rows(&rows);
-        let names = space.encoded_names(data.n_joints(), &opts.periodic);
+        let map = InputMap::fit(data, space, &opts.periodic, &[])?;
+        let (d, x) = (map.dim(), map.encode_dataset(data)?);
+        let names = map.names();
         let quad = KrigingOptions {
             trend: crate::kriging::TrendKind::Quadratic,
             ..opts.clone()
@@ -368,7 +368,7 @@ impl ErrorModel {
                 threshold,
                 variance_share,
                 data.len() / 2,
-                &names,
+                names,
             )?;
             trends.push(crate::kriging::Trend::Fused(basis));
             reports.push(report);
@@ -446,21 +446,9 @@ impl ErrorModel {
             });
         }
         let n = data.n_joints();
-        if let Some(j) = opts.periodic.iter().find(|&&j| j >= n) {
-            return Err(Error::InvalidParameter(format!(
-                "periodic joint {} does not exist: the data has {n} joints",
-                j + 1
-            )));
-        }
-        let mut rows = space.encode_rows(&opts.periodic, &data.q, &data.dir);
-        let mut names = space.encoded_names(n, &opts.periodic);
-        for f in extras {
-            append_columns(&mut rows, &f.columns(data)?);
-            names.extend(f.names());
-        }
-        let input_norm = Normalizer::fit(&rows);
-        let x = input_norm.apply_rows(&rows);
-        let corr_dims = names.len() - crate::features::trend_only_dims(extras);
+        let map = InputMap::fit(data, space, &opts.periodic, extras)?;
+        let x = map.encode_dataset(data)?;
+        let corr_dims = map.corr_dims();
         let inputs = TrainingInputs::new(
             &x.iter()
                 .map(|r| r[..corr_dims].to_vec())
@@ -487,7 +475,7 @@ impl ErrorModel {
                 &inputs,
                 &y,
                 &trends[a],
-                &names,
+                map.names(),
                 opts,
                 opts.warm_start.get(a),
             )
@@ -510,8 +498,8 @@ impl ErrorModel {
             version: MODEL_VERSION,
             space,
             n_joints: n,
-            input_names: names,
-            input_norm,
+            input_names: map.names().to_vec(),
+            input_norm: map.normalizer().clone(),
             // a warm start is how this fit began, not what the model is
             options: KrigingOptions {
                 warm_start: Vec::new(),
@@ -549,11 +537,9 @@ impl ErrorModel {
             }
             _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
         };
-        let rows = self
-            .space
-            .encode_rows(&self.options.periodic, &data.q, &data.dir);
-        let input_norm = Normalizer::fit(&rows);
-        let x = input_norm.apply_rows(&rows);
+        let map = InputMap::fit(data, self.space, &self.options.periodic, &[])?;
+        let x = map.encode_dataset(data)?;
+        let input_norm = map.normalizer().clone();
         let inputs = TrainingInputs::new(&x);
         let fits: Vec<Result<KrigingModel>> = (0..3)
             .into_par_iter()
@@ -636,15 +622,22 @@ impl ErrorModel {
     /// ([`Feature::columns_from_poses`]).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
-        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
-        for f in &self.extras {
-            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
-        }
-        self.predict_rows(&rows)
+        self.predict_inputs(&self.input_map().encode(q, dir)?)
     }
 
-    fn predict_rows(&self, rows: &[Vec<f64>]) -> Result<Prediction> {
-        let s = self.input_norm.apply_rows(rows);
+    /// The map from poses to this model's normalised inputs.
+    pub fn input_map(&self) -> InputMap {
+        InputMap::from_parts(
+            self.space,
+            self.n_joints,
+            &self.options.periodic,
+            &self.extras,
+            &self.input_names,
+            &self.input_norm,
+        )
+    }
+
+    fn predict_inputs(&self, s: &[Vec<f64>]) -> Result<Prediction> {
         // the first standard deviation needs each output's m × m factor,
         // which then stays with the model: known before it is allocated
         let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
@@ -665,16 +658,16 @@ impl ErrorModel {
             // large models: one factorisation at a time, each multi-threaded
             self.outputs
                 .iter()
-                .map(|o| o.predict(&s))
+                .map(|o| o.predict(s))
                 .collect::<Result<_>>()?
         } else {
             self.outputs
                 .par_iter()
-                .map(|o| o.predict(&s))
+                .map(|o| o.predict(s))
                 .collect::<Result<_>>()?
         };
-        let mut mean = vec![[0.0; 3]; rows.len()];
-        let mut std = vec![[0.0; 3]; rows.len()];
+        let mut mean = vec![[0.0; 3]; s.len()];
+        let mut std = vec![[0.0; 3]; s.len()];
         for (a, preds) in per_axis.iter().enumerate() {
             for (k, p) in preds.iter().enumerate() {
                 mean[k][a] = p.mean;
@@ -716,11 +709,7 @@ impl ErrorModel {
     /// ```
     pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.check_rows(q, dir)?;
-        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
-        for f in &self.extras {
-            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
-        }
-        let s = self.input_norm.apply_rows(&rows);
+        let s = self.input_map().encode(q, dir)?;
         let per_axis: Vec<Vec<f64>> = self
             .outputs
             .par_iter()
@@ -751,13 +740,7 @@ impl ErrorModel {
     /// Predict for every row of a dataset (extra inputs from its columns).
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
-        let mut rows = self
-            .space
-            .encode_rows(&self.options.periodic, &data.q, &data.dir);
-        for f in &self.extras {
-            append_columns(&mut rows, &f.columns(data)?);
-        }
-        self.predict_rows(&rows)
+        self.predict_inputs(&self.input_map().encode_dataset(data)?)
     }
 
     /// The points of a prediction that leave what the training data
@@ -777,11 +760,7 @@ impl ErrorModel {
         std: Option<&[[f64; 3]]>,
     ) -> Result<Vec<CoverageWarning>> {
         self.check_rows(q, dir)?;
-        let mut rows = self.space.encode_rows(&self.options.periodic, q, dir);
-        for f in &self.extras {
-            append_columns(&mut rows, &f.columns_from_poses(q, dir)?);
-        }
-        let s = self.input_norm.apply_rows(&rows);
+        let s = self.input_map().encode(q, dir)?;
         let trend: Vec<Vec<f64>> = self.outputs.iter().map(|o| o.predict_trend(&s)).collect();
         let mut out = Vec::new();
         for (k, qk) in q.iter().enumerate() {
@@ -1034,9 +1013,9 @@ fn kinematic_trend_set(
         }
     }
     let (kept, _) = independent_columns(&f, 1e-7);
-    let x = space.encode_rows(&opts.periodic, &data.q, &data.dir);
-    let norm = Normalizer::fit(&x);
-    let d = space.encoded_dim(n, &opts.periodic);
+    let map = InputMap::fit(data, space, &opts.periodic, &[])?;
+    let norm = map.normalizer();
+    let d = map.dim();
     let nj = d - space.dim(n) + n; // joint columns
     let poly = opts.trend.monomials(d);
     let norm2 = |a: Option<usize>, k: usize| -> f64 {
@@ -1046,7 +1025,13 @@ fn kinematic_trend_set(
             .sum()
     };
     // the monomial columns of every axis's trend matrix
-    let fp = axis_tol.map(|_| crate::kriging::trend_matrix(&poly, &norm.apply_rows(&x)));
+    let fp = match axis_tol {
+        Some(_) => Some(crate::kriging::trend_matrix(
+            &poly,
+            &map.encode_dataset(data)?,
+        )),
+        None => None,
+    };
     let axis_params = |a: usize| -> Vec<usize> {
         let seen: Vec<usize> = kept
             .iter()
