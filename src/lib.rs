@@ -25,7 +25,8 @@
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
 //! | engine | [`inputs`] | `InputMap`: encoding, extras and normalisation of a model's inputs, in one place |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
-//! | model | [`methods`] | the papers' model variants by name, and `recommended` |
+//! | model | [`params`] | `ErrorModelParams` → checked → `fit`: every space × trend × hyperparameter choice |
+//! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended` |
 //! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
 //! | studies | [`compensate`] | single-step and iterative feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22) |
 //! | studies | [`diagnose`] | closing the loop: what the model still misses |
@@ -57,6 +58,7 @@ pub mod methods;
 pub mod model;
 pub mod optim;
 pub mod output;
+pub mod params;
 pub mod physics;
 #[cfg(feature = "plot")]
 pub mod plot;

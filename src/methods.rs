@@ -19,6 +19,7 @@ use crate::kriging::{
 };
 use crate::model::ErrorModel;
 use crate::optim::{GaOptions, ga};
+use crate::params::{ErrorModelParams, TrendSpec};
 use crate::space::Space;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -35,10 +36,19 @@ pub enum Method {
     /// output's correlation family chosen by closed-form CV
     /// ([`crate::kriging::fit_output_auto`]).
     Recommended,
+    /// Seed 003's JS model: joint space `[θ]`, constant trend, Gaussian
+    /// correlation, Hooke–Jeeves on ln ψ, interpolating.
     JsHj,
+    /// Seed 003's EJS model: `[θ, λ]` (eq 5), otherwise as [`Method::JsHj`].
     EjsHj,
+    /// EJS with the hyperparameters by generalised pattern search (seed 004).
     EjsGps,
+    /// EJS with each output's trend chosen by PCC + PCA fusion of the
+    /// quadratic monomials (seed 003 eqs 15–20; PCC threshold 0.1, 99 % of the
+    /// variance).
     EjsPca,
+    /// EJS with each output's trend chosen by the genetic algorithm of seed
+    /// 004 (fitness: 10-fold CV RMSE).
     EjsGa,
 }
 
@@ -104,6 +114,16 @@ impl Method {
         nugget: bool,
         progress: GaProgress,
     ) -> Result<ErrorModel> {
+        self.params(seed, nugget)
+            .check()?
+            .fit_with_progress(data, progress)
+    }
+
+    /// The method's fit parameters: every paper constant is here (GPS with
+    /// [`PAPER_GPS_STARTS`] starts, PCC threshold 0.1 and 99 % variance share,
+    /// 10 GA folds). `nugget` switches the papers' methods to estimating one;
+    /// [`Method::Recommended`] always does.
+    pub fn params(self, seed: u64, nugget: bool) -> ErrorModelParams {
         let gps = KrigingOptions {
             seed,
             nugget,
@@ -115,24 +135,34 @@ impl Method {
             optimizer: OptimizerKind::HookeJeeves,
             ..gps.clone()
         };
+        let p = ErrorModelParams::new();
         match self {
-            Method::Recommended => {
-                let opts = KrigingOptions {
-                    seed,
-                    ..KrigingOptions::recommended()
-                };
-                ErrorModel::fit(data, Space::Ejs, &opts)
-            }
-            Method::JsHj => ErrorModel::fit(data, Space::Js, &hj),
-            Method::EjsHj => ErrorModel::fit(data, Space::Ejs, &hj),
-            Method::EjsGps => ErrorModel::fit(data, Space::Ejs, &gps),
-            Method::EjsPca => {
-                ErrorModel::fit_pcc_pca(data, Space::Ejs, &gps, 0.1, 0.99).map(|r| r.0)
-            }
-            Method::EjsGa => fit_ga(data, &gps, 10, seed, progress, None),
+            Method::Recommended => p.kriging(KrigingOptions {
+                seed,
+                ..KrigingOptions::recommended()
+            }),
+            Method::JsHj => p.space(Space::Js).kriging(hj),
+            Method::EjsHj => p.kriging(hj),
+            Method::EjsGps => p.kriging(gps),
+            Method::EjsPca => p.kriging(gps).trend(TrendSpec::PccPca {
+                threshold: PAPER_PCC_THRESHOLD,
+                variance_share: PAPER_VARIANCE_SHARE,
+                kinematic: None,
+            }),
+            Method::EjsGa => p.kriging(gps).trend(TrendSpec::Ga {
+                folds: PAPER_GA_FOLDS,
+                kinematic: None,
+            }),
         }
     }
 }
+
+/// Seed 003's PCC threshold: candidates with |PCC| below it are dropped.
+pub const PAPER_PCC_THRESHOLD: f64 = 0.1;
+/// Seed 003's share of the candidates' variance the PCA components keep.
+pub const PAPER_VARIANCE_SHARE: f64 = 0.99;
+/// Seed 004's CV folds of the GA fitness.
+pub const PAPER_GA_FOLDS: usize = 10;
 
 /// `all` or a comma-separated list of method names.
 pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
@@ -166,9 +196,23 @@ pub fn fit_ga(
     progress: GaProgress,
     kinematic: Option<&crate::kinematics::Robot>,
 ) -> Result<ErrorModel> {
+    fit_ga_in(Space::Ejs, data, opts, k, seed, progress, kinematic)
+}
+
+/// [`fit_ga`] in either space (seed 004 uses EJS; JS is reachable through
+/// [`crate::params::ErrorModelParams`]).
+pub(crate) fn fit_ga_in(
+    space: Space,
+    data: &Dataset,
+    opts: &KrigingOptions,
+    k: usize,
+    seed: u64,
+    progress: GaProgress,
+    kinematic: Option<&crate::kinematics::Robot>,
+) -> Result<ErrorModel> {
     let errors = data.errors_or_err()?;
     let m = data.len();
-    let map = crate::inputs::InputMap::fit(data, Space::Ejs, &opts.periodic, &[])?;
+    let map = crate::inputs::InputMap::fit(data, space, &opts.periodic, &[])?;
     let (d, x) = (map.dim(), map.encode_dataset(data)?);
     let inputs = TrainingInputs::new(&x);
     let names = map.names().to_vec();
@@ -179,7 +223,7 @@ pub fn fit_ga(
         ..opts.clone()
     };
     let all: [Trend; 3] = match kinematic {
-        Some(robot) => crate::model::kinematic_candidates(data, Space::Ejs, &quad, robot)?,
+        Some(robot) => crate::model::kinematic_candidates(data, space, &quad, robot)?,
         None => std::array::from_fn(|_| Trend::from(Monomials::quadratic(d))),
     };
     let cap = (k - 1) * m / k;
@@ -230,7 +274,7 @@ pub fn fit_ga(
         trends.push(trend);
     }
     let trends: [Trend; 3] = trends.try_into().expect("three outputs");
-    let mut model = ErrorModel::fit_with_trend(data, Space::Ejs, opts, &trends)?;
+    let mut model = ErrorModel::fit_with_trend(data, space, opts, &trends)?;
     model.selection = Some(Selection::Ga { outputs: reports });
     Ok(model)
 }

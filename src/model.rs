@@ -70,15 +70,23 @@ pub const AXES: [&str; 3] = ["ex", "ey", "ez"];
 /// A fitted TCP error model δ̂(s) = (δ̂x, δ̂y, δ̂z).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ErrorModel {
+    /// File format tag, [`MODEL_FORMAT`].
     pub format: String,
+    /// File format version, [`MODEL_VERSION_MIN`]..=[`MODEL_VERSION`].
     pub version: u32,
+    /// JS `[θ]` or EJS `[θ, λ]` (seed 003 eq 5).
     pub space: Space,
+    /// Joints of the robot (columns q1..qN of the campaign).
     pub n_joints: usize,
+    /// Name of every input column, space encoding first, then the extras.
     pub input_names: Vec<String>,
+    /// Z-score of the input columns, fitted on the training rows.
     pub input_norm: Normalizer,
+    /// The options the model was fitted with (periodic joints included).
     pub options: KrigingOptions,
     /// One model per axis, in [`AXES`] order.
     pub outputs: Vec<KrigingModel>,
+    /// One fit report per axis (ln ψ, ξ, nugget, evaluations, time).
     pub reports: Vec<FitReport>,
     /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -167,24 +175,34 @@ pub const SOFTWARE: &str = concat!("robokrige ", env!("CARGO_PKG_VERSION"));
 pub enum CoverageIssue {
     /// A joint outside the campaign's range.
     JointRange {
+        /// 0-based joint.
         joint: usize,
+        /// The joint's value at the point, degrees (mm if prismatic).
         value_deg: f64,
+        /// Smallest value of that joint in the training campaign.
         min_deg: f64,
+        /// Largest value of that joint in the training campaign.
         max_deg: f64,
     },
     /// The prediction's standard deviation is a large share of the prior
     /// (process) standard deviation: no training pose is near.
     Uncertain {
+        /// Output axis (0 x, 1 y, 2 z).
         axis: usize,
+        /// The prediction's standard deviation √MSE, mm.
         std_mm: f64,
+        /// The process standard deviation σ of that output, mm.
         process_std_mm: f64,
     },
     /// The Kriging correction `r(s)ᵀγ` departs from the trend-only
     /// prediction by more than the process σ allows: a trend that
     /// extrapolates wildly, corrected by the GP near the data only.
     TrendDisagrees {
+        /// Output axis (0 x, 1 y, 2 z).
         axis: usize,
+        /// The correction `r(s)ᵀγ` added to the trend, mm.
         correction_mm: f64,
+        /// The process standard deviation σ of that output, mm.
         process_std_mm: f64,
     },
 }
@@ -231,6 +249,7 @@ impl std::fmt::Display for CoverageIssue {
 pub struct CoverageWarning {
     /// 0-based index of the point.
     pub index: usize,
+    /// Every way the point leaves what the data covers.
     pub issues: Vec<CoverageIssue>,
 }
 
@@ -244,7 +263,9 @@ pub const TREND_SIGMAS: f64 = 6.0;
 /// Predicted errors with their standard deviations (√MSE), mm.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prediction {
+    /// Predicted error `[δx, δy, δz]` per point, mm.
     pub mean: Vec<[f64; 3]>,
+    /// Its standard deviation per axis, mm.
     pub std: Vec<[f64; 3]>,
 }
 

@@ -306,14 +306,28 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                     AXES[axis]
                 ));
             };
+            use robokrige::methods::{self as m, Method};
+            use robokrige::params::{ErrorModelParams, TrendSpec};
             let model = match (choice.kinematic_robot(), method) {
-                (Some(robot), robokrige::methods::Method::EjsGa) => {
-                    robokrige::methods::fit_ga(&data, opts, 10, opts.seed, &progress, Some(robot))
-                }
-                (Some(robot), robokrige::methods::Method::EjsPca) => {
-                    let space = robokrige::space::Space::Ejs;
-                    ErrorModel::fit_pcc_pca_with(&data, space, opts, 0.1, 0.99, Some(robot))
-                        .map(|r| r.0)
+                (Some(robot), Method::EjsGa | Method::EjsPca) => {
+                    let kinematic = Some(Box::new(robot.clone()));
+                    let trend = if method == Method::EjsGa {
+                        TrendSpec::Ga {
+                            folds: m::PAPER_GA_FOLDS,
+                            kinematic,
+                        }
+                    } else {
+                        TrendSpec::PccPca {
+                            threshold: m::PAPER_PCC_THRESHOLD,
+                            variance_share: m::PAPER_VARIANCE_SHARE,
+                            kinematic,
+                        }
+                    };
+                    ErrorModelParams::new()
+                        .kriging(opts.clone())
+                        .trend(trend)
+                        .check()
+                        .and_then(|p| p.fit_with_progress(&data, &progress))
                 }
                 (Some(_), _) => Err(Error::InvalidParameter(
                     "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),

@@ -9,7 +9,9 @@ use robokrige::dataset::Dataset;
 use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::methods;
 use robokrige::model::ErrorModel;
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::physics::HybridModel;
 use robokrige::predictor::ErrorPredictor;
 use robokrige::space::Space;
@@ -283,8 +285,15 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     if a.pca {
         pb.set_message("PCC + PCA");
         let t0 = Instant::now();
-        let (m, _) =
-            ErrorModel::fit_pcc_pca_with(&train, Space::Ejs, &opts, 0.1, 0.99, Some(&robot))?;
+        let m = ErrorModelParams::new()
+            .kriging(opts.clone())
+            .trend(TrendSpec::PccPca {
+                threshold: methods::PAPER_PCC_THRESHOLD,
+                variance_share: methods::PAPER_VARIANCE_SHARE,
+                kinematic: Some(Box::new(robot.clone())),
+            })
+            .check()?
+            .fit(&train)?;
         let secs = t0.elapsed().as_secs_f64();
         rows.push(score(
             "universal Kriging EJS, PCC + PCA fusion of quadratic + kinematic candidates",
@@ -296,7 +305,17 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     if a.ga {
         pb.set_message("GA selection");
         let t0 = Instant::now();
-        let m = robokrige::methods::fit_ga(&train, &opts, 10, a.seed, &|_, _, _| {}, Some(&robot))?;
+        let m = ErrorModelParams::new()
+            .kriging(KrigingOptions {
+                seed: a.seed,
+                ..opts.clone()
+            })
+            .trend(TrendSpec::Ga {
+                folds: methods::PAPER_GA_FOLDS,
+                kinematic: Some(Box::new(robot.clone())),
+            })
+            .check()?
+            .fit(&train)?;
         let secs = t0.elapsed().as_secs_f64();
         rows.push(score(
             "universal Kriging EJS, GA-selected quadratic + kinematic trend",

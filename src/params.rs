@@ -1,0 +1,240 @@
+//! One way to fit: parameters → checked parameters → `fit` (the shape of
+//! linfa's `Params → ValidParams → Fit`).
+//!
+//! ```
+//! use robokrige::params::{ErrorModelParams, TrendSpec};
+//! use robokrige::{dataset::read_csv, space::Space};
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+//! let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+//! let model = ErrorModelParams::new()
+//!     .space(Space::Js)
+//!     .trend(TrendSpec::PccPca { threshold: 0.1, variance_share: 0.99, kinematic: None })
+//!     .check()?
+//!     .fit(&data)?;
+//! assert_eq!(model.space, Space::Js);
+//! # Ok::<(), robokrige::Error>(())
+//! ```
+//!
+//! Every combination of space, trend and hyperparameters is reachable,
+//! including the GA selection in JS. The papers' methods are
+//! [`crate::methods::Method::params`], which holds their constants in one
+//! place.
+
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use crate::kinematics::Robot;
+use crate::kriging::{KrigingOptions, Trend};
+use crate::model::ErrorModel;
+use crate::space::Space;
+use crate::{Error, Result};
+
+/// How each output's trend is chosen.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrendSpec {
+    /// The options' trend kind (constant, linear, quadratic) on every output.
+    Options,
+    /// A given trend per output, in x, y, z order.
+    PerAxis(Box<[Trend; 3]>),
+    /// Constant plus the rows of the robot's identification Jacobian (seed
+    /// 003 eq 4): one fit calibrates and krigs.
+    Kinematic(Box<Robot>),
+    /// PCC + PCA fusion of the quadratic monomials (seed 003 eqs 15–20), and
+    /// of the robot's Jacobian rows when `kinematic` is given.
+    PccPca {
+        /// |PCC| below which a candidate is dropped (seed 003: 0.1).
+        threshold: f64,
+        /// Share of the candidates' variance the kept components explain (0.99).
+        variance_share: f64,
+        /// Robot whose Jacobian rows join the candidates.
+        kinematic: Option<Box<Robot>>,
+    },
+    /// The genetic algorithm of seed 004 over the quadratic monomials (and
+    /// the Jacobian rows), fitness the closed-form `folds`-fold CV RMSE.
+    Ga {
+        /// CV folds of the fitness (seed 004: 10).
+        folds: usize,
+        /// Robot whose Jacobian rows join the candidates.
+        kinematic: Option<Box<Robot>>,
+    },
+}
+
+/// Where the correlation hyperparameters come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum HyperSpec {
+    /// Searched on the data with the options' optimiser.
+    Search,
+    /// Those of a fitted model, kept (the trend re-derived for the new rows
+    /// when it is kinematic): [`ErrorModel::refit_at_hyperparameters`].
+    FixedFrom(Box<ErrorModel>),
+}
+
+/// The parameters of an error-model fit, set by builder methods.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ErrorModelParams {
+    space: Space,
+    kriging: KrigingOptions,
+    trend: TrendSpec,
+    hyper: HyperSpec,
+    extras: Vec<Feature>,
+    robot: Option<Robot>,
+}
+
+/// Parameters that passed [`ErrorModelParams::check`]: only these fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidErrorModelParams(ErrorModelParams);
+
+impl Default for ErrorModelParams {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ErrorModelParams {
+    /// EJS, [`KrigingOptions::recommended`] (nugget, family by CV, BFGS),
+    /// the options' trend, hyperparameters searched, no extras.
+    pub fn new() -> Self {
+        ErrorModelParams {
+            space: Space::Ejs,
+            kriging: KrigingOptions::recommended(),
+            trend: TrendSpec::Options,
+            hyper: HyperSpec::Search,
+            extras: Vec::new(),
+            robot: None,
+        }
+    }
+
+    /// JS or EJS.
+    pub fn space(mut self, space: Space) -> Self {
+        self.space = space;
+        self
+    }
+
+    /// The Kriging options: trend kind, correlation, optimiser, nugget,
+    /// periodic joints, seed.
+    pub fn kriging(mut self, options: KrigingOptions) -> Self {
+        self.kriging = options;
+        self
+    }
+
+    /// How the trend is chosen.
+    pub fn trend(mut self, trend: TrendSpec) -> Self {
+        self.trend = trend;
+        self
+    }
+
+    /// Where the hyperparameters come from.
+    pub fn hyper(mut self, hyper: HyperSpec) -> Self {
+        self.hyper = hyper;
+        self
+    }
+
+    /// Extra inputs after `[θ, λ]` (effects `diagnose` adds).
+    pub fn extras(mut self, extras: Vec<Feature>) -> Self {
+        self.extras = extras;
+        self
+    }
+
+    /// The robot the campaign was measured on, recorded in the model
+    /// ([`ErrorModel::record_robot`]).
+    pub fn robot(mut self, robot: Robot) -> Self {
+        self.robot = Some(robot);
+        self
+    }
+
+    /// Check the combination and every value.
+    pub fn check(self) -> Result<ValidErrorModelParams> {
+        self.kriging.validate()?;
+        let bad = |m: &str| Err(Error::InvalidParameter(m.into()));
+        if !self.extras.is_empty() && self.trend != TrendSpec::Options {
+            return bad("extra inputs take the options' trend (each adds a linear term to it)");
+        }
+        if let HyperSpec::FixedFrom(m) = &self.hyper {
+            if !self.extras.is_empty() || self.trend != TrendSpec::Options {
+                return bad(
+                    "fixed hyperparameters keep the model's own trend and inputs: give no trend or extras",
+                );
+            }
+            if m.space != self.space {
+                return bad("fixed hyperparameters come from a model of another space");
+            }
+        }
+        match &self.trend {
+            TrendSpec::PccPca {
+                threshold,
+                variance_share,
+                ..
+            } if !(*threshold >= 0.0 && *threshold < 1.0)
+                || !(*variance_share > 0.0 && *variance_share <= 1.0) =>
+            {
+                return bad("PCC + PCA needs 0 ≤ threshold < 1 and 0 < variance share ≤ 1");
+            }
+            TrendSpec::Ga { folds, .. } if *folds < 2 => {
+                return bad("the GA's CV fitness needs at least 2 folds");
+            }
+            _ => {}
+        }
+        Ok(ValidErrorModelParams(self))
+    }
+}
+
+impl ValidErrorModelParams {
+    /// The parameters.
+    pub fn params(&self) -> &ErrorModelParams {
+        &self.0
+    }
+
+    /// Fit on `data`.
+    pub fn fit(&self, data: &Dataset) -> Result<ErrorModel> {
+        self.fit_with_progress(data, &|_, _, _| {})
+    }
+
+    /// [`ValidErrorModelParams::fit`], reporting GA generations to `progress`.
+    pub fn fit_with_progress(
+        &self,
+        data: &Dataset,
+        progress: crate::methods::GaProgress,
+    ) -> Result<ErrorModel> {
+        let p = &self.0;
+        let (space, opts) = (p.space, &p.kriging);
+        let mut model = match (&p.hyper, &p.trend) {
+            (HyperSpec::FixedFrom(m), _) => m.refit_at_hyperparameters(data)?,
+            (HyperSpec::Search, TrendSpec::Options) if p.extras.is_empty() => {
+                ErrorModel::fit(data, space, opts)?
+            }
+            (HyperSpec::Search, TrendSpec::Options) => {
+                ErrorModel::fit_with_extras(data, space, opts, &p.extras)?
+            }
+            (HyperSpec::Search, TrendSpec::PerAxis(t)) => {
+                ErrorModel::fit_with_trend(data, space, opts, t)?
+            }
+            (HyperSpec::Search, TrendSpec::Kinematic(r)) => {
+                ErrorModel::fit_kinematic(data, space, opts, r)?
+            }
+            (
+                HyperSpec::Search,
+                TrendSpec::PccPca {
+                    threshold,
+                    variance_share,
+                    kinematic,
+                },
+            ) => {
+                let robot = kinematic.as_deref();
+                ErrorModel::fit_pcc_pca_with(data, space, opts, *threshold, *variance_share, robot)?
+                    .0
+            }
+            (HyperSpec::Search, TrendSpec::Ga { folds, kinematic }) => crate::methods::fit_ga_in(
+                space,
+                data,
+                opts,
+                *folds,
+                opts.seed,
+                progress,
+                kinematic.as_deref(),
+            )?,
+        };
+        if let Some(r) = &p.robot {
+            model.record_robot(r)?;
+        }
+        Ok(model)
+    }
+}
