@@ -23,7 +23,10 @@ use serde::{Deserialize, Serialize};
 /// A candidate removed before selection, and why.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Dropped {
+    /// The candidate term's name, e.g. a monomial of the input names.
     pub term: String,
+    /// Why it was dropped: an exact duplicate, zero on every training row, or a
+    /// linear combination of the kept terms it names.
     pub reason: String,
 }
 
@@ -35,6 +38,7 @@ pub struct CandidateScreen {
     /// Indices (into the candidate list) of the linearly independent ones.
     #[serde(skip)]
     pub kept: Vec<usize>,
+    /// Candidates removed as linearly dependent, with reasons, in candidate order.
     pub dropped: Vec<Dropped>,
 }
 
@@ -102,6 +106,7 @@ pub fn screen_candidates(
 pub struct GaSelection {
     /// Candidates before screening, and those removed as dependent.
     pub candidates: usize,
+    /// Candidates removed as linearly dependent before the GA ran, with reasons.
     pub dropped: Vec<Dropped>,
     /// Size cap C ≤ (K−1)m/K on the selected terms.
     pub size_cap: usize,
@@ -111,7 +116,9 @@ pub struct GaSelection {
     pub cv_rmse_mm: f64,
     /// Best fitness after each generation (seed 004 Fig 10).
     pub history: Vec<f64>,
+    /// Generations run (the GA stops on stall or at its generation cap).
     pub generations: usize,
+    /// Distinct chromosomes (term subsets) whose fitness was evaluated.
     pub evaluations: usize,
 }
 
@@ -119,8 +126,16 @@ pub struct GaSelection {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum Selection {
-    PccPca { outputs: Vec<PccPcaReport> },
-    Ga { outputs: Vec<GaSelection> },
+    /// PCC + PCA fusion (seed 003 eqs 16–20).
+    PccPca {
+        /// One report per output axis (x, y, z).
+        outputs: Vec<PccPcaReport>,
+    },
+    /// GA subset selection (seed 004 §III.B).
+    Ga {
+        /// One selection per output axis (x, y, z).
+        outputs: Vec<GaSelection>,
+    },
 }
 
 /// A candidate set PCC + PCA can draw from: monomials, or monomials plus the
@@ -152,6 +167,7 @@ pub struct PccPcaReport {
     /// (candidate name, Pearson r) of every candidate with non-zero variance,
     /// by decreasing |r|.
     pub ranking: Vec<(String, f64)>,
+    /// Threshold T on |r| (eq 16; paper: 0.1): a candidate is kept when |r| > T.
     pub threshold: f64,
     /// Candidates kept (|r| > threshold), n2.
     pub selected: usize,
@@ -159,6 +175,7 @@ pub struct PccPcaReport {
     pub eigenvalues: Vec<f64>,
     /// Components kept, n3, and their cumulative variance share (eq 19).
     pub components: usize,
+    /// Cumulative share of variance of the kept components, in [0, 1] (eq 19).
     pub explained: f64,
 }
 

@@ -58,6 +58,7 @@ pub struct CompensationOptions {
     /// taught with (keeps each pose on its own branch). Without hints each
     /// point is seeded from the previous point's solution, then from home.
     pub hints: Option<Vec<Vec<f64>>>,
+    /// Options of the numerical IK that turns each command into joints.
     pub ik: IkOptions,
 }
 
@@ -120,11 +121,14 @@ pub enum Stop {
 pub struct Compensated {
     /// The corrected commands `Pm` (target orientation kept).
     pub commands: Trajectory,
-    /// Nominal IK joints of the last evaluated commands, and their λ.
+    /// Nominal IK joints of the last evaluated commands (degrees; mm for a
+    /// prismatic joint), one row per point.
     pub joints: Vec<Vec<f64>>,
+    /// Direction coefficients λ (±1) of those joints in visiting order, one row per point.
     pub dir: Vec<Vec<f64>>,
     /// Predicted error δ̂ at those joints, mm.
     pub predicted: Vec<[f64; 3]>,
+    /// One entry per iteration run, in order.
     pub history: Vec<Iteration>,
     /// Whether the change fell below the tolerance (always true for single-step).
     pub converged: bool,

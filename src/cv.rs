@@ -25,9 +25,12 @@ pub use crate::stats::kfold_partition;
 /// Result of a cross-validation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CvResult {
+    /// Number of folds K.
     pub folds: usize,
+    /// Seed of the random fold partition ([`kfold_partition`]).
     pub seed: u64,
-    /// How the folds were predicted ("refit": hyperparameters re-optimised per fold).
+    /// How the folds were predicted: `"refit"` (hyperparameters re-optimised per
+    /// fold) or `"closed-form"` (one fit's ξ and nugget on all rows).
     pub mode: String,
     /// Fold of every row.
     pub fold: Vec<usize>,
@@ -35,6 +38,7 @@ pub struct CvResult {
     pub residuals: Vec<[f64; 3]>,
     /// Statistics of the residuals (RMSE per axis = `rms_mm`, eq 17).
     pub summary: ErrorSummary,
+    /// Wall-clock time of the whole cross-validation, seconds.
     pub seconds: f64,
 }
 

@@ -27,31 +27,57 @@ pub enum Feature {
     /// A numeric covariate column (temperature, time, payload, …), with its
     /// value at the start of the campaign for predictions without the column.
     Covariate {
+        /// The covariate's column name in the campaign CSV.
         name: String,
+        /// Its value at the start of the campaign (first row), used when
+        /// predicting from poses alone; `None`: such predictions are refused.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         reference: Option<f64>,
     },
     /// Measurement order: the 0-based row index (slow drift).
     Row,
     /// 0 before `row`, 1 from it on (an abrupt change, e.g. a tracker bump).
-    Step { row: usize },
+    Step {
+        /// 0-based row where the step begins.
+        row: usize,
+    },
     /// `sin` and `cos` of `2π θ_j / P` (1-based joint j, period P in degrees).
-    Harmonic { joint: usize, period_deg: f64 },
+    Harmonic {
+        /// 1-based joint j.
+        joint: usize,
+        /// Period P in joint units (degrees; mm for a prismatic joint), > 0.
+        period_deg: f64,
+    },
     /// `θ_a · θ_b` (1-based joints).
-    Interaction { a: usize, b: usize },
+    Interaction {
+        /// 1-based index of the first joint.
+        a: usize,
+        /// 1-based index of the second joint.
+        b: usize,
+    },
     /// λ_j of the previous row (+1 for the first).
-    PreviousDirection { joint: usize },
+    PreviousDirection {
+        /// 1-based joint j.
+        joint: usize,
+    },
     /// Travel of joint j since its direction last changed (degrees or mm).
-    SinceReversal { joint: usize },
+    SinceReversal {
+        /// 1-based joint j.
+        joint: usize,
+    },
     /// Joint j deviating with the angle of joint k (cross-talk, seed 000
     /// §5.2): `∂P/∂θ_j(q) · sin θ_k` and `· cos θ_k`, the TCP displacement a
     /// deviation `a·sin θ_k + b·cos θ_k` of joint j causes (six columns: x, y, z
     /// of each). Carries the robot for the Jacobian (files written before
     /// robot files name a preset instead).
     Crosstalk {
+        /// The measured robot, whose position Jacobian `∂P/∂θ_j` maps the
+        /// deviation to the TCP.
         #[serde(deserialize_with = "crate::kinematics::robot_or_preset_name")]
         robot: Box<crate::kinematics::Robot>,
+        /// 1-based joint j that deviates.
         joint: usize,
+        /// 1-based joint k whose angle drives the deviation.
         from: usize,
     },
 }

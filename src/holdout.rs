@@ -23,10 +23,13 @@ use std::time::Instant;
 /// One model's held-out errors.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HoldoutRow {
+    /// The model's name, e.g. one of [`CV_MODELS`] or "nominal".
     pub model: String,
-    /// Mean and max of the 3D error |e − ê|, mm.
+    /// Mean of the 3D error |e − ê| over the held-out rows, mm.
     pub mean_mm: f64,
+    /// Largest 3D error |e − ê| over the held-out rows, mm.
     pub max_mm: f64,
+    /// RMS of e − ê per axis (x, y, z), mm.
     pub rms_xyz_mm: [f64; 3],
     /// Wall time of the model's fits (all folds), s.
     pub seconds: f64,
@@ -104,8 +107,9 @@ pub struct HoldoutCv {
     pub fold_max_covered_mm: Vec<[f64; 5]>,
     /// Rows each of the [`CV_MODELS`] flagged when they were held out.
     pub flagged: Vec<Vec<usize>>,
-    /// Rows the Kriging hyperparameters were chosen on, and the time it took.
+    /// Rows the Kriging hyperparameters were chosen on (the first ones).
     pub hyper_rows: usize,
+    /// Wall time of choosing the hyperparameters, s.
     pub hyper_seconds: f64,
 }
 

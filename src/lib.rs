@@ -25,6 +25,7 @@
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
 //! | engine | [`inputs`] | `InputMap`: encoding, extras and normalisation of a model's inputs, in one place |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
+//! | model | [`selection`] | the GA trend selection of seed 004 (needs fits) |
 //! | model | [`params`] | `ErrorModelParams` → checked → `fit`: every space × trend × hyperparameter choice |
 //! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended` |
 //! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
@@ -39,6 +40,8 @@
 //! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
 //! `plot` (plotters), both on by default; `default-features = false` gives
 //! the library alone.
+
+#![warn(missing_docs)]
 
 pub mod basis;
 pub mod batch;
@@ -63,6 +66,7 @@ pub mod physics;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod predictor;
+pub mod selection;
 pub mod sim;
 pub mod space;
 pub mod stats;

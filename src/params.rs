@@ -17,7 +17,7 @@
 //!
 //! Every combination of space, trend and hyperparameters is reachable,
 //! including the GA selection in JS. The papers' methods are
-//! [`crate::methods::Method::params`], which holds their constants in one
+//! `methods::Method::params`, which holds their constants in one
 //! place.
 
 use crate::dataset::Dataset;
@@ -163,8 +163,10 @@ impl ErrorModelParams {
                 threshold,
                 variance_share,
                 ..
-            } if !(*threshold >= 0.0 && *threshold < 1.0)
-                || !(*variance_share > 0.0 && *variance_share <= 1.0) =>
+            } if !(*threshold >= 0.0
+                && *threshold < 1.0
+                && *variance_share > 0.0
+                && *variance_share <= 1.0) =>
             {
                 return bad("PCC + PCA needs 0 ≤ threshold < 1 and 0 < variance share ≤ 1");
             }
@@ -192,7 +194,7 @@ impl ValidErrorModelParams {
     pub fn fit_with_progress(
         &self,
         data: &Dataset,
-        progress: crate::methods::GaProgress,
+        progress: crate::selection::GaProgress,
     ) -> Result<ErrorModel> {
         let p = &self.0;
         let (space, opts) = (p.space, &p.kriging);
@@ -222,7 +224,7 @@ impl ValidErrorModelParams {
                 ErrorModel::fit_pcc_pca_with(data, space, opts, *threshold, *variance_share, robot)?
                     .0
             }
-            (HyperSpec::Search, TrendSpec::Ga { folds, kinematic }) => crate::methods::fit_ga_in(
+            (HyperSpec::Search, TrendSpec::Ga { folds, kinematic }) => crate::selection::fit_ga_in(
                 space,
                 data,
                 opts,

@@ -168,19 +168,25 @@ fn draw_box_plot(
 /// How a series is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mark {
+    /// Straight segments joining the points in order.
     Line,
+    /// One marker per point, unjoined.
     Points,
 }
 
 /// One named series of an x–y plot.
 #[derive(Debug, Clone)]
 pub struct Series {
+    /// Legend entry.
     pub name: String,
+    /// `(x, y)` points, in drawing order.
     pub points: Vec<(f64, f64)>,
+    /// Line or markers.
     pub mark: Mark,
 }
 
 impl Series {
+    /// A series drawn as a line through `points` in order.
     pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
         Series {
             name: name.into(),
@@ -189,6 +195,7 @@ impl Series {
         }
     }
 
+    /// A series drawn as unjoined markers.
     pub fn points(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
         Series {
             name: name.into(),
@@ -201,8 +208,11 @@ impl Series {
 /// Axis labels and the title of an x–y plot.
 #[derive(Debug, Clone)]
 pub struct Labels<'a> {
+    /// Chart title.
     pub title: &'a str,
+    /// Label of the x axis, drawn as given (e.g. "X (mm)").
     pub x: &'a str,
+    /// Label of the y axis, drawn as given (e.g. "3D position error (mm)").
     pub y: &'a str,
 }
 

@@ -167,7 +167,9 @@ pub fn periodic_joints(q: &[Vec<f64>]) -> Vec<usize> {
 /// gets σ = 1 so it maps to 0 instead of dividing by zero.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Normalizer {
+    /// Training mean μ of each input column.
     pub mean: Vec<f64>,
+    /// Sample standard deviation σ of each column (ddof = 1; 1 for a constant column).
     pub std: Vec<f64>,
 }
 

@@ -7,12 +7,15 @@ use serde::{Deserialize, Serialize};
 /// Statistics of a set of 3D errors (mm).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ErrorSummary {
+    /// Number of errors summarised.
     pub n: usize,
     /// Mean of |δ|.
     pub mean_3d_mm: f64,
     /// Population standard deviation of |δ|.
     pub std_3d_mm: f64,
+    /// Smallest |δ|, mm.
     pub min_3d_mm: f64,
+    /// Largest |δ|, mm.
     pub max_3d_mm: f64,
     /// Per-axis mean (signed).
     pub mean_mm: [f64; 3],
@@ -27,11 +30,17 @@ pub struct ErrorSummary {
 /// are outliers.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BoxStats {
+    /// First quartile (25 %).
     pub q1: f64,
+    /// Median (50 %).
     pub median: f64,
+    /// Third quartile (75 %).
     pub q3: f64,
+    /// Lower whisker: the smallest value ≥ q1 − 1.5·IQR.
     pub whisker_lo: f64,
+    /// Upper whisker: the largest value ≤ q3 + 1.5·IQR.
     pub whisker_hi: f64,
+    /// Number of values outside the whiskers.
     pub outliers: usize,
 }
 
@@ -74,9 +83,13 @@ pub fn box_stats(v: &[f64]) -> BoxStats {
 /// Mean, population standard deviation, minimum and maximum of one quantity.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Spread {
+    /// Arithmetic mean.
     pub mean: f64,
+    /// Population standard deviation (divides by n).
     pub std: f64,
+    /// Smallest value.
     pub min: f64,
+    /// Largest value.
     pub max: f64,
 }
 
@@ -105,14 +118,23 @@ pub fn spread(v: &[f64]) -> Spread {
 /// promises (`mean_abs_mm`, `max_abs_mm`, `std_abs_mm`, `mean_mm`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PositionErrorTable {
+    /// Number of errors.
     pub n: usize,
+    /// Mean of the 3D error |δ|, mm.
     pub mean_abs_mm: f64,
+    /// Population standard deviation of |δ|, mm.
     pub std_abs_mm: f64,
+    /// Smallest |δ|, mm.
     pub min_abs_mm: f64,
+    /// Largest |δ|, mm.
     pub max_abs_mm: f64,
+    /// Per-axis mean of the signed error (x, y, z), mm.
     pub mean_mm: [f64; 3],
+    /// Per-axis population standard deviation (x, y, z), mm.
     pub std_mm: [f64; 3],
+    /// Per-axis smallest signed error (x, y, z), mm.
     pub min_mm: [f64; 3],
+    /// Per-axis largest signed error (x, y, z), mm.
     pub max_mm: [f64; 3],
 }
 

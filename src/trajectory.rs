@@ -15,6 +15,8 @@ use std::path::Path;
 pub struct Trajectory {
     /// TCP poses; orientation is identity when `has_orientation` is false.
     pub poses: Vec<Isometry3<f64>>,
+    /// Whether the poses carry a target orientation (CSV with
+    /// `roll_deg,pitch_deg,yaw_deg`); otherwise they are position-only targets.
     pub has_orientation: bool,
 }
 

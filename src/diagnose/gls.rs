@@ -91,6 +91,7 @@ impl AxisSystem {
         })
     }
 
+    /// Number of training rows m.
     pub fn rows(&self) -> usize {
         self.gamma.len()
     }

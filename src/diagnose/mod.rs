@@ -47,8 +47,11 @@ const CONFIRMATIONS: usize = 3;
 /// 3 effects.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiagnoseOptions {
+    /// Input space of every model fitted: JS `[θ]` or EJS `[θ, λ]`.
     pub space: Space,
+    /// Kriging options of every fit (trend, correlation, nugget, optimiser).
     pub kriging: KrigingOptions,
+    /// Number of CV folds K.
     pub folds: usize,
     /// Seed of the fold partition and of the resamples.
     pub seed: u64,
@@ -57,6 +60,7 @@ pub struct DiagnoseOptions {
     pub permutations: usize,
     /// False-discovery rate for the Benjamini–Hochberg step.
     pub fdr: f64,
+    /// Most effects added before the loop stops.
     pub max_effects: usize,
     /// Relative drop of the pooled CV RMSE an effect must bring to count:
     /// a candidate is *significant* when its q-value is within `fdr` and its
@@ -110,10 +114,13 @@ pub struct CvStats {
     pub cv_rmse_mm: [f64; 3],
     /// RMSE pooled over the axes, mm.
     pub pooled_rmse_mm: f64,
+    /// Mean of the out-of-fold 3D error |δ − δ̂|, mm.
     pub mean_3d_mm: f64,
+    /// Largest out-of-fold 3D error |δ − δ̂|, mm.
     pub max_3d_mm: f64,
     /// Extra inputs of the model.
     pub extras: Vec<String>,
+    /// Out-of-fold residuals δ − δ̂ (mm), measurement order; not serialised.
     #[serde(skip)]
     pub residuals: Vec<[f64; 3]>,
 }
@@ -133,9 +140,13 @@ fn cv_stats(residuals: Vec<[f64; 3]>, extras: &[Feature]) -> CvStats {
 /// One candidate as ranked in one round.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EffectReport {
+    /// Round of the loop (1-based) in which it was ranked.
     pub round: usize,
+    /// What kind of effect the candidate is.
     pub kind: EffectKind,
+    /// Column(s) or joint(s) it comes from, e.g. `["temp_c"]`, `["q2"]`, `["row"]`.
     pub source: Vec<String>,
+    /// Short description, e.g. "temp_c × joint angles".
     pub label: String,
     /// Parameters of the best grid point (e.g. `period_deg`, `row`).
     pub params: BTreeMap<String, f64>,
@@ -145,9 +156,14 @@ pub struct EffectReport {
     /// Leave-one-out gain of the best grid point as a share of the model's
     /// leave-one-out squared error (the test statistic, relative).
     pub explained: f64,
+    /// Sign-flip test p-value `(1 + exceedances) / (1 + resamples)`, before the
+    /// multiple-testing correction.
     pub p_value: f64,
     /// Benjamini–Hochberg adjusted p-value.
     pub q_value: f64,
+    /// Counted as a discovery: q-value within `fdr` and a closed-form CV drop
+    /// of at least `min_gain`; a candidate tested at re-estimated ξ loses it
+    /// when the refit CV does not confirm the drop.
     pub significant: bool,
     /// Added to the model (significant, best of its round, and it lowered the CV RMSE).
     pub accepted: bool,
@@ -167,6 +183,7 @@ pub struct EffectReport {
     /// Sign-flip resamples run before its p-value settled.
     #[serde(default)]
     pub resamples: usize,
+    /// What would be added to the model if it were accepted; not serialised.
     #[serde(skip)]
     pub add: Vec<Feature>,
 }
@@ -174,12 +191,19 @@ pub struct EffectReport {
 /// The result of [`diagnose`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Diagnosis {
+    /// Input space of the models.
     pub space: Space,
+    /// Number of CV folds K.
     pub folds: usize,
+    /// Seed of the fold partition and of the resamples.
     pub seed: u64,
+    /// Most sign-flip resamples per candidate.
     pub permutations: usize,
+    /// False-discovery rate of the Benjamini–Hochberg step.
     pub fdr: f64,
+    /// CV statistics of the model as given (no extra input).
     pub before: CvStats,
+    /// CV statistics of the final model (equal to `before` when nothing was added).
     pub after: CvStats,
     /// CV statistics after each accepted effect, in order.
     pub steps: Vec<CvStats>,
@@ -191,6 +215,7 @@ pub struct Diagnosis {
     /// the rows used ([`scan::constant_covariate`]).
     #[serde(default)]
     pub dropped_covariates: Vec<scan::DroppedCovariate>,
+    /// Wall-clock time of the whole diagnosis, seconds.
     pub seconds: f64,
 }
 

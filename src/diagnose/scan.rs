@@ -27,16 +27,24 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum EffectKind {
+    /// A numeric covariate column, alone or times the joint angles.
     Covariate,
+    /// The measurement order: slow drift, or a step at one row.
     Order,
+    /// A harmonic of one joint angle over a scanned period.
     Harmonic,
+    /// A cross-joint product, or joint cross-talk through the Jacobian.
     Interaction,
+    /// The direction history of a joint: its previous direction, or the travel
+    /// since its last reversal.
     DirectionHistory,
 }
 
 /// One parameter value of a family.
 #[derive(Debug, Clone)]
 pub struct GridPoint {
+    /// The grid parameters of this point by name (e.g. `period_deg`, `row`,
+    /// `scale_deg`); empty for a family of one point.
     pub params: BTreeMap<String, f64>,
     /// Regressors, one column per entry (row order).
     pub columns: Vec<Vec<f64>>,
@@ -47,11 +55,13 @@ pub struct GridPoint {
 /// A candidate effect: a name and a grid of regressor sets.
 #[derive(Debug, Clone)]
 pub struct Family {
+    /// What kind of effect it is.
     pub kind: EffectKind,
     /// Column(s) / joint(s) it comes from, e.g. `["temp_c"]`, `["q2"]`, `["row"]`.
     pub source: Vec<String>,
     /// Short description, e.g. "temp_c × joint angles".
     pub label: String,
+    /// The parameter grid; each point is one set of regressor columns.
     pub grid: Vec<GridPoint>,
 }
 
@@ -379,11 +389,14 @@ fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
 /// Result of testing one family.
 #[derive(Debug, Clone)]
 pub struct Tested {
+    /// Index of the family in the list tested.
     pub family: usize,
-    /// Best grid point (index) and its leave-one-out gain as a share of the
-    /// model's leave-one-out SSE (the test statistic, relative).
+    /// Index of the best grid point in the family's grid.
     pub best: usize,
+    /// Leave-one-out gain of the best grid point as a share of the model's
+    /// leave-one-out SSE (the test statistic, relative).
     pub explained: f64,
+    /// Sign-flip test p-value `(1 + exceedances) / (1 + resamples)`.
     pub p_value: f64,
     /// Benjamini–Hochberg adjusted p-value.
     pub q_value: f64,

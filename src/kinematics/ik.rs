@@ -45,6 +45,7 @@ impl IkTarget {
 /// Options of [`Robot::ik`]; `Default` suits mm-scale industrial robots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkOptions {
+    /// Iteration cap of the damped least-squares loop.
     pub max_iter: usize,
     /// Position tolerance, mm.
     pub tol_mm: f64,

@@ -50,6 +50,7 @@ pub enum JointKind {
 /// One link of the MD-H chain (seed 003 eq 1); angles in degrees, lengths in mm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MdhLink {
+    /// Whether the joint variable is the angle θ (revolute) or the offset d (prismatic).
     pub kind: JointKind,
     /// Constant added to `sign·q` to give θ (revolute) or the fixed θ (prismatic), degrees.
     pub theta_offset_deg: f64,
@@ -126,6 +127,7 @@ pub struct Robot {
     pub name: String,
     /// One sentence on the parameter source and the angle convention.
     pub convention: String,
+    /// The MD-H links, base to flange, one per joint.
     pub links: Vec<MdhLink>,
     /// World ← robot base (identity for the presets).
     pub base: Isometry3<f64>,

@@ -294,7 +294,9 @@ impl CorrelationModel for Gaussian {
 /// of length m), so the fill of R streams a few kilobytes that stay in cache.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrainingInputs {
+    /// Number of training rows m.
     pub m: usize,
+    /// Input dimension d (normalised inputs per row).
     pub d: usize,
     by_dim: Vec<f64>,
 }

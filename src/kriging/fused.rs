@@ -15,7 +15,9 @@ pub struct FusedBasis {
     /// The selected candidates when some are kinematic-error rows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematic: Option<Box<KinematicTrend>>,
+    /// Training mean μ of each selected candidate.
     pub mean: Vec<f64>,
+    /// Training standard deviation σ of each selected candidate (divisor m − 1).
     pub std: Vec<f64>,
     /// Principal directions e_i (each of length `candidates.len()`), by
     /// decreasing variance.

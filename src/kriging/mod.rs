@@ -38,8 +38,11 @@ use std::time::Instant;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum TrendKind {
+    /// `[1]`: an unknown constant mean (ordinary Kriging).
     Constant,
+    /// `[1, s1, …, sd]`: constant plus every input.
     Linear,
+    /// Every monomial of degree ≤ 2: `(d+1)(d+2)/2` terms.
     Quadratic,
 }
 
@@ -93,6 +96,7 @@ impl OptimizerKind {
 /// (`Method` in the `methods` module).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingOptions {
+    /// Trend `F β` in the normalised inputs (constant by default).
     pub trend: TrendKind,
     /// Correlation family ([`Correlation`]; Gaussian, eq 8, by default).
     #[serde(default)]
@@ -101,6 +105,7 @@ pub struct KrigingOptions {
     /// ([`fit_output_auto`]); `corr` is then ignored.
     #[serde(default)]
     pub corr_auto: bool,
+    /// How the hyperparameters are searched (BFGS by default).
     pub optimizer: OptimizerKind,
     /// Estimate a nugget ν (noise-to-signal variance ratio) with ξ.
     pub nugget: bool,
@@ -140,7 +145,9 @@ pub struct KrigingOptions {
 /// ξ (one per correlation input) and the nugget ν (ignored without one).
 #[derive(Debug, Clone, PartialEq)]
 pub struct WarmStart {
+    /// ξ, one per correlation input (≥ 0).
     pub theta: Vec<f64>,
+    /// Nugget ν (≥ 0; ignored when the nugget is not estimated).
     pub nugget: f64,
     /// The BFGS inverse Hessian there (in log10 ξ, log10 ν), if known: the
     /// local search then starts with the curvature it ended with (used only
@@ -226,16 +233,26 @@ impl KrigingOptions {
 /// How one output's fit went. Equality ignores the wall time.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FitReport {
+    /// ξ at the optimum, one per input column (0 for trend-only inputs).
     pub theta: Vec<f64>,
+    /// Nugget ν at the optimum (0 when not estimated).
     pub nugget: f64,
+    /// ln ψ at the optimum (eq 14); `f64::MIN` when it is −∞ ([`storable_ln_psi`]).
     pub ln_psi: f64,
+    /// Process variance σ² of the normalised response (eq 13).
     pub sigma2: f64,
+    /// Diagonal jitter ε that made R factorisable.
     pub jitter: f64,
-    /// Trend terms used, and those dropped as linearly dependent.
+    /// Trend terms used, by name.
     pub trend_terms: Vec<String>,
+    /// Trend terms dropped as linearly dependent on the training rows.
     pub dropped_terms: Vec<String>,
+    /// Optimiser of the hyperparameter search.
     pub optimizer: OptimizerKind,
+    /// Starting points the search ran from (0 when nothing was searched).
     pub starts: usize,
+    /// Objective evaluations of the whole search, summed over all starts (0
+    /// when nothing was searched).
     pub evals: usize,
     /// Rows the hyperparameters were converged on: all of them (m), or a
     /// subset on campaigns over [`REFINE_ROWS`] rows (the model itself is

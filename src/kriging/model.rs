@@ -22,6 +22,7 @@ const BLOCK: usize = 128;
 /// What is saved of a model: enough to predict bit-identically.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingModelData {
+    /// Trend `f(s)` of the normalised inputs.
     pub trend: Trend,
     /// Correlation family, by name (files without one are Gaussian).
     #[serde(default)]
@@ -34,9 +35,14 @@ pub struct KrigingModelData {
     pub jitter: f64,
     /// Normalised training inputs, m rows.
     pub x_train: Vec<Vec<f64>>,
+    /// Training mean of the response, original units (mm for an error model).
     pub y_mean: f64,
+    /// Training standard deviation of the response: a normalised value v is
+    /// `y_mean + y_std·v` in original units.
     pub y_std: f64,
+    /// GLS trend coefficients β (eq 11), normalised units.
     pub beta: Vec<f64>,
+    /// `γ = R⁻¹(y − Fβ)` (eq 10) on the normalised response, one per training row.
     pub gamma: Vec<f64>,
     /// Process variance σ² (normalised units, eq 13).
     pub sigma2: f64,
@@ -69,6 +75,7 @@ pub const KEEP_FACTOR_MAX_M: usize = 4096;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(try_from = "KrigingModelData", into = "KrigingModelData")]
 pub struct KrigingModel {
+    /// The saved part: trend, ξ, ν, training inputs, β, γ.
     pub data: KrigingModelData,
     g: Mat<f64>,
     /// Training inputs, dimension-major (vectorised correlation vectors).
@@ -220,6 +227,7 @@ fn unpack_upper(v: &[f64], n: usize) -> Mat<f64> {
 /// Mean and MSE of one predicted output, original units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pred {
+    /// Predicted mean, original units (mm for an error model).
     pub mean: f64,
     /// Mean squared error φ (eq 12), units².
     pub mse: f64,

@@ -40,7 +40,9 @@ pub const MAX_JITTER: f64 = 1e-6;
 pub struct KrigingProblem<'a> {
     /// First rung of the jitter ladder; `None` = DACE's `(10 + m)·eps`.
     pub min_jitter: Option<f64>,
+    /// Correlation family `R(s, s')`.
     pub corr: &'a dyn CorrelationModel,
+    /// Normalised training inputs, dimension-major.
     pub inputs: &'a TrainingInputs,
     /// m × p trend matrix with linearly independent columns.
     pub f: &'a Mat<f64>,
@@ -93,6 +95,7 @@ impl Workspace {
 pub struct PsiValue {
     /// ln ψ (what the optimisers minimise).
     pub ln_psi: f64,
+    /// `σ² = ρ²/m` (eq 13), normalised units.
     pub sigma2: f64,
     /// ln |R|.
     pub ln_det_r: f64,
@@ -103,12 +106,15 @@ pub struct PsiValue {
 /// Everything prediction needs, at one ξ.
 #[derive(Debug, Clone)]
 pub struct Solution {
+    /// The objective's value and its by-products at this ξ.
     pub value: PsiValue,
     /// Lower Cholesky factor C of R (upper triangle zero).
     pub c: Mat<f64>,
     /// Upper-triangular QR factor G of F̃ (p × p).
     pub g: Mat<f64>,
+    /// `β = G⁻¹ b`, GLS trend coefficients (eq 11).
     pub beta: Vec<f64>,
+    /// `γ = R⁻¹(y − Fβ)` for the predictor (eq 10), length m.
     pub gamma: Vec<f64>,
 }
 

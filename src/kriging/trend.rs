@@ -26,7 +26,9 @@ pub trait TrendModel: Send + Sync {
 /// Monomials `Π_k s_k^{e_k}`, one exponent vector per basis function.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Monomials {
+    /// Input dimension d of `s`.
     pub dim: usize,
+    /// One exponent vector (length `dim`, entries ≤ 8) per basis function.
     pub exponents: Vec<Vec<u8>>,
 }
 
@@ -154,8 +156,11 @@ pub struct KinematicTrend {
     pub axis: usize,
     /// Calibration parameters (indices into `calib_names`).
     pub params: Vec<usize>,
-    /// Normalisation of the joint columns of the input.
+    /// Mean of each encoded joint column of the input (the normalisation the
+    /// model's inputs went through).
     pub joint_mean: Vec<f64>,
+    /// Standard deviation of each encoded joint column: the raw joint value is
+    /// `s_i·joint_std_i + joint_mean_i` (degrees, or sin/cos for a periodic joint).
     pub joint_std: Vec<f64>,
     /// Joints encoded as (sin, cos).
     #[serde(default)]
@@ -250,8 +255,11 @@ impl TrendModel for KinematicTrend {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Trend {
+    /// Monomials of the normalised inputs.
     Monomials(Monomials),
+    /// A PCC + PCA fused basis (seed 003 eqs 16–20).
     Fused(super::fused::FusedBasis),
+    /// Monomials plus the robot's kinematic-error (identification Jacobian) columns.
     Kinematic(Box<KinematicTrend>),
 }
 

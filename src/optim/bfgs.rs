@@ -12,7 +12,9 @@ pub struct BfgsOptions {
     pub gtol: f64,
     /// Longest step per iteration (units of x).
     pub max_step: f64,
+    /// Iteration cap (reaching it stops with [`StopReason::MeshTolerance`]).
     pub max_iter: usize,
+    /// Objective evaluation budget, finite-difference gradients included.
     pub max_evals: usize,
 }
 

@@ -20,8 +20,11 @@ use std::collections::HashMap;
 /// Options of [`ga`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GaOptions {
+    /// Chromosomes per generation (raised to at least `elite + anti_elite + 2`).
     pub population: usize,
+    /// Best chromosomes copied unchanged into the next generation.
     pub elite: usize,
+    /// Worst chromosomes replaced each generation by fresh random ones (diversity).
     pub anti_elite: usize,
     /// Tournament size for parent selection.
     pub tournament: usize,
@@ -31,11 +34,15 @@ pub struct GaOptions {
     pub mutation: f64,
     /// Probability that a bit is set in a fresh random chromosome.
     pub density: f64,
+    /// Fewest bits set in any chromosome (e.g. terms selected).
     pub min_ones: usize,
+    /// Most bits set in any chromosome: the size cap, e.g. C ≤ (K−1)m/K.
     pub max_ones: usize,
+    /// Generation cap.
     pub max_generations: usize,
     /// Stop after this many generations without improvement of the best.
     pub stall: usize,
+    /// Seed of the GA's random stream ([`crate::stats::rng_for`], stream `"ga"`).
     pub seed: u64,
 }
 
@@ -61,12 +68,15 @@ impl Default for GaOptions {
 /// Result of [`ga`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GaResult {
+    /// Best chromosome found: one bit per candidate, `true` = selected.
     pub best: Vec<bool>,
+    /// Its fitness (the minimised value, e.g. K-fold CV RMSE).
     pub fitness: f64,
     /// Best fitness after each generation (seed 004 Fig 10).
     pub history: Vec<f64>,
     /// Distinct chromosomes evaluated.
     pub evaluations: usize,
+    /// Generations run (≤ `max_generations`; fewer on stall).
     pub generations: usize,
 }
 

@@ -41,7 +41,9 @@ use serde::{Deserialize, Serialize};
 /// Box `lo ≤ x ≤ hi`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Bounds {
+    /// Lower bound per dimension.
     pub lo: Vec<f64>,
+    /// Upper bound per dimension.
     pub hi: Vec<f64>,
 }
 

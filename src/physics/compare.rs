@@ -36,11 +36,13 @@ pub struct CompareOptions {
     pub train_poses: usize,
     /// Points of the circle path (run forward, then backward).
     pub path_points: usize,
+    /// Diameter of the circle path, mm.
     pub path_mm: f64,
     /// Independent random poses.
     pub verify_poses: usize,
-    /// Kriging methods for the JS and EJS rows and the hybrid's residual.
+    /// Kriging method of the JS row.
     pub js: Method,
+    /// Kriging method of the EJS row and of the hybrid's residual model.
     pub ejs: Method,
     /// Estimate a nugget in every Kriging fit (the papers interpolate: no nugget).
     pub nugget: bool,
@@ -65,9 +67,13 @@ impl Default for CompareOptions {
 /// Mean and max of the 3D and the XY error, mm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Score {
+    /// Mean of the 3D error |e|, mm.
     pub mean_3d_mm: f64,
+    /// Largest 3D error |e|, mm.
     pub max_3d_mm: f64,
+    /// Mean of the XY error `√(e_x² + e_y²)`, mm.
     pub mean_xy_mm: f64,
+    /// Largest XY error, mm.
     pub max_xy_mm: f64,
 }
 
@@ -92,12 +98,15 @@ impl Score {
 /// One model's row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CompareRow {
+    /// The model's name, e.g. "nominal", "D-H + APD (physics)", "Kriging EJS".
     pub model: String,
-    /// Measured − predicted error on the path and on the random poses.
+    /// Measured − predicted error on the circle path.
     pub predict_path: Score,
+    /// Measured − predicted error on the independent random poses.
     pub predict_poses: Score,
-    /// Measured − target after compensation.
+    /// Measured − target on the path after compensation.
     pub compensate_path: Score,
+    /// Measured − target on the random poses after compensation.
     pub compensate_poses: Score,
     /// Compensation iterations on the path.
     pub iterations: usize,
@@ -108,6 +117,7 @@ pub struct CompareRow {
 /// Result of [`compare`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Comparison {
+    /// The options it ran with.
     pub options: CompareOptions,
     /// How the physics model was identified.
     pub physics: String,
@@ -116,13 +126,19 @@ pub struct Comparison {
     /// What measurement noise alone gives (simulator truth, for reading the
     /// table): mean |n| of the tracker + repeatability noise σ per axis,
     /// `E‖n‖ ≈ 1.596 σ` in 3D, `1.253 σ` in XY, over the path and the poses.
+    ///
+    /// This one is over the path (means only; the maxima are NaN).
     pub noise_path: Score,
+    /// The same over the random poses (means only; the maxima are NaN).
     pub noise_poses: Score,
-    /// The path's nominal TCP points and measured errors, mm (for the plots).
+    /// The path's nominal TCP points, mm (for the plots).
     pub path_nominal: Vec<[f64; 3]>,
+    /// Measured − nominal error at every executed path point (uncompensated), mm
+    /// (for the plots).
     pub path_errors: Vec<[f64; 3]>,
     /// Campaign sizes: indexing rows, training rows, path points, poses.
     pub sizes: [usize; 4],
+    /// Remarks on the set-up (identification notes, pose draw, Kriging methods).
     pub notes: Vec<String>,
 }
 

@@ -28,7 +28,9 @@ use serde::{Deserialize, Serialize};
 /// J1's unexplained deviation at one J2 angle.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CrosstalkGroup {
+    /// The J2 angle held during these J1 rows, degrees.
     pub j2_deg: f64,
+    /// J1 rows measured at this J2 angle.
     pub rows: usize,
     /// `Δθ1,xt` per indexed J1 angle and direction, degrees.
     pub table: BidirectionalTable,
@@ -41,6 +43,7 @@ pub struct CrosstalkGroup {
 /// Result of [`identify_crosstalk`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CrosstalkReport {
+    /// One group per held J2 angle, ascending.
     pub groups: Vec<CrosstalkGroup>,
     /// Standard error of one table entry (cycle mean), degrees, pooled over
     /// all entries from the spread of the repeated cycles.

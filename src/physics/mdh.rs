@@ -30,8 +30,11 @@ use serde::{Deserialize, Serialize};
 /// APD tables identified from indexing tests.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ApdIdentification {
+    /// One table per joint (`None`: no table: not indexed, prismatic, or skipped).
     pub apd: Vec<Option<BidirectionalTable>>,
+    /// What the identification saw, per identified axis.
     pub axes: Vec<AxisReport>,
+    /// Indexed axes that could not be used, with the reason.
     pub skipped: Vec<String>,
 }
 
@@ -128,13 +131,19 @@ fn rest_of(rows: &[Row], j: usize) -> f64 {
 /// Summary of a Levenberg–Marquardt calibration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LmSummary {
+    /// Parameters identified (of `5n + 9`: per link Δθ_off, Δd, Δa, Δα, Δβ, the
+    /// tool offset and the base pose), those frozen excluded.
     pub parameters: usize,
     /// Names of the parameters frozen as unidentifiable.
     pub frozen: Vec<String>,
-    /// rms of the position residual per coordinate, mm, before and after.
+    /// rms of the position residual per coordinate before the fit (nominal
+    /// parameters), mm.
     pub rms_before_mm: f64,
+    /// rms of the position residual per coordinate after the fit, mm.
     pub rms_after_mm: f64,
+    /// Levenberg–Marquardt iterations run.
     pub iterations: usize,
+    /// Why the solver stopped (the `LmStop` variant's name).
     pub stop: String,
 }
 

@@ -48,7 +48,9 @@ pub struct PhysicsIdentification {
     pub dh: PhysicsModel,
     /// How it was identified, one line.
     pub method: String,
+    /// What the identification saw, per identified axis.
     pub axes: Vec<AxisReport>,
+    /// Axes that could not be used, with the reason.
     pub notes: Vec<String>,
     /// The calibrations, when Levenberg–Marquardt was used: D-H only, D-H + APD.
     pub lm: Vec<LmSummary>,

@@ -9,8 +9,9 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Format tag and version of a saved physics model.
+/// Format tag of a saved physics model (its JSON `format` field).
 pub const PHYSICS_FORMAT: &str = "robokrige-physics-model";
+/// Version of the physics-model file format this crate writes.
 pub const PHYSICS_VERSION: u32 = 1;
 
 /// Identified SCARA geometry of seed 000 (eqs 3, 18, 23), in the reference
@@ -18,11 +19,13 @@ pub const PHYSICS_VERSION: u32 = 1;
 /// at `θ̂1 = 0`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScaraGeometry {
-    /// Nominal link lengths `L1`, `L2`, mm.
+    /// Nominal length of link 1, `L1`, mm.
     pub l1_mm: f64,
+    /// Nominal length of link 2, `L2`, mm.
     pub l2_mm: f64,
-    /// Link length errors `ΔL1`, `ΔL2` (eqs 12–13), mm.
+    /// Length error of link 1, `ΔL1 = ‖Q2 − Q1‖ − L1` (the exact form of eq 12), mm.
     pub dl1_mm: f64,
+    /// Length error of link 2, `ΔL2 = R2 − L2` (eq 13), mm.
     pub dl2_mm: f64,
     /// Angular offset of J2, `θ20` (eq 14), degrees.
     pub theta20_deg: f64,
@@ -31,8 +34,12 @@ pub struct ScaraGeometry {
     /// of the reference CS; `a`, `b` in mm/mm (small angles, rad), `z1` in mm.
     /// The TCP's Z (eq 23) is this plane plus the commanded height change
     /// `Z*(q) − Z*(rest)`.
+    ///
+    /// This field is the slope `a`, along x'.
     pub parallel_a: f64,
+    /// Slope `b` of the J2 plane along y' (mm/mm, a small angle in rad).
     pub parallel_b: f64,
+    /// Height `z1` of the J2 plane at the link-1 origin, mm.
     pub z1_mm: f64,
     /// Commanded pose of the indexing tests (its nominal z is the Z origin).
     pub rest: Vec<f64>,
@@ -45,7 +52,10 @@ pub enum Geometry {
     /// Seed 000: planar SCARA with parallelism (eq 23).
     Scara(ScaraGeometry),
     /// Seed 002 eqs 1–2: an MD-H chain with identified parameter errors.
-    Mdh { robot: Robot },
+    Mdh {
+        /// The robot with its identified MD-H, tool and base errors applied.
+        robot: Robot,
+    },
 }
 
 /// A physics-based error model (seed 000 eq 3, seed 002 eqs 1–2):
@@ -57,12 +67,15 @@ pub enum Geometry {
 /// the same convention as the measured `ex, ey, ez`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PhysicsModel {
+    /// Format tag, [`PHYSICS_FORMAT`].
     pub format: String,
+    /// File format version; loading needs [`PHYSICS_VERSION`].
     pub version: u32,
     /// One line on how it was identified.
     pub description: String,
     /// The robot as the controller knows it.
     pub nominal: Robot,
+    /// The identified geometry: θ̂ → TCP position in the reference CS.
     pub geometry: Geometry,
     /// Measurement frame ← reference CS.
     pub frame: Isometry3<f64>,
@@ -221,7 +234,9 @@ impl PhysicsModel {
 /// residuals `e − δ̂_phys` of the training campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HybridModel {
+    /// The physics stage, `δ̂_phys`.
     pub physics: PhysicsModel,
+    /// The Kriging stage `δ̂_UK`, fitted to the physics model's residuals.
     pub residual: ErrorModel,
 }
 
@@ -279,7 +294,9 @@ pub(crate) fn load_json<T: for<'de> Deserialize<'de>>(path: &Path, what: &str) -
 /// `compensate --model` accepts.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AnyModel {
+    /// A universal-Kriging error model file.
     Kriging(Box<ErrorModel>),
+    /// A physics model file (`format` = [`PHYSICS_FORMAT`]).
     Physics(Box<PhysicsModel>),
 }
 

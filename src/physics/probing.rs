@@ -35,15 +35,21 @@ pub struct Straightedge {
     pub along: Vector3<f64>,
     /// Unit probing direction (towards the face, base frame).
     pub probe: Vector3<f64>,
+    /// Length of the probed stretch along the edge, mm.
     pub length_mm: f64,
+    /// Contact points, evenly spaced over `length_mm` (at least 3).
     pub points: usize,
+    /// Distance before the face from which each touch starts, mm.
     pub approach_mm: f64,
 }
 
 /// Encoder readings of one probing run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProbeRun {
+    /// Encoder readings `Θ(k)` at each contact, with the joint repeatability
+    /// noise (degrees or mm).
     pub joints: Vec<Vec<f64>>,
+    /// Direction coefficients λ (±1) of each contact, from its approach move.
     pub dir: Vec<Vec<f64>>,
     /// The true contact points (on the straight face).
     pub contact: Vec<Vector3<f64>>,
@@ -202,9 +208,13 @@ pub fn example_edges(robot: &Robot) -> Result<(Vec<Straightedge>, Vec<f64>)> {
 /// One row of the seed 002 Table 2 analogue.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ProbingRow {
+    /// The straightedge's name.
     pub edge: String,
+    /// With the nominal model (eq 3).
     pub nominal: Straightness,
+    /// With the identified D-H model only.
     pub dh: Straightness,
+    /// With the full physics model (D-H + APD tables, eq 6).
     pub full: Straightness,
 }
 

@@ -63,12 +63,15 @@ impl Default for ScaraOptions {
 pub struct AxisReport {
     /// 1-based joint.
     pub axis: usize,
+    /// Rows of this axis's indexing test.
     pub rows: usize,
     /// Indexed angles (both directions each).
     pub angles: usize,
+    /// Repeated cycles (distinct values of the `cycle` column; 1 without it).
     pub cycles: usize,
-    /// Best-fit circle radius and rms of the radial residuals, mm.
+    /// Radius of the best-fit circle of the TCP positions, mm.
     pub radius_mm: f64,
+    /// rms of the radial residuals of that circle fit, mm.
     pub circle_rms_mm: f64,
     /// rms distance from the best-fit plane, mm.
     pub plane_rms_mm: f64,
@@ -81,7 +84,9 @@ pub struct AxisReport {
 /// Result of [`identify_scara`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScaraIdentification {
+    /// The identified SCARA model (geometry, APD and radial tables).
     pub model: PhysicsModel,
+    /// What the identification saw, per indexed axis (J1, J2).
     pub axes: Vec<AxisReport>,
     /// Indexed axes that could not be used, with the reason.
     pub skipped: Vec<String>,

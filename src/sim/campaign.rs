@@ -26,11 +26,15 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CampaignKind {
+    /// Latin-hypercube poses in the joint ranges, visited in the order drawn.
     Lhs,
+    /// Independent uniformly random poses (a verification set).
     Verify,
+    /// Single-axis indexing tests of every revolute joint (seed 000 §2.3).
     Indexing,
     /// Seed 000 §5.2: J1 indexed (eq 21) with J2 held at several angles.
     Crosstalk,
+    /// A circle of commanded TCP points around the home TCP (a trajectory, not measured).
     Circle,
 }
 
@@ -49,18 +53,22 @@ impl CampaignKind {
 /// Campaign parameters; `CampaignSpec::new(kind, seed)` gives the defaults.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CampaignSpec {
+    /// Which design to simulate.
     pub kind: CampaignKind,
     /// Seed of the true robot *and* of the campaign's random draws. The same
     /// seed gives the same true robot for every kind.
     pub seed: u64,
     /// Poses (lhs, verify) or trajectory points (circle); ignored by indexing.
     pub poses: usize,
+    /// Undeclared effects switched on for this campaign.
     pub effects: Vec<Effect>,
     /// Joint ranges overriding the robot's `work_ranges`.
     pub ranges: Option<Vec<(f64, f64)>>,
     /// Mean time per measured pose, s.
     pub seconds_per_pose: f64,
+    /// Diameter of the `circle` trajectory, mm.
     pub circle_diameter_mm: f64,
+    /// Forward-and-backward cycles of each indexing (and cross-talk) test.
     pub indexing_cycles: usize,
 }
 
@@ -83,9 +91,13 @@ impl CampaignSpec {
 /// The simulator's ground truth, written beside the data (never into it).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Truth {
+    /// Format tag, [`TRUTH_FORMAT`].
     pub format: String,
+    /// File format version, [`TRUTH_VERSION`].
     pub version: u32,
+    /// The campaign that was simulated.
     pub spec: CampaignSpec,
+    /// The true robot the campaign ran on.
     pub robot: TrueRobot,
     /// RMS over the measured rows of the per-axis noise σ (tracker +
     /// repeatability), mm: the best CV RMSE any model can reach.
@@ -95,14 +107,17 @@ pub struct Truth {
     pub direction_spread_mm: Option<[f64; 3]>,
 }
 
-/// Truth format tag and version.
+/// Format tag of a truth sidecar (its JSON `format` field).
 pub const TRUTH_FORMAT: &str = "robokrige-sim-truth";
+/// Version of the truth-sidecar format this crate writes.
 pub const TRUTH_VERSION: u32 = 1;
 
 /// A campaign's result.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SimOutput {
+    /// A measured campaign (every kind but `circle`).
     Measurements(Dataset),
+    /// A commanded trajectory (`circle`).
     Trajectory(Trajectory),
 }
 

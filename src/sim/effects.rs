@@ -23,27 +23,45 @@ pub enum Effect {
     /// true robot scales by `1 + κ·(T − T0)`. Written as `temp_c` (sensor
     /// noise 0.02 K) next to `time_s`.
     Temperature {
+        /// Temperature rise ΔT at saturation, K (default 6).
         delta_k: f64,
+        /// Time constant τ of the warm-up, s (> 0; default 1200).
         tau_s: f64,
+        /// Expansion coefficient κ of every length, per K (default 4e-5).
         expansion_per_k: f64,
     },
     /// Payload changes in equal blocks of rows through the given levels;
     /// compliance bends the arm more under load. Written as `payload_kg`.
-    Payload { levels_kg: Vec<f64> },
+    Payload {
+        /// Payload masses in the order the blocks run through them, kg (≥ 0).
+        levels_kg: Vec<f64>,
+    },
     /// An extra gear harmonic `A·sin(2π·q/P + φ)` on one joint (1-based).
     Harmonic {
+        /// 1-based joint.
         joint: usize,
+        /// Period P in the joint's angle, degrees (> 0).
         period_deg: f64,
+        /// Amplitude A, degrees.
         amp_deg: f64,
+        /// Phase φ, radians.
         phase_rad: f64,
     },
     /// The tracker set-up is bumped before row `row` (0-based): every later
     /// measurement is offset by `offset_mm`. No column records it.
-    TrackerStep { row: usize, offset_mm: [f64; 3] },
+    TrackerStep {
+        /// 0-based row from which the offset applies.
+        row: usize,
+        /// Offset added to every later measured position (x, y, z), mm.
+        offset_mm: [f64; 3],
+    },
     /// Cross-talk: joint `joint` deviates by `gain·sin(q_from)` (both 1-based).
     Crosstalk {
+        /// 1-based joint that deviates.
         joint: usize,
+        /// 1-based joint whose angle drives the deviation (≠ `joint`).
         from: usize,
+        /// Gain: the deviation's amplitude, degrees.
         gain_deg: f64,
     },
     /// Hysteresis that builds up after a reversal (Dahl-type friction):
@@ -52,8 +70,11 @@ pub enum Effect {
     /// (EJS's λ) is the saturated value; for moves of the order of `S` the
     /// deviation depends on the move history, which no column records.
     Hysteresis {
+        /// 1-based joint.
         joint: usize,
+        /// Saturated deviation A, degrees.
         amp_deg: f64,
+        /// Travel scale S of the build-up, degrees (> 0).
         travel_deg: f64,
     },
 }

@@ -16,8 +16,9 @@ use rand::Rng;
 /// What a run of a trajectory produced.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Execution {
-    /// Nominal IK joints of the commands and their λ.
+    /// Nominal IK joints of the commands (degrees or mm), one row per point.
     pub joints: Vec<Vec<f64>>,
+    /// Direction coefficients λ (±1) of those joints in visiting order.
     pub dir: Vec<Vec<f64>>,
     /// Measured TCP positions (with noise), mm.
     pub measured: Vec<[f64; 3]>,

@@ -10,8 +10,13 @@ use serde::{Deserialize, Serialize};
 /// mean of both directions at the rest angle).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScaraTruth {
+    /// Effective length error of link 1, `ΔL1` (J1–J2 distance in the TCP's
+    /// horizontal plane minus the nominal L1), mm.
     pub dl1_mm: f64,
+    /// Effective length error of link 2, `ΔL2` (J2–TCP distance in that plane
+    /// minus the nominal L2), mm.
     pub dl2_mm: f64,
+    /// Effective angular offset of J2, `θ20` (seed 000 eq 14), degrees in [−180, 180).
     pub theta20_deg: f64,
     /// Rest pose of the indexing tests.
     pub rest: Vec<f64>,

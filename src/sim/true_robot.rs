@@ -17,8 +17,11 @@ use std::f64::consts::TAU;
 /// One sinusoid `A·sin(2π·θ*/P + φ)` of a joint's angular positioning deviation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Harmonic {
+    /// Amplitude A, degrees (mm for a prismatic joint).
     pub amplitude_deg: f64,
+    /// Period P in the commanded angle θ*, degrees.
     pub period_deg: f64,
+    /// Phase φ, radians.
     pub phase_rad: f64,
 }
 
@@ -83,8 +86,11 @@ pub struct NoiseModel {
     /// Unidirectional repeatability: per-joint Gaussian σ (deg or mm).
     pub repeatability_sigma_deg: f64,
     /// Tracker maximum permissible error `U = a + b·L` (seed 000 Table 2:
-    /// 15 µm + 6 µm/m), taken as 2σ per axis.
+    /// 15 µm + 6 µm/m), taken as 2σ per axis; this field is the constant
+    /// part `a`, mm.
     pub tracker_mpe_const_mm: f64,
+    /// Distance-proportional part `b` of the tracker MPE, mm per metre of
+    /// tracker-to-point distance L (seed 000: 0.006).
     pub tracker_mpe_per_m_mm: f64,
     /// Tracker position in the robot base frame, mm.
     pub tracker_position_mm: [f64; 3],
@@ -101,8 +107,11 @@ impl NoiseModel {
 /// Magnitudes used to draw a true robot (1σ unless stated).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ErrorProfile {
+    /// σ of the perturbation of every MD-H length (d, a), mm.
     pub length_sigma_mm: f64,
+    /// σ of the perturbation of every MD-H angle (θ offset, α, β), degrees.
     pub angle_sigma_deg: f64,
+    /// σ of the tool offset perturbation per axis, mm.
     pub tool_sigma_mm: f64,
     /// Mean backlash half-width is drawn uniformly in `[0.5, 1.5]×` this.
     pub backlash_deg: f64,
@@ -112,6 +121,7 @@ pub struct ErrorProfile {
     pub arm_mass_kg: f64,
     /// Stiffness of the shoulder and elbow, N·m/rad.
     pub stiffness_nm_per_rad: f64,
+    /// Unidirectional repeatability σ per joint, degrees (mm for a prismatic joint).
     pub repeatability_sigma_deg: f64,
 }
 
@@ -161,7 +171,9 @@ pub struct TrueRobot {
     pub actual: Robot,
     /// Per-joint bidirectional angular positioning deviation.
     pub deviation: Vec<JointDeviation>,
+    /// Gravity compliance of the arm (masses and joint stiffnesses).
     pub compliance: Compliance,
+    /// Noise of the joints and of the tracker.
     pub noise: NoiseModel,
 }
 
