@@ -33,6 +33,7 @@
 //! | studies | [`diagnose`] | closing the loop: what the model still misses |
 //! | studies | [`sim`] | a "true robot" and its campaigns (checks the engine; never used inside it) |
 //! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, hybrid, comparisons |
+//! | studies | [`study`] | compensation targets, simulator truth files, before/after evaluation on the simulated robot |
 //! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
 //! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
 //! | output | `plot` | SVG charts (box plots, x–y plots); Cargo feature `plot` (default) |
@@ -70,6 +71,7 @@ pub mod selection;
 pub mod sim;
 pub mod space;
 pub mod stats;
+pub mod study;
 pub mod trajectory;
 
 pub use error::{Error, Result};

@@ -2,16 +2,14 @@
 
 use super::progress::spinner;
 use clap::Args;
-use nalgebra::{Isometry3, UnitQuaternion};
 use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
 use robokrige::kinematics::{self, Robot};
 use robokrige::physics::AnyModel;
 use robokrige::plot::{Labels, Series, xy_plot};
-use robokrige::sim::{Truth, execute, rng_for};
-use robokrige::stats::{PositionErrorTable, position_error_table};
-use robokrige::trajectory::{TargetFile, Trajectory};
+use robokrige::stats::PositionErrorTable;
+use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
+use robokrige::trajectory::Trajectory;
 use robokrige::{Error, Result};
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// Pre-compensate a trajectory with a fitted error model (feed-forward).
@@ -103,145 +101,18 @@ pub struct EvaluateArgs {
     json: Option<PathBuf>,
 }
 
-/// Target poses, and for a q1..qN pose list the joints as IK hints.
-pub(super) struct Targets {
-    pub(super) traj: Trajectory,
-    pub(super) hints: Option<Vec<Vec<f64>>>,
-}
-
-/// Targets from a trajectory CSV or from the nominal FK of a q1..qN pose list.
+/// The targets of `path` (see [`Targets::read`]), its warnings shown.
 pub(super) fn read_targets(
     path: &Path,
     robot: &Robot,
     orientation: Option<&[f64]>,
     start: &[f64],
 ) -> Result<Targets> {
-    let mut hints = None;
-    let mut t = match robokrige::trajectory::read_target_file(path)? {
-        TargetFile::Joints(d) => {
-            for w in d.warnings() {
-                eprintln!("warning: {w}");
-            }
-            robot.check_dataset(&d)?;
-            let t = Trajectory::new(d.q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?);
-            hints = Some(d.q);
-            t
-        }
-        TargetFile::Tcp(t) => t,
-    };
-    if orientation.is_some() && (t.has_orientation || hints.is_some() || robot.dof() < 6) {
-        return Err(Error::InvalidParameter(format!(
-            "--orientation is for position-only (x,y,z) trajectories of a six-axis robot; {} {}",
-            path.display(),
-            if hints.is_some() {
-                "is a pose list (its orientations come from the joints)"
-            } else if t.has_orientation {
-                "has its own roll,pitch,yaw columns"
-            } else {
-                "is for a robot with fewer than six joints"
-            }
-        )));
+    let t = Targets::read(path, robot, orientation, start)?;
+    for w in &t.warnings {
+        eprintln!("warning: {w}");
     }
-    if !t.has_orientation && robot.dof() >= 6 {
-        let rot = match orientation {
-            Some(&[r, p, y]) => {
-                UnitQuaternion::from_euler_angles(r.to_radians(), p.to_radians(), y.to_radians())
-            }
-            Some(_) => {
-                return Err(Error::InvalidParameter(
-                    "--orientation needs three angles: roll,pitch,yaw (deg)".into(),
-                ));
-            }
-            None => robot.fk(start)?.rotation,
-        };
-        for p in &mut t.poses {
-            *p = Isometry3::from_parts(p.translation, rot);
-        }
-        t.has_orientation = true;
-    }
-    Ok(Targets { traj: t, hints })
-}
-
-pub(super) fn load_truth(path: &Path) -> Result<Truth> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let truth: Truth = serde_json::from_str(&text).map_err(|e| Error::Json {
-        context: format!("{}: not a simulator truth file", path.display()),
-        source: e,
-    })?;
-    if truth.format != robokrige::sim::campaign::TRUTH_FORMAT {
-        return Err(Error::Input {
-            source_name: path.display().to_string(),
-            message: format!("format '{}' is not a simulator truth", truth.format),
-        });
-    }
-    Ok(truth)
-}
-
-/// Errors `measured − target` of running `commands` on the truth's robot.
-fn run_on(
-    truth: &Truth,
-    commands: &Trajectory,
-    targets: &Targets,
-    start: &[f64],
-    rng: &mut impl rand::Rng,
-) -> Result<Vec<[f64; 3]>> {
-    let ex = execute(
-        &truth.robot,
-        commands,
-        start,
-        targets.hints.as_deref(),
-        &truth.spec.effects,
-        rng,
-    )?;
-    Ok(ex
-        .measured
-        .iter()
-        .zip(&targets.traj.poses)
-        .map(|(m, p)| {
-            let t = p.translation.vector;
-            [m[0] - t[0], m[1] - t[1], m[2] - t[2]]
-        })
-        .collect())
-}
-
-/// Measured errors (mm) of the nominal and the compensated runs.
-pub(super) type Runs = (Vec<[f64; 3]>, Vec<[f64; 3]>);
-
-#[derive(Serialize)]
-pub(super) struct Evaluation {
-    truth: PathBuf,
-    seed: u64,
-    points: usize,
-    pub(super) before: PositionErrorTable,
-    pub(super) after: PositionErrorTable,
-    reduction_mean_abs_pct: f64,
-    reduction_max_abs_pct: f64,
-}
-
-pub(super) fn evaluation(
-    truth_path: &Path,
-    truth: &Truth,
-    targets: &Targets,
-    commands: &Trajectory,
-    start: &[f64],
-    seed: u64,
-) -> Result<(Evaluation, Runs)> {
-    let mut rng = rng_for(seed, "evaluate");
-    let before = run_on(truth, &targets.traj, targets, start, &mut rng)?;
-    let after = run_on(truth, commands, targets, start, &mut rng)?;
-    let (b, a) = (position_error_table(&before), position_error_table(&after));
-    Ok((
-        Evaluation {
-            truth: truth_path.to_path_buf(),
-            seed,
-            points: targets.traj.len(),
-            reduction_mean_abs_pct: 100.0 * (1.0 - a.mean_abs_mm / b.mean_abs_mm),
-            reduction_max_abs_pct: 100.0 * (1.0 - a.max_abs_mm / b.max_abs_mm),
-            before: b,
-            after: a,
-        },
-        (before, after),
-    ))
+    Ok(t)
 }
 
 fn norms(e: &[[f64; 3]]) -> Vec<(f64, f64)> {
@@ -355,9 +226,8 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let truth = load_truth(tp)?;
-        check_robot(&truth, &robot, tp)?;
-        let (ev, (before, after)) =
-            evaluation(tp, &truth, &targets, &res.commands, &start, a.seed)?;
+        check_truth_robot(&truth, &robot, tp)?;
+        let (ev, (before, after)) = evaluate(tp, &truth, &targets, &res.commands, &start, a.seed)?;
         say!(
             "on the simulated robot ({}), measured error vs target (mm):",
             tp.display()
@@ -419,21 +289,6 @@ fn list(v: &[usize]) -> String {
     s.join(", ")
 }
 
-/// Error unless the truth's nominal robot has `robot`'s kinematic table.
-fn check_robot(truth: &Truth, robot: &Robot, path: &Path) -> Result<()> {
-    let nominal = &truth.robot.nominal;
-    if kinematics::table_digest(nominal) != kinematics::table_digest(robot) {
-        return Err(Error::Input {
-            source_name: path.display().to_string(),
-            message: format!(
-                "the truth is for robot '{}', not '{}' (their kinematic tables differ)",
-                nominal.name, robot.name
-            ),
-        });
-    }
-    Ok(())
-}
-
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let mut inputs = vec![a.traj.as_path(), a.truth.as_path()];
     inputs.extend(a.compensated.iter().map(PathBuf::as_path));
@@ -443,7 +298,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let robot = match &a.robot {
         Some(name) => {
             let robot = kinematics::load_robot(name)?;
-            check_robot(&truth, &robot, &a.truth)?;
+            check_truth_robot(&truth, &robot, &a.truth)?;
             robot
         }
         None => truth.robot.nominal.clone(),
@@ -467,7 +322,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             });
         }
         let (ev, (before, after)) =
-            evaluation(&a.truth, &truth, &targets, &commands, &start, a.seed)?;
+            evaluate(&a.truth, &truth, &targets, &commands, &start, a.seed)?;
         if k == 0 {
             print_table("before (nominal)", &ev.before);
             runs.push(("before".to_string(), before));

@@ -4,7 +4,6 @@
 //! simulated robot, and diagnose a campaign with an undeclared effect.
 //! Writes the data, models, SVG plots and a Markdown report to a folder.
 
-use super::compensate::{Targets, evaluation};
 use super::diagnose::{describe, draw_plots, rmse3};
 use super::progress::bar;
 use clap::Args;
@@ -17,7 +16,7 @@ use robokrige::methods::Method;
 use robokrige::plot::{Labels, Series, box_plot, xy_plot};
 use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, Truth, simulate};
 use robokrige::stats::PositionErrorTable;
-use robokrige::trajectory::Trajectory;
+use robokrige::study::{Targets, evaluate};
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -193,20 +192,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
 
     // 3. compensation
     let mut comp = Vec::new();
-    let verify_targets = Targets {
-        traj: Trajectory::new(
-            verify
-                .q
-                .iter()
-                .map(|q| robot.fk(q))
-                .collect::<Result<_>>()?,
-        ),
-        hints: Some(verify.q.clone()),
-    };
-    let circle_targets = Targets {
-        traj: circle.clone(),
-        hints: None,
-    };
+    let verify_targets = Targets::from_joints(&robot, &verify.q)?;
+    let circle_targets = Targets::from_trajectory(circle.clone());
     let mut circle_runs: Vec<(String, Vec<[f64; 3]>)> = Vec::new();
     for (name, targets, truth, truth_file) in [
         (
@@ -236,7 +223,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
                     ..CompensationOptions::default()
                 },
             )?;
-            let (ev, (before, after)) = evaluation(
+            let (ev, (before, after)) = evaluate(
                 Path::new(truth_file),
                 truth,
                 targets,

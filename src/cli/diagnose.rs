@@ -1,6 +1,6 @@
 //! `robokrige diagnose`.
 
-use super::compensate::{load_truth, read_targets};
+use super::compensate::read_targets;
 use super::progress::spinner;
 use clap::Args;
 use robokrige::compensate::{CompensationOptions, compensate};
@@ -15,6 +15,7 @@ use robokrige::model::{AXES, ErrorModel};
 use robokrige::plot::{Labels, Series, xy_plot};
 use robokrige::space::Space;
 use robokrige::stats::PositionErrorTable;
+use robokrige::study::load_truth;
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -424,7 +425,7 @@ fn compare_compensation(
         };
         let c = compensate(&robot, m, &targets.traj, &opts)?;
         let (ev, _) =
-            super::compensate::evaluation(truth_path, &truth, &targets, &c.commands, &start, seed)?;
+            robokrige::study::evaluate(truth_path, &truth, &targets, &c.commands, &start, seed)?;
         Ok((ev.before, ev.after))
     };
     let (b, a) = (run(before)?, run(after)?);

@@ -246,7 +246,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     }
     say_part!("{}", identify_text(&id));
     if let Some(tp) = &a.truth {
-        let truth = super::compensate::load_truth(tp)?;
+        let truth = robokrige::study::load_truth(tp)?;
         say_part!("{}", truth_text(&id, &truth));
     }
     say!("model: {}", a.output.display());

@@ -1,0 +1,210 @@
+//! Studies on a simulated robot: compensation targets from a trajectory or a
+//! pose list, the simulator's truth file, and the evaluation of commands run
+//! on the true robot (before / after). The CLI's `compensate`, `evaluate`,
+//! `demo`, `diagnose` and `physics` and the examples all use these.
+
+use crate::kinematics::{Robot, table_digest};
+use crate::sim::{Truth, execute, rng_for};
+use crate::stats::{PositionErrorTable, position_error_table};
+use crate::trajectory::{TargetFile, Trajectory, read_target_file};
+use crate::{Error, Result};
+use nalgebra::{Isometry3, UnitQuaternion};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Target poses, and for a q1..qN pose list the joints as IK hints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Targets {
+    /// The TCP poses to reach, in visiting order.
+    pub traj: Trajectory,
+    /// Joints of each target when they came from a pose list (IK hints).
+    pub hints: Option<Vec<Vec<f64>>>,
+    /// Warnings of the pose list (repeated poses, …), for the caller to show.
+    pub warnings: Vec<String>,
+}
+
+impl Targets {
+    /// Targets at the nominal TCP poses of joint vectors `q` (hints = `q`).
+    pub fn from_joints(robot: &Robot, q: &[Vec<f64>]) -> Result<Self> {
+        Ok(Targets {
+            traj: Trajectory::new(q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?),
+            hints: Some(q.to_vec()),
+            warnings: Vec::new(),
+        })
+    }
+
+    /// Targets along a trajectory (no hints).
+    pub fn from_trajectory(traj: Trajectory) -> Self {
+        Targets {
+            traj,
+            hints: None,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Read a target file: a trajectory CSV (x,y,z[,roll,pitch,yaw]) or a
+    /// q1..qN pose list, whose nominal TCP poses become the targets. A
+    /// six-axis robot's position-only targets take `orientation` (roll,
+    /// pitch, yaw in degrees), else the orientation of the pose `start`.
+    pub fn read(
+        path: &Path,
+        robot: &Robot,
+        orientation: Option<&[f64]>,
+        start: &[f64],
+    ) -> Result<Self> {
+        let mut targets = match read_target_file(path)? {
+            TargetFile::Joints(d) => {
+                robot.check_dataset(&d)?;
+                let mut t = Targets::from_joints(robot, &d.q)?;
+                t.warnings = d.warnings();
+                t
+            }
+            TargetFile::Tcp(t) => Targets::from_trajectory(t),
+        };
+        let t = &mut targets.traj;
+        if orientation.is_some()
+            && (t.has_orientation || targets.hints.is_some() || robot.dof() < 6)
+        {
+            return Err(Error::InvalidParameter(format!(
+                "--orientation is for position-only (x,y,z) trajectories of a six-axis robot; {} {}",
+                path.display(),
+                if targets.hints.is_some() {
+                    "is a pose list (its orientations come from the joints)"
+                } else if t.has_orientation {
+                    "has its own roll,pitch,yaw columns"
+                } else {
+                    "is for a robot with fewer than six joints"
+                }
+            )));
+        }
+        if !t.has_orientation && robot.dof() >= 6 {
+            let rot = match orientation {
+                Some(&[r, p, y]) => UnitQuaternion::from_euler_angles(
+                    r.to_radians(),
+                    p.to_radians(),
+                    y.to_radians(),
+                ),
+                Some(_) => {
+                    return Err(Error::InvalidParameter(
+                        "--orientation needs three angles: roll,pitch,yaw (deg)".into(),
+                    ));
+                }
+                None => robot.fk(start)?.rotation,
+            };
+            for p in &mut t.poses {
+                *p = Isometry3::from_parts(p.translation, rot);
+            }
+            t.has_orientation = true;
+        }
+        Ok(targets)
+    }
+}
+
+/// Read a simulator truth file (`robokrige simulate` writes it beside a campaign).
+pub fn load_truth(path: &Path) -> Result<Truth> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let truth: Truth = serde_json::from_str(&text).map_err(|e| Error::Json {
+        context: format!("{}: not a simulator truth file", path.display()),
+        source: e,
+    })?;
+    if truth.format != crate::sim::campaign::TRUTH_FORMAT {
+        return Err(Error::Input {
+            source_name: path.display().to_string(),
+            message: format!("format '{}' is not a simulator truth", truth.format),
+        });
+    }
+    Ok(truth)
+}
+
+/// Error unless the truth's nominal robot has `robot`'s kinematic table.
+pub fn check_truth_robot(truth: &Truth, robot: &Robot, path: &Path) -> Result<()> {
+    let nominal = &truth.robot.nominal;
+    if table_digest(nominal) != table_digest(robot) {
+        return Err(Error::Input {
+            source_name: path.display().to_string(),
+            message: format!(
+                "the truth is for robot '{}', not '{}' (their kinematic tables differ)",
+                nominal.name, robot.name
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Errors `measured − target` (mm) of running `commands` on the truth's robot
+/// from `start`.
+pub fn run_on(
+    truth: &Truth,
+    commands: &Trajectory,
+    targets: &Targets,
+    start: &[f64],
+    rng: &mut impl rand::Rng,
+) -> Result<Vec<[f64; 3]>> {
+    let ex = execute(
+        &truth.robot,
+        commands,
+        start,
+        targets.hints.as_deref(),
+        &truth.spec.effects,
+        rng,
+    )?;
+    Ok(ex
+        .measured
+        .iter()
+        .zip(&targets.traj.poses)
+        .map(|(m, p)| {
+            let t = p.translation.vector;
+            [m[0] - t[0], m[1] - t[1], m[2] - t[2]]
+        })
+        .collect())
+}
+
+/// Measured errors (mm) of the nominal and the compensated runs.
+pub type Runs = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// Before / after errors of a compensation measured on the simulated robot.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// The truth file.
+    pub truth: PathBuf,
+    /// Seed of the simulated measurement noise.
+    pub seed: u64,
+    /// Points of the trajectory.
+    pub points: usize,
+    /// Errors of the nominal commands (the targets themselves).
+    pub before: PositionErrorTable,
+    /// Errors of the compensated commands.
+    pub after: PositionErrorTable,
+    /// `100 (1 − after/before)` of the mean |δ|, %.
+    pub reduction_mean_abs_pct: f64,
+    /// `100 (1 − after/before)` of the max |δ|, %.
+    pub reduction_max_abs_pct: f64,
+}
+
+/// Run the nominal commands (the targets) and `commands` on the truth's
+/// robot with the same noise stream (`seed`), and compare.
+pub fn evaluate(
+    truth_path: &Path,
+    truth: &Truth,
+    targets: &Targets,
+    commands: &Trajectory,
+    start: &[f64],
+    seed: u64,
+) -> Result<(Evaluation, Runs)> {
+    let mut rng = rng_for(seed, "evaluate");
+    let before = run_on(truth, &targets.traj, targets, start, &mut rng)?;
+    let after = run_on(truth, commands, targets, start, &mut rng)?;
+    let (b, a) = (position_error_table(&before), position_error_table(&after));
+    Ok((
+        Evaluation {
+            truth: truth_path.to_path_buf(),
+            seed,
+            points: targets.traj.len(),
+            reduction_mean_abs_pct: 100.0 * (1.0 - a.mean_abs_mm / b.mean_abs_mm),
+            reduction_max_abs_pct: 100.0 * (1.0 - a.max_abs_mm / b.max_abs_mm),
+            before: b,
+            after: a,
+        },
+        (before, after),
+    ))
+}
