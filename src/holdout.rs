@@ -14,6 +14,7 @@ use crate::kinematics::Robot;
 use crate::kriging::KrigingOptions;
 use crate::model::ErrorModel;
 use crate::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
+use crate::predictor::ErrorPredictor;
 use crate::space::Space;
 use crate::stats::spread;
 use crate::{Error, Result};
@@ -232,4 +233,108 @@ fn predicted(model: &ErrorModel, held: &Dataset) -> Result<(Vec<[f64; 3]>, Vec<u
         .map(|w| w.index)
         .collect();
     Ok((p.mean, flags))
+}
+
+/// What [`holdout_split`] scores beyond the five models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SplitExtras {
+    /// Also EJS with the PCC + PCA fusion (seed 003) of the quadratic and
+    /// the kinematic candidates.
+    pub pca: bool,
+    /// Also EJS with the trend chosen by the GA (seed 004) among the same.
+    pub ga: bool,
+}
+
+/// The result of [`holdout_split`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HoldoutSplit {
+    /// "nominal", then the five models, then the extras asked for.
+    pub rows: Vec<HoldoutRow>,
+    /// The D-H calibration on the training rows.
+    pub calibration: LmSummary,
+}
+
+/// Train every model on `train`, score it on `test` (rows it never saw):
+/// nominal, the D-H calibration, the hybrid and the kinematic-trend Kriging
+/// in JS and EJS, and the `extras`. `progress(message)` is called before
+/// each model.
+pub fn holdout_split(
+    train: &Dataset,
+    test: &Dataset,
+    robot: &Robot,
+    opts: &KrigingOptions,
+    extras: SplitExtras,
+    progress: &dyn Fn(&str),
+) -> Result<HoldoutSplit> {
+    use crate::methods::{PAPER_GA_FOLDS, PAPER_PCC_THRESHOLD, PAPER_VARIANCE_SHARE};
+    use crate::params::{ErrorModelParams, TrendSpec};
+    let truth = test.errors_or_err()?.to_vec();
+    let mut rows = vec![score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0)];
+    progress("D-H calibration");
+    let t0 = Instant::now();
+    let (dh, calibration) = calibrate(train, robot)?;
+    let dh_secs = t0.elapsed().as_secs_f64();
+    rows.push(score(
+        "D-H calibration (LM)",
+        &truth,
+        &dh.predict_errors(&test.q, &test.dir)?,
+        dh_secs,
+    ));
+    let resid = residual(train, &dh)?;
+    for space in [Space::Js, Space::Ejs] {
+        let label = format!("{space:?}").to_uppercase();
+        progress(&format!("hybrid {label}"));
+        let t0 = Instant::now();
+        let h = HybridModel {
+            physics: dh.clone(),
+            residual: ErrorModel::fit(&resid, space, opts)?,
+        };
+        let secs = dh_secs + t0.elapsed().as_secs_f64();
+        rows.push(score(
+            &format!("hybrid: D-H calibration + Kriging {label}"),
+            &truth,
+            &h.predict(&test.q, &test.dir)?,
+            secs,
+        ));
+        progress(&format!("UK kinematic trend {label}"));
+        let t0 = Instant::now();
+        let m = ErrorModel::fit_kinematic(train, space, opts, robot)?;
+        rows.push(score(
+            &format!("universal Kriging {label}, kinematic trend"),
+            &truth,
+            &m.predict_mean(&test.q, &test.dir)?,
+            t0.elapsed().as_secs_f64(),
+        ));
+    }
+    let kinematic = Some(Box::new(robot.clone()));
+    let mut selected = Vec::new();
+    if extras.pca {
+        let trend = TrendSpec::PccPca {
+            threshold: PAPER_PCC_THRESHOLD,
+            variance_share: PAPER_VARIANCE_SHARE,
+            kinematic: kinematic.clone(),
+        };
+        let name = "universal Kriging EJS, PCC + PCA fusion of quadratic + kinematic candidates";
+        selected.push(("PCC + PCA", name, trend));
+    }
+    if extras.ga {
+        let trend = TrendSpec::Ga {
+            folds: PAPER_GA_FOLDS,
+            kinematic,
+        };
+        let name = "universal Kriging EJS, GA-selected quadratic + kinematic trend";
+        selected.push(("GA selection", name, trend));
+    }
+    for (what, name, trend) in selected {
+        progress(what);
+        let t0 = Instant::now();
+        let m = ErrorModelParams::new()
+            .kriging(opts.clone())
+            .trend(trend)
+            .check()?
+            .fit(train)?;
+        let pred = m.predict_mean(&test.q, &test.dir)?;
+        rows.push(score(name, &truth, &pred, t0.elapsed().as_secs_f64()));
+    }
+    Ok(HoldoutSplit { rows, calibration })
 }

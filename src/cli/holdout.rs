@@ -6,18 +6,11 @@ use super::progress::bar;
 use super::read_data;
 use clap::Args;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{HoldoutRow, calibrate, holdout_cv, residual, score};
+use robokrige::holdout::{HoldoutRow, SplitExtras, holdout_cv, holdout_split};
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
-use robokrige::methods;
-use robokrige::model::ErrorModel;
-use robokrige::params::{ErrorModelParams, TrendSpec};
-use robokrige::physics::HybridModel;
-use robokrige::predictor::ErrorPredictor;
-use robokrige::space::Space;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
-use std::time::Instant;
 
 /// Hold-out comparison of calibration models on a measured campaign.
 #[derive(Debug, Args)]
@@ -235,95 +228,19 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     }
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
     let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
-    let truth = test.errors_or_err()?.to_vec();
     let opts = kriging_opts(&a, &train.q)?;
     super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
     let periodic = opts.periodic.clone();
-    let pb = bar(6, "holdout");
-    let mut rows = Vec::new();
-    rows.push(score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0));
-    pb.set_message("D-H calibration");
-    let t0 = Instant::now();
-    let (dh, lm) = calibrate(&train, &robot)?;
-    let dh_secs = t0.elapsed().as_secs_f64();
-    rows.push(score(
-        "D-H calibration (LM)",
-        &truth,
-        &dh.predict_errors(&test.q, &test.dir)?,
-        dh_secs,
-    ));
-    pb.inc(1);
-    let resid = residual(&train, &dh)?;
-    for space in [Space::Js, Space::Ejs] {
-        let label = format!("{space:?}").to_uppercase();
-        pb.set_message(format!("hybrid {label}"));
-        let t0 = Instant::now();
-        let h = HybridModel {
-            physics: dh.clone(),
-            residual: ErrorModel::fit(&resid, space, &opts)?,
-        };
-        let secs = dh_secs + t0.elapsed().as_secs_f64();
-        rows.push(score(
-            &format!("hybrid: D-H calibration + Kriging {label}"),
-            &truth,
-            &h.predict(&test.q, &test.dir)?,
-            secs,
-        ));
+    let pb = bar(6 + u64::from(a.pca) + u64::from(a.ga), "holdout");
+    let extras = SplitExtras {
+        pca: a.pca,
+        ga: a.ga,
+    };
+    let split = holdout_split(&train, &test, &robot, &opts, extras, &|what| {
         pb.inc(1);
-        pb.set_message(format!("UK kinematic trend {label}"));
-        let t0 = Instant::now();
-        let m = ErrorModel::fit_kinematic(&train, space, &opts, &robot)?;
-        let secs = t0.elapsed().as_secs_f64();
-        rows.push(score(
-            &format!("universal Kriging {label}, kinematic trend"),
-            &truth,
-            &m.predict_mean(&test.q, &test.dir)?,
-            secs,
-        ));
-        pb.inc(1);
-    }
-    if a.pca {
-        pb.set_message("PCC + PCA");
-        let t0 = Instant::now();
-        let m = ErrorModelParams::new()
-            .kriging(opts.clone())
-            .trend(TrendSpec::PccPca {
-                threshold: methods::PAPER_PCC_THRESHOLD,
-                variance_share: methods::PAPER_VARIANCE_SHARE,
-                kinematic: Some(Box::new(robot.clone())),
-            })
-            .check()?
-            .fit(&train)?;
-        let secs = t0.elapsed().as_secs_f64();
-        rows.push(score(
-            "universal Kriging EJS, PCC + PCA fusion of quadratic + kinematic candidates",
-            &truth,
-            &m.predict_mean(&test.q, &test.dir)?,
-            secs,
-        ));
-    }
-    if a.ga {
-        pb.set_message("GA selection");
-        let t0 = Instant::now();
-        let m = ErrorModelParams::new()
-            .kriging(KrigingOptions {
-                seed: a.seed,
-                ..opts.clone()
-            })
-            .trend(TrendSpec::Ga {
-                folds: methods::PAPER_GA_FOLDS,
-                kinematic: Some(Box::new(robot.clone())),
-            })
-            .check()?
-            .fit(&train)?;
-        let secs = t0.elapsed().as_secs_f64();
-        rows.push(score(
-            "universal Kriging EJS, GA-selected quadratic + kinematic trend",
-            &truth,
-            &m.predict_mean(&test.q, &test.dir)?,
-            secs,
-        ));
-    }
+        pb.set_message(what.to_string());
+    })?;
+    let (rows, lm) = (split.rows, split.calibration);
     pb.finish_and_clear();
     say!(
         "{}: train rows 1–{}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}",
