@@ -6,7 +6,7 @@ use clap::Args;
 use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{
-    CvStats, DiagnoseOptions, Diagnosis, EffectKind, EffectReport, diagnose, with_columns,
+    CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, with_columns,
 };
 use robokrige::features::Feature;
 use robokrige::kinematics;
@@ -369,7 +369,7 @@ pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Ve
                 .map(|(xi, r)| (*xi, r[axis]))
                 .collect()
         };
-        let path = dir.join(format!("effect{}_{}.svg", k + 1, kind_name(e.kind)));
+        let path = dir.join(format!("effect{}_{}.svg", k + 1, e.kind.name()));
         let title = format!("{}: residual before / after", describe(e));
         let ylabel = format!("out-of-fold residual {} (mm)", AXES[axis]);
         xy_plot(
@@ -389,16 +389,6 @@ pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Ve
         prev = next;
     }
     Ok(out)
-}
-
-fn kind_name(k: EffectKind) -> &'static str {
-    match k {
-        EffectKind::Covariate => "covariate",
-        EffectKind::Order => "order",
-        EffectKind::Harmonic => "harmonic",
-        EffectKind::Interaction => "interaction",
-        EffectKind::DirectionHistory => "direction-history",
-    }
 }
 
 type Comparison = (PositionErrorTable, PositionErrorTable);
@@ -531,7 +521,7 @@ fn report(
             let _ = writeln!(
                 s,
                 "| {rank} | {} | {} | {} | {:.3} | {:.4} | {:.4} | {status} |",
-                kind_name(e.kind),
+                e.kind.name(),
                 e.source.join(", "),
                 describe(e),
                 e.score,

@@ -40,6 +40,19 @@ pub enum EffectKind {
     DirectionHistory,
 }
 
+impl EffectKind {
+    /// The kind's name, as in the JSON `kind` and in plot file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            EffectKind::Covariate => "covariate",
+            EffectKind::Order => "order",
+            EffectKind::Harmonic => "harmonic",
+            EffectKind::Interaction => "interaction",
+            EffectKind::DirectionHistory => "direction-history",
+        }
+    }
+}
+
 /// One parameter value of a family.
 #[derive(Debug, Clone)]
 pub struct GridPoint {
@@ -648,6 +661,17 @@ pub fn benjamini_hochberg(p: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn kind_names_are_the_json_names() {
+        use EffectKind::*;
+        for k in [Covariate, Order, Harmonic, Interaction, DirectionHistory] {
+            assert_eq!(
+                serde_json::to_string(&k).unwrap(),
+                format!("\"{}\"", k.name())
+            );
+        }
+    }
 
     #[test]
     fn bh_adjustment_is_monotone_and_matches_hand_values() {
