@@ -135,6 +135,17 @@ pub enum Error {
     /// A linear-algebra step failed (e.g. a matrix that stays singular).
     #[error("numerical failure: {0}")]
     Numerical(String),
+
+    /// A failure in one output axis of a model (fit or refit); the cause
+    /// keeps its own variant.
+    #[error("output {axis}: {source}")]
+    Axis {
+        /// The axis: `ex`, `ey` or `ez`.
+        axis: &'static str,
+        /// What went wrong there.
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 /// Crate-wide result alias.

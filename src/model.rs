@@ -510,7 +510,10 @@ impl ErrorModel {
         let mut outputs = Vec::with_capacity(3);
         let mut reports = Vec::with_capacity(3);
         for (a, f) in fits.into_iter().enumerate() {
-            let (m, r) = f.map_err(|e| Error::Numerical(format!("output {}: {e}", AXES[a])))?;
+            let (m, r) = f.map_err(|e| Error::Axis {
+                axis: AXES[a],
+                source: Box::new(e),
+            })?;
             outputs.push(m);
             reports.push(r);
         }
@@ -578,7 +581,10 @@ impl ErrorModel {
             .collect();
         let mut outputs = Vec::with_capacity(3);
         for (a, f) in fits.into_iter().enumerate() {
-            outputs.push(f.map_err(|e| Error::Numerical(format!("output {}: {e}", AXES[a])))?);
+            outputs.push(f.map_err(|e| Error::Axis {
+                axis: AXES[a],
+                source: Box::new(e),
+            })?);
         }
         let secs = t0.elapsed().as_secs_f64();
         let reports = self

@@ -522,3 +522,42 @@ fn c24_same_command_twice_gives_byte_identical_json() {
     }
     assert_eq!(load(&da), load(&db));
 }
+
+/// A failure in one output keeps its cause's variant under the axis
+/// (issue 19: errors keep their variant through the layers).
+#[test]
+fn a_per_axis_failure_keeps_its_cause() {
+    use robokrige::Error;
+    use robokrige::dataset::Dataset;
+    use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
+    use robokrige::model::ErrorModel;
+    use robokrige::space::Space;
+    // a warm start of the wrong length fails in every output's fit
+    let q: Vec<Vec<f64>> = (0..12)
+        .map(|i| vec![i as f64, (i * 7 % 5) as f64])
+        .collect();
+    let mut d = Dataset::from_poses("t", q, None).unwrap();
+    d.errors = Some((0..12).map(|i| [i as f64 * 0.01, 0.0, 0.0]).collect());
+    let opts = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        corr: Correlation::Gaussian,
+        warm_start: vec![
+            robokrige::kriging::WarmStart {
+                theta: vec![1.0; 1],
+                nugget: 0.0,
+                inverse_hessian: None,
+            };
+            3
+        ],
+        ..KrigingOptions::default()
+    };
+    let e = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap_err();
+    match &e {
+        Error::Axis { axis, source } => {
+            assert_eq!(*axis, "ex");
+            assert!(!matches!(**source, Error::Axis { .. }), "{e}");
+        }
+        other => panic!("expected an Axis error, got {other:?}"),
+    }
+    assert!(e.to_string().starts_with("output ex: "), "{e}");
+}
