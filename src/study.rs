@@ -42,7 +42,7 @@ impl Targets {
         }
     }
 
-    /// Read a target file: a trajectory CSV (x,y,z[,roll,pitch,yaw]) or a
+    /// Read a target file: a trajectory CSV (`x,y,z[,roll,pitch,yaw]`) or a
     /// q1..qN pose list, whose nominal TCP poses become the targets. A
     /// six-axis robot's position-only targets take `orientation` (roll,
     /// pitch, yaw in degrees), else the orientation of the pose `start`.
