@@ -27,13 +27,15 @@ pub struct InputMap {
 impl InputMap {
     /// Fit the map on a campaign: the encoding of its rows (extras from its
     /// columns, [`Feature::columns`]) and the normalisation of those rows.
-    /// Errors if a periodic joint does not exist.
+    /// Returns the map and the campaign's normalised inputs (what
+    /// [`InputMap::encode_dataset`] would give, computed once). Errors if a
+    /// periodic joint does not exist.
     pub fn fit(
         data: &Dataset,
         space: Space,
         periodic: &[usize],
         extras: &[Feature],
-    ) -> Result<Self> {
+    ) -> Result<(Self, Vec<Vec<f64>>)> {
         let n = data.n_joints();
         if let Some(j) = periodic.iter().find(|&&j| j >= n) {
             return Err(Error::InvalidParameter(format!(
@@ -53,8 +55,10 @@ impl InputMap {
             },
         };
         map.names.extend(extras.iter().flat_map(Feature::names));
-        map.norm = Normalizer::fit(&map.raw_dataset(data)?);
-        Ok(map)
+        let raw = map.raw_dataset(data)?;
+        map.norm = Normalizer::fit(&raw);
+        let x = map.norm.apply_rows(&raw);
+        Ok((map, x))
     }
 
     /// The map of a saved model, from its parts (no refit of the normalisation).
@@ -157,8 +161,9 @@ mod tests {
             .map(|i| vec![i as f64, (i * i) as f64 % 7.0])
             .collect();
         let data = Dataset::from_poses("t", q.clone(), None).unwrap();
-        let map = InputMap::fit(&data, Space::Ejs, &[], &[]).unwrap();
+        let (map, x) = InputMap::fit(&data, Space::Ejs, &[], &[]).unwrap();
         let a = map.encode_dataset(&data).unwrap();
+        assert_eq!(a, x);
         let b = map.encode(&q, &data.dir).unwrap();
         assert_eq!(a, b);
         let mean: f64 = a.iter().map(|r| r[0]).sum::<f64>() / 20.0;

@@ -367,8 +367,8 @@ impl ErrorModel {
         kinematic: Option<&crate::kinematics::Robot>,
     ) -> Result<(Self, Vec<crate::basis::PccPcaReport>)> {
         let errors = data.errors_or_err()?;
-        let map = InputMap::fit(data, space, &opts.periodic, &[])?;
-        let (d, x) = (map.dim(), map.encode_dataset(data)?);
+        let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+        let d = map.dim();
         let names = map.names();
         let quad = KrigingOptions {
             trend: crate::kriging::TrendKind::Quadratic,
@@ -467,8 +467,7 @@ impl ErrorModel {
             });
         }
         let n = data.n_joints();
-        let map = InputMap::fit(data, space, &opts.periodic, extras)?;
-        let x = map.encode_dataset(data)?;
+        let (map, x) = InputMap::fit(data, space, &opts.periodic, extras)?;
         let corr_dims = map.corr_dims();
         let inputs = TrainingInputs::new(
             &x.iter()
@@ -561,8 +560,7 @@ impl ErrorModel {
             }
             _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
         };
-        let map = InputMap::fit(data, self.space, &self.options.periodic, &[])?;
-        let x = map.encode_dataset(data)?;
+        let (map, x) = InputMap::fit(data, self.space, &self.options.periodic, &[])?;
         let input_norm = map.normalizer().clone();
         let inputs = TrainingInputs::new(&x);
         let fits: Vec<Result<KrigingModel>> = (0..3)
@@ -1040,7 +1038,7 @@ fn kinematic_trend_set(
         }
     }
     let (kept, _) = independent_columns(&f, 1e-7);
-    let map = InputMap::fit(data, space, &opts.periodic, &[])?;
+    let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
     let norm = map.normalizer();
     let d = map.dim();
     let nj = d - space.dim(n) + n; // joint columns
@@ -1052,13 +1050,7 @@ fn kinematic_trend_set(
             .sum()
     };
     // the monomial columns of every axis's trend matrix
-    let fp = match axis_tol {
-        Some(_) => Some(crate::kriging::trend_matrix(
-            &poly,
-            &map.encode_dataset(data)?,
-        )),
-        None => None,
-    };
+    let fp = axis_tol.map(|_| crate::kriging::trend_matrix(&poly, &x));
     let axis_params = |a: usize| -> Vec<usize> {
         let seen: Vec<usize> = kept
             .iter()

@@ -53,8 +53,8 @@ pub(crate) fn fit_ga_in(
 ) -> Result<ErrorModel> {
     let errors = data.errors_or_err()?;
     let m = data.len();
-    let map = crate::inputs::InputMap::fit(data, space, &opts.periodic, &[])?;
-    let (d, x) = (map.dim(), map.encode_dataset(data)?);
+    let (map, x) = crate::inputs::InputMap::fit(data, space, &opts.periodic, &[])?;
+    let d = map.dim();
     let inputs = TrainingInputs::new(&x);
     let names = map.names().to_vec();
     let fold = kfold_partition(m, k, seed)?;

@@ -231,7 +231,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let opts = kriging_opts(&a, &train.q)?;
     super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
     let periodic = opts.periodic.clone();
-    let pb = bar(6 + u64::from(a.pca) + u64::from(a.ga), "holdout");
+    let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,
         ga: a.ga,
