@@ -5,29 +5,29 @@
 
 mod common;
 
-use robokrige::basis::Selection;
 use robokrige::kriging::KrigingOptions;
-use robokrige::methods::fit_ga;
+use robokrige::params::{ErrorModelParams, TrendSpec};
+use robokrige::selection::Selection;
 use std::time::Instant;
 
 fn main() {
     let data = common::campaign();
     let t0 = Instant::now();
-    let model = fit_ga(
-        &data,
-        &KrigingOptions::default(),
-        10,
-        1,
-        &|_, _, _| {},
-        None,
-    )
-    .expect("GA fit");
-    let Some(Selection::Ga { outputs: ga }) = &model.selection else {
+    let model = ErrorModelParams::new()
+        .kriging(KrigingOptions::default())
+        .trend(TrendSpec::Ga {
+            folds: 10,
+            kinematic: None,
+        })
+        .check()
+        .and_then(|p| p.fit(&data))
+        .expect("GA fit");
+    let Some(Selection::Ga { outputs: ga }) = model.selection() else {
         panic!("the GA fit records its selection");
     };
     let secs = t0.elapsed().as_secs_f64();
     println!("EJS&GA selection + fit of ex, ey, ez: {secs:.2} s");
-    for ((axis, r), out) in ["ex", "ey", "ez"].iter().zip(ga).zip(&model.reports) {
+    for ((axis, r), out) in ["ex", "ey", "ez"].iter().zip(ga).zip(model.reports()) {
         let hist: Vec<String> = r
             .history
             .iter()

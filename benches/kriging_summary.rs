@@ -22,9 +22,9 @@ fn main() {
         let t0 = Instant::now();
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).expect("fit");
         let secs = t0.elapsed().as_secs_f64();
-        let evals: usize = model.reports.iter().map(|r| r.evals).sum();
+        let evals: usize = model.reports().iter().map(|r| r.evals).sum();
         let lp: Vec<String> = model
-            .reports
+            .reports()
             .iter()
             .map(|r| format!("{:.4}", r.ln_psi))
             .collect();

@@ -105,9 +105,9 @@ fn run(case: &Case, label: &str, opts: &KrigingOptions) {
     let t0 = Instant::now();
     let model = ErrorModel::fit(&case.train, Space::Ejs, opts).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
-    let evals: usize = model.reports.iter().map(|r| r.evals).sum();
+    let evals: usize = model.reports().iter().map(|r| r.evals).sum();
     let lp: Vec<String> = model
-        .reports
+        .reports()
         .iter()
         .map(|r| format!("{:.4}", r.ln_psi))
         .collect();
@@ -143,7 +143,7 @@ fn scale_row(case: &Case, label: &str, opts: &KrigingOptions) {
     let model = ErrorModel::fit(&case.train, Space::Ejs, opts).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
     let peak = peak_rss().map_or("-".into(), robokrige::memory::human);
-    let evals: usize = model.reports.iter().map(|r| r.evals).sum();
+    let evals: usize = model.reports().iter().map(|r| r.evals).sum();
     let (test, floor) = case.test.as_ref().expect("simulated");
     let ho = held_out(&model, test) / floor;
     let path = std::env::temp_dir().join(format!("robokrige-scale-{}.json", std::process::id()));
@@ -250,8 +250,11 @@ fn families() {
                 let model = ErrorModel::fit(&case.train, Space::Ejs, &opts).expect("fit");
                 let secs = t0.elapsed().as_secs_f64();
                 let ho = held_out(&model, test) / floor;
-                let chosen: Vec<String> =
-                    model.outputs.iter().map(|o| o.corr().to_string()).collect();
+                let chosen: Vec<String> = model
+                    .outputs()
+                    .iter()
+                    .map(|o| o.corr().to_string())
+                    .collect();
                 println!(
                     "| {} | {} | {} | {secs:.2} | {ho:.2}× | {} |",
                     case.name,

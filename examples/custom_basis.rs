@@ -7,6 +7,7 @@ use robokrige::cv::cross_validate_closed_form;
 use robokrige::dataset::read_csv;
 use robokrige::kriging::{KrigingOptions, Monomials, Trend, TrendModel};
 use robokrige::model::ErrorModel;
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::space::Space;
 use std::path::Path;
 
@@ -33,12 +34,15 @@ fn main() -> robokrige::Result<()> {
     println!("custom trend: {}", terms.join(" + "));
     let opts = KrigingOptions::default();
     let trend = Trend::from(basis);
-    let custom = ErrorModel::fit_with_trend(
-        &data,
-        Space::Ejs,
-        &opts,
-        &[trend.clone(), trend.clone(), trend],
-    )?;
+    let custom = ErrorModelParams::new()
+        .kriging(opts.clone())
+        .trend(TrendSpec::PerAxis(Box::new([
+            trend.clone(),
+            trend.clone(),
+            trend,
+        ])))
+        .check()?
+        .fit(&data)?;
     let constant = ErrorModel::fit(&data, Space::Ejs, &opts)?;
     for (name, m) in [("constant", &constant), ("custom", &custom)] {
         let cv = cross_validate_closed_form(&data, m, 10, 1)?;

@@ -150,7 +150,7 @@ pub fn holdout_cv(
     let mut kin_t = Vec::new();
     for space in spaces {
         hybrid_t.push(ErrorModel::fit(&first_resid, space, opts)?);
-        kin_t.push(ErrorModel::fit_kinematic(&first, space, opts, robot)?);
+        kin_t.push(fit_kinematic(&first, space, opts, robot)?);
     }
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
     let mut pred = vec![vec![[0.0; 3]; m]; 5];
@@ -298,7 +298,7 @@ pub fn holdout_split(
         ));
         progress(&format!("UK kinematic trend {label}"));
         let t0 = Instant::now();
-        let m = ErrorModel::fit_kinematic(train, space, opts, robot)?;
+        let m = fit_kinematic(train, space, opts, robot)?;
         rows.push(score(
             &format!("universal Kriging {label}, kinematic trend"),
             &truth,
@@ -337,4 +337,19 @@ pub fn holdout_split(
         rows.push(score(name, &truth, &pred, t0.elapsed().as_secs_f64()));
     }
     Ok(HoldoutSplit { rows, calibration })
+}
+
+/// Universal Kriging with the kinematic trend of `robot` on `data`.
+fn fit_kinematic(
+    data: &Dataset,
+    space: Space,
+    opts: &KrigingOptions,
+    robot: &Robot,
+) -> Result<ErrorModel> {
+    crate::params::ErrorModelParams::new()
+        .space(space)
+        .kriging(opts.clone())
+        .trend(crate::params::TrendSpec::Kinematic(Box::new(robot.clone())))
+        .check()?
+        .fit(data)
 }

@@ -21,11 +21,10 @@
 //! | geometry | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
 //! | geometry | [`optim`] | box-constrained minimisers (BFGS, GPS, Hooke–Jeeves, GA, Levenberg–Marquardt) |
 //! | engine | [`kriging`] | universal Kriging: trend, correlation families, likelihood, fit, predict |
-//! | engine | [`basis`] | trend selection: PCC + PCA fusion (seed 003 eqs 15–20) |
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
 //! | engine | [`inputs`] | `InputMap`: encoding, extras and normalisation of a model's inputs, in one place |
+//! | engine | [`selection`] | trend selection: candidates, PCC + PCA (seed 003 eqs 15–20), GA (seed 004), the kinematic trend |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
-//! | model | [`selection`] | the GA trend selection of seed 004 (needs fits) |
 //! | model | [`params`] | `ErrorModelParams` → checked → `fit`: every space × trend × hyperparameter choice |
 //! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended` |
 //! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
@@ -44,7 +43,6 @@
 
 #![warn(missing_docs)]
 
-pub mod basis;
 pub mod batch;
 pub mod compensate;
 pub mod cv;

@@ -10,11 +10,9 @@
 //! | `ejs-pca` | EJS | PCC + PCA fusion of the quadratic candidates (T = 0.1, 99 %) | GPS |
 //! | `ejs-ga` | EJS | GA subset of the quadratic candidates, fitness = closed-form K-fold CV RMSE at the constant-trend ξ | GPS |
 
-use crate::dataset::Dataset;
+use crate::kinematics::Robot;
 use crate::kriging::{KrigingOptions, OptimizerKind};
-use crate::model::ErrorModel;
 use crate::params::{ErrorModelParams, TrendSpec};
-pub use crate::selection::{GaProgress, fit_ga};
 use crate::space::Space;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -84,36 +82,6 @@ impl Method {
             })
     }
 
-    /// Fit this method on `data` (all selection on `data` only).
-    pub fn fit(self, data: &Dataset, seed: u64) -> Result<ErrorModel> {
-        self.fit_with_progress(data, seed, &|_, _, _| {})
-    }
-
-    /// [`Method::fit`], reporting GA generations to `progress`.
-    pub fn fit_with_progress(
-        self,
-        data: &Dataset,
-        seed: u64,
-        progress: GaProgress,
-    ) -> Result<ErrorModel> {
-        self.fit_with(data, seed, false, progress)
-    }
-
-    /// [`Method::fit_with_progress`], optionally estimating a nugget (noise
-    /// variance ratio) with the correlation parameters. [`Method::Recommended`]
-    /// always estimates one: `nugget` only switches the papers' methods.
-    pub fn fit_with(
-        self,
-        data: &Dataset,
-        seed: u64,
-        nugget: bool,
-        progress: GaProgress,
-    ) -> Result<ErrorModel> {
-        self.params(seed, nugget)
-            .check()?
-            .fit_with_progress(data, progress)
-    }
-
     /// The method's fit parameters: every paper constant is here (GPS with
     /// [`PAPER_GPS_STARTS`] starts, PCC threshold 0.1 and 99 % variance share,
     /// 10 GA folds). `nugget` switches the papers' methods to estimating one;
@@ -139,15 +107,26 @@ impl Method {
             Method::JsHj => p.space(Space::Js).kriging(hj),
             Method::EjsHj => p.kriging(hj),
             Method::EjsGps => p.kriging(gps),
-            Method::EjsPca => p.kriging(gps).trend(TrendSpec::PccPca {
+            Method::EjsPca | Method::EjsGa => p.kriging(gps).trend(self.trend(None)),
+        }
+    }
+
+    /// The method's trend: the PCC + PCA or GA selection with the papers'
+    /// constants (the rows of `kinematic`'s identification Jacobian among
+    /// the candidates when given), the options' trend for the others.
+    pub fn trend(self, kinematic: Option<&Robot>) -> TrendSpec {
+        let kinematic = kinematic.map(|r| Box::new(r.clone()));
+        match self {
+            Method::EjsPca => TrendSpec::PccPca {
                 threshold: PAPER_PCC_THRESHOLD,
                 variance_share: PAPER_VARIANCE_SHARE,
-                kinematic: None,
-            }),
-            Method::EjsGa => p.kriging(gps).trend(TrendSpec::Ga {
+                kinematic,
+            },
+            Method::EjsGa => TrendSpec::Ga {
                 folds: PAPER_GA_FOLDS,
-                kinematic: None,
-            }),
+                kinematic,
+            },
+            _ => TrendSpec::Options,
         }
     }
 }

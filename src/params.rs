@@ -11,7 +11,7 @@
 //!     .trend(TrendSpec::PccPca { threshold: 0.1, variance_share: 0.99, kinematic: None })
 //!     .check()?
 //!     .fit(&data)?;
-//! assert_eq!(model.space, Space::Js);
+//! assert_eq!(model.space(), Space::Js);
 //! # Ok::<(), robokrige::Error>(())
 //! ```
 //!
@@ -22,9 +22,14 @@
 
 use crate::dataset::Dataset;
 use crate::features::Feature;
+use crate::inputs::InputMap;
 use crate::kinematics::Robot;
-use crate::kriging::{KrigingOptions, Trend};
-use crate::model::ErrorModel;
+use crate::kriging::{KrigingOptions, TrainingInputs, Trend};
+use crate::model::{ErrorModel, fit_outputs};
+use crate::selection::{
+    BasisSelector, Candidates, Ga, GaProgress, KINEMATIC_AXIS_TOL, PccPca, Selection,
+    SelectionProblem, kinematic_trend_set_in,
+};
 use crate::space::Space;
 use crate::{Error, Result};
 
@@ -64,7 +69,8 @@ pub enum HyperSpec {
     /// Searched on the data with the options' optimiser.
     Search,
     /// Those of a fitted model, kept (the trend re-derived for the new rows
-    /// when it is kinematic): [`ErrorModel::refit_at_hyperparameters`].
+    /// when it is kinematic; the normalisation re-fitted on the new rows). The way to scale to
+    /// thousands of rows: ξ on a subset, then one factorisation on all rows.
     FixedFrom(Box<ErrorModel>),
 }
 
@@ -101,6 +107,16 @@ impl ErrorModelParams {
             extras: Vec::new(),
             robot: None,
         }
+    }
+
+    /// The parameters of a refit of `model` at its own hyperparameters (ξ,
+    /// nugget, trend kind, space, options, robot): one factorisation on the
+    /// new rows, no search ([`HyperSpec::FixedFrom`]).
+    pub fn fixed_from(model: ErrorModel) -> Self {
+        ErrorModelParams::new()
+            .space(model.space())
+            .kriging(model.options().clone())
+            .hyper(HyperSpec::FixedFrom(Box::new(model)))
     }
 
     /// JS or EJS.
@@ -191,52 +207,90 @@ impl ValidErrorModelParams {
     }
 
     /// [`ValidErrorModelParams::fit`], reporting GA generations to `progress`.
-    pub fn fit_with_progress(
-        &self,
-        data: &Dataset,
-        progress: crate::selection::GaProgress,
-    ) -> Result<ErrorModel> {
+    pub fn fit_with_progress(&self, data: &Dataset, progress: GaProgress) -> Result<ErrorModel> {
         let p = &self.0;
         let (space, opts) = (p.space, &p.kriging);
-        let mut model = match (&p.hyper, &p.trend) {
-            (HyperSpec::FixedFrom(m), _) => m.refit_at_hyperparameters(data)?,
-            (HyperSpec::Search, TrendSpec::Options) if p.extras.is_empty() => {
-                ErrorModel::fit(data, space, opts)?
-            }
-            (HyperSpec::Search, TrendSpec::Options) => {
+        let mut model = match &p.hyper {
+            HyperSpec::FixedFrom(m) => m.refit_at_hyperparameters(data)?,
+            HyperSpec::Search if !p.extras.is_empty() => {
                 ErrorModel::fit_with_extras(data, space, opts, &p.extras)?
             }
-            (HyperSpec::Search, TrendSpec::PerAxis(t)) => {
-                ErrorModel::fit_with_trend(data, space, opts, t)?
+            HyperSpec::Search => {
+                let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+                let (trends, selection) = self.trends(data, &map, &x, progress)?;
+                let mut model = fit_outputs(data, &map, &x, opts, &trends)?;
+                model.selection = selection;
+                model
             }
-            (HyperSpec::Search, TrendSpec::Kinematic(r)) => {
-                ErrorModel::fit_kinematic(data, space, opts, r)?
-            }
-            (
-                HyperSpec::Search,
-                TrendSpec::PccPca {
-                    threshold,
-                    variance_share,
-                    kinematic,
-                },
-            ) => {
-                let robot = kinematic.as_deref();
-                ErrorModel::fit_pcc_pca_with(data, space, opts, *threshold, *variance_share, robot)?
-                    .0
-            }
-            (HyperSpec::Search, TrendSpec::Ga { folds, kinematic }) => crate::selection::fit_ga_in(
-                space,
-                data,
-                opts,
-                *folds,
-                opts.seed,
-                progress,
-                kinematic.as_deref(),
-            )?,
         };
-        if let Some(r) = &p.robot {
+        if let Some(r) = p.robot.as_ref().or(match &p.trend {
+            TrendSpec::Kinematic(r) => Some(r),
+            _ => None,
+        }) {
             model.record_robot(r)?;
         }
         Ok(model)
+    }
+
+    /// Each output's trend (and the selection's report) on `data`, whose
+    /// space map is `map` and normalised inputs `x`.
+    fn trends(
+        &self,
+        data: &Dataset,
+        map: &InputMap,
+        x: &[Vec<f64>],
+        progress: GaProgress,
+    ) -> Result<([Trend; 3], Option<Selection>)> {
+        let p = &self.0;
+        let opts = &p.kriging;
+        let select = |selector: &dyn BasisSelector, robot: &Option<Box<Robot>>| {
+            let candidates = match robot {
+                Some(r) => Candidates::Kinematic(r),
+                None => Candidates::Quadratic,
+            }
+            .build(data, map, x)?;
+            let errors = data.errors_or_err()?;
+            let y: [Vec<f64>; 3] = std::array::from_fn(|a| errors.iter().map(|e| e[a]).collect());
+            let problem = SelectionProblem {
+                x,
+                inputs: &TrainingInputs::new(x),
+                names: map.names(),
+                y: &y,
+                candidates: &candidates,
+                options: opts,
+            };
+            let (trends, report) = selector.select(&problem)?;
+            Ok((trends, Some(report)))
+        };
+        match &p.trend {
+            TrendSpec::Options => {
+                let t = opts.trend.trend(map.dim());
+                Ok(([t.clone(), t.clone(), t], None))
+            }
+            TrendSpec::PerAxis(t) => Ok(((**t).clone(), None)),
+            TrendSpec::Kinematic(r) => Ok((
+                kinematic_trend_set_in(data, map, x, opts.trend, r, Some(KINEMATIC_AXIS_TOL))?,
+                None,
+            )),
+            TrendSpec::PccPca {
+                threshold,
+                variance_share,
+                kinematic,
+            } => select(
+                &PccPca {
+                    threshold: *threshold,
+                    variance_share: *variance_share,
+                },
+                kinematic,
+            ),
+            TrendSpec::Ga { folds, kinematic } => select(
+                &Ga {
+                    folds: *folds,
+                    seed: opts.seed,
+                    progress,
+                },
+                kinematic,
+            ),
+        }
     }
 }

@@ -1,10 +1,10 @@
 //! PCC + PCA basis fusion (seed 003 eqs 16–20).
 
-use robokrige::basis::{pcc_pca, screen_candidates};
 use robokrige::dataset::read_csv;
 use robokrige::kriging::{KrigingOptions, Monomials, OptimizerKind, TrendModel, trend_matrix};
 use robokrige::model::ErrorModel;
-use robokrige::space::{Normalizer, Space};
+use robokrige::selection::{pcc_pca, screen_candidates};
+use robokrige::space::Normalizer;
 use std::path::Path;
 
 fn inputs(m: usize) -> Vec<Vec<f64>> {
@@ -77,8 +77,8 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
         max_evals: 60,
         ..KrigingOptions::default()
     };
-    let (model, reports) = ErrorModel::fit_pcc_pca(&d, Space::Ejs, &opts, 0.1, 0.99).unwrap();
-    for (r, out) in reports.iter().zip(&model.outputs) {
+    let (model, reports) = fit_pcc_pca(&d, &opts, None);
+    for (r, out) in reports.iter().zip(model.outputs()) {
         eprintln!(
             "PCC+PCA: {} candidates, {} above T, {} components ({:.4} of the variance)",
             r.ranking.len(),
@@ -88,7 +88,7 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
         );
         assert!(r.components >= 1 && r.selected >= r.components);
         // the constant plus the components (none is dependent on the others)
-        assert_eq!(out.data.trend.len(), 1 + r.components);
+        assert_eq!(out.data().trend.len(), 1 + r.components);
     }
     let text = serde_json::to_string(&model).unwrap();
     let back = ErrorModel::from_json(&text, "pca.json").unwrap();
@@ -137,4 +137,24 @@ fn screening_drops_dependent_candidates_and_says_why() {
     );
     assert_eq!(s.kept.len() + s.dropped.len(), 15);
     assert!(!s.kept.contains(&3));
+}
+
+/// PCC + PCA with the papers' constants, and its per-axis reports.
+fn fit_pcc_pca(
+    data: &robokrige::dataset::Dataset,
+    opts: &robokrige::kriging::KrigingOptions,
+    robot: Option<&robokrige::kinematics::Robot>,
+) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
+    let model = robokrige::params::ErrorModelParams::new()
+        .kriging(opts.clone())
+        .trend(robokrige::methods::Method::EjsPca.trend(robot))
+        .check()
+        .unwrap()
+        .fit(data)
+        .unwrap();
+    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
+        panic!("no PCC + PCA report");
+    };
+    let reports = outputs.clone();
+    (model, reports)
 }

@@ -73,7 +73,7 @@ fn every_family_saves_by_name_and_predicts_the_same_after_loading() {
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.contains(&format!("\"corr\":\"{}\"", corr.name())));
         let back = ErrorModel::load(&path).unwrap();
-        assert!(back.outputs.iter().all(|o| o.corr() == corr));
+        assert!(back.outputs().iter().all(|o| o.corr() == corr));
         let a = model.predict_dataset(&test).unwrap();
         let b = back.predict_dataset(&test).unwrap();
         assert_eq!(a.mean, b.mean, "{corr}");
@@ -101,11 +101,11 @@ fn files_without_a_family_load_as_gaussian() {
     assert!(!old.contains("\"corr\""));
     let back = ErrorModel::from_json(&old, "old.json").unwrap();
     assert!(
-        back.outputs
+        back.outputs()
             .iter()
             .all(|o| o.corr() == Correlation::Gaussian)
     );
-    assert_eq!(back.outputs, model.outputs);
+    assert_eq!(back.outputs(), model.outputs());
 }
 
 #[test]
@@ -117,7 +117,7 @@ fn auto_keeps_the_family_with_the_lowest_cv_error() {
         ..KrigingOptions::default()
     };
     let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
-    for (out, rep) in model.outputs.iter().zip(&model.reports) {
+    for (out, rep) in model.outputs().iter().zip(model.reports()) {
         // tried from the smoothest, stopping after the first rougher family
         // that scored worse than the best so far
         let tried: Vec<Correlation> = rep.families.iter().map(|f| f.corr).collect();
@@ -150,9 +150,9 @@ fn auto_keeps_the_family_with_the_lowest_cv_error() {
     }
     // deterministic, and the table is saved with the model
     let again = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
-    assert_eq!(again.reports, model.reports);
+    assert_eq!(again.reports(), model.reports());
     let back = ErrorModel::from_json(&model.to_json().unwrap(), "auto.json").unwrap();
-    assert_eq!(back.reports[0].families, model.reports[0].families);
+    assert_eq!(back.reports()[0].families, model.reports()[0].families);
 }
 
 /// Over `SEARCH_ROWS` rows the family is chosen on the search subset and

@@ -22,7 +22,7 @@ fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
         ..KrigingOptions::default()
     };
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
-    let (lo, hi) = model.joint_range[0];
+    let (lo, hi) = model.joint_range()[0];
     assert!(lo < hi && hi < 170.0, "campaign range of q1: [{lo}, {hi}]");
     // the training poses themselves, and one pose with q1 = 170°
     let mut q = d.q[..40].to_vec();

@@ -7,6 +7,7 @@ use robokrige::features::Feature;
 use robokrige::kinematics;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
+use robokrige::params::ErrorModelParams;
 use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
 use robokrige::space::Space;
 use robokrige::{Error, dataset::Dataset};
@@ -143,19 +144,25 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
         max_evals: 200,
         ..KrigingOptions::default()
     };
-    let m = ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &extras).unwrap();
-    assert_eq!(m.input_names.len(), 12 + 4);
+    let m = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .kriging(opts.clone())
+        .extras(extras.clone())
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    assert_eq!(m.input_names().len(), 12 + 4);
     // correlation inputs first; the harmonic is trend-only (ξ = 0 on its two columns)
     let stored = vec![extras[0].clone(), extras[2].clone(), extras[1].clone()];
-    assert_eq!(m.extras, stored);
+    assert_eq!(m.extras(), stored);
     assert_eq!(m.correlation_dims(), 14);
-    for o in &m.outputs {
-        assert_eq!(o.data.theta.len(), 16);
-        assert!(o.data.theta[14..].iter().all(|t| *t == 0.0));
-        assert!(o.data.theta[..14].iter().all(|t| *t > 0.0));
+    for o in m.outputs() {
+        assert_eq!(o.data().theta.len(), 16);
+        assert!(o.data().theta[14..].iter().all(|t| *t == 0.0));
+        assert!(o.data().theta[..14].iter().all(|t| *t > 0.0));
     }
     let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
-    assert_eq!(back.extras, stored);
+    assert_eq!(back.extras(), stored);
     // from the dataset the payload column is used; from poses its reference 0
     let a = m.predict_dataset(&data).unwrap().mean;
     let b = m.predict(&data.q, &data.dir).unwrap().mean;
@@ -177,7 +184,13 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
         name: "payload_kg".into(),
         reference: None,
     }];
-    let m2 = ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &no_ref).unwrap();
+    let m2 = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .kriging(opts.clone())
+        .extras(no_ref)
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
     let err = m2.predict(&data.q, &data.dir).unwrap_err();
     assert!(err.to_string().contains("payload_kg"), "{err}");
     // a joint out of range is rejected
@@ -186,7 +199,12 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
         period_deg: 5.0,
     }];
     assert!(matches!(
-        ErrorModel::fit_with_extras(&data, Space::Ejs, &opts, &bad),
+        ErrorModelParams::new()
+            .space(Space::Ejs)
+            .kriging(opts.clone())
+            .extras(bad)
+            .check()
+            .and_then(|p| p.fit(&data)),
         Err(Error::InvalidParameter(_))
     ));
 }

@@ -4,6 +4,7 @@ use robokrige::dataset::read_csv;
 use robokrige::kinematics;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::ErrorModel;
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::physics::identify_mdh;
 use robokrige::sim::campaign::simulate_on;
 use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, SimOutput, TrueRobot};
@@ -112,7 +113,13 @@ fn kinematic_trend_captures_geometric_errors() {
         panic!()
     };
     let truth = test.errors.clone().unwrap();
-    let kin = ErrorModel::fit_kinematic(&train, Space::Js, &hj(), &nominal).unwrap();
+    let kin = ErrorModelParams::new()
+        .space(Space::Js)
+        .kriging(hj())
+        .trend(TrendSpec::Kinematic(Box::new(nominal.clone())))
+        .check()
+        .and_then(|p| p.fit(&train))
+        .unwrap();
     let plain = ErrorModel::fit(&train, Space::Js, &hj()).unwrap();
     let e_kin = rms3(&truth, &kin.predict_mean(&test.q, &test.dir).unwrap());
     let e_plain = rms3(&truth, &plain.predict_mean(&test.q, &test.dir).unwrap());
@@ -123,7 +130,7 @@ fn kinematic_trend_captures_geometric_errors() {
         "{e_kin} vs {e_plain}"
     );
     // the trend names say what they are
-    let names = &kin.reports[0].trend_terms;
+    let names = &kin.reports()[0].trend_terms;
     assert!(names.iter().any(|t| t.starts_with("dPx/d")), "{names:?}");
 }
 
@@ -165,7 +172,13 @@ fn ur10_real_data_small_split() {
         periodic: periodic_joints(&train.q),
         ..hj()
     };
-    let uk = ErrorModel::fit_kinematic(&train, Space::Js, &opts, &robot).unwrap();
+    let uk = ErrorModelParams::new()
+        .space(Space::Js)
+        .kriging(opts.clone())
+        .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
+        .check()
+        .and_then(|p| p.fit(&train))
+        .unwrap();
     let k = mean3(&uk.predict_mean(&test.q, &test.dir).unwrap());
     eprintln!(
         "UR10 held-out mean 3D: nominal {nominal:.3}, D-H {lm:.3}, UK kinematic JS {k:.3} mm"
@@ -186,17 +199,29 @@ fn refit_at_hyperparameters_reproduces_the_model() {
     let dir = data.dir[200..210].to_vec();
     for kin in [false, true] {
         let m = if kin {
-            ErrorModel::fit_kinematic(&sub, Space::Ejs, &hj(), &robot).unwrap()
+            ErrorModelParams::new()
+                .space(Space::Ejs)
+                .kriging(hj())
+                .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
+                .check()
+                .and_then(|p| p.fit(&sub))
+                .unwrap()
         } else {
             ErrorModel::fit(&sub, Space::Ejs, &hj()).unwrap()
         };
-        let again = m.refit_at_hyperparameters(&sub).unwrap();
+        let again = ErrorModelParams::fixed_from(m.clone())
+            .check()
+            .and_then(|p| p.fit(&sub))
+            .unwrap();
         let (a, b) = (
             m.predict_mean(&q, &dir).unwrap(),
             again.predict_mean(&q, &dir).unwrap(),
         );
         assert!(rms3(&a, &b) < 1e-9, "kinematic {kin}: {a:?} vs {b:?}");
-        let all = m.refit_at_hyperparameters(&data).unwrap();
+        let all = ErrorModelParams::fixed_from(m.clone())
+            .check()
+            .and_then(|p| p.fit(&data))
+            .unwrap();
         let truth = &data.errors.as_ref().unwrap()[200..210];
         // rows 200..210 are now training rows: interpolated
         assert!(rms3(truth, &all.predict_mean(&q, &dir).unwrap()) < 1e-6);
@@ -211,8 +236,7 @@ fn pcc_pca_can_fuse_kinematic_candidates() {
     let data =
         read_csv(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/comau_lhs.csv")).unwrap();
     let robot = kinematics::preset("comau-nj220").unwrap();
-    let (m, reports) =
-        ErrorModel::fit_pcc_pca_with(&data, Space::Ejs, &hj(), 0.1, 0.99, Some(&robot)).unwrap();
+    let (m, reports) = pcc_pca(&data, &hj(), Some(&robot));
     for r in &reports {
         let kin = r
             .ranking
@@ -231,4 +255,24 @@ fn pcc_pca_can_fuse_kinematic_candidates() {
         m.predict_mean(&q, &dir).unwrap()
     );
     std::fs::remove_file(path).ok();
+}
+
+/// PCC + PCA with the papers' constants, and its per-axis reports.
+fn pcc_pca(
+    data: &robokrige::dataset::Dataset,
+    opts: &robokrige::kriging::KrigingOptions,
+    robot: Option<&robokrige::kinematics::Robot>,
+) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
+    let model = robokrige::params::ErrorModelParams::new()
+        .kriging(opts.clone())
+        .trend(robokrige::methods::Method::EjsPca.trend(robot))
+        .check()
+        .unwrap()
+        .fit(data)
+        .unwrap();
+    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
+        panic!("no PCC + PCA report");
+    };
+    let reports = outputs.clone();
+    (model, reports)
 }

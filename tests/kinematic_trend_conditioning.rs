@@ -13,8 +13,9 @@ use robokrige::kinematics::Robot;
 use robokrige::kriging::{
     KrigingOptions, OptimizerKind, TrendModel, independent_columns, trend_matrix,
 };
-use robokrige::model::{ErrorModel, kinematic_trends};
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::physics::{Geometry, PhysicsModel, identify_mdh};
+use robokrige::selection::kinematic_trends;
 use robokrige::sim::{PoseContext, TrueRobot};
 use robokrige::space::{Normalizer, Space, periodic_joints};
 
@@ -87,7 +88,13 @@ fn kinematic_trend_does_not_blow_up_off_the_campaign() {
         periodic: periodic_joints(&data.q),
         ..KrigingOptions::default()
     };
-    let uk = ErrorModel::fit_kinematic(&data, Space::Js, &opts, &robot).unwrap();
+    let uk = ErrorModelParams::new()
+        .space(Space::Js)
+        .kriging(opts.clone())
+        .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
     let (cal, _) = identify_mdh(&data, &robot, &[None, None, None, None, None, None]).unwrap();
     let dh = PhysicsModel::new("D-H", robot.clone(), Geometry::Mdh { robot: cal });
     let q = vec![

@@ -132,7 +132,7 @@ fn row_order_does_not_change_predictions() {
         assert!((pa.mean - pb.mean).abs() < 1e-9 * (1.0 + pa.mean.abs()));
         assert!((pa.mse - pb.mse).abs() < 1e-9 * (1e-6 + pa.mse));
     }
-    assert!((a.data.ln_psi - b.data.ln_psi).abs() < 1e-10);
+    assert!((a.data().ln_psi - b.data().ln_psi).abs() < 1e-10);
 }
 
 #[test]
@@ -145,7 +145,7 @@ fn quadratic_trend_over_ejs_drops_the_direction_squares() {
         ..KrigingOptions::default()
     };
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
-    for r in &model.reports {
+    for r in model.reports() {
         assert_eq!(r.trend_terms.len() + r.dropped_terms.len(), 91);
         // dir_k² is affine in dir_k: the six squares go (nothing else in this design)
         assert_eq!(
@@ -217,7 +217,7 @@ fn model_files_store_no_factor_and_version_1_files_still_load() {
     // a version-1 file: the same model with each output's packed factor
     let mut v1: serde_json::Value = serde_json::from_str(&text).unwrap();
     v1["version"] = 1.into();
-    for (a, out) in model.outputs.iter().enumerate() {
+    for (a, out) in model.outputs().iter().enumerate() {
         let (c, _, _) = out.factors().unwrap();
         let packed: Vec<f64> = (0..c.nrows())
             .flat_map(|i| (0..=i).map(move |j| (i, j)))
@@ -231,7 +231,7 @@ fn model_files_store_no_factor_and_version_1_files_still_load() {
         "the factor dominates a v1 file"
     );
     let old = ErrorModel::from_json(&v1_text, "v1.json").unwrap();
-    assert_eq!(old.version, 2);
+    assert_eq!(old.version(), 2);
     let probe_q: Vec<Vec<f64>> =
         d.q.iter()
             .map(|q| q.iter().map(|v| v - 0.4).collect())
@@ -303,13 +303,13 @@ fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
             None,
         )
         .unwrap();
-        assert!(hj.reports[a].ln_psi < at_centre.data.ln_psi);
+        assert!(hj.reports()[a].ln_psi < at_centre.data().ln_psi);
         // GPS starts from the centre too, and more places
         assert!(
-            gps.reports[a].ln_psi <= hj.reports[a].ln_psi + 1e-3,
+            gps.reports()[a].ln_psi <= hj.reports()[a].ln_psi + 1e-3,
             "axis {a}: gps {} hj {}",
-            gps.reports[a].ln_psi,
-            hj.reports[a].ln_psi
+            gps.reports()[a].ln_psi,
+            hj.reports()[a].ln_psi
         );
     }
 }

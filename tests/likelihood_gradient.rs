@@ -10,6 +10,7 @@ use robokrige::kriging::{
     Workspace, trend_matrix,
 };
 use robokrige::model::ErrorModel;
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::space::Space;
 
 mod common;
@@ -37,7 +38,7 @@ fn ln_psi(prob: &KrigingProblem, z: &[f64], d: usize, ws: &mut Workspace) -> f64
 /// Checks every component of the analytic gradient of one output's problem
 /// against central differences at three ξ, with and without a nugget.
 fn check(out: &KrigingModel, y: &[f64], what: &str) {
-    let data = &out.data;
+    let data = &out.data();
     let x = &data.x_train;
     let d = data.theta.len();
     let inputs = TrainingInputs::new(x);
@@ -92,7 +93,7 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
 
 fn check_model(model: &ErrorModel, data: &Dataset, what: &str) {
     let errors = data.errors.as_ref().unwrap();
-    for (a, out) in model.outputs.iter().enumerate() {
+    for (a, out) in model.outputs().iter().enumerate() {
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         check(out, &y, &format!("{what} output {a}"));
     }
@@ -121,7 +122,7 @@ fn gradient_matches_central_differences_every_correlation_family() {
             ..quick()
         };
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
-        assert!(model.outputs.iter().all(|o| o.corr() == corr));
+        assert!(model.outputs().iter().all(|o| o.corr() == corr));
         check_model(&model, &data, corr.name());
     }
 }
@@ -130,9 +131,14 @@ fn gradient_matches_central_differences_every_correlation_family() {
 fn gradient_matches_central_differences_kinematic_trend() {
     let data = campaign(90);
     let robot = kinematics::preset("comau-nj220").unwrap();
-    let model = ErrorModel::fit_kinematic(&data, Space::Ejs, &quick(), &robot).unwrap();
+    let model = ErrorModelParams::new()
+        .kriging(quick())
+        .trend(TrendSpec::Kinematic(Box::new(robot)))
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
     assert!(matches!(
-        model.outputs[0].data.trend,
+        model.outputs()[0].data().trend,
         robokrige::kriging::Trend::Kinematic(_)
     ));
     check_model(&model, &data, "kinematic");
@@ -141,10 +147,30 @@ fn gradient_matches_central_differences_kinematic_trend() {
 #[test]
 fn gradient_matches_central_differences_fused_trend() {
     let data = campaign(80);
-    let (model, _) = ErrorModel::fit_pcc_pca(&data, Space::Ejs, &quick(), 0.1, 0.99).unwrap();
+    let (model, _) = pcc_pca(&data, &quick(), None);
     assert!(matches!(
-        model.outputs[0].data.trend,
+        model.outputs()[0].data().trend,
         robokrige::kriging::Trend::Fused(_)
     ));
     check_model(&model, &data, "fused");
+}
+
+/// PCC + PCA with the papers' constants, and its per-axis reports.
+fn pcc_pca(
+    data: &robokrige::dataset::Dataset,
+    opts: &robokrige::kriging::KrigingOptions,
+    robot: Option<&robokrige::kinematics::Robot>,
+) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
+    let model = robokrige::params::ErrorModelParams::new()
+        .kriging(opts.clone())
+        .trend(robokrige::methods::Method::EjsPca.trend(robot))
+        .check()
+        .unwrap()
+        .fit(data)
+        .unwrap();
+    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
+        panic!("no PCC + PCA report");
+    };
+    let reports = outputs.clone();
+    (model, reports)
 }

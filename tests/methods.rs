@@ -1,9 +1,9 @@
 //! The method registry: names, parsing, and the GA method's selection.
 
-use robokrige::basis::Selection;
 use robokrige::dataset::Dataset;
 use robokrige::kriging::TrendModel;
 use robokrige::methods::{ALL_METHODS, Method, parse_methods};
+use robokrige::selection::Selection;
 
 mod common;
 
@@ -29,27 +29,27 @@ fn names_parse_and_round_trip() {
 fn the_recommended_method_comes_first_with_a_nugget_and_the_family_by_cv() {
     assert_eq!(ALL_METHODS[0], Method::Recommended);
     assert_eq!(Method::parse("recommended").unwrap(), Method::Recommended);
-    let m = Method::Recommended.fit(&campaign(60), 1).unwrap();
-    assert!(m.options.nugget && m.options.corr_auto);
-    for (out, rep) in m.outputs.iter().zip(&m.reports) {
+    let m = fit(Method::Recommended, &campaign(60), 1);
+    assert!(m.options().nugget && m.options().corr_auto);
+    for (out, rep) in m.outputs().iter().zip(m.reports()) {
         assert!(rep.families.len() >= 2);
         assert!(rep.nugget > 0.0);
         assert!(rep.families.iter().any(|f| f.corr == out.corr()));
     }
     // the papers' methods keep interpolating
-    let paper = Method::EjsHj.fit(&campaign(60), 1).unwrap();
-    assert!(!paper.options.nugget && !paper.options.corr_auto);
+    let paper = fit(Method::EjsHj, &campaign(60), 1);
+    assert!(!paper.options().nugget && !paper.options().corr_auto);
 }
 
 #[test]
 fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
     let d = campaign(50);
-    let a = Method::EjsGa.fit(&d, 3).unwrap();
-    let b = Method::EjsGa.fit(&d, 3).unwrap();
+    let a = fit(Method::EjsGa, &d, 3);
+    let b = fit(Method::EjsGa, &d, 3);
     // same seed, same model (the reports differ only by their wall-clock seconds)
-    assert_eq!(a.outputs, b.outputs);
-    for (out, report) in a.outputs.iter().zip(&a.reports) {
-        let p = out.data.trend.len();
+    assert_eq!(a.outputs(), b.outputs());
+    for (out, report) in a.outputs().iter().zip(a.reports()) {
+        let p = out.data().trend.len();
         assert!(
             (1..=44).contains(&p),
             "{p} terms for 50 rows, 10 folds (cap 45 − 1)"
@@ -59,10 +59,10 @@ fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
     // the selection is recorded with the model: dependent candidates dropped
     // with a reason, the fitness history non-increasing (elitism), and the
     // selected names are the fitted trend's terms
-    let Some(Selection::Ga { outputs }) = &a.selection else {
-        panic!("GA selection not recorded: {:?}", a.selection);
+    let Some(Selection::Ga { outputs }) = &a.selection() else {
+        panic!("GA selection not recorded: {:?}", a.selection());
     };
-    for (sel, report) in outputs.iter().zip(&a.reports) {
+    for (sel, report) in outputs.iter().zip(a.reports()) {
         assert_eq!(sel.candidates, 91);
         // 50 rows: at most 50 independent columns, and every λ² is affine in λ
         assert!(sel.dropped.len() >= 91 - 50, "{}", sel.dropped.len());
@@ -90,4 +90,8 @@ fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
     }
     let text = serde_json::to_string(&a).unwrap();
     assert!(text.contains("\"selection\":{\"kind\":\"ga\""));
+}
+
+fn fit(m: Method, data: &robokrige::dataset::Dataset, seed: u64) -> robokrige::model::ErrorModel {
+    m.params(seed, false).check().unwrap().fit(data).unwrap()
 }

@@ -25,7 +25,7 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
     let w = ErrorModel::fit(&fold, Space::Ejs, &warm).unwrap();
     let c = ErrorModel::fit(&fold, Space::Ejs, &o).unwrap();
     for a in 0..3 {
-        let (rw, rc) = (&w.reports[a], &c.reports[a]);
+        let (rw, rc) = (&w.reports()[a], &c.reports()[a]);
         eprintln!(
             "axis {a}: warm ln ψ {:.5} ({} evals), cold {:.5} ({} evals)",
             rw.ln_psi, rw.evals, rc.ln_psi, rc.evals
@@ -35,7 +35,7 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
         assert_eq!(rw.starts, 1);
     }
     // the start is how the fit began, not part of the model
-    assert!(w.options.warm_start.is_empty());
+    assert!(w.options().warm_start.is_empty());
 }
 
 #[test]

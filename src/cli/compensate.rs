@@ -264,7 +264,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         let mut v = serde_json::json!({
             "targets": a.traj, "output": a.output, "model": a.model, "robot": robot.name,
             "space": match &model {
-                AnyModel::Kriging(m) => serde_json::to_value(m.space).expect("plain enum"),
+                AnyModel::Kriging(m) => serde_json::to_value(m.space()).expect("plain enum"),
                 AnyModel::Physics(_) => "physics".into(),
             }, "iterative": a.iterative, "converged": res.converged,
             "stop": res.stop, "unsettled": res.unsettled,

@@ -5,6 +5,7 @@ use super::progress::bar;
 use clap::Args;
 use clap::ValueEnum;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
+use robokrige::params::ErrorModelParams;
 use robokrige::plot::box_plot;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -108,7 +109,7 @@ pub fn run(a: CvArgs) -> Result<()> {
                         t.elapsed().as_secs_f64()
                     );
                     let t = std::time::Instant::now();
-                    let m = m.refit_at_hyperparameters(&data)?;
+                    let m = ErrorModelParams::fixed_from(m).check()?.fit(&data)?;
                     eprintln!(
                         "refit on all {} rows at those values in {:.1} s",
                         data.len(),
@@ -221,7 +222,10 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
             ))
         };
         let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-            let model = m.fit_with_progress(train, a.cv_seed, &ga_progress);
+            let model = m
+                .params(a.cv_seed, false)
+                .check()
+                .and_then(|p| p.fit_with_progress(train, &ga_progress));
             pb.inc(1);
             model
         });

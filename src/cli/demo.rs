@@ -118,8 +118,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
 
     // 1. models
     pb.set_message("fitting JS (js-hj) and EJS (ejs-gps) models on 300 poses");
-    let js = Method::JsHj.fit(&lhs, 1)?;
-    let ejs = Method::EjsGps.fit(&lhs, 1)?;
+    let fit = |m: Method, data: &Dataset| m.params(1, false).check()?.fit(data);
+    let js = fit(Method::JsHj, &lhs)?;
+    let ejs = fit(Method::EjsGps, &lhs)?;
     js.save(&out.join("models/js.json"))?;
     ejs.save(&out.join("models/ejs.json"))?;
     pb.inc(1);
@@ -128,7 +129,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let mut rows = Vec::new();
     for m in [Method::Recommended, Method::JsHj, Method::EjsHj] {
         pb.set_message(format!("10-fold CV of {} (refit in every fold)", m.name()));
-        let res = cross_validate_refit(&lhs, 10, 1, |train| m.fit(train, 1))?;
+        let res = cross_validate_refit(&lhs, 10, 1, |train| fit(m, train))?;
         rows.push(MethodRow {
             method: m,
             mode: "refit",
@@ -145,12 +146,14 @@ pub fn run(a: DemoArgs) -> Result<()> {
             ejs.clone()
         } else {
             let pbm = &pb;
-            m.fit_with_progress(&lhs, 1, &|axis, g, best| {
-                pbm.set_message(format!(
-                    "GA selection for {}: generation {g}, best CV RMSE {best:.4} mm",
-                    ["ex", "ey", "ez"][axis]
-                ))
-            })?
+            m.params(1, false)
+                .check()?
+                .fit_with_progress(&lhs, &|axis, g, best| {
+                    pbm.set_message(format!(
+                        "GA selection for {}: generation {g}, best CV RMSE {best:.4} mm",
+                        ["ex", "ey", "ez"][axis]
+                    ))
+                })?
         };
         let res = cross_validate_closed_form(&lhs, &model, 10, 1)?;
         rows.push(MethodRow {

@@ -6,7 +6,7 @@ use clap::Args;
 use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{
-    CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, with_columns,
+    CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, fit_with_effects,
 };
 use robokrige::features::Feature;
 use robokrige::kinematics;
@@ -188,15 +188,14 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let need_models = a.model_out.is_some() || a.traj.is_some();
     let mut compensation = None;
     if need_models {
-        let work = with_columns(&data, &d.extras)?;
-        let after = ErrorModel::fit_with_extras(&work, opts.space, &opts.kriging, &d.extras)?;
+        let after = fit_with_effects(&data, &opts, &d.extras)?;
         if let Some(p) = &a.model_out {
             after.save(p)?;
             say!("model with the added effects: {}", p.display());
         }
         if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
             // (--traj and --truth without --robot are rejected by clap)
-            let before = ErrorModel::fit_with_extras(&data, opts.space, &opts.kriging, &[])?;
+            let before = fit_with_effects(&data, &opts, &[])?;
             compensation = Some(compare_compensation(
                 robot, traj, truth, &before, &after, a.seed,
             )?);

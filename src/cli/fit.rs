@@ -3,6 +3,7 @@
 use clap::{Args, ValueEnum};
 use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
+use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::space::Space;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -181,22 +182,30 @@ impl ModelChoice {
         self.robot.as_ref().filter(|_| self.kinematic)
     }
 
-    /// Fit on `data` with this choice.
-    pub fn fit(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModel> {
-        let mut model = match self.kinematic_robot() {
-            Some(r) => ErrorModel::fit_kinematic(data, self.space, &self.opts, r)?,
-            None => ErrorModel::fit(data, self.space, &self.opts)?,
-        };
-        self.record(&mut model)?;
-        Ok(model)
+    /// The fit parameters of this choice.
+    pub fn params(&self) -> ErrorModelParams {
+        let p = self.with_robot(
+            ErrorModelParams::new()
+                .space(self.space)
+                .kriging(self.opts.clone()),
+        );
+        match self.kinematic_robot() {
+            Some(r) => p.trend(TrendSpec::Kinematic(Box::new(r.clone()))),
+            None => p,
+        }
     }
 
-    /// Record the robot in `model`, if one was given.
-    pub fn record(&self, model: &mut ErrorModel) -> Result<()> {
+    /// `params` recording the measured robot, if one was given.
+    pub fn with_robot(&self, params: ErrorModelParams) -> ErrorModelParams {
         match &self.robot {
-            Some(r) => model.record_robot(r),
-            None => Ok(()),
+            Some(r) => params.robot(r.clone()),
+            None => params,
         }
+    }
+
+    /// Fit on `data` with this choice.
+    pub fn fit(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModel> {
+        self.params().check()?.fit(data)
     }
 }
 
@@ -306,42 +315,25 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                     AXES[axis]
                 ));
             };
-            use robokrige::methods::{self as m, Method};
-            use robokrige::params::{ErrorModelParams, TrendSpec};
-            let model = match (choice.kinematic_robot(), method) {
+            use robokrige::methods::Method;
+            let params = match (choice.kinematic_robot(), method) {
                 (Some(robot), Method::EjsGa | Method::EjsPca) => {
-                    let kinematic = Some(Box::new(robot.clone()));
-                    let trend = if method == Method::EjsGa {
-                        TrendSpec::Ga {
-                            folds: m::PAPER_GA_FOLDS,
-                            kinematic,
-                        }
-                    } else {
-                        TrendSpec::PccPca {
-                            threshold: m::PAPER_PCC_THRESHOLD,
-                            variance_share: m::PAPER_VARIANCE_SHARE,
-                            kinematic,
-                        }
-                    };
-                    ErrorModelParams::new()
-                        .kriging(opts.clone())
-                        .trend(trend)
-                        .check()
-                        .and_then(|p| p.fit_with_progress(&data, &progress))
+                    Ok(choice.params().trend(method.trend(Some(robot))))
                 }
                 (Some(_), _) => Err(Error::InvalidParameter(
                     "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
                 )),
-                (None, _) => method.fit_with_progress(&data, opts.seed, &progress),
+                (None, _) => Ok(choice.with_robot(method.params(opts.seed, false))),
             };
+            let model = params
+                .and_then(ErrorModelParams::check)
+                .and_then(|p| p.fit_with_progress(&data, &progress));
             pb.finish_and_clear();
-            let mut model = model?;
-            choice.record(&mut model)?;
-            model
+            model?
         }
         None => choice.fit(&data)?,
     };
-    let space = model.space;
+    let space = model.space();
     let secs = t0.elapsed().as_secs_f64();
     for w in model.conditioning_warnings() {
         eprintln!("warning: {w}");
@@ -349,33 +341,37 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     model.save(&a.output)?;
     if let Some(path) = &a.json {
         let settings: serde_json::Map<String, serde_json::Value> =
-            settings(model.space, &model.options, choice.kinematic)
+            settings(model.space(), model.options(), choice.kinematic)
                 .into_iter()
                 .map(|(k, v)| (k.to_string(), v.into()))
                 .collect();
         let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
-            "settings": settings, "method": a.method, "robot": model.robot,
-            "seconds": secs, "outputs": model.reports, "selection": model.selection});
+            "settings": settings, "method": a.method, "robot": model.robot(),
+            "seconds": secs, "outputs": model.reports(), "selection": model.selection()});
         super::write_json(path, &v, "fit report")?;
     }
     say!(
         "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
-        if model.options.corr_auto {
-            let c: Vec<String> = model.outputs.iter().map(|o| o.corr().to_string()).collect();
+        if model.options().corr_auto {
+            let c: Vec<String> = model
+                .outputs()
+                .iter()
+                .map(|o| o.corr().to_string())
+                .collect();
             format!("correlation by CV: {}", c.join(" / "))
         } else {
-            format!("{} correlation", model.outputs[0].corr())
+            format!("{} correlation", model.outputs()[0].corr())
         },
-        if model.options.nugget {
+        if model.options().nugget {
             "nugget estimated"
         } else {
             "interpolating"
         },
         a.output.display()
     );
-    for (ax, r) in AXES.iter().zip(&model.reports) {
+    for (ax, r) in AXES.iter().zip(model.reports()) {
         if !r.families.is_empty() {
             let t: Vec<String> = r
                 .families
@@ -407,8 +403,8 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
 
 /// One line per output of what PCC+PCA or the GA selected.
 fn print_selection(model: &ErrorModel) {
-    use robokrige::basis::Selection;
-    match &model.selection {
+    use robokrige::selection::Selection;
+    match &model.selection() {
         Some(Selection::PccPca { outputs }) => {
             for (ax, r) in AXES.iter().zip(outputs) {
                 say!(
@@ -463,13 +459,13 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     robokrige::output::check_outputs(&[&a.model, &a.poses], &outputs)?;
     let model = ErrorModel::load(&a.model)?;
     let data = super::read_data(&a.poses)?;
-    if data.n_joints() != model.n_joints {
+    if data.n_joints() != model.n_joints() {
         return Err(Error::Input {
             source_name: a.poses.display().to_string(),
             message: format!(
                 "has {} joints but the model was fitted on {}",
                 data.n_joints(),
-                model.n_joints
+                model.n_joints()
             ),
         });
     }

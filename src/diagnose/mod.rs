@@ -276,6 +276,23 @@ fn cross_validated(
     Ok((cv_stats(res.residuals, extras), model))
 }
 
+/// The model of `data` with `extras` as inputs, fitted with the options of
+/// `o` (after a diagnosis: its improved model, `extras` = [`Diagnosis::extras`];
+/// with no extras: the model as it was).
+pub fn fit_with_effects(
+    data: &Dataset,
+    o: &DiagnoseOptions,
+    extras: &[Feature],
+) -> Result<ErrorModel> {
+    let work = with_columns(data, extras)?;
+    crate::params::ErrorModelParams::new()
+        .space(o.space)
+        .kriging(o.kriging.clone())
+        .extras(extras.to_vec())
+        .check()?
+        .fit(&work)
+}
+
 /// Run the loop on `data` (which needs `ex,ey,ez`). `progress` receives one
 /// line per step.
 ///

@@ -76,7 +76,7 @@ pub const KEEP_FACTOR_MAX_M: usize = 4096;
 #[serde(try_from = "KrigingModelData", into = "KrigingModelData")]
 pub struct KrigingModel {
     /// The saved part: trend, ξ, ν, training inputs, β, γ.
-    pub data: KrigingModelData,
+    pub(crate) data: KrigingModelData,
     g: Mat<f64>,
     /// Training inputs, dimension-major (vectorised correlation vectors).
     xt: TrainingInputs,
@@ -105,6 +105,12 @@ impl TryFrom<KrigingModelData> for KrigingModel {
 }
 
 impl KrigingModel {
+    /// The saved part: trend, ξ, ν, training inputs, β, γ (read-only: the
+    /// cached factors are derived from it).
+    pub fn data(&self) -> &KrigingModelData {
+        &self.data
+    }
+
     /// Assemble a model after checking sizes, ranges and finiteness; with
     /// `trend_from_file` also the trend's structure and its values at the
     /// training inputs (a fit builds its trend itself and has just

@@ -216,7 +216,11 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
 
     step(2, "Kriging JS");
     let quiet = &|_: usize, _: usize, _: f64| {};
-    let fit = |m: Method, d: &Dataset| m.fit_with(d, opts.seed, opts.nugget, quiet);
+    let fit = |m: Method, d: &Dataset| {
+        m.params(opts.seed, opts.nugget)
+            .check()?
+            .fit_with_progress(d, quiet)
+    };
     let js = fit(opts.js, &train)?;
     step(3, "Kriging EJS");
     let ejs = fit(opts.ejs, &train)?;

@@ -1,9 +1,3 @@
-//! Basis (trend) selection for universal Kriging.
-//!
-//! Candidates: all monomials of degree ≤ η in the 2n normalised EJS variables
-//! (seed 003 eq 15; [`Monomials::full`]), linearly dependent ones removed
-//! ([`independent_columns`]).
-//!
 //! **PCC + PCA fusion** (seed 003 eqs 16–20), per output: rank the candidates
 //! by |Pearson r| with the response (eq 16), keep those above a threshold T,
 //! z-score them, eigen-decompose their covariance (eq 17), and keep the
@@ -13,149 +7,12 @@
 //! term is kept in front (the components have zero training mean, and the
 //! Kriging mean still needs one).
 
-pub use crate::kriging::FusedBasis;
-use crate::kriging::{Monomials, Trend, TrendModel, independent_columns, trend_matrix};
+use super::screen::{CandidateSet, Dropped, screen_candidates};
+use super::{BasisSelector, Selection, SelectionProblem};
+use crate::kriging::{FusedBasis, Trend, trend_matrix};
 use crate::{Error, Result};
-use faer::linalg::solvers::SolveLstsq;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
-
-/// A candidate removed before selection, and why.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Dropped {
-    /// The candidate term's name, e.g. a monomial of the input names.
-    pub term: String,
-    /// Why it was dropped: an exact duplicate, zero on every training row, or a
-    /// linear combination of the kept terms it names.
-    pub reason: String,
-}
-
-/// The candidates that survive screening on the training inputs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CandidateScreen {
-    /// Number of candidates before screening (91 for 12 inputs, η = 2).
-    pub total: usize,
-    /// Indices (into the candidate list) of the linearly independent ones.
-    #[serde(skip)]
-    pub kept: Vec<usize>,
-    /// Candidates removed as linearly dependent, with reasons, in candidate order.
-    pub dropped: Vec<Dropped>,
-}
-
-/// Screen `candidates` at the training inputs `x`: in candidate order, a term
-/// is dropped when its column is an exact duplicate of a kept one, or lies
-/// (to relative tolerance 1e-9) in the span of the kept columns — e.g. `λ²`,
-/// which is affine in `λ` because λ = ±1 (seed 003 eq 15 discussion). The
-/// reason names the terms it depends on.
-pub fn screen_candidates(
-    candidates: &dyn TrendModel,
-    x: &[Vec<f64>],
-    names: &[String],
-) -> CandidateScreen {
-    let f = trend_matrix(candidates, x);
-    let (kept, dropped_idx) = independent_columns(&f, 1e-9);
-    let m = f.nrows();
-    let col = |j: usize| (0..m).map(|i| f[(i, j)]).collect::<Vec<f64>>();
-    let name = |j: usize| candidates.term_name(j, names);
-    let basis = Mat::<f64>::from_fn(m, kept.len(), |i, k| f[(i, kept[k])]);
-    let qr = (!kept.is_empty()).then(|| basis.qr());
-    let dropped = dropped_idx
-        .into_iter()
-        .map(|j| {
-            let cj = col(j);
-            let reason = if let Some(&k) = kept.iter().find(|&&k| col(k) == cj) {
-                format!("exact duplicate of {}", name(k))
-            } else if cj.iter().all(|v| *v == 0.0) {
-                "zero on every training row".to_string()
-            } else if let Some(qr) = &qr {
-                let rhs = Mat::<f64>::from_fn(m, 1, |i, _| cj[i]);
-                let coef = qr.solve_lstsq(&rhs);
-                let big = (0..kept.len())
-                    .map(|k| coef[(k, 0)].abs())
-                    .fold(0.0, f64::max);
-                let support: Vec<String> = (0..kept.len())
-                    .filter(|&k| coef[(k, 0)].abs() > 1e-6 * big)
-                    .map(|k| name(kept[k]))
-                    .collect();
-                let shown = support
-                    .iter()
-                    .take(4)
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                let more = if support.len() > 4 { ", …" } else { "" };
-                format!("linear combination of {shown}{more} on the training rows")
-            } else {
-                "no independent terms to compare with".to_string()
-            };
-            Dropped {
-                term: name(j),
-                reason,
-            }
-        })
-        .collect();
-    CandidateScreen {
-        total: candidates.len(),
-        kept,
-        dropped,
-    }
-}
-
-/// GA basis selection for one output (seed 004 §III.B).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GaSelection {
-    /// Candidates before screening, and those removed as dependent.
-    pub candidates: usize,
-    /// Candidates removed as linearly dependent before the GA ran, with reasons.
-    pub dropped: Vec<Dropped>,
-    /// Size cap C ≤ (K−1)m/K on the selected terms.
-    pub size_cap: usize,
-    /// Selected terms (the constant always first).
-    pub selected: Vec<String>,
-    /// Best fitness: closed-form K-fold CV RMSE (mm, seed 004 eq 17).
-    pub cv_rmse_mm: f64,
-    /// Best fitness after each generation (seed 004 Fig 10).
-    pub history: Vec<f64>,
-    /// Generations run (the GA stops on stall or at its generation cap).
-    pub generations: usize,
-    /// Distinct chromosomes (term subsets) whose fitness was evaluated.
-    pub evaluations: usize,
-}
-
-/// What a method's basis selection did, per output axis; saved with the model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case")]
-pub enum Selection {
-    /// PCC + PCA fusion (seed 003 eqs 16–20).
-    PccPca {
-        /// One report per output axis (x, y, z).
-        outputs: Vec<PccPcaReport>,
-    },
-    /// GA subset selection (seed 004 §III.B).
-    Ga {
-        /// One selection per output axis (x, y, z).
-        outputs: Vec<GaSelection>,
-    },
-}
-
-/// A candidate set PCC + PCA can draw from: monomials, or monomials plus the
-/// kinematic-error rows ([`crate::kriging::KinematicTrend`]).
-pub trait CandidateSet: TrendModel {
-    /// The candidates at `keep`, as a trend.
-    fn pick(&self, keep: &[usize]) -> Trend;
-}
-
-impl CandidateSet for Monomials {
-    fn pick(&self, keep: &[usize]) -> Trend {
-        Trend::Monomials(self.subset(keep))
-    }
-}
-
-impl CandidateSet for Trend {
-    fn pick(&self, keep: &[usize]) -> Trend {
-        self.subset(keep)
-    }
-}
 
 /// What PCC + PCA did, for the report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -283,4 +140,37 @@ pub fn pcc_pca(
         components: n3,
     };
     Ok((basis, report))
+}
+
+/// The PCC + PCA selector of seed 003 (EJS&PCA): per output,
+/// [`pcc_pca`] of the candidates with at most m/2 terms, the fused basis as
+/// the trend.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PccPca {
+    /// |PCC| at or below which a candidate is dropped (eq 16; seed 003: 0.1).
+    pub threshold: f64,
+    /// Cumulative variance share the kept components explain (eq 19; 0.99).
+    pub variance_share: f64,
+}
+
+impl BasisSelector for PccPca {
+    fn select(&self, p: &SelectionProblem) -> Result<([Trend; 3], Selection)> {
+        let mut trends = Vec::with_capacity(3);
+        let mut reports = Vec::with_capacity(3);
+        for a in 0..3 {
+            let (basis, report) = pcc_pca(
+                &p.candidates[a],
+                p.x,
+                &p.y[a],
+                self.threshold,
+                self.variance_share,
+                p.x.len() / 2,
+                p.names,
+            )?;
+            trends.push(Trend::Fused(basis));
+            reports.push(report);
+        }
+        let trends: [Trend; 3] = trends.try_into().expect("three outputs");
+        Ok((trends, Selection::PccPca { outputs: reports }))
+    }
 }

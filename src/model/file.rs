@@ -1,0 +1,130 @@
+//! The model file: versioned JSON, written atomically, checked on load.
+//! Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
+//! first needed); version 1 files, which store it, still load.
+
+use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION, MODEL_VERSION_MIN};
+use crate::{Error, Result};
+use std::path::Path;
+
+impl ErrorModel {
+    /// Write as JSON, atomically. The text is loaded back first: a model
+    /// that would not load (issue 18: a `y_std` that overflowed to `null`)
+    /// is never written.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = self.to_json()?;
+        Self::from_json(&text, &path.display().to_string()).map_err(|e| {
+            Error::Numerical(format!(
+                "refusing to write {}: the model would not load back ({e})",
+                path.display()
+            ))
+        })?;
+        crate::output::write_text(path, &text)
+    }
+
+    /// The model file's JSON text.
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string(self).map_err(|e| Error::Json {
+            context: "model".into(),
+            source: e,
+        })
+    }
+
+    /// The ranges of a loaded model's values (issue 18 §4: a model file
+    /// with ξ < 0, an input scale of 0 or `y_std = 1e308` predicted NaN or
+    /// constants). Shapes are checked by the caller; ξ, ν, σ² and
+    /// finiteness by [`KrigingModel`]'s own loader.
+    fn check_values(&self) -> std::result::Result<(), String> {
+        use crate::dataset::{MAX_ABS_ERROR_MM, MAX_ABS_JOINT};
+        if self.n_joints == 0 {
+            return Err("n_joints is 0".into());
+        }
+        self.input_norm
+            .validate(crate::dataset::MAX_ABS_COVARIATE)
+            .map_err(|why| format!("input_norm: {why}"))?;
+        if !self.joint_range.is_empty() && self.joint_range.len() != self.n_joints {
+            return Err(format!(
+                "joint_range has {} entries for {} joints",
+                self.joint_range.len(),
+                self.n_joints
+            ));
+        }
+        for (j, &(lo, hi)) in self.joint_range.iter().enumerate() {
+            if !(lo.abs() <= MAX_ABS_JOINT && hi.abs() <= MAX_ABS_JOINT && lo <= hi) {
+                return Err(format!("joint_range[{j}] = ({lo}, {hi}) is not a range"));
+            }
+        }
+        for (axis, o) in AXES.iter().zip(&self.outputs) {
+            let (mean, scale) = o.output_scale();
+            if mean.is_nan() || mean.abs() > MAX_ABS_ERROR_MM {
+                return Err(format!(
+                    "output {axis}: y_mean = {mean:e} mm is not a TCP error"
+                ));
+            }
+            if !(scale > 0.0 && scale <= 2.0 * MAX_ABS_ERROR_MM) {
+                return Err(format!(
+                    "output {axis}: y_std = {scale:e} mm is not a scale of TCP errors"
+                ));
+            }
+            if o.data.x_train.iter().flatten().any(|v| v.abs() > 1e6) {
+                return Err(format!(
+                    "output {axis}: a normalised training input is beyond ±1e6"
+                ));
+            }
+        }
+        self.options.validate().map_err(|e| format!("options: {e}"))
+    }
+
+    /// Read a model saved by [`ErrorModel::save`], checking format and version.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parse a saved model from JSON text (`source_name` for messages).
+    pub fn from_json(text: &str, source_name: &str) -> Result<Self> {
+        let head: serde_json::Value = serde_json::from_str(text).map_err(|e| Error::Json {
+            context: source_name.into(),
+            source: e,
+        })?;
+        let format = head.get("format").and_then(|v| v.as_str()).unwrap_or("");
+        let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
+        let known = u64::from(MODEL_VERSION_MIN)..=u64::from(MODEL_VERSION);
+        if format != MODEL_FORMAT || !known.contains(&version) {
+            return Err(Error::Input {
+                source_name: source_name.into(),
+                message: format!(
+                    "not a robokrige error model of version {MODEL_VERSION_MIN}–{MODEL_VERSION} (found format '{format}', version {version}); refit it with this version"
+                ),
+            });
+        }
+        let mut model: ErrorModel = serde_json::from_value(head).map_err(|e| Error::Json {
+            context: source_name.into(),
+            source: e,
+        })?;
+        let dim = model
+            .space
+            .encoded_dim(model.n_joints, &model.options.periodic)
+            + model.extras.iter().map(|f| f.names().len()).sum::<usize>();
+        let extras_ok = model
+            .extras
+            .iter()
+            .all(|f| f.validate(model.n_joints).is_ok());
+        if model.outputs.len() != 3
+            || model.input_norm.mean.len() != dim
+            || model.outputs.iter().any(|o| o.dim() != dim)
+            || !extras_ok
+        {
+            return Err(Error::Input {
+                source_name: source_name.into(),
+                message: "model file is inconsistent (outputs or input dimension)".into(),
+            });
+        }
+        model.check_values().map_err(|why| Error::Input {
+            source_name: source_name.into(),
+            message: format!("model file holds an impossible value: {why}"),
+        })?;
+        // held in memory (and saved again) in the current form
+        model.version = MODEL_VERSION;
+        Ok(model)
+    }
+}

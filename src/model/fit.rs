@@ -1,0 +1,249 @@
+//! Fitting an [`ErrorModel`]: the three outputs' universal-Kriging fits on
+//! one input map. `params::ValidErrorModelParams::fit` drives it; the
+//! selections choose the trends it is given.
+
+use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION, SOFTWARE};
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use crate::inputs::InputMap;
+use crate::kriging::{
+    FitReport, KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_from,
+};
+use crate::selection::{KINEMATIC_AXIS_TOL, kinematic_trend_set_in};
+use crate::space::Space;
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// Per joint `(min, max)` of the rows.
+fn joint_range(q: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let n = q.first().map_or(0, Vec::len);
+    (0..n)
+        .map(|j| {
+            q.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+                    (lo.min(r[j]), hi.max(r[j]))
+                })
+        })
+        .collect()
+}
+
+/// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`]),
+/// refused with [`Error::Memory`] when its estimated peak exceeds the
+/// memory limit ([`crate::memory`]); the message says how to fit the most
+/// rows that fit: `subset(rows)` (e.g. "`--rows 5000`"), or raising the limit.
+pub fn check_fit_memory(
+    rows: usize,
+    optimizer: crate::kriging::OptimizerKind,
+    subset: impl Fn(usize) -> String,
+) -> Result<crate::kriging::FitPlan> {
+    let threads = rayon::current_num_threads();
+    let plan = crate::kriging::FitPlan::new(rows, 3, optimizer, threads);
+    if let Some((limit, _)) = crate::memory::limit() {
+        let fits = crate::kriging::FitPlan::max_rows(limit, 3, optimizer, threads);
+        crate::memory::check(
+            &format!("a fit of {rows} rows"),
+            plan.bytes,
+            &format!(
+                "fit at most {fits} rows ({}), or raise {}",
+                subset(fits),
+                crate::memory::LIMIT_ENV
+            ),
+        )?;
+    }
+    Ok(plan)
+}
+
+/// Fit the three outputs of `data` on the input map `map` (fitted on
+/// `data`, whose normalised inputs are `x`), output `a` with `trends[a]`.
+/// Outputs (and the optimiser's starts) run in parallel, unless the
+/// memory plan says one output at a time.
+pub(crate) fn fit_outputs(
+    data: &Dataset,
+    map: &InputMap,
+    x: &[Vec<f64>],
+    opts: &KrigingOptions,
+    trends: &[Trend; 3],
+) -> Result<ErrorModel> {
+    opts.validate()?;
+    let errors = data.errors_or_err()?;
+    if data.len() < 3 {
+        return Err(Error::Input {
+            source_name: data.source.clone(),
+            message: format!(
+                "{} rows are too few to fit a model (need at least 3)",
+                data.len()
+            ),
+        });
+    }
+    let n = data.n_joints();
+    let corr_dims = map.corr_dims();
+    let inputs = TrainingInputs::new(
+        &x.iter()
+            .map(|r| r[..corr_dims].to_vec())
+            .collect::<Vec<_>>(),
+    );
+    if !matches!(opts.warm_start.len(), 0 | 3) {
+        return Err(Error::InvalidParameter(format!(
+            "warm starts must be one per output (3), not {}",
+            opts.warm_start.len()
+        )));
+    }
+    let plan = check_fit_memory(data.len(), opts.optimizer, |n| {
+        format!("a subset of {n} rows")
+    })?;
+    let fit_axis = |a: usize| {
+        let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+        let fit = if opts.corr_auto {
+            crate::kriging::fit_output_auto
+        } else {
+            fit_output_from
+        };
+        fit(
+            x,
+            &inputs,
+            &y,
+            &trends[a],
+            map.names(),
+            opts,
+            opts.warm_start.get(a),
+        )
+    };
+    // large campaigns: one output at a time, one m × m factor in memory
+    let fits: Vec<Result<(KrigingModel, FitReport)>> = if plan.sequential_outputs {
+        (0..3).map(fit_axis).collect()
+    } else {
+        (0..3).into_par_iter().map(fit_axis).collect()
+    };
+    let mut outputs = Vec::with_capacity(3);
+    let mut reports = Vec::with_capacity(3);
+    for (a, f) in fits.into_iter().enumerate() {
+        let (m, r) = f.map_err(|e| Error::Axis {
+            axis: AXES[a],
+            source: Box::new(e),
+        })?;
+        outputs.push(m);
+        reports.push(r);
+    }
+    Ok(ErrorModel {
+        format: MODEL_FORMAT.into(),
+        version: MODEL_VERSION,
+        space: map.space(),
+        n_joints: n,
+        input_names: map.names().to_vec(),
+        input_norm: map.normalizer().clone(),
+        // a warm start is how this fit began, not what the model is
+        options: KrigingOptions {
+            warm_start: Vec::new(),
+            ..opts.clone()
+        },
+        outputs,
+        reports,
+        extras: map.extras().to_vec(),
+        selection: None,
+        joint_range: joint_range(&data.q),
+        robot: None,
+        software: SOFTWARE.into(),
+    })
+}
+
+impl ErrorModel {
+    /// Fit with extra inputs `extras` after `[θ, λ]`: each gets a linear
+    /// trend term next to the options' trend in `[θ, λ]`, and those that are
+    /// not [`Feature::trend_only`] are also input dimensions of the
+    /// correlation. The model stores the extras with the correlation inputs
+    /// first (the order of its input columns).
+    pub(crate) fn fit_with_extras(
+        data: &Dataset,
+        space: Space,
+        opts: &KrigingOptions,
+        extras: &[Feature],
+    ) -> Result<Self> {
+        let mut extras = extras.to_vec();
+        extras.sort_by_key(Feature::trend_only);
+        let extras = &extras[..];
+        let d0 = space.encoded_dim(data.n_joints(), &opts.periodic);
+        let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
+        let mut terms = opts.trend.monomials(d0);
+        terms.dim = d0 + extra_dims;
+        for e in &mut terms.exponents {
+            e.resize(d0 + extra_dims, 0);
+        }
+        for k in 0..extra_dims {
+            let mut e = vec![0u8; d0 + extra_dims];
+            e[d0 + k] = 1;
+            terms.exponents.push(e);
+        }
+        let trend = Trend::from(terms);
+        let (map, x) = InputMap::fit(data, space, &opts.periodic, extras)?;
+        fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
+    }
+
+    /// Refit on `data` at this model's correlation parameters ξ and nugget
+    /// (no search): the way to scale to thousands of rows when the O(m³)
+    /// search is too slow — choose ξ on a subset, then one factorisation on
+    /// everything (issue 10). Same space, options and kind of trend; a
+    /// kinematic trend is rebuilt for `data` (its parameters and the input
+    /// normalisation are re-derived), a polynomial one reused. The reports
+    /// keep the subset's search figures (ln ψ, evaluations).
+    pub(crate) fn refit_at_hyperparameters(&self, data: &Dataset) -> Result<Self> {
+        if !self.extras.is_empty() {
+            return Err(Error::InvalidParameter(
+                "refit at fixed hyperparameters does not support extra inputs".into(),
+            ));
+        }
+        let t0 = std::time::Instant::now();
+        let errors = data.errors_or_err()?;
+        self.check_rows(&data.q, &data.dir)?;
+        let (map, x) = InputMap::fit(data, self.space, &self.options.periodic, &[])?;
+        let trends: [Trend; 3] = match &self.outputs[0].data.trend {
+            Trend::Kinematic(k) => kinematic_trend_set_in(
+                data,
+                &map,
+                &x,
+                self.options.trend,
+                &k.robot,
+                Some(KINEMATIC_AXIS_TOL),
+            )?,
+            _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
+        };
+        let input_norm = map.normalizer().clone();
+        let inputs = TrainingInputs::new(&x);
+        let fits: Vec<Result<KrigingModel>> = (0..3)
+            .into_par_iter()
+            .map(|a| {
+                let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+                let r = &self.reports[a];
+                let at = crate::kriging::Hyperparameters {
+                    corr: self.outputs[a].corr(),
+                    theta: &r.theta,
+                    nugget: r.nugget,
+                    min_jitter: self.options.min_jitter,
+                };
+                crate::kriging::fit_output_with(&x, &inputs, &y, &trends[a], &at)
+            })
+            .collect();
+        let mut outputs = Vec::with_capacity(3);
+        for (a, f) in fits.into_iter().enumerate() {
+            outputs.push(f.map_err(|e| Error::Axis {
+                axis: AXES[a],
+                source: Box::new(e),
+            })?);
+        }
+        let secs = t0.elapsed().as_secs_f64();
+        let reports = self
+            .reports
+            .iter()
+            .map(|r| FitReport {
+                seconds: secs,
+                ..r.clone()
+            })
+            .collect();
+        Ok(ErrorModel {
+            input_norm,
+            outputs,
+            reports,
+            joint_range: joint_range(&data.q),
+            ..self.clone()
+        })
+    }
+}

@@ -1,0 +1,360 @@
+//! The TCP error model: one universal-Kriging model per output axis
+//! (ex, ey, ez), each with its own ξ and trend (DESIGN.md §3), over JS or EJS
+//! inputs z-scored by one shared [`Normalizer`].
+//!
+//! `fit` returns a model, `predict` is pure; `save`/`load` write a versioned
+//! JSON that predicts bit-identically after loading.
+
+mod coverage;
+mod file;
+mod fit;
+mod record;
+
+pub use coverage::{CoverageIssue, CoverageWarning, TREND_SIGMAS, UNCERTAIN_SHARE};
+pub use fit::check_fit_memory;
+pub(crate) use fit::fit_outputs;
+pub use record::RobotRecord;
+
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use crate::inputs::InputMap;
+use crate::kriging::{FitReport, KrigingModel, KrigingOptions, Pred, Trend};
+use crate::selection::Selection;
+use crate::space::{Normalizer, Space};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Format tag and version of saved models.
+pub const MODEL_FORMAT: &str = "robokrige-error-model";
+/// Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
+/// first needed). Version 1 files, which store it, still load.
+pub const MODEL_VERSION: u32 = 2;
+/// Oldest model-file version that loads.
+pub const MODEL_VERSION_MIN: u32 = 1;
+
+/// Output axis names.
+pub const AXES: [&str; 3] = ["ex", "ey", "ez"];
+
+/// A fitted TCP error model δ̂(s) = (δ̂x, δ̂y, δ̂z).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ErrorModel {
+    /// File format tag, [`MODEL_FORMAT`].
+    pub(crate) format: String,
+    /// File format version, [`MODEL_VERSION_MIN`]..=[`MODEL_VERSION`].
+    pub(crate) version: u32,
+    /// JS `[θ]` or EJS `[θ, λ]` (seed 003 eq 5).
+    pub(crate) space: Space,
+    /// Joints of the robot (columns q1..qN of the campaign).
+    pub(crate) n_joints: usize,
+    /// Name of every input column, space encoding first, then the extras.
+    pub(crate) input_names: Vec<String>,
+    /// Z-score of the input columns, fitted on the training rows.
+    pub(crate) input_norm: Normalizer,
+    /// The options the model was fitted with (periodic joints included).
+    pub(crate) options: KrigingOptions,
+    /// One model per axis, in [`AXES`] order.
+    pub(crate) outputs: Vec<KrigingModel>,
+    /// One fit report per axis (ln ψ, ξ, nugget, evaluations, time).
+    pub(crate) reports: Vec<FitReport>,
+    /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) extras: Vec<Feature>,
+    /// Basis selection that chose the trends (PCC+PCA or GA), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) selection: Option<Selection>,
+    /// Joint range `(min, max)` of the training campaign, degrees, per joint
+    /// (empty in files written before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) joint_range: Vec<(f64, f64)>,
+    /// The robot the campaign was measured on, when the fit was told
+    /// ([`ErrorModel::record_robot`]; the kinematic trend records it itself).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) robot: Option<RobotRecord>,
+    /// The robokrige version that fitted the model (empty in older files).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub(crate) software: String,
+}
+
+/// This crate's version, recorded in every model it fits.
+pub const SOFTWARE: &str = concat!("robokrige ", env!("CARGO_PKG_VERSION"));
+
+/// Predicted errors with their standard deviations (√MSE), mm.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// Predicted error `[δx, δy, δz]` per point, mm.
+    pub mean: Vec<[f64; 3]>,
+    /// Its standard deviation per axis, mm.
+    pub std: Vec<[f64; 3]>,
+}
+
+impl ErrorModel {
+    /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
+    /// with the given options' trend. Outputs and starts run in parallel.
+    ///
+    /// ```
+    /// use robokrige::{dataset::read_csv, kriging::KrigingOptions, model::ErrorModel, space::Space};
+    /// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+    /// let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+    /// let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
+    /// assert!(model.options().nugget); // tracker data is noisy
+    /// # Ok::<(), robokrige::Error>(())
+    /// ```
+    pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
+        let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+        let trend: Trend = opts.trend.trend(map.dim());
+        fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
+    }
+
+    /// File format tag, [`MODEL_FORMAT`].
+    pub fn format(&self) -> &str {
+        &self.format
+    }
+
+    /// File format version ([`MODEL_VERSION`] once loaded).
+    pub fn version(&self) -> u32 {
+        self.version
+    }
+
+    /// JS `[θ]` or EJS `[θ, λ]` (seed 003 eq 5).
+    pub fn space(&self) -> Space {
+        self.space
+    }
+
+    /// Joints of the robot (columns q1..qN of the campaign).
+    pub fn n_joints(&self) -> usize {
+        self.n_joints
+    }
+
+    /// Name of every input column, space encoding first, then the extras.
+    pub fn input_names(&self) -> &[String] {
+        &self.input_names
+    }
+
+    /// Z-score of the input columns, fitted on the training rows.
+    pub fn input_norm(&self) -> &Normalizer {
+        &self.input_norm
+    }
+
+    /// The options the model was fitted with (periodic joints included).
+    pub fn options(&self) -> &KrigingOptions {
+        &self.options
+    }
+
+    /// The three output models, in [`AXES`] order.
+    pub fn outputs(&self) -> &[KrigingModel] {
+        &self.outputs
+    }
+
+    /// The three fit reports (ln ψ, ξ, nugget, evaluations, time), in
+    /// [`AXES`] order.
+    pub fn reports(&self) -> &[FitReport] {
+        &self.reports
+    }
+
+    /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
+    pub fn extras(&self) -> &[Feature] {
+        &self.extras
+    }
+
+    /// The basis selection that chose the trends (PCC+PCA or GA), if any.
+    pub fn selection(&self) -> Option<&Selection> {
+        self.selection.as_ref()
+    }
+
+    /// Joint range `(min, max)` of the training campaign per joint, degrees
+    /// (empty for files written before it was recorded).
+    pub fn joint_range(&self) -> &[(f64, f64)] {
+        &self.joint_range
+    }
+
+    /// The robot the campaign was measured on, when the fit was told.
+    pub fn robot(&self) -> Option<&RobotRecord> {
+        self.robot.as_ref()
+    }
+
+    /// The robokrige version that fitted the model (empty in older files).
+    pub fn software(&self) -> &str {
+        &self.software
+    }
+
+    /// Training rows m.
+    pub fn n_train(&self) -> usize {
+        self.outputs.first().map_or(0, |o| o.data.x_train.len())
+    }
+
+    /// This model's hyperparameters as warm starts of a refit on similar data
+    /// ([`KrigingOptions::warm_start`]), one per output.
+    pub fn warm_starts(&self) -> Vec<crate::kriging::WarmStart> {
+        let d = self.correlation_dims();
+        self.reports
+            .iter()
+            .map(|r| crate::kriging::WarmStart::of(r, d))
+            .collect()
+    }
+
+    /// Input dimensions that enter the correlation: `[θ, λ]` encoded and the
+    /// extras that are not trend-only (those come first, see
+    /// `params::ErrorModelParams::extras`).
+    pub fn correlation_dims(&self) -> usize {
+        self.input_names.len() - crate::features::trend_only_dims(&self.extras)
+    }
+
+    /// Warnings about the conditioning of the fit: an output whose correlation
+    /// matrix needed more diagonal jitter than DACE's `(10 + m)·eps` to be
+    /// factorised (near-duplicate poses, very long correlation lengths).
+    pub fn conditioning_warnings(&self) -> Vec<String> {
+        self.reports
+            .iter()
+            .zip(AXES)
+            .filter_map(|(r, ax)| {
+                let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+                let base = self
+                    .options
+                    .min_jitter
+                    .unwrap_or((10.0 + m as f64) * f64::EPSILON);
+                (r.jitter > 1.5 * base).then(|| {
+                    format!(
+                        "{ax}: the correlation matrix was numerically singular (near-duplicate poses?); jitter {:.1e} was added to its diagonal",
+                        r.jitter
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// Predict at poses `q` approached in directions `dir` (ignored in JS).
+    /// Extra inputs are computed from the pose sequence
+    /// ([`Feature::columns_from_poses`]).
+    pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
+        self.check_rows(q, dir)?;
+        self.predict_inputs(&self.input_map().encode(q, dir)?)
+    }
+
+    /// The map from poses to this model's normalised inputs.
+    pub fn input_map(&self) -> InputMap {
+        InputMap::from_parts(
+            self.space,
+            self.n_joints,
+            &self.options.periodic,
+            &self.extras,
+            &self.input_names,
+            &self.input_norm,
+        )
+    }
+
+    fn predict_inputs(&self, s: &[Vec<f64>]) -> Result<Prediction> {
+        // the first standard deviation needs each output's m × m factor,
+        // which then stays with the model: known before it is allocated
+        let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+        let missing = self.outputs.iter().filter(|o| !o.has_factors()).count() as u64;
+        if missing > 0 {
+            crate::memory::check(
+                &format!(
+                    "prediction standard deviations of a {m}-row model ({missing} m × m factor(s))"
+                ),
+                missing * crate::memory::square_bytes(m),
+                &format!(
+                    "predict the mean only (`compensate` does), or fit on fewer rows; or raise {}",
+                    crate::memory::LIMIT_ENV
+                ),
+            )?;
+        }
+        let per_axis: Vec<Vec<Pred>> = if m > crate::kriging::model::KEEP_FACTOR_MAX_M {
+            // large models: one factorisation at a time, each multi-threaded
+            self.outputs
+                .iter()
+                .map(|o| o.predict(s))
+                .collect::<Result<_>>()?
+        } else {
+            self.outputs
+                .par_iter()
+                .map(|o| o.predict(s))
+                .collect::<Result<_>>()?
+        };
+        let mut mean = vec![[0.0; 3]; s.len()];
+        let mut std = vec![[0.0; 3]; s.len()];
+        for (a, preds) in per_axis.iter().enumerate() {
+            for (k, p) in preds.iter().enumerate() {
+                mean[k][a] = p.mean;
+                std[k][a] = p.mse.sqrt();
+            }
+        }
+        Ok(Prediction { mean, std })
+    }
+
+    /// How far (mm, 3D) the predicted error at joints `q` moves when every
+    /// joint's direction `dir` is reversed: what an assumed λ can be worth
+    /// (0 in joint space, which ignores λ).
+    pub fn direction_sensitivity(&self, q: &[f64], dir: &[f64]) -> Result<f64> {
+        if self.space == Space::Js {
+            return Ok(0.0);
+        }
+        let flipped: Vec<f64> = dir.iter().map(|v| -v).collect();
+        let p = self.predict_mean(&[q.to_vec(), q.to_vec()], &[dir.to_vec(), flipped])?;
+        Ok((0..3)
+            .map(|k| (p[0][k] - p[1][k]).powi(2))
+            .sum::<f64>()
+            .sqrt())
+    }
+
+    /// The predicted error only (no standard deviation), mm: the fast path
+    /// for compensation.
+    ///
+    /// ```
+    /// # use robokrige::{dataset::read_csv, kriging::KrigingOptions, model::ErrorModel, space::Space};
+    /// # let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+    /// # let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
+    /// # let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
+    /// // joints (degrees) and directions λ = ±1 of two commanded poses
+    /// let q = vec![vec![5.0, -10.0, 20.0, 0.0, 30.0, 0.0]; 2];
+    /// let dir = vec![vec![1.0; 6], vec![-1.0; 6]];
+    /// let errors = model.predict_mean(&q, &dir)?; // [ex, ey, ez] in mm per pose
+    /// assert_eq!(errors.len(), 2);
+    /// # Ok::<(), robokrige::Error>(())
+    /// ```
+    pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.check_rows(q, dir)?;
+        let s = self.input_map().encode(q, dir)?;
+        let per_axis: Vec<Vec<f64>> = self
+            .outputs
+            .par_iter()
+            .map(|m| m.predict_mean(&s))
+            .collect();
+        Ok((0..q.len())
+            .map(|k| [per_axis[0][k], per_axis[1][k], per_axis[2][k]])
+            .collect())
+    }
+
+    fn check_rows(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<()> {
+        if q.len() != dir.len() {
+            return Err(Error::InvalidParameter(
+                "q and dir have different row counts".into(),
+            ));
+        }
+        for r in q.iter().chain(dir) {
+            if r.len() != self.n_joints {
+                return Err(Error::JointCount {
+                    expected: self.n_joints,
+                    got: r.len(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Predict for every row of a dataset (extra inputs from its columns).
+    pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
+        self.check_rows(&data.q, &data.dir)?;
+        self.predict_inputs(&self.input_map().encode_dataset(data)?)
+    }
+}
+
+impl crate::predictor::ErrorPredictor for ErrorModel {
+    fn n_joints(&self) -> usize {
+        self.n_joints
+    }
+    fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        self.predict_mean(q, dir)
+    }
+}
