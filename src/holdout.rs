@@ -17,6 +17,7 @@ use crate::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_md
 use crate::predictor::ErrorPredictor;
 use crate::space::Space;
 use crate::stats::spread;
+use crate::vec3::{Vec3, norms, residuals};
 use crate::{Error, Result};
 use serde::Serialize;
 use std::time::Instant;
@@ -38,12 +39,8 @@ pub struct HoldoutRow {
 
 /// Scores `pred` against the measured `truth`.
 pub fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) -> HoldoutRow {
-    let r: Vec<[f64; 3]> = truth
-        .iter()
-        .zip(pred)
-        .map(|(t, p)| [t[0] - p[0], t[1] - p[1], t[2] - p[2]])
-        .collect();
-    let d: Vec<f64> = r.iter().map(norm3).collect();
+    let r = residuals(truth, pred);
+    let d = norms(&r);
     let s = spread(&d);
     let rms = |a: usize| (r.iter().map(|e| e[a] * e[a]).sum::<f64>() / r.len() as f64).sqrt();
     HoldoutRow {
@@ -53,10 +50,6 @@ pub fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) ->
         rms_xyz_mm: [rms(0), rms(1), rms(2)],
         seconds,
     }
-}
-
-fn norm3(e: &[f64; 3]) -> f64 {
-    (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt()
 }
 
 /// D-H calibration (Levenberg–Marquardt, every parameter free; redundant
@@ -76,13 +69,7 @@ pub fn calibrate(data: &Dataset, robot: &Robot) -> Result<(PhysicsModel, LmSumma
 pub fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
     let pred = dh.predict(&data.q, &data.dir)?;
     let mut r = data.clone();
-    r.errors = Some(
-        data.errors_or_err()?
-            .iter()
-            .zip(&pred)
-            .map(|(e, p)| [e[0] - p[0], e[1] - p[1], e[2] - p[2]])
-            .collect(),
-    );
+    r.errors = Some(residuals(data.errors_or_err()?, &pred));
     Ok(r)
 }
 
@@ -173,7 +160,7 @@ pub fn holdout_cv(
         let mut put = |slot: usize, p: Vec<[f64; 3]>, flags: Vec<usize>| {
             for (j, v) in p.into_iter().enumerate() {
                 let e = errors[test[j]];
-                let err = norm3(&[e[0] - v[0], e[1] - v[1], e[2] - v[2]]);
+                let err = e.minus(&v).norm();
                 worst[slot] = worst[slot].max(err);
                 if !flags.contains(&j) {
                     worst_covered[slot] = worst_covered[slot].max(err);

@@ -16,6 +16,7 @@
 //! | data | [`space`] | direction coefficients λ (seed 003 eq 5), JS/EJS encoding, input normalisation |
 //! | data | [`stats`] | summaries of error sets, seeded RNG streams, fold partitions |
 //! | data | [`memory`], [`output`] | memory estimates before large allocations; checked, atomic output files |
+//! | data | [`vec3`] | TCP error vectors `[x, y, z]` (mm): norm, residuals |
 //! | data | [`predictor`] | the `ErrorPredictor` trait every error model implements |
 //! | geometry | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK (also along a path), presets |
 //! | geometry | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
@@ -71,5 +72,6 @@ pub mod space;
 pub mod stats;
 pub mod study;
 pub mod trajectory;
+pub mod vec3;
 
 pub use error::{Error, Result};

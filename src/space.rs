@@ -50,11 +50,17 @@ use serde::{Deserialize, Serialize};
 
 /// Which input space a model uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Space {
     /// Joint space `[θ1..θn]`.
+    #[cfg_attr(feature = "cli", value(help = "Joint space [θ]"))]
     Js,
     /// Extended joint space `[θ1..θn, λ1..λn]`.
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Extended joint space [θ, λ] (seed 003 §II.B)")
+    )]
     Ejs,
 }
 
@@ -239,6 +245,26 @@ impl Normalizer {
     /// Normalised copies of rows.
     pub fn apply_rows(&self, rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
         rows.iter().map(|r| self.apply(r)).collect()
+    }
+}
+
+/// Periodic joints from a specification: `auto` ([`periodic_joints`] of
+/// the rows `q`), `none` (or empty), or 1-based joint numbers `1,4,6`.
+/// Returns 0-based joints.
+pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> crate::Result<Vec<usize>> {
+    let n = q.first().map_or(0, Vec::len);
+    match spec.trim() {
+        "auto" => Ok(periodic_joints(q)),
+        "none" | "" => Ok(Vec::new()),
+        list => list
+            .split(',')
+            .map(|t| match t.trim().parse::<usize>() {
+                Ok(j) if (1..=n).contains(&j) => Ok(j - 1),
+                _ => Err(crate::Error::InvalidParameter(format!(
+                    "--periodic '{spec}': expected auto, none or joint numbers 1..{n}"
+                ))),
+            })
+            .collect(),
     }
 }
 

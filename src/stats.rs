@@ -2,6 +2,7 @@
 //! Table 3 (range, mean, standard deviation of the 3D error; per-axis mean and
 //! RMS).
 
+use crate::vec3::norms;
 use serde::{Deserialize, Serialize};
 
 /// Statistics of a set of 3D errors (mm).
@@ -140,10 +141,7 @@ pub struct PositionErrorTable {
 
 /// Seed 004 Table 3 statistics of a set of errors.
 pub fn position_error_table(errors: &[[f64; 3]]) -> PositionErrorTable {
-    let abs: Vec<f64> = errors
-        .iter()
-        .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
-        .collect();
+    let abs = norms(errors);
     let axis: [Spread; 3] =
         std::array::from_fn(|a| spread(&errors.iter().map(|e| e[a]).collect::<Vec<_>>()));
     let s = spread(&abs);
@@ -176,10 +174,7 @@ pub fn summarize(errors: &[[f64; 3]]) -> ErrorSummary {
         };
     }
     let nf = n as f64;
-    let norms: Vec<f64> = errors
-        .iter()
-        .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
-        .collect();
+    let norms = norms(errors);
     let mean = norms.iter().sum::<f64>() / nf;
     let var = norms.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / nf;
     let mut mean_mm = [0.0; 3];

@@ -3,10 +3,13 @@
 //! on the true robot (before / after). The CLI's `compensate`, `evaluate`,
 //! `demo`, `diagnose` and `physics` and the examples all use these.
 
+use crate::compensate::{Compensated, CompensationOptions, compensate};
 use crate::kinematics::{Robot, table_digest};
+use crate::predictor::ErrorPredictor;
 use crate::sim::{Truth, execute, rng_for};
 use crate::stats::{PositionErrorTable, position_error_table};
 use crate::trajectory::{TargetFile, Trajectory, read_target_file};
+use crate::vec3::Vec3;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, UnitQuaternion};
 use serde::Serialize;
@@ -152,10 +155,7 @@ pub fn run_on(
         .measured
         .iter()
         .zip(&targets.traj.poses)
-        .map(|(m, p)| {
-            let t = p.translation.vector;
-            [m[0] - t[0], m[1] - t[1], m[2] - t[2]]
-        })
+        .map(|(m, p)| m.minus(&p.translation.vector.into()))
         .collect())
 }
 
@@ -207,4 +207,48 @@ pub fn evaluate(
         },
         (before, after),
     ))
+}
+
+/// A compensation and its evaluation on the simulated robot.
+#[derive(Debug, Clone)]
+pub struct CompensatedRun {
+    /// The compensation: commands and the iteration history.
+    pub compensation: Compensated,
+    /// Before / after error tables.
+    pub evaluation: Evaluation,
+    /// The measured errors of the nominal and the compensated runs.
+    pub runs: Runs,
+}
+
+/// Iterative feed-forward compensation of `targets` with `model`, then
+/// [`evaluate`]: the nominal and the compensated commands run on the
+/// truth's simulated robot from `start`, with the same noise stream (`seed`).
+pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
+    robot: &Robot,
+    model: &M,
+    truth_path: &Path,
+    truth: &Truth,
+    targets: &Targets,
+    start: &[f64],
+    seed: u64,
+) -> Result<CompensatedRun> {
+    let opts = CompensationOptions {
+        iterative: true,
+        hints: targets.hints.clone(),
+        ..CompensationOptions::default()
+    };
+    let compensation = compensate(robot, model, &targets.traj, &opts)?;
+    let (evaluation, runs) = evaluate(
+        truth_path,
+        truth,
+        targets,
+        &compensation.commands,
+        start,
+        seed,
+    )?;
+    Ok(CompensatedRun {
+        compensation,
+        evaluation,
+        runs,
+    })
 }

@@ -527,7 +527,11 @@ fn every_subcommand_has_an_example_and_every_option_a_help_text() {
             assert!(!lines.is_empty(), "{path:?}: no options section");
             for (i, l) in lines.iter().enumerate() {
                 let t = l.trim_start();
-                if !(l.starts_with("  ") && t.starts_with('-')) || t.starts_with("-h, --help") {
+                // (a "- name: text" line is a possible value, not an option)
+                if !(l.starts_with("  ") && t.starts_with('-'))
+                    || t.starts_with("- ")
+                    || t.starts_with("-h, --help")
+                {
                     continue;
                 }
                 // the text follows on the same line after two spaces, or on

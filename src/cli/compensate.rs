@@ -9,6 +9,7 @@ use robokrige::plot::{Labels, Series, xy_plot};
 use robokrige::stats::PositionErrorTable;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
+use robokrige::vec3::Vec3;
 use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -118,7 +119,7 @@ pub(super) fn read_targets(
 fn norms(e: &[[f64; 3]]) -> Vec<(f64, f64)> {
     e.iter()
         .enumerate()
-        .map(|(i, v)| (i as f64, (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()))
+        .map(|(i, v)| (i as f64, v.norm()))
         .collect()
 }
 
@@ -157,7 +158,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     outputs.extend(a.plot.as_deref());
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&inputs, &outputs)?;
-    let robot = super::robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
     let model_name = a.model.display().to_string();
     match &model {

@@ -7,6 +7,7 @@ use clap::ValueEnum;
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
 use robokrige::params::ErrorModelParams;
 use robokrige::plot::box_plot;
+use robokrige::vec3::norms;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
 
@@ -176,12 +177,6 @@ pub fn run(a: CvArgs) -> Result<()> {
         say!("plot: {}", path.display());
     }
     Ok(())
-}
-
-fn norms(e: &[[f64; 3]]) -> Vec<f64> {
-    e.iter()
-        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
-        .collect()
 }
 
 /// `cv --methods`: the table of seed 003 Table 2 (range, mean, std of the 3D

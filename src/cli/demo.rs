@@ -7,7 +7,6 @@
 use super::diagnose::{describe, draw_plots, rmse3};
 use super::progress::bar;
 use clap::Args;
-use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::cv::{CvResult, cross_validate_closed_form, cross_validate_refit};
 use robokrige::dataset::{Dataset, write_csv};
 use robokrige::diagnose::{DiagnoseOptions, diagnose};
@@ -16,7 +15,8 @@ use robokrige::methods::Method;
 use robokrige::plot::{Labels, Series, box_plot, xy_plot};
 use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, Truth, simulate};
 use robokrige::stats::PositionErrorTable;
-use robokrige::study::{Targets, evaluate};
+use robokrige::study::{Targets, compensate_and_evaluate};
+use robokrige::vec3::{Vec3, norms};
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -169,12 +169,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let groups: Vec<(String, Vec<f64>)> = rows
         .iter()
         .map(|r| {
-            let n = r
-                .res
-                .residuals
-                .iter()
-                .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
-                .collect();
+            let n = norms(&r.res.residuals);
             (
                 format!(
                     "{} ({})",
@@ -216,24 +211,16 @@ pub fn run(a: DemoArgs) -> Result<()> {
             "compensating the {name} with JS and EJS, run on the simulated robot"
         ));
         for (label, model) in [("JS", &js), ("EJS", &ejs)] {
-            let c = compensate(
+            let run = compensate_and_evaluate(
                 &robot,
                 model,
-                &targets.traj,
-                &CompensationOptions {
-                    iterative: true,
-                    hints: targets.hints.clone(),
-                    ..CompensationOptions::default()
-                },
-            )?;
-            let (ev, (before, after)) = evaluate(
                 Path::new(truth_file),
                 truth,
                 targets,
-                &c.commands,
                 &robot.home,
                 1,
             )?;
+            let (ev, (before, after)) = (run.evaluation, run.runs);
             if name.starts_with('Ø') {
                 if circle_runs.is_empty() {
                     circle_runs.push(("nominal".into(), before));
@@ -249,7 +236,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 model: label,
                 nominal: ev.before,
                 after: ev.after,
-                iterations: c.history.len(),
+                iterations: run.compensation.history.len(),
             });
         }
         pb.inc(1);
@@ -262,7 +249,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 n.clone(),
                 e.iter()
                     .enumerate()
-                    .map(|(i, v)| (i as f64, (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()))
+                    .map(|(i, v)| (i as f64, v.norm()))
                     .collect(),
             )
         })

@@ -3,19 +3,17 @@
 use super::compensate::read_targets;
 use super::progress::spinner;
 use clap::Args;
-use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{
     CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, fit_with_effects,
 };
-use robokrige::features::Feature;
 use robokrige::kinematics;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::plot::{Labels, Series, xy_plot};
 use robokrige::space::Space;
 use robokrige::stats::PositionErrorTable;
-use robokrige::study::load_truth;
+use robokrige::study::{compensate_and_evaluate, load_truth};
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -123,7 +121,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
             optimizer,
             nugget: !a.no_nugget,
             seed: a.seed,
-            periodic: super::holdout::parse_periodic(&a.periodic, &data.q)?,
+            periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
             ..KrigingOptions::default()
         },
         folds: a.folds,
@@ -320,34 +318,6 @@ fn fmt_param(v: f64) -> String {
     }
 }
 
-/// The variable an effect is traced to, for the x axis of its plot.
-fn trace(e: &EffectReport, data: &Dataset) -> (String, Vec<f64>) {
-    match e.add.first() {
-        Some(Feature::Harmonic { joint, period_deg }) => (
-            format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
-            data.q
-                .iter()
-                .map(|r| r[joint - 1].rem_euclid(*period_deg))
-                .collect(),
-        ),
-        Some(Feature::Row | Feature::Step { .. }) => (
-            "measurement order (row)".into(),
-            (0..data.len()).map(|i| i as f64).collect(),
-        ),
-        Some(f @ Feature::Covariate { name, .. }) => (
-            name.clone(),
-            f.columns(data).map(|c| c[0].clone()).unwrap_or_default(),
-        ),
-        Some(f) => (
-            f.names()[0].clone(),
-            f.columns_from_poses(&data.q, &data.dir)
-                .map(|c| c[0].clone())
-                .unwrap_or_default(),
-        ),
-        None => (String::new(), Vec::new()),
-    }
-}
-
 pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut prev: &CvStats = &d.before;
@@ -361,7 +331,7 @@ pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Ve
         let axis = (0..3)
             .max_by(|x, y| gain(*x).total_cmp(&gain(*y)))
             .unwrap_or(0);
-        let (xlabel, x) = trace(e, data);
+        let (xlabel, x) = e.traced_variable(data);
         let pts = |s: &CvStats| {
             x.iter()
                 .zip(&s.residuals)
@@ -406,16 +376,9 @@ fn compare_compensation(
     let truth = load_truth(truth_path)?;
     let start = robot.home.clone();
     let targets = read_targets(traj, &robot, None, &start)?;
-    let run = |m: &ErrorModel| -> Result<Comparison> {
-        let opts = CompensationOptions {
-            iterative: true,
-            hints: targets.hints.clone(),
-            ..CompensationOptions::default()
-        };
-        let c = compensate(&robot, m, &targets.traj, &opts)?;
-        let (ev, _) =
-            robokrige::study::evaluate(truth_path, &truth, &targets, &c.commands, &start, seed)?;
-        Ok((ev.before, ev.after))
+    let run = |m: &ErrorModel| {
+        compensate_and_evaluate(&robot, m, truth_path, &truth, &targets, &start, seed)
+            .map(|r| (r.evaluation.before, r.evaluation.after))
     };
     let (b, a) = (run(before)?, run(after)?);
     say!(

@@ -9,21 +9,6 @@ use robokrige::{Error, Result};
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum SpaceArg {
-    /// Extended joint space [θ, λ] (seed 003 §II.B).
-    Ejs,
-    /// Joint space [θ].
-    Js,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum TrendArg {
-    Constant,
-    Linear,
-    Quadratic,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum CorrArg {
     /// exp(−h²), seed 003 eq 8 (the papers').
     Gaussian,
@@ -50,30 +35,20 @@ impl CorrArg {
     }
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum OptimizerArg {
-    /// Projected BFGS on the analytic likelihood gradient, 8 starts (default).
-    Bfgs,
-    /// Generalised pattern search from several LHS starts.
-    Gps,
-    /// Hooke–Jeeves from the centre of the box.
-    Hj,
-}
-
 /// Model choices shared by `fit` and `cv`.
 #[derive(Debug, Args)]
 pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "ejs")]
-    space: SpaceArg,
+    space: Space,
     #[arg(long, value_enum, default_value = "constant")]
-    trend: TrendArg,
+    trend: TrendKind,
     /// Correlation family, one length scale per input (h² = Σ ξ_k Δs_k²);
     /// by default each output's family is chosen by closed-form 10-fold CV
     /// (the `recommended` method). `gaussian` is the papers'.
     #[arg(long, value_enum, default_value = "auto")]
     corr: CorrArg,
     #[arg(long, value_enum, default_value = "bfgs")]
-    optimizer: OptimizerArg,
+    optimizer: OptimizerKind,
     /// Interpolate the measurements exactly (no nugget), as the papers' Kriging.
     /// By default a nugget (measurement-noise variance) is estimated with the
     /// correlation parameters: tracker data is noisy.
@@ -212,20 +187,23 @@ impl ModelChoice {
 impl ModelArgs {
     /// The full choice for `data` (periodic joints resolved on its rows).
     pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ModelChoice> {
-        if self.starts.is_some() && matches!(self.optimizer, OptimizerArg::Hj) {
+        if self.starts.is_some() && self.optimizer == OptimizerKind::HookeJeeves {
             return Err(Error::InvalidParameter(
                 "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
             ));
         }
         let (space, mut opts) = self.options();
-        opts.periodic = super::holdout::parse_periodic(&self.periodic, &data.q)?;
+        opts.periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
         if self.kinematic && self.robot.is_none() {
             return Err(Error::InvalidParameter(
                 "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
             ));
         }
         let robot = match &self.robot {
-            Some(r) => Some(super::robot_with_tool(r, self.tool.as_deref())?),
+            Some(r) => Some(robokrige::kinematics::load_robot_with_tool(
+                r,
+                self.tool.as_deref(),
+            )?),
             None => None,
         };
         if let Some(r) = &robot {
@@ -243,17 +221,9 @@ impl ModelArgs {
     /// joints: see [`ModelArgs::resolve`]).
     pub fn options(&self) -> (Space, KrigingOptions) {
         let (corr, corr_auto) = self.corr.resolve();
-        let optimizer = match self.optimizer {
-            OptimizerArg::Bfgs => OptimizerKind::Bfgs,
-            OptimizerArg::Gps => OptimizerKind::Gps,
-            OptimizerArg::Hj => OptimizerKind::HookeJeeves,
-        };
+        let optimizer = self.optimizer;
         let opts = KrigingOptions {
-            trend: match self.trend {
-                TrendArg::Constant => TrendKind::Constant,
-                TrendArg::Linear => TrendKind::Linear,
-                TrendArg::Quadratic => TrendKind::Quadratic,
-            },
+            trend: self.trend,
             corr,
             corr_auto,
             optimizer,
@@ -262,11 +232,7 @@ impl ModelArgs {
             seed: self.seed,
             ..KrigingOptions::default()
         };
-        let space = match self.space {
-            SpaceArg::Ejs => Space::Ejs,
-            SpaceArg::Js => Space::Js,
-        };
-        (space, opts)
+        (self.space, opts)
     }
 }
 
@@ -514,11 +480,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         w.flush()
     })?;
     if let Some(e) = &data.errors {
-        let resid: Vec<[f64; 3]> = e
-            .iter()
-            .zip(&pred.mean)
-            .map(|(m, p)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]])
-            .collect();
+        let resid = robokrige::vec3::residuals(e, &pred.mean);
         let before = robokrige::stats::summarize(e);
         let after = robokrige::stats::summarize(&resid);
         if let Some(path) = &a.json {

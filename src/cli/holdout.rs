@@ -88,24 +88,6 @@ pub struct HoldoutArgs {
     json: Option<PathBuf>,
 }
 
-/// `--periodic auto|none|1,4,6` → 0-based joints.
-pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
-    let n = q.first().map_or(0, Vec::len);
-    match spec.trim() {
-        "auto" => Ok(robokrige::space::periodic_joints(q)),
-        "none" | "" => Ok(Vec::new()),
-        list => list
-            .split(',')
-            .map(|t| match t.trim().parse::<usize>() {
-                Ok(j) if (1..=n).contains(&j) => Ok(j - 1),
-                _ => Err(Error::InvalidParameter(format!(
-                    "--periodic '{spec}': expected auto, none or joint numbers 1..{n}"
-                ))),
-            })
-            .collect(),
-    }
-}
-
 /// The Kriging options of `a` for training rows `q`.
 fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
     let optimizer = match a.optimizer.as_str() {
@@ -126,7 +108,7 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
         starts: optimizer.default_starts(),
         seed: a.seed,
         nugget: !a.no_nugget,
-        periodic: parse_periodic(&a.periodic, q)?,
+        periodic: robokrige::space::parse_periodic(&a.periodic, q)?,
         ..KrigingOptions::default()
     })
 }
@@ -211,7 +193,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
     robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = read_data(&a.data)?;
-    let robot = super::robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
     if let Some(k) = a.cv {
         return run_cv(&a, &data, &robot, k);

@@ -128,29 +128,6 @@ fn dispatch(command: Command) -> Result<()> {
     }
 }
 
-/// `--robot SPEC` (preset name or robot file), with `--tool "x,y,z"` (mm)
-/// replacing its tool translation.
-pub fn robot_with_tool(name: &str, tool: Option<&str>) -> Result<robokrige::kinematics::Robot> {
-    let mut robot = robokrige::kinematics::load_robot(name)?;
-    if let Some(t) = tool {
-        let v: Vec<f64> = t
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::InvalidParameter(format!("--tool '{t}': expected x,y,z in mm")))?;
-        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(Error::InvalidParameter(format!(
-                "--tool '{t}': expected x,y,z in mm"
-            )));
-        }
-        robot.tool = nalgebra::Isometry3::from_parts(
-            nalgebra::Translation3::new(v[0], v[1], v[2]),
-            robot.tool.rotation,
-        );
-    }
-    Ok(robot)
-}
-
 /// Pretty JSON of `value`; `context` names it in the error.
 pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
     serde_json::to_string_pretty(value).map_err(|e| Error::Json {

@@ -188,6 +188,39 @@ pub struct EffectReport {
     pub add: Vec<Feature>,
 }
 
+impl EffectReport {
+    /// The variable this effect is traced to, with its label and its value
+    /// on every row of `data` (the x axis of a residual plot): the phase of
+    /// a harmonic, the row for a drift or a step, the covariate, or the
+    /// feature's first column. Empty when nothing would be added.
+    pub fn traced_variable(&self, data: &Dataset) -> (String, Vec<f64>) {
+        match self.add.first() {
+            Some(Feature::Harmonic { joint, period_deg }) => (
+                format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
+                data.q
+                    .iter()
+                    .map(|r| r[joint - 1].rem_euclid(*period_deg))
+                    .collect(),
+            ),
+            Some(Feature::Row | Feature::Step { .. }) => (
+                "measurement order (row)".into(),
+                (0..data.len()).map(|i| i as f64).collect(),
+            ),
+            Some(f @ Feature::Covariate { name, .. }) => (
+                name.clone(),
+                f.columns(data).map(|c| c[0].clone()).unwrap_or_default(),
+            ),
+            Some(f) => (
+                f.names()[0].clone(),
+                f.columns_from_poses(&data.q, &data.dir)
+                    .map(|c| c[0].clone())
+                    .unwrap_or_default(),
+            ),
+            None => (String::new(), Vec::new()),
+        }
+    }
+}
+
 /// The result of [`diagnose`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Diagnosis {

@@ -36,13 +36,20 @@ use std::time::Instant;
 
 /// Built-in trends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum TrendKind {
     /// `[1]`: an unknown constant mean (ordinary Kriging).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "An unknown constant mean (ordinary Kriging)")
+    )]
     Constant,
     /// `[1, s1, …, sd]`: constant plus every input.
+    #[cfg_attr(feature = "cli", value(help = "Constant plus every input"))]
     Linear,
     /// Every monomial of degree ≤ 2: `(d+1)(d+2)/2` terms.
+    #[cfg_attr(feature = "cli", value(help = "Every monomial of degree ≤ 2"))]
     Quadratic,
 }
 
@@ -64,15 +71,28 @@ impl TrendKind {
 
 /// Hyperparameter optimiser.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum OptimizerKind {
     /// Projected BFGS with the analytic gradient of ln ψ
     /// ([`KrigingProblem::psi_grad`], [`optim::quasi_newton`]) from the box
     /// centre and LHS starts (the default; issue 16).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Projected BFGS on the analytic likelihood gradient, 8 starts (default)")
+    )]
     Bfgs,
     /// Generalised pattern search from several LHS starts (seed 003 §III.B).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Generalised pattern search from several LHS starts")
+    )]
     Gps,
     /// Hooke–Jeeves from the box centre (the JS&HJ / EJS&HJ baseline).
+    #[cfg_attr(
+        feature = "cli",
+        value(name = "hj", help = "Hooke–Jeeves from the centre of the box")
+    )]
     HookeJeeves,
 }
 

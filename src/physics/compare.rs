@@ -22,6 +22,7 @@ use crate::predictor::ErrorPredictor;
 use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot, campaign, execute, rng_for};
 use crate::stats::spread;
 use crate::trajectory::Trajectory;
+use crate::vec3::{Vec3, norms, residuals};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -80,11 +81,8 @@ pub struct Score {
 impl Score {
     /// Scores of a set of error vectors.
     pub fn of(errors: &[[f64; 3]]) -> Self {
-        let d3: Vec<f64> = errors
-            .iter()
-            .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
-            .collect();
-        let dxy: Vec<f64> = errors.iter().map(|e| e[0].hypot(e[1])).collect();
+        let d3 = norms(errors);
+        let dxy: Vec<f64> = errors.iter().map(Vec3::norm_xy).collect();
         let (a, b) = (spread(&d3), spread(&dxy));
         Score {
             mean_3d_mm: a.mean,
@@ -171,13 +169,6 @@ fn path(nominal: &Robot, opts: &CompareOptions) -> Result<Trajectory> {
     Ok(Trajectory::new(poses))
 }
 
-fn minus(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<[f64; 3]> {
-    a.iter()
-        .zip(b)
-        .map(|(u, v)| [u[0] - v[0], u[1] - v[1], u[2] - v[2]])
-        .collect()
-}
-
 /// Run the whole comparison; `progress(step, total, what)` after each step.
 pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> Result<Comparison> {
     let nominal = kinematics::load_robot(&opts.robot)?;
@@ -227,7 +218,7 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     step(4, "hybrid");
     let mut resid = train.clone();
     let pred = phys.predict(&train.q, &train.dir)?;
-    resid.errors = Some(minus(train.errors_or_err()?, &pred));
+    resid.errors = Some(residuals(train.errors_or_err()?, &pred));
     let hybrid = HybridModel {
         physics: phys.clone(),
         residual: fit(opts.ejs, &resid)?,
@@ -316,8 +307,8 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
         };
         rows.push(CompareRow {
             model: name.to_string(),
-            predict_path: Score::of(&minus(&path_err, &pp)),
-            predict_poses: Score::of(&minus(&pose_err, &pq)),
+            predict_path: Score::of(&residuals(&path_err, &pp)),
+            predict_poses: Score::of(&residuals(&pose_err, &pq)),
             compensate_path: Score::of(&vs_target(&after_path.measured, &traj)),
             compensate_poses: Score::of(&vs_target(&after_poses.measured, &pose_targets)),
             iterations,
