@@ -1,37 +1,15 @@
 //! The genetic-algorithm trend selection of seed 004 (EJS&GA+GPS), with the
 //! closed-form K-fold CV RMSE as fitness.
 
-use super::screen::{Dropped, screen_candidates};
-use super::{BasisSelector, Selection, SelectionProblem};
+use super::screen::screen_candidates;
+use super::selector::{BasisSelector, GaSelection, Selection, SelectionProblem};
 use crate::Result;
 use crate::kriging::{Hyperparameters, Trend, TrendKind, TrendModel, fit_output, fit_output_with};
 use crate::optim::{GaOptions, ga};
 use crate::stats::{fold_blocks, kfold_partition};
-use serde::{Deserialize, Serialize};
 
 /// Progress of a GA selection: `(output axis, generation, best CV RMSE mm)`.
 pub type GaProgress<'a> = &'a (dyn Fn(usize, usize, f64) + Sync);
-
-/// GA basis selection for one output (seed 004 §III.B).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GaSelection {
-    /// Candidates before screening, and those removed as dependent.
-    pub candidates: usize,
-    /// Candidates removed as linearly dependent before the GA ran, with reasons.
-    pub dropped: Vec<Dropped>,
-    /// Size cap C ≤ (K−1)m/K on the selected terms.
-    pub size_cap: usize,
-    /// Selected terms (the constant always first).
-    pub selected: Vec<String>,
-    /// Best fitness: closed-form K-fold CV RMSE (mm, seed 004 eq 17).
-    pub cv_rmse_mm: f64,
-    /// Best fitness after each generation (seed 004 Fig 10).
-    pub history: Vec<f64>,
-    /// Generations run (the GA stops on stall or at its generation cap).
-    pub generations: usize,
-    /// Distinct chromosomes (term subsets) whose fitness was evaluated.
-    pub evaluations: usize,
-}
 
 /// The GA selector of seed 004: per output, ξ from a constant-trend fit
 /// with the problem's options; the candidates screened for linear

@@ -20,47 +20,23 @@ mod ga;
 mod kinematic;
 mod pcc_pca;
 mod screen;
+mod selector;
 
-pub use ga::{Ga, GaProgress, GaSelection};
+pub use ga::{Ga, GaProgress};
 pub(crate) use kinematic::kinematic_trend_set_in;
 pub use kinematic::{
     KINEMATIC_AXIS_TOL, KINEMATIC_MIN_SUPPORT, KINEMATIC_ZERO_TOL, kinematic_candidates,
     kinematic_trends,
 };
-pub use pcc_pca::{PccPca, PccPcaReport, pcc_pca};
+pub use pcc_pca::{PccPca, pcc_pca};
 pub use screen::{CandidateScreen, CandidateSet, Dropped, screen_candidates};
+pub use selector::{BasisSelector, GaSelection, PccPcaReport, Selection, SelectionProblem};
 
 use crate::Result;
 use crate::dataset::Dataset;
 use crate::inputs::InputMap;
 use crate::kinematics::Robot;
-use crate::kriging::{KrigingOptions, Monomials, TrainingInputs, Trend, TrendKind};
-use serde::{Deserialize, Serialize};
-
-/// A selection problem: the training rows of one campaign, encoded, with
-/// one candidate trend per output axis.
-#[derive(Debug, Clone, Copy)]
-pub struct SelectionProblem<'a> {
-    /// Normalised training inputs, one row per pose.
-    pub x: &'a [Vec<f64>],
-    /// The same rows as correlation inputs.
-    pub inputs: &'a TrainingInputs,
-    /// Input names (for the terms' names in reports).
-    pub names: &'a [String],
-    /// The responses (errors, mm) of each output axis x, y, z.
-    pub y: &'a [Vec<f64>; 3],
-    /// The candidates of each output axis.
-    pub candidates: &'a [Trend; 3],
-    /// Options of any fit a selector makes (correlation, optimiser, nugget).
-    pub options: &'a KrigingOptions,
-}
-
-/// A way of choosing each output's trend from its candidates.
-pub trait BasisSelector {
-    /// The chosen trend per output axis (x, y, z), and the report saved with
-    /// the model.
-    fn select(&self, problem: &SelectionProblem) -> Result<([Trend; 3], Selection)>;
-}
+use crate::kriging::{Monomials, Trend, TrendKind};
 
 /// The candidate terms of a selection.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,20 +61,4 @@ impl Candidates<'_> {
             }
         }
     }
-}
-
-/// What a method's basis selection did, per output axis; saved with the model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case")]
-pub enum Selection {
-    /// PCC + PCA fusion (seed 003 eqs 16–20).
-    PccPca {
-        /// One report per output axis (x, y, z).
-        outputs: Vec<PccPcaReport>,
-    },
-    /// GA subset selection (seed 004 §III.B).
-    Ga {
-        /// One selection per output axis (x, y, z).
-        outputs: Vec<GaSelection>,
-    },
 }

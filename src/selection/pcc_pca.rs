@@ -7,34 +7,11 @@
 //! term is kept in front (the components have zero training mean, and the
 //! Kriging mean still needs one).
 
-use super::screen::{CandidateSet, Dropped, screen_candidates};
-use super::{BasisSelector, Selection, SelectionProblem};
+use super::screen::{CandidateSet, screen_candidates};
+use super::selector::{BasisSelector, PccPcaReport, Selection, SelectionProblem};
 use crate::kriging::{FusedBasis, Trend, trend_matrix};
 use crate::{Error, Result};
 use faer::{Mat, Side};
-use serde::{Deserialize, Serialize};
-
-/// What PCC + PCA did, for the report.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PccPcaReport {
-    /// Candidates removed before ranking (linear dependence), with reasons.
-    pub dropped: Vec<Dropped>,
-    /// Candidates with zero variance on the training rows (the constant).
-    pub no_variance: Vec<String>,
-    /// (candidate name, Pearson r) of every candidate with non-zero variance,
-    /// by decreasing |r|.
-    pub ranking: Vec<(String, f64)>,
-    /// Threshold T on |r| (eq 16; paper: 0.1): a candidate is kept when |r| > T.
-    pub threshold: f64,
-    /// Candidates kept (|r| > threshold), n2.
-    pub selected: usize,
-    /// Eigenvalues of the z-scored selection's covariance, decreasing.
-    pub eigenvalues: Vec<f64>,
-    /// Components kept, n3, and their cumulative variance share (eq 19).
-    pub components: usize,
-    /// Cumulative share of variance of the kept components, in [0, 1] (eq 19).
-    pub explained: f64,
-}
 
 /// PCC + PCA fusion of `candidates` (evaluated at normalised inputs `x`) for
 /// response `y`: threshold `t` on |r| (paper: 0.1), cumulative variance share
