@@ -1,0 +1,283 @@
+//! What a fit is asked to do (`KrigingOptions`: trend kind, correlation,
+//! optimiser, nugget, box, seed, warm starts) and what it reports
+//! (`FitReport`).
+
+use super::{Correlation, FamilyScore, Monomials, Trend};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// Built-in trends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum TrendKind {
+    /// `[1]`: an unknown constant mean (ordinary Kriging).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "An unknown constant mean (ordinary Kriging)")
+    )]
+    Constant,
+    /// `[1, s1, …, sd]`: constant plus every input.
+    #[cfg_attr(feature = "cli", value(help = "Constant plus every input"))]
+    Linear,
+    /// Every monomial of degree ≤ 2: `(d+1)(d+2)/2` terms.
+    #[cfg_attr(feature = "cli", value(help = "Every monomial of degree ≤ 2"))]
+    Quadratic,
+}
+
+impl TrendKind {
+    /// This trend in `dim` variables, as a [`Trend`].
+    pub fn trend(self, dim: usize) -> Trend {
+        self.monomials(dim).into()
+    }
+
+    /// The monomials of this trend in `dim` variables.
+    pub fn monomials(self, dim: usize) -> Monomials {
+        match self {
+            TrendKind::Constant => Monomials::constant(dim),
+            TrendKind::Linear => Monomials::linear(dim),
+            TrendKind::Quadratic => Monomials::quadratic(dim),
+        }
+    }
+}
+
+/// Hyperparameter optimiser.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum OptimizerKind {
+    /// Projected BFGS with the analytic gradient of ln ψ
+    /// ([`super::KrigingProblem::psi_grad`], `optim::quasi_newton`) from the box
+    /// centre and LHS starts (the default; issue 16).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Projected BFGS on the analytic likelihood gradient, 8 starts (default)")
+    )]
+    Bfgs,
+    /// Generalised pattern search from several LHS starts (seed 003 §III.B).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Generalised pattern search from several LHS starts")
+    )]
+    Gps,
+    /// Hooke–Jeeves from the box centre (the JS&HJ / EJS&HJ baseline).
+    #[cfg_attr(
+        feature = "cli",
+        value(name = "hj", help = "Hooke–Jeeves from the centre of the box")
+    )]
+    HookeJeeves,
+}
+
+impl OptimizerKind {
+    /// Starting points when none are given: 8 for BFGS, the papers' 4 for
+    /// GPS (Hooke–Jeeves runs from the box centre only).
+    pub const fn default_starts(self) -> usize {
+        match self {
+            OptimizerKind::Bfgs => 8,
+            OptimizerKind::Gps | OptimizerKind::HookeJeeves => 4,
+        }
+    }
+}
+
+/// Fitting options (plain data). `Default`: constant trend, Gaussian
+/// correlation, a nugget estimated (tracker data is noisy: issue 17),
+/// projected BFGS on the analytic gradient from 8 starts.
+/// [`KrigingOptions::recommended`] adds the family choice by CV (the
+/// `recommended` method, the CLI's default); the papers' set-ups are
+/// interpolating and name GPS or Hooke–Jeeves explicitly
+/// (`Method` in the `methods` module).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KrigingOptions {
+    /// Trend `F β` in the normalised inputs (constant by default).
+    pub trend: TrendKind,
+    /// Correlation family ([`Correlation`]; Gaussian, eq 8, by default).
+    #[serde(default)]
+    pub corr: Correlation,
+    /// Choose the family per output by closed-form K-fold CV
+    /// ([`super::fit_output_auto`]); `corr` is then ignored.
+    #[serde(default)]
+    pub corr_auto: bool,
+    /// How the hyperparameters are searched (BFGS by default).
+    pub optimizer: OptimizerKind,
+    /// Estimate a nugget ν (noise-to-signal variance ratio) with ξ.
+    pub nugget: bool,
+    /// Box for `log10 ξ_k`.
+    pub log10_theta: (f64, f64),
+    /// Box for `log10 ν` when the nugget is estimated.
+    pub log10_nugget: (f64, f64),
+    /// Starting points (the centre plus LHS points): of the whole box for
+    /// GPS (the papers' set-up uses 4), of an inner start box for BFGS.
+    pub starts: usize,
+    /// Seed of the LHS starts.
+    pub seed: u64,
+    /// Objective evaluations per start.
+    pub max_evals: usize,
+    /// GPS mesh tolerance, in log10 units (Hooke–Jeeves, the cheap baseline,
+    /// stops at its own coarser step, `HjOptions::default().tol`).
+    pub tol: f64,
+    /// Smallest diagonal jitter ε tried (`None`: DACE's `(10 + m)·eps`).
+    pub min_jitter: Option<f64>,
+    /// Finish GPS with a finite-difference BFGS polish of the winning start
+    /// (ψ to gradient-method precision; ~30 % more evaluations).
+    pub polish: bool,
+    /// Joints (0-based) entered as `(sin θ, cos θ)` instead of θ
+    /// ([`crate::space::Space::encode`]); empty = none.
+    #[serde(default)]
+    pub periodic: Vec<usize>,
+    /// Warm starts, one per output (empty: none): each output's search is a
+    /// local one from its `(ξ, ν)` instead of the multistart (egobox's
+    /// `theta_init`). For refits on data close to a fitted model's — CV
+    /// folds, one more trend term — where the multistart would find the same
+    /// basin at several times the cost. Not saved with a model.
+    #[serde(skip)]
+    pub warm_start: Vec<WarmStart>,
+}
+
+/// A starting point of the hyperparameter search ([`KrigingOptions::warm_start`]):
+/// ξ (one per correlation input) and the nugget ν (ignored without one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WarmStart {
+    /// ξ, one per correlation input (≥ 0).
+    pub theta: Vec<f64>,
+    /// Nugget ν (≥ 0; ignored when the nugget is not estimated).
+    pub nugget: f64,
+    /// The BFGS inverse Hessian there (in log10 ξ, log10 ν), if known: the
+    /// local search then starts with the curvature it ended with (used only
+    /// when its size matches the search).
+    pub inverse_hessian: Option<Vec<Vec<f64>>>,
+}
+
+impl WarmStart {
+    /// The hyperparameters a fit ended at, and its curvature.
+    pub fn of(report: &FitReport, corr_dims: usize) -> Self {
+        WarmStart {
+            theta: report.theta[..corr_dims.min(report.theta.len())].to_vec(),
+            nugget: report.nugget,
+            inverse_hessian: report.inverse_hessian.clone(),
+        }
+    }
+}
+
+impl Default for KrigingOptions {
+    fn default() -> Self {
+        KrigingOptions {
+            trend: TrendKind::Constant,
+            corr: Correlation::Gaussian,
+            corr_auto: false,
+            optimizer: OptimizerKind::Bfgs,
+            nugget: true,
+            log10_theta: (-6.0, 2.0),
+            log10_nugget: (-8.0, -0.5),
+            starts: OptimizerKind::Bfgs.default_starts(),
+            seed: 1,
+            max_evals: 2_000,
+            tol: 1e-2,
+            min_jitter: None,
+            polish: true,
+            periodic: Vec::new(),
+            warm_start: Vec::new(),
+        }
+    }
+}
+
+impl KrigingOptions {
+    /// The engine's best model for noisy tracker data: the defaults (a
+    /// nugget, BFGS) with each output's correlation family chosen by
+    /// closed-form K-fold CV ([`super::fit_output_auto`]).
+    pub fn recommended() -> Self {
+        KrigingOptions {
+            corr_auto: true,
+            ..KrigingOptions::default()
+        }
+    }
+
+    /// Check ranges once, before fitting.
+    pub fn validate(&self) -> Result<()> {
+        let ok_box = |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a < b;
+        if !ok_box(self.log10_theta) || !ok_box(self.log10_nugget) {
+            return Err(Error::InvalidParameter(
+                "log10 bounds must be finite with lo < hi".into(),
+            ));
+        }
+        if self.min_jitter.is_some_and(|j| !(j > 0.0 && j < 1e-6)) {
+            return Err(Error::InvalidParameter(
+                "min_jitter must be in (0, 1e-6)".into(),
+            ));
+        }
+        if self.starts == 0 || self.max_evals == 0 || self.tol.is_nan() || self.tol <= 0.0 {
+            return Err(Error::InvalidParameter(
+                "starts, max_evals and tol must be positive".into(),
+            ));
+        }
+        if self.warm_start.iter().any(|w| {
+            w.theta.iter().any(|t| !t.is_finite() || *t < 0.0)
+                || w.nugget.is_nan()
+                || w.nugget < 0.0
+        }) {
+            return Err(Error::InvalidParameter(
+                "warm starts need finite ξ ≥ 0 and a nugget ≥ 0".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// How one output's fit went. Equality ignores the wall time.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitReport {
+    /// ξ at the optimum, one per input column (0 for trend-only inputs).
+    pub theta: Vec<f64>,
+    /// Nugget ν at the optimum (0 when not estimated).
+    pub nugget: f64,
+    /// ln ψ at the optimum (eq 14); `f64::MIN` when it is −∞ ([`super::storable_ln_psi`]).
+    pub ln_psi: f64,
+    /// Process variance σ² of the normalised response (eq 13).
+    pub sigma2: f64,
+    /// Diagonal jitter ε that made R factorisable.
+    pub jitter: f64,
+    /// Trend terms used, by name.
+    pub trend_terms: Vec<String>,
+    /// Trend terms dropped as linearly dependent on the training rows.
+    pub dropped_terms: Vec<String>,
+    /// Optimiser of the hyperparameter search.
+    pub optimizer: OptimizerKind,
+    /// Starting points the search ran from (0 when nothing was searched).
+    pub starts: usize,
+    /// Objective evaluations of the whole search, summed over all starts (0
+    /// when nothing was searched).
+    pub evals: usize,
+    /// Rows the hyperparameters were converged on: all of them (m), or a
+    /// subset on campaigns over [`super::REFINE_ROWS`] rows (the model itself is
+    /// solved on all rows); 0 when nothing was searched.
+    #[serde(default)]
+    pub search_rows: usize,
+    /// Wall time of the fit; not saved, so that a model file depends only on
+    /// the data and the options (byte-identical for the same command).
+    #[serde(skip)]
+    pub seconds: f64,
+    /// The BFGS inverse Hessian at the optimum (log10 units), for a warm
+    /// start ([`WarmStart::of`]); not saved.
+    #[serde(skip)]
+    pub inverse_hessian: Option<Vec<Vec<f64>>>,
+    /// With [`KrigingOptions::corr_auto`]: every family's closed-form
+    /// K-fold score, the chosen one lowest ([`super::fit_output_auto`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub families: Vec<FamilyScore>,
+}
+
+impl PartialEq for FitReport {
+    fn eq(&self, o: &Self) -> bool {
+        self.theta == o.theta
+            && self.nugget == o.nugget
+            && self.ln_psi == o.ln_psi
+            && self.sigma2 == o.sigma2
+            && self.jitter == o.jitter
+            && self.trend_terms == o.trend_terms
+            && self.dropped_terms == o.dropped_terms
+            && self.optimizer == o.optimizer
+            && self.starts == o.starts
+            && self.evals == o.evals
+            && self.search_rows == o.search_rows
+            && self.families == o.families
+    }
+}
