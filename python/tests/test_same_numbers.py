@@ -104,3 +104,31 @@ def test_refit_cross_validation_equals_cli_cv(cli, datasets, tmp_path):
     res = rk.cross_validate(rk.ErrorModel(corr="gaussian"), path, folds=5)
     assert res["mode"] == "refit"
     assert np.max(np.abs(res["residuals"] - np.asarray(ref["residuals"]))) <= TOL
+
+
+def test_compensation_equals_cli_compensate(cli, datasets, tmp_path):
+    lhs, circle = datasets / "comau_lhs.csv", datasets / "comau_circle.csv"
+    cli("fit", lhs, "--robot", "comau-nj220", "-o", tmp_path / "m.json")
+    cli("compensate", "--model", tmp_path / "m.json", "--robot", "comau-nj220", circle,
+        "--iterative", "-o", tmp_path / "c.csv")
+    model = rk.ErrorModel(robot="comau-nj220").fit(lhs)
+    model.save(tmp_path / "py.json")
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "m.json").read_bytes()
+    out = rk.compensate(model, "comau-nj220", circle)
+    ref = np.genfromtxt(tmp_path / "c.csv", delimiter=",", skip_header=1)
+    assert np.max(np.abs(out["xyz"] - ref[:, 1:4])) <= TOL
+    assert np.max(np.abs(out["rpy"] - ref[:, 4:7])) <= TOL
+
+
+def test_diagnosis_equals_cli_diagnose(cli, datasets, tmp_path):
+    step = datasets / "comau_tracker_step.csv"
+    cli("diagnose", step, "--permutations", "199", "--json", tmp_path / "d.json",
+        "--model-out", tmp_path / "m.json")
+    ref = json.loads((tmp_path / "d.json").read_text())
+    effects, improved, report = rk.diagnose(step, permutations=199, as_frame=False)
+    improved.save(tmp_path / "py.json")
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "m.json").read_bytes()
+    assert [e["label"] for e in effects] == [e["label"] for e in ref["effects"]]
+    assert [e["accepted"] for e in effects] == [e["accepted"] for e in ref["effects"]]
+    assert np.allclose([e["p_value"] for e in effects], [e["p_value"] for e in ref["effects"]], rtol=0, atol=TOL)
+    assert np.allclose(report["after"]["cv_rmse_mm"], ref["after"]["cv_rmse_mm"], rtol=0, atol=TOL)
