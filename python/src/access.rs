@@ -62,4 +62,3 @@ pub fn corr_auto(o: &KrigingOptions) -> bool {
 pub fn nugget(o: &KrigingOptions) -> bool {
     o.nugget
 }
-

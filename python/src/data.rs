@@ -13,7 +13,11 @@ use std::path::PathBuf;
 /// Rows of a 2-D array (read in place through a view, copied once into the
 /// library's row format).
 pub fn rows(a: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<f64>> {
-    a.as_array().rows().into_iter().map(|r| r.to_vec()).collect()
+    a.as_array()
+        .rows()
+        .into_iter()
+        .map(|r| r.to_vec())
+        .collect()
 }
 
 /// An m × n array of rows that all have `n` entries (the caller's data).
@@ -92,7 +96,10 @@ impl Data {
         d.errors = errors;
         if let Some(p) = &positions {
             if p.len() != m {
-                return Err(input(format!("positions has {} rows but q has {m}", p.len())));
+                return Err(input(format!(
+                    "positions has {} rows but q has {m}",
+                    p.len()
+                )));
             }
         }
         d.positions = positions;
@@ -111,7 +118,10 @@ impl Data {
         }
         if let Some(ids) = ids {
             if ids.len() != m {
-                return Err(input(format!("ids has {} labels but q has {m} rows", ids.len())));
+                return Err(input(format!(
+                    "ids has {} labels but q has {m} rows",
+                    ids.len()
+                )));
             }
             d.ids = Some(ids);
         }
@@ -243,12 +253,21 @@ impl Data {
         }
         let n = d.n_joints();
         for j in 0..n {
-            out.append((format!("q{}", j + 1), col(d.q.iter().map(|r| r[j]).collect())))?;
+            out.append((
+                format!("q{}", j + 1),
+                col(d.q.iter().map(|r| r[j]).collect()),
+            ))?;
         }
         for j in 0..n {
-            out.append((format!("dir{}", j + 1), col(d.dir.iter().map(|r| r[j]).collect())))?;
+            out.append((
+                format!("dir{}", j + 1),
+                col(d.dir.iter().map(|r| r[j]).collect()),
+            ))?;
         }
-        for (set, names) in [(&d.errors, ["ex", "ey", "ez"]), (&d.positions, ["x", "y", "z"])] {
+        for (set, names) in [
+            (&d.errors, ["ex", "ey", "ez"]),
+            (&d.positions, ["x", "y", "z"]),
+        ] {
             if let Some(v) = set {
                 for (a, name) in names.iter().enumerate() {
                     out.append((*name, col(v.iter().map(|r| r[a]).collect())))?;
@@ -274,9 +293,12 @@ impl Data {
             self.inner.len(),
             self.inner.n_joints(),
             self.dir_source(),
-            if self.inner.errors.is_some() { "" } else { "no " },
+            if self.inner.errors.is_some() {
+                ""
+            } else {
+                "no "
+            },
             self.inner.covariates.len()
         )
     }
 }
-

@@ -141,7 +141,9 @@ impl Model {
             .map_err(to_py)?;
         let d = &data.inner;
         if mean.len() != d.len() || std.as_ref().is_some_and(|s| s.len() != d.len()) {
-            return Err(crate::invalid("coverage: mean and std need one row per pose"));
+            return Err(crate::invalid(
+                "coverage: mean and std need one row per pose",
+            ));
         }
         let w = py
             .detach(|| self.inner.coverage(&d.q, &d.dir, &mean, std.as_deref()))

@@ -98,7 +98,11 @@ fn finite_rows(what: &str, rows: &[Vec<f64>], limit: f64) -> Result<()> {
 
 impl TargetSpec<'_, '_> {
     fn resolve(self, robot: &Robot, start: &[f64]) -> Result<Targets> {
-        let given = [self.path.is_some(), self.xyz.is_some(), self.joints.is_some()];
+        let given = [
+            self.path.is_some(),
+            self.xyz.is_some(),
+            self.joints.is_some(),
+        ];
         if given.iter().filter(|g| **g).count() != 1 {
             return Err(Error::InvalidParameter(
                 "give the targets one way: a file, joint poses or TCP positions".into(),
@@ -145,7 +149,9 @@ impl TargetSpec<'_, '_> {
             }
         }
         if xyz.is_empty() {
-            return Err(Error::InvalidParameter("the trajectory has no points".into()));
+            return Err(Error::InvalidParameter(
+                "the trajectory has no points".into(),
+            ));
         }
         let euler = |a: &[f64]| {
             UnitQuaternion::from_euler_angles(
