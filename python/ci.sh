@@ -20,11 +20,15 @@ trap 'rm -rf "$work"' EXIT
 if [ "$(uname -m)" = "x86_64" ]; then
     export RUSTFLAGS="${ROBOKRIGE_WHEEL_RUSTFLAGS:--C target-cpu=x86-64}"
 fi
+t0=$SECONDS
 (cd "$here" && "$work/venv/bin/maturin" build --release --quiet \
     --interpreter "$work/venv/bin/python" --out "$work/wheels")
+echo "python/ci.sh: wheel built in $((SECONDS - t0)) s (RUSTFLAGS=${RUSTFLAGS:-})"
 "$work/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$work"/wheels/*.whl
 # from the repository root, so that the installed package is imported,
 # not the sources in python/robokrige
 cd "$repo"
 "$work/venv/bin/python" -c "import robokrige as rk; print('robokrige', rk.__version__, 'wheel build:', rk.build_target_cpu())"
+t0=$SECONDS
 "$work/venv/bin/pytest" -q -p no:cacheprovider python/tests
+echo "python/ci.sh: pytest in $((SECONDS - t0)) s"
