@@ -82,25 +82,25 @@ impl Data {
             source_name: source.into(),
             message,
         };
-        if let Some(d) = &dirs {
-            if d.len() != m {
-                return Err(input(format!("dirs has {} rows but q has {m}", d.len())));
-            }
+        if let Some(d) = &dirs
+            && d.len() != m
+        {
+            return Err(input(format!("dirs has {} rows but q has {m}", d.len())));
         }
         let mut d = Dataset::from_poses(source, q, dirs)?;
-        if let Some(e) = &errors {
-            if e.len() != m {
-                return Err(input(format!("errors has {} rows but q has {m}", e.len())));
-            }
+        if let Some(e) = &errors
+            && e.len() != m
+        {
+            return Err(input(format!("errors has {} rows but q has {m}", e.len())));
         }
         d.errors = errors;
-        if let Some(p) = &positions {
-            if p.len() != m {
-                return Err(input(format!(
-                    "positions has {} rows but q has {m}",
-                    p.len()
-                )));
-            }
+        if let Some(p) = &positions
+            && p.len() != m
+        {
+            return Err(input(format!(
+                "positions has {} rows but q has {m}",
+                p.len()
+            )));
         }
         d.positions = positions;
         for (name, values) in covariates {
@@ -137,6 +137,7 @@ impl Data {
     /// `positions` (m × 3 measured TCP, mm), `covariates` (a list of
     /// (name, m values), NaN = missing), `ids`.
     #[new]
+    #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (q, dirs=None, errors=None, positions=None, covariates=None, ids=None, source="<memory>"))]
     fn new(
         py: Python<'_>,

@@ -11,6 +11,9 @@ use robokrige::dataset::Dataset;
 use robokrige::model::{AXES, ErrorModel};
 use std::path::PathBuf;
 
+/// Predicted means and, if asked for, standard deviations (m × 3 each).
+type MeanStd<'py> = (Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray2<f64>>>);
+
 /// A fitted TCP error model: one universal-Kriging model per axis.
 #[pyclass(module = "robokrige._robokrige", name = "Model", frozen)]
 pub struct Model {
@@ -107,7 +110,7 @@ impl Model {
         py: Python<'py>,
         data: &Data,
         return_std: bool,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray2<f64>>>)> {
+    ) -> PyResult<MeanStd<'py>> {
         self.check_joints(&data.inner)?;
         let d = &data.inner;
         let m = &self.inner;

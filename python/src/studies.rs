@@ -233,10 +233,10 @@ pub fn compensate(
     truth: Option<PathBuf>,
     truth_seed: u64,
 ) -> PyResult<String> {
-    if let (Some(x), Some(r)) = (&xyz, &rpy) {
-        if x.shape()[0] != r.shape()[0] {
-            return Err(invalid("xyz and rpy need the same number of rows"));
-        }
+    if let (Some(x), Some(r)) = (&xyz, &rpy)
+        && x.shape()[0] != r.shape()[0]
+    {
+        return Err(invalid("xyz and rpy need the same number of rows"));
     }
     let spec = TargetSpec {
         path,
