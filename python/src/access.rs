@@ -1,10 +1,10 @@
-//! Every read of a field of `ErrorModel`, `KrigingModel` or `KrigingOptions`
-//! is here, and nowhere else in this crate: when the library makes those
-//! fields private (getters of the same name), only this file changes, each
-//! `m.field` becoming `m.field()`.
+//! Every read of a field of `ErrorModel`, `KrigingModel` or `KrigingOptions`,
+//! and every `KrigingOptions { .. }` literal, is here and nowhere else in
+//! this crate: when the library makes those fields private (getters of the
+//! same name), only this file changes, each `m.field` becoming `m.field()`.
 
 use robokrige::features::Feature;
-use robokrige::kriging::{FitReport, KrigingOptions};
+use robokrige::kriging::{Correlation, FitReport, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{ErrorModel, RobotRecord};
 use robokrige::space::Space;
 
@@ -61,4 +61,45 @@ pub fn corr_auto(o: &KrigingOptions) -> bool {
 /// Whether a nugget was estimated.
 pub fn nugget(o: &KrigingOptions) -> bool {
     o.nugget
+}
+
+/// `KrigingOptions::default()` with what `robokrige fit` sets from its flags.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_options(
+    trend: TrendKind,
+    corr: Correlation,
+    corr_auto: bool,
+    optimizer: OptimizerKind,
+    nugget: bool,
+    starts: usize,
+    seed: u64,
+    periodic: Vec<usize>,
+) -> KrigingOptions {
+    KrigingOptions {
+        trend,
+        corr,
+        corr_auto,
+        optimizer,
+        nugget,
+        starts,
+        seed,
+        periodic,
+        ..KrigingOptions::default()
+    }
+}
+
+/// `KrigingOptions::default()` with what `robokrige diagnose` sets.
+pub fn diagnose_options(
+    optimizer: OptimizerKind,
+    nugget: bool,
+    seed: u64,
+    periodic: Vec<usize>,
+) -> KrigingOptions {
+    KrigingOptions {
+        optimizer,
+        nugget,
+        seed,
+        periodic,
+        ..KrigingOptions::default()
+    }
 }

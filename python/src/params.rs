@@ -138,17 +138,16 @@ impl FitParams {
             ));
         }
         let (corr, corr_auto) = parse_corr(&self.corr)?;
-        let opts = KrigingOptions {
-            trend: parse_trend(&self.trend)?,
+        let opts = crate::access::fit_options(
+            parse_trend(&self.trend)?,
             corr,
             corr_auto,
             optimizer,
-            nugget: self.nugget,
-            starts: self.starts.unwrap_or(optimizer.default_starts()),
-            seed: self.seed,
-            periodic: parse_periodic(&self.periodic, &data.q)?,
-            ..KrigingOptions::default()
-        };
+            self.nugget,
+            self.starts.unwrap_or(optimizer.default_starts()),
+            self.seed,
+            parse_periodic(&self.periodic, &data.q)?,
+        );
         Ok((parse_space(&self.space)?, opts))
     }
 

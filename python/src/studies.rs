@@ -14,7 +14,7 @@ use robokrige::compensate::{CompensationOptions, Stop};
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
 use robokrige::diagnose::{DiagnoseOptions, with_columns};
 use robokrige::kinematics::Robot;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::OptimizerKind;
 use robokrige::params::ErrorModelParams;
 use robokrige::space::Space;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
@@ -362,13 +362,12 @@ pub fn diagnose(
             let (space, optimizer) = diagnose_method(method)?;
             let o = DiagnoseOptions {
                 space,
-                kriging: KrigingOptions {
+                kriging: crate::access::diagnose_options(
                     optimizer,
                     nugget,
                     seed,
-                    periodic: parse_periodic(periodic, &d.q)?,
-                    ..KrigingOptions::default()
-                },
+                    parse_periodic(periodic, &d.q)?,
+                ),
                 folds,
                 seed,
                 permutations,
