@@ -1,0 +1,105 @@
+//! Every read of a field of `ErrorModel`, `KrigingModel` or `KrigingOptions`,
+//! and every `KrigingOptions { .. }` literal, is here and nowhere else in
+//! this crate: when the library makes those fields private (getters of the
+//! same name), only this file changes, each `m.field` becoming `m.field()`.
+
+use robokrige::features::Feature;
+use robokrige::kriging::{Correlation, FitReport, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::model::{ErrorModel, RobotRecord};
+use robokrige::space::Space;
+
+/// JS or EJS.
+pub fn space(m: &ErrorModel) -> Space {
+    m.space
+}
+
+/// Joints of the robot the model was fitted on.
+pub fn n_joints(m: &ErrorModel) -> usize {
+    m.n_joints
+}
+
+/// Name of every input column.
+pub fn input_names(m: &ErrorModel) -> &[String] {
+    &m.input_names
+}
+
+/// The options the model was fitted with.
+pub fn options(m: &ErrorModel) -> &KrigingOptions {
+    &m.options
+}
+
+/// One fit report per axis.
+pub fn reports(m: &ErrorModel) -> &[FitReport] {
+    &m.reports
+}
+
+/// Extra inputs (effects added by `diagnose`).
+pub fn extras(m: &ErrorModel) -> &[Feature] {
+    &m.extras
+}
+
+/// The robot the model records, if any.
+pub fn robot(m: &ErrorModel) -> Option<&RobotRecord> {
+    m.robot.as_ref()
+}
+
+/// Training rows (0 for a model without outputs).
+pub fn training_rows(m: &ErrorModel) -> usize {
+    m.outputs.first().map_or(0, |o| o.data.x_train.len())
+}
+
+/// The correlation family of each output, by name.
+pub fn families(m: &ErrorModel) -> Vec<String> {
+    m.outputs.iter().map(|o| o.corr().to_string()).collect()
+}
+
+/// Whether each output's family was chosen by CV.
+pub fn corr_auto(o: &KrigingOptions) -> bool {
+    o.corr_auto
+}
+
+/// Whether a nugget was estimated.
+pub fn nugget(o: &KrigingOptions) -> bool {
+    o.nugget
+}
+
+/// `KrigingOptions::default()` with what `robokrige fit` sets from its flags.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_options(
+    trend: TrendKind,
+    corr: Correlation,
+    corr_auto: bool,
+    optimizer: OptimizerKind,
+    nugget: bool,
+    starts: usize,
+    seed: u64,
+    periodic: Vec<usize>,
+) -> KrigingOptions {
+    KrigingOptions {
+        trend,
+        corr,
+        corr_auto,
+        optimizer,
+        nugget,
+        starts,
+        seed,
+        periodic,
+        ..KrigingOptions::default()
+    }
+}
+
+/// `KrigingOptions::default()` with what `robokrige diagnose` sets.
+pub fn diagnose_options(
+    optimizer: OptimizerKind,
+    nugget: bool,
+    seed: u64,
+    periodic: Vec<usize>,
+) -> KrigingOptions {
+    KrigingOptions {
+        optimizer,
+        nugget,
+        seed,
+        periodic,
+        ..KrigingOptions::default()
+    }
+}

@@ -1,0 +1,220 @@
+//! The Python estimator's parameters → the library's checked fit parameters
+//! (`ErrorModelParams` → `check`), with the command line's defaults and
+//! rules (`robokrige fit`'s `ModelArgs`), so that the same data and the
+//! same settings give the same model file.
+
+use pyo3::prelude::*;
+use robokrige::dataset::Dataset;
+use robokrige::kinematics::Robot;
+use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::methods::{self, Method};
+use robokrige::params::{ErrorModelParams, TrendSpec, ValidErrorModelParams};
+use robokrige::space::Space;
+use robokrige::{Error, Result};
+
+/// `ErrorModel.get_params()` of the Python layer, read item by item.
+#[derive(Debug, Clone, FromPyObject)]
+pub struct FitParams {
+    #[pyo3(item)]
+    pub space: String,
+    #[pyo3(item)]
+    pub trend: String,
+    #[pyo3(item)]
+    pub nugget: bool,
+    #[pyo3(item)]
+    pub corr: String,
+    #[pyo3(item)]
+    pub optimizer: String,
+    #[pyo3(item)]
+    pub starts: Option<usize>,
+    #[pyo3(item)]
+    pub seed: u64,
+    #[pyo3(item)]
+    pub periodic: String,
+    #[pyo3(item)]
+    pub robot: Option<String>,
+    #[pyo3(item)]
+    pub tool: Option<(f64, f64, f64)>,
+    #[pyo3(item)]
+    pub kinematic: bool,
+    #[pyo3(item)]
+    pub method: Option<String>,
+}
+
+fn bad(message: String) -> Error {
+    Error::InvalidParameter(message)
+}
+
+/// `"ejs"` or `"js"`.
+pub fn parse_space(s: &str) -> Result<Space> {
+    match s {
+        "ejs" => Ok(Space::Ejs),
+        "js" => Ok(Space::Js),
+        _ => Err(bad(format!("space '{s}': expected 'ejs' or 'js'"))),
+    }
+}
+
+fn parse_trend(s: &str) -> Result<TrendKind> {
+    match s {
+        "constant" => Ok(TrendKind::Constant),
+        "linear" => Ok(TrendKind::Linear),
+        "quadratic" => Ok(TrendKind::Quadratic),
+        _ => Err(bad(format!(
+            "trend '{s}': expected 'constant', 'linear' or 'quadratic'"
+        ))),
+    }
+}
+
+/// `(corr, corr_auto)` of the options, as `--corr`.
+fn parse_corr(s: &str) -> Result<(Correlation, bool)> {
+    match s {
+        "auto" => Ok((Correlation::Gaussian, true)),
+        "gaussian" => Ok((Correlation::Gaussian, false)),
+        "matern52" => Ok((Correlation::Matern52, false)),
+        "matern32" => Ok((Correlation::Matern32, false)),
+        "exponential" => Ok((Correlation::Exponential, false)),
+        _ => Err(bad(format!(
+            "corr '{s}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
+        ))),
+    }
+}
+
+/// `"bfgs"`, `"gps"` or `"hj"`.
+pub fn parse_optimizer(s: &str) -> Result<OptimizerKind> {
+    match s {
+        "bfgs" => Ok(OptimizerKind::Bfgs),
+        "gps" => Ok(OptimizerKind::Gps),
+        "hj" => Ok(OptimizerKind::HookeJeeves),
+        _ => Err(bad(format!(
+            "optimizer '{s}': expected 'bfgs', 'gps' or 'hj'"
+        ))),
+    }
+}
+
+/// Periodic joints as `--periodic`: "auto" (range over 180° in `q`),
+/// "none", or 1-based joint numbers "1,4,6".
+pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
+    let n = q.first().map_or(0, Vec::len);
+    match spec.trim() {
+        "auto" => Ok(robokrige::space::periodic_joints(q)),
+        "none" | "" => Ok(Vec::new()),
+        list => list
+            .split(',')
+            .map(|t| match t.trim().parse::<usize>() {
+                Ok(j) if (1..=n).contains(&j) => Ok(j - 1),
+                _ => Err(bad(format!(
+                    "periodic '{spec}': expected 'auto', 'none' or joint numbers 1..{n}"
+                ))),
+            })
+            .collect(),
+    }
+}
+
+/// A preset name or robot file, with its tool translation replaced (mm).
+pub fn robot_with_tool(spec: &str, tool: Option<(f64, f64, f64)>) -> Result<Robot> {
+    let mut robot = robokrige::kinematics::load_robot(spec)?;
+    if let Some((x, y, z)) = tool {
+        if ![x, y, z].iter().all(|v| v.is_finite()) {
+            return Err(bad(format!(
+                "tool ({x}, {y}, {z}): expected finite x, y, z in mm"
+            )));
+        }
+        robot.tool = nalgebra::Isometry3::from_parts(
+            nalgebra::Translation3::new(x, y, z),
+            robot.tool.rotation,
+        );
+    }
+    Ok(robot)
+}
+
+impl FitParams {
+    /// Space and options as `robokrige fit` makes them from its flags, the
+    /// periodic joints resolved on `data`.
+    fn options(&self, data: &Dataset) -> Result<(Space, KrigingOptions)> {
+        let optimizer = parse_optimizer(&self.optimizer)?;
+        if self.starts.is_some() && optimizer == OptimizerKind::HookeJeeves {
+            return Err(bad(
+                "starts is for optimizer 'bfgs' or 'gps' (Hooke–Jeeves runs once, from the centre of the box)".into(),
+            ));
+        }
+        let (corr, corr_auto) = parse_corr(&self.corr)?;
+        let opts = crate::access::fit_options(
+            parse_trend(&self.trend)?,
+            corr,
+            corr_auto,
+            optimizer,
+            self.nugget,
+            self.starts.unwrap_or(optimizer.default_starts()),
+            self.seed,
+            parse_periodic(&self.periodic, &data.q)?,
+        );
+        Ok((parse_space(&self.space)?, opts))
+    }
+
+    /// The checked fit parameters for `data` (periodic joints resolved on
+    /// its rows, the robot checked against its joint count): what
+    /// `robokrige fit` fits with the same flags.
+    pub fn resolve(&self, data: &Dataset) -> Result<ValidErrorModelParams> {
+        if self.kinematic && self.robot.is_none() {
+            return Err(bad(
+                "kinematic=True needs robot (the robot whose Jacobian forms the trend)".into(),
+            ));
+        }
+        let robot = self
+            .robot
+            .as_deref()
+            .map(|r| robot_with_tool(r, self.tool))
+            .transpose()?;
+        if self.tool.is_some() && robot.is_none() {
+            return Err(bad("tool needs robot (the robot the tool is on)".into()));
+        }
+        if let Some(r) = &robot {
+            r.check_dataset(data)?;
+        }
+        let kinematic = robot.as_ref().filter(|_| self.kinematic);
+        let params = match &self.method {
+            Some(name) => {
+                let method = Method::parse(name)?;
+                match (kinematic, method) {
+                    (Some(r), Method::EjsGa | Method::EjsPca) => {
+                        // as `fit --method … --kinematic`: the flags' options
+                        let (_, opts) = self.options(data)?;
+                        let k = Some(Box::new(r.clone()));
+                        let trend = if method == Method::EjsGa {
+                            TrendSpec::Ga {
+                                folds: methods::PAPER_GA_FOLDS,
+                                kinematic: k,
+                            }
+                        } else {
+                            TrendSpec::PccPca {
+                                threshold: methods::PAPER_PCC_THRESHOLD,
+                                variance_share: methods::PAPER_VARIANCE_SHARE,
+                                kinematic: k,
+                            }
+                        };
+                        ErrorModelParams::new().kriging(opts).trend(trend)
+                    }
+                    (Some(_), _) => {
+                        return Err(bad(
+                            "kinematic=True with a method works for 'ejs-pca' and 'ejs-ga' (selection among polynomial and kinematic candidates); use kinematic=True without a method otherwise".into(),
+                        ));
+                    }
+                    (None, m) => m.params(self.seed, false),
+                }
+            }
+            None => {
+                let (space, opts) = self.options(data)?;
+                let p = ErrorModelParams::new().space(space).kriging(opts);
+                match kinematic {
+                    Some(r) => p.trend(TrendSpec::Kinematic(Box::new(r.clone()))),
+                    None => p,
+                }
+            }
+        };
+        match robot {
+            Some(r) => params.robot(r),
+            None => params,
+        }
+        .check()
+    }
+}

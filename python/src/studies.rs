@@ -1,0 +1,408 @@
+//! Cross-validation, compensation and diagnosis, as the command line runs
+//! them (`robokrige cv`, `compensate`, `diagnose`), with the same defaults.
+//! Results go to Python as JSON text (parsed there into dicts and arrays).
+
+use crate::data::{Data, rows};
+use crate::model::{Model, check_memory, json};
+use crate::params::{FitParams, parse_periodic, robot_with_tool};
+use crate::progress::Progress;
+use crate::{invalid, to_py};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use robokrige::compensate::{CompensationOptions, Stop};
+use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
+use robokrige::diagnose::{DiagnoseOptions, with_columns};
+use robokrige::kinematics::Robot;
+use robokrige::kriging::OptimizerKind;
+use robokrige::params::ErrorModelParams;
+use robokrige::space::Space;
+use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
+use robokrige::trajectory::Trajectory;
+use robokrige::{Error, Result};
+use serde_json::json as j;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// K-fold CV of a model choice: "refit" (hyperparameters re-optimised on
+/// every training fold, as `robokrige cv`) or "closed-form" (one fit's ξ,
+/// residuals from the bordered system). Returns the `CvResult` as JSON.
+#[pyfunction]
+#[pyo3(signature = (data, params, folds=10, cv_seed=1, mode="refit", progress=None))]
+pub fn cross_validate(
+    py: Python<'_>,
+    data: &Data,
+    params: FitParams,
+    folds: usize,
+    cv_seed: u64,
+    mode: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<String> {
+    let refit = match mode {
+        "refit" => true,
+        "closed-form" => false,
+        _ => {
+            return Err(invalid(format!(
+                "mode '{mode}': expected 'refit' or 'closed-form'"
+            )));
+        }
+    };
+    let d = &data.inner;
+    let p = Progress::new(progress);
+    let done = AtomicUsize::new(0);
+    let res = py
+        .detach(|| {
+            let valid = params.resolve(d)?;
+            check_memory(d.len(), &params.optimizer)?;
+            let t0 = std::time::Instant::now();
+            let mut res = if refit {
+                cross_validate_refit(d, folds, cv_seed, |train| {
+                    let m = valid.fit(train);
+                    let k = done.fetch_add(1, Ordering::SeqCst) + 1;
+                    p.call((k, folds, format!("fold {k} of {folds}")));
+                    m
+                })?
+            } else {
+                let model = valid.fit(d)?;
+                cross_validate_closed_form(d, &model, folds, cv_seed)?
+            };
+            res.seconds = t0.elapsed().as_secs_f64();
+            Ok::<_, Error>(res)
+        })
+        .map_err(to_py)?;
+    p.finish()?;
+    json(&res, "cv result")
+}
+
+/// The robot's targets: a file (trajectory or pose list, as the command
+/// line reads it), joint poses, or TCP positions with optional roll, pitch,
+/// yaw (degrees).
+struct TargetSpec<'a, 'py> {
+    path: Option<PathBuf>,
+    xyz: Option<PyReadonlyArray2<'py, f64>>,
+    rpy: Option<PyReadonlyArray2<'py, f64>>,
+    joints: Option<PyReadonlyArray2<'py, f64>>,
+    orientation: Option<&'a [f64]>,
+}
+
+fn finite_rows(what: &str, rows: &[Vec<f64>], limit: f64) -> Result<()> {
+    for (i, r) in rows.iter().enumerate() {
+        if let Some(v) = r.iter().find(|v| !(v.is_finite() && v.abs() <= limit)) {
+            return Err(Error::InvalidParameter(format!(
+                "{what} row {i} (0-based): {v} is not a finite value within ±{limit:e}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+impl TargetSpec<'_, '_> {
+    fn resolve(self, robot: &Robot, start: &[f64]) -> Result<Targets> {
+        let given = [
+            self.path.is_some(),
+            self.xyz.is_some(),
+            self.joints.is_some(),
+        ];
+        if given.iter().filter(|g| **g).count() != 1 {
+            return Err(Error::InvalidParameter(
+                "give the targets one way: a file, joint poses or TCP positions".into(),
+            ));
+        }
+        if let Some(path) = &self.path {
+            return Targets::read(path, robot, self.orientation, start);
+        }
+        if let Some(q) = &self.joints {
+            if self.orientation.is_some() {
+                return Err(Error::InvalidParameter(
+                    "orientation is for position-only (x, y, z) targets of a six-axis robot; joint poses have their own".into(),
+                ));
+            }
+            let q = rows(q);
+            finite_rows("joints", &q, robokrige::dataset::MAX_ABS_JOINT)?;
+            for r in &q {
+                robot.check_len(r)?;
+            }
+            return Targets::from_joints(robot, &q);
+        }
+        let Some(xyz) = &self.xyz else {
+            unreachable!("one of the three was given")
+        };
+        let xyz = rows(xyz);
+        if xyz.first().is_some_and(|r| r.len() != 3) {
+            return Err(Error::InvalidParameter(
+                "TCP targets need 3 columns: x, y, z (mm)".into(),
+            ));
+        }
+        finite_rows("xyz", &xyz, robokrige::dataset::MAX_ABS_POSITION_MM)?;
+        let rpy = self.rpy.as_ref().map(rows);
+        if let Some(r) = &rpy {
+            if r.len() != xyz.len() || r.first().is_some_and(|r| r.len() != 3) {
+                return Err(Error::InvalidParameter(
+                    "roll, pitch, yaw need one row of 3 angles (degrees) per target".into(),
+                ));
+            }
+            finite_rows("rpy", r, 1e6)?;
+            if self.orientation.is_some() {
+                return Err(Error::InvalidParameter(
+                    "orientation is for position-only (x, y, z) targets; these have roll, pitch, yaw".into(),
+                ));
+            }
+        }
+        if xyz.is_empty() {
+            return Err(Error::InvalidParameter(
+                "the trajectory has no points".into(),
+            ));
+        }
+        let euler = |a: &[f64]| {
+            UnitQuaternion::from_euler_angles(
+                a[0].to_radians(),
+                a[1].to_radians(),
+                a[2].to_radians(),
+            )
+        };
+        // position-only targets of a six-axis robot keep one orientation
+        // (given, else the start pose's), as `Targets::read`
+        let fixed = match (&rpy, self.orientation) {
+            (Some(_), _) => None,
+            (None, _) if robot.dof() < 6 => {
+                if self.orientation.is_some() {
+                    return Err(Error::InvalidParameter(
+                        "orientation is for a six-axis robot's position-only targets".into(),
+                    ));
+                }
+                None
+            }
+            (None, Some(o)) if o.len() == 3 && o.iter().all(|v| v.is_finite()) => Some(euler(o)),
+            (None, Some(_)) => {
+                return Err(Error::InvalidParameter(
+                    "orientation needs three finite angles: roll, pitch, yaw (deg)".into(),
+                ));
+            }
+            (None, None) => Some(robot.fk(start)?.rotation),
+        };
+        let poses = xyz
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let rot = match (&rpy, fixed) {
+                    (Some(r), _) => euler(&r[i]),
+                    (None, Some(f)) => f,
+                    (None, None) => UnitQuaternion::identity(),
+                };
+                Isometry3::from_parts(Translation3::from(Vector3::new(p[0], p[1], p[2])), rot)
+            })
+            .collect();
+        Ok(Targets::from_trajectory(Trajectory {
+            poses,
+            has_orientation: rpy.is_some() || fixed.is_some(),
+        }))
+    }
+}
+
+fn stop_name(s: Stop) -> &'static str {
+    match s {
+        Stop::SingleStep => "single-step",
+        Stop::Converged => "converged",
+        Stop::Stalled => "stalled",
+        Stop::MaxIterations => "max-iterations",
+    }
+}
+
+/// Pre-compensate targets for `robot` with `model` (feed-forward, single
+/// step or iterative), as `robokrige compensate`; with `truth` (a simulator
+/// truth file) also run the nominal and compensated commands on the
+/// simulated robot. Returns JSON.
+#[pyfunction]
+#[pyo3(signature = (model, robot, *, path=None, xyz=None, rpy=None, joints=None, tool=None,
+    iterative=true, tol=1e-3, max_iter=10, start=None, orientation=None, truth=None, truth_seed=1))]
+#[allow(clippy::too_many_arguments)]
+pub fn compensate(
+    py: Python<'_>,
+    model: &Model,
+    robot: &str,
+    path: Option<PathBuf>,
+    xyz: Option<PyReadonlyArray2<'_, f64>>,
+    rpy: Option<PyReadonlyArray2<'_, f64>>,
+    joints: Option<PyReadonlyArray2<'_, f64>>,
+    tool: Option<(f64, f64, f64)>,
+    iterative: bool,
+    tol: f64,
+    max_iter: usize,
+    start: Option<Vec<f64>>,
+    orientation: Option<Vec<f64>>,
+    truth: Option<PathBuf>,
+    truth_seed: u64,
+) -> PyResult<String> {
+    if let (Some(x), Some(r)) = (&xyz, &rpy)
+        && x.shape()[0] != r.shape()[0]
+    {
+        return Err(invalid("xyz and rpy need the same number of rows"));
+    }
+    let spec = TargetSpec {
+        path,
+        xyz,
+        rpy,
+        joints,
+        orientation: orientation.as_deref(),
+    };
+    let robot = robot_with_tool(robot, tool).map_err(to_py)?;
+    let m = &model.inner;
+    m.check_robot(&robot, "model").map_err(to_py)?;
+    let start = start.unwrap_or_else(|| robot.home.clone());
+    robot.check_len(&start).map_err(to_py)?;
+    if start.iter().any(|v| !v.is_finite()) {
+        return Err(invalid("start: joint values must be finite"));
+    }
+    let targets = spec.resolve(&robot, &start).map_err(to_py)?;
+    let opts = CompensationOptions {
+        iterative,
+        tol_mm: tol,
+        max_iter,
+        start: Some(start.clone()),
+        hints: targets.hints.clone(),
+        ..CompensationOptions::default()
+    };
+    let out = py
+        .detach(|| {
+            let t0 = std::time::Instant::now();
+            let res = robokrige::compensate::compensate(&robot, m, &targets.traj, &opts)?;
+            let seconds = t0.elapsed().as_secs_f64();
+            let coverage = m.coverage(&res.joints, &res.dir, &res.predicted, None)?;
+            let evaluation = match &truth {
+                Some(tp) => {
+                    let t = load_truth(tp)?;
+                    check_truth_robot(&t, &robot, tp)?;
+                    let (ev, (before, after)) =
+                        evaluate(tp, &t, &targets, &res.commands, &start, truth_seed)?;
+                    Some(j!({"summary": ev, "before": before, "after": after}))
+                }
+                None => None,
+            };
+            Ok::<_, Error>((res, seconds, coverage, evaluation))
+        })
+        .map_err(to_py)?;
+    let (res, seconds, coverage, evaluation) = out;
+    let xyz: Vec<[f64; 3]> = res
+        .commands
+        .poses
+        .iter()
+        .map(|p| {
+            let t = p.translation.vector;
+            [t.x, t.y, t.z]
+        })
+        .collect();
+    let rpy: Option<Vec<[f64; 3]>> = res.commands.has_orientation.then(|| {
+        res.commands
+            .poses
+            .iter()
+            .map(|p| {
+                let (r, pi, y) = p.rotation.euler_angles();
+                [r.to_degrees(), pi.to_degrees(), y.to_degrees()]
+            })
+            .collect()
+    });
+    let coverage: Vec<_> = coverage
+        .iter()
+        .map(|c| {
+            let issues: Vec<String> = c.issues.iter().map(ToString::to_string).collect();
+            j!({"index": c.index, "issues": issues})
+        })
+        .collect();
+    let v = j!({
+        "xyz": xyz, "rpy": rpy, "joints": res.joints, "dir": res.dir,
+        "predicted": res.predicted, "history": res.history, "converged": res.converged,
+        "stop": stop_name(res.stop), "unsettled": res.unsettled, "seconds": seconds,
+        "coverage": coverage, "evaluation": evaluation,
+    });
+    json(&v, "compensation")
+}
+
+/// The base model of `robokrige diagnose --method M`: space and optimiser.
+fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
+    Ok(match method {
+        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
+        "js" => (Space::Js, OptimizerKind::Bfgs),
+        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
+        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
+        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
+        other => {
+            return Err(Error::InvalidParameter(format!(
+                "diagnose supports method 'ejs', 'js', 'js-hj', 'ejs-hj' or 'ejs-gps', not '{other}'"
+            )));
+        }
+    })
+}
+
+/// Find what the model misses, trace it to an effect, add it, re-validate
+/// (`robokrige diagnose`, same defaults). Returns the diagnosis as JSON and
+/// the final model (with the effects added, refitted on all rows).
+#[pyfunction]
+#[pyo3(signature = (data, method="ejs", nugget=true, folds=10, seed=1, permutations=1999,
+    fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn diagnose(
+    py: Python<'_>,
+    data: &Data,
+    method: &str,
+    nugget: bool,
+    folds: usize,
+    seed: u64,
+    permutations: usize,
+    fdr: f64,
+    max_effects: usize,
+    periodic: &str,
+    robot: Option<String>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Model)> {
+    let d = &data.inner;
+    let p = Progress::new(progress);
+    let step = AtomicUsize::new(0);
+    let (v, model) = py
+        .detach(|| {
+            let (space, optimizer) = diagnose_method(method)?;
+            let o = DiagnoseOptions {
+                space,
+                kriging: crate::access::diagnose_options(
+                    optimizer,
+                    nugget,
+                    seed,
+                    parse_periodic(periodic, &d.q)?,
+                ),
+                folds,
+                seed,
+                permutations,
+                fdr,
+                max_effects,
+                robot: robot
+                    .as_deref()
+                    .map(robokrige::kinematics::load_robot)
+                    .transpose()?,
+                ..DiagnoseOptions::default()
+            };
+            robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
+                format!("e.g. the first {n} rows")
+            })?;
+            let diag = robokrige::diagnose::diagnose(d, &o, &|msg: &str| {
+                let k = step.fetch_add(1, Ordering::SeqCst) + 1;
+                p.call((k, 0usize, msg.to_string()));
+            })?;
+            let work = with_columns(d, &diag.extras)?;
+            let model = ErrorModelParams::new()
+                .space(o.space)
+                .kriging(o.kriging.clone())
+                .extras(diag.extras.clone())
+                .check()?
+                .fit(&work)?;
+            let mut v = serde_json::to_value(&diag).map_err(|e| Error::Json {
+                context: "diagnosis".into(),
+                source: e,
+            })?;
+            v["before_residuals"] = j!(diag.before.residuals);
+            v["after_residuals"] = j!(diag.after.residuals);
+            v["method"] = j!(method);
+            Ok::<_, Error>((v, model))
+        })
+        .map_err(to_py)?;
+    p.finish()?;
+    Ok((json(&v, "diagnosis")?, Model { inner: model }))
+}
