@@ -10,47 +10,47 @@ use robokrige::space::Space;
 
 /// JS or EJS.
 pub fn space(m: &ErrorModel) -> Space {
-    m.space
+    m.space()
 }
 
 /// Joints of the robot the model was fitted on.
 pub fn n_joints(m: &ErrorModel) -> usize {
-    m.n_joints
+    m.n_joints()
 }
 
 /// Name of every input column.
 pub fn input_names(m: &ErrorModel) -> &[String] {
-    &m.input_names
+    m.input_names()
 }
 
 /// The options the model was fitted with.
 pub fn options(m: &ErrorModel) -> &KrigingOptions {
-    &m.options
+    m.options()
 }
 
 /// One fit report per axis.
 pub fn reports(m: &ErrorModel) -> &[FitReport] {
-    &m.reports
+    m.reports()
 }
 
 /// Extra inputs (effects added by `diagnose`).
 pub fn extras(m: &ErrorModel) -> &[Feature] {
-    &m.extras
+    m.extras()
 }
 
 /// The robot the model records, if any.
 pub fn robot(m: &ErrorModel) -> Option<&RobotRecord> {
-    m.robot.as_ref()
+    m.robot()
 }
 
 /// Training rows (0 for a model without outputs).
 pub fn training_rows(m: &ErrorModel) -> usize {
-    m.outputs.first().map_or(0, |o| o.data.x_train.len())
+    m.n_train()
 }
 
 /// The correlation family of each output, by name.
 pub fn families(m: &ErrorModel) -> Vec<String> {
-    m.outputs.iter().map(|o| o.corr().to_string()).collect()
+    m.outputs().iter().map(|o| o.corr().to_string()).collect()
 }
 
 /// Whether each output's family was chosen by CV.

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use robokrige::dataset::Dataset;
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
-use robokrige::methods::{self, Method};
+use robokrige::methods::Method;
 use robokrige::params::{ErrorModelParams, TrendSpec, ValidErrorModelParams};
 use robokrige::space::Space;
 use robokrige::{Error, Result};
@@ -92,22 +92,9 @@ pub fn parse_optimizer(s: &str) -> Result<OptimizerKind> {
 }
 
 /// Periodic joints as `--periodic`: "auto" (range over 180° in `q`),
-/// "none", or 1-based joint numbers "1,4,6".
+/// "none", or 1-based joint numbers "1,4,6" (the library's rule).
 pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
-    let n = q.first().map_or(0, Vec::len);
-    match spec.trim() {
-        "auto" => Ok(robokrige::space::periodic_joints(q)),
-        "none" | "" => Ok(Vec::new()),
-        list => list
-            .split(',')
-            .map(|t| match t.trim().parse::<usize>() {
-                Ok(j) if (1..=n).contains(&j) => Ok(j - 1),
-                _ => Err(bad(format!(
-                    "periodic '{spec}': expected 'auto', 'none' or joint numbers 1..{n}"
-                ))),
-            })
-            .collect(),
-    }
+    robokrige::space::parse_periodic(spec, q)
 }
 
 /// A preset name or robot file, with its tool translation replaced (mm).
@@ -179,20 +166,9 @@ impl FitParams {
                     (Some(r), Method::EjsGa | Method::EjsPca) => {
                         // as `fit --method … --kinematic`: the flags' options
                         let (_, opts) = self.options(data)?;
-                        let k = Some(Box::new(r.clone()));
-                        let trend = if method == Method::EjsGa {
-                            TrendSpec::Ga {
-                                folds: methods::PAPER_GA_FOLDS,
-                                kinematic: k,
-                            }
-                        } else {
-                            TrendSpec::PccPca {
-                                threshold: methods::PAPER_PCC_THRESHOLD,
-                                variance_share: methods::PAPER_VARIANCE_SHARE,
-                                kinematic: k,
-                            }
-                        };
-                        ErrorModelParams::new().kriging(opts).trend(trend)
+                        ErrorModelParams::new()
+                            .kriging(opts)
+                            .trend(method.trend(Some(r)))
                     }
                     (Some(_), _) => {
                         return Err(bad(

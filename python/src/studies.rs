@@ -12,10 +12,9 @@ use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use robokrige::compensate::{CompensationOptions, Stop};
 use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
-use robokrige::diagnose::{DiagnoseOptions, with_columns};
+use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
 use robokrige::kriging::OptimizerKind;
-use robokrige::params::ErrorModelParams;
 use robokrige::space::Space;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
@@ -386,13 +385,7 @@ pub fn diagnose(
                 let k = step.fetch_add(1, Ordering::SeqCst) + 1;
                 p.call((k, 0usize, msg.to_string()));
             })?;
-            let work = with_columns(d, &diag.extras)?;
-            let model = ErrorModelParams::new()
-                .space(o.space)
-                .kriging(o.kriging.clone())
-                .extras(diag.extras.clone())
-                .check()?
-                .fit(&work)?;
+            let model = robokrige::diagnose::fit_with_effects(d, &o, &diag.extras)?;
             let mut v = serde_json::to_value(&diag).map_err(|e| Error::Json {
                 context: "diagnosis".into(),
                 source: e,
