@@ -1,5 +1,7 @@
 //! PCC + PCA basis fusion (seed 003 eqs 16–20).
 
+mod common;
+
 use robokrige::dataset::read_csv;
 use robokrige::kriging::{KrigingOptions, Monomials, OptimizerKind, TrendModel, trend_matrix};
 use robokrige::model::ErrorModel;
@@ -77,7 +79,7 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
         max_evals: 60,
         ..KrigingOptions::default()
     };
-    let (model, reports) = fit_pcc_pca(&d, &opts, None);
+    let (model, reports) = common::fit_pcc_pca(&d, &opts, None);
     for (r, out) in reports.iter().zip(model.outputs()) {
         eprintln!(
             "PCC+PCA: {} candidates, {} above T, {} components ({:.4} of the variance)",
@@ -137,24 +139,4 @@ fn screening_drops_dependent_candidates_and_says_why() {
     );
     assert_eq!(s.kept.len() + s.dropped.len(), 15);
     assert!(!s.kept.contains(&3));
-}
-
-/// PCC + PCA with the papers' constants, and its per-axis reports.
-fn fit_pcc_pca(
-    data: &robokrige::dataset::Dataset,
-    opts: &robokrige::kriging::KrigingOptions,
-    robot: Option<&robokrige::kinematics::Robot>,
-) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
-    let model = robokrige::params::ErrorModelParams::new()
-        .kriging(opts.clone())
-        .trend(robokrige::methods::Method::EjsPca.trend(robot))
-        .check()
-        .unwrap()
-        .fit(data)
-        .unwrap();
-    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
-        panic!("no PCC + PCA report");
-    };
-    let reports = outputs.clone();
-    (model, reports)
 }

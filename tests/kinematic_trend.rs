@@ -1,5 +1,7 @@
 //! Issue 10: the kinematic-error trend basis and periodic joints.
 
+mod common;
+
 use robokrige::dataset::read_csv;
 use robokrige::kinematics;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
@@ -236,7 +238,7 @@ fn pcc_pca_can_fuse_kinematic_candidates() {
     let data =
         read_csv(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/comau_lhs.csv")).unwrap();
     let robot = kinematics::preset("comau-nj220").unwrap();
-    let (m, reports) = pcc_pca(&data, &hj(), Some(&robot));
+    let (m, reports) = common::fit_pcc_pca(&data, &hj(), Some(&robot));
     for r in &reports {
         let kin = r
             .ranking
@@ -255,24 +257,4 @@ fn pcc_pca_can_fuse_kinematic_candidates() {
         m.predict_mean(&q, &dir).unwrap()
     );
     std::fs::remove_file(path).ok();
-}
-
-/// PCC + PCA with the papers' constants, and its per-axis reports.
-fn pcc_pca(
-    data: &robokrige::dataset::Dataset,
-    opts: &robokrige::kriging::KrigingOptions,
-    robot: Option<&robokrige::kinematics::Robot>,
-) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
-    let model = robokrige::params::ErrorModelParams::new()
-        .kriging(opts.clone())
-        .trend(robokrige::methods::Method::EjsPca.trend(robot))
-        .check()
-        .unwrap()
-        .fit(data)
-        .unwrap();
-    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
-        panic!("no PCC + PCA report");
-    };
-    let reports = outputs.clone();
-    (model, reports)
 }

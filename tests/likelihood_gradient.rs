@@ -147,30 +147,10 @@ fn gradient_matches_central_differences_kinematic_trend() {
 #[test]
 fn gradient_matches_central_differences_fused_trend() {
     let data = campaign(80);
-    let (model, _) = pcc_pca(&data, &quick(), None);
+    let (model, _) = common::fit_pcc_pca(&data, &quick(), None);
     assert!(matches!(
         model.outputs()[0].data().trend,
         robokrige::kriging::Trend::Fused(_)
     ));
     check_model(&model, &data, "fused");
-}
-
-/// PCC + PCA with the papers' constants, and its per-axis reports.
-fn pcc_pca(
-    data: &robokrige::dataset::Dataset,
-    opts: &robokrige::kriging::KrigingOptions,
-    robot: Option<&robokrige::kinematics::Robot>,
-) -> (ErrorModel, Vec<robokrige::selection::PccPcaReport>) {
-    let model = robokrige::params::ErrorModelParams::new()
-        .kriging(opts.clone())
-        .trend(robokrige::methods::Method::EjsPca.trend(robot))
-        .check()
-        .unwrap()
-        .fit(data)
-        .unwrap();
-    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
-        panic!("no PCC + PCA report");
-    };
-    let reports = outputs.clone();
-    (model, reports)
 }

@@ -318,18 +318,7 @@ pub fn compensate(
 
 /// The base model of `robokrige diagnose --method M`: space and optimiser.
 fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
-    Ok(match method {
-        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
-        "js" => (Space::Js, OptimizerKind::Bfgs),
-        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
-        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
-        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
-        other => {
-            return Err(Error::InvalidParameter(format!(
-                "diagnose supports method 'ejs', 'js', 'js-hj', 'ejs-hj' or 'ejs-gps', not '{other}'"
-            )));
-        }
-    })
+    robokrige::diagnose::base_method(method)
 }
 
 /// Find what the model misses, trace it to an effect, add it, re-validate

@@ -8,10 +8,9 @@ use robokrige::diagnose::{
     CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, fit_with_effects,
 };
 use robokrige::kinematics;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::KrigingOptions;
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::plot::{Labels, Series, xy_plot};
-use robokrige::space::Space;
 use robokrige::stats::PositionErrorTable;
 use robokrige::study::{compensate_and_evaluate, load_truth};
 use robokrige::{Error, Result};
@@ -103,18 +102,7 @@ pub struct DiagnoseArgs {
 }
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
-    let (space, optimizer) = match a.method.as_str() {
-        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
-        "js" => (Space::Js, OptimizerKind::Bfgs),
-        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
-        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
-        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
-        other => {
-            return Err(Error::InvalidParameter(format!(
-                "diagnose supports --method ejs, js, js-hj, ejs-hj or ejs-gps, not '{other}'"
-            )));
-        }
-    };
+    let (space, optimizer) = robokrige::diagnose::base_method(&a.method)?;
     Ok(DiagnoseOptions {
         space,
         kriging: KrigingOptions {

@@ -309,6 +309,25 @@ fn cross_validated(
     Ok((cv_stats(res.residuals, extras), model))
 }
 
+/// The base model a diagnosis starts from, by name: `ejs` (the default)
+/// and `js` (BFGS with the options' nugget), or the papers' `js-hj`,
+/// `ejs-hj`, `ejs-gps`. Returns its space and optimiser.
+pub fn base_method(name: &str) -> Result<(Space, crate::kriging::OptimizerKind)> {
+    use crate::kriging::OptimizerKind;
+    Ok(match name {
+        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
+        "js" => (Space::Js, OptimizerKind::Bfgs),
+        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
+        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
+        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
+        other => {
+            return Err(Error::InvalidParameter(format!(
+                "diagnose supports the base methods ejs, js, js-hj, ejs-hj or ejs-gps, not '{other}'"
+            )));
+        }
+    })
+}
+
 /// The model of `data` with `extras` as inputs, fitted with the options of
 /// `o` (after a diagnosis: its improved model, `extras` = [`Diagnosis::extras`];
 /// with no extras: the model as it was).

@@ -43,3 +43,28 @@ pub fn comau_lhs(rows: usize) -> robokrige::dataset::Dataset {
     .unwrap();
     d.select(&(0..rows).collect::<Vec<_>>())
 }
+
+/// PCC + PCA with the papers' constants (the rows of `robot`'s Jacobian
+/// among the candidates when given), and its per-axis reports.
+#[allow(dead_code)] // not every test binary that shares this module uses it
+pub fn fit_pcc_pca(
+    data: &robokrige::dataset::Dataset,
+    opts: &robokrige::kriging::KrigingOptions,
+    robot: Option<&robokrige::kinematics::Robot>,
+) -> (
+    robokrige::model::ErrorModel,
+    Vec<robokrige::selection::PccPcaReport>,
+) {
+    let model = robokrige::params::ErrorModelParams::new()
+        .kriging(opts.clone())
+        .trend(robokrige::methods::Method::EjsPca.trend(robot))
+        .check()
+        .unwrap()
+        .fit(data)
+        .unwrap();
+    let Some(robokrige::selection::Selection::PccPca { outputs }) = model.selection() else {
+        panic!("no PCC + PCA report");
+    };
+    let reports = outputs.clone();
+    (model, reports)
+}
