@@ -208,7 +208,7 @@ impl ErrorModel {
             .iter()
             .zip(AXES)
             .filter_map(|(r, ax)| {
-                let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+                let m = self.n_train();
                 let base = self
                     .options
                     .min_jitter
@@ -246,7 +246,7 @@ impl ErrorModel {
     fn predict_inputs(&self, s: &[Vec<f64>]) -> Result<Prediction> {
         // the first standard deviation needs each output's m × m factor,
         // which then stays with the model: known before it is allocated
-        let m = self.outputs.first().map_or(0, |o| o.data.x_train.len());
+        let m = self.n_train();
         let missing = self.outputs.iter().filter(|o| !o.has_factors()).count() as u64;
         if missing > 0 {
             crate::memory::check(
