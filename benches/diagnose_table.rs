@@ -1,7 +1,8 @@
 //! Bench binary: `diagnose` on simulated COMAU campaigns with one undeclared
 //! effect each, at two magnitudes and two seeds, plus controls without any.
-//! Prints the table of issue 6 (case, effect found, p / q, CV RMSE before and
-//! after, noise floor). Run: `cargo bench --bench diagnose_table`
+//! Prints the table of issues 6 and 22 (case, effect found, p / q, CV RMSE
+//! before and after, after over the CV RMSE of the same campaign simulated
+//! without the effect, the "after" check, noise floor). Run: `cargo bench --bench diagnose_table`
 //! (about 10 minutes on 2 cores). The robot preset is given, so joint
 //! cross-talk candidates (through the Jacobian) are in the scan.
 
@@ -72,6 +73,25 @@ fn main() {
             "hysteresis:joint=2,amp_deg=0.01,travel_deg=20",
             hysteresis_q2,
         ),
+        ("lag q2 0.05 %, last move", "lag:joint=2,gain=0.0005", |e| {
+            lag_of(e, "move2")
+        }),
+        ("lag q2 0.02 %, last move", "lag:joint=2,gain=0.0002", |e| {
+            lag_of(e, "move2")
+        }),
+        (
+            "lag q3 0.03 %, τ = 2 poses",
+            "lag:joint=3,gain=0.0003,tau_poses=2",
+            |e| lag_of(e, "move3"),
+        ),
+        (
+            "lag q1 0.02 %, τ = 1 pose",
+            "lag:joint=1,gain=0.0002,tau_poses=1",
+            |e| lag_of(e, "move1"),
+        ),
+        ("lag q5 0.2 %, last move", "lag:joint=5,gain=0.002", |e| {
+            lag_of(e, "move5")
+        }),
     ];
     // `cargo bench --bench diagnose_table -- harmonic`: only matching cases
     let only: Vec<String> = std::env::args()
@@ -80,9 +100,11 @@ fn main() {
         .collect();
     let robot = kinematics::preset("comau-nj220").expect("preset");
     println!(
-        "| case | seed | found (rank 1) | p | q | true effect first | CV RMSE before x/y/z (mm) | after x/y/z (mm) | noise floor x/y/z (mm) | s |"
+        "| case | seed | found (rank 1) | p | q | true effect first | CV RMSE before x/y/z (mm) | after x/y/z (mm) | after / without the effect | after check | noise floor x/y/z (mm) | s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // CV RMSE (pooled) of the same campaign simulated without any effect
+    let mut without = std::collections::BTreeMap::new();
     for (name, spec, is_true) in &cases {
         if !only.is_empty() && !only.iter().any(|o| name.contains(o.as_str())) {
             continue;
@@ -103,6 +125,29 @@ fn main() {
                 ..DiagnoseOptions::default()
             };
             let d = diagnose(&data, &opts, &|_| {}).expect("diagnose");
+            let secs = t0.elapsed().as_secs_f64();
+            let base = *without.entry(seed).or_insert_with(|| {
+                let c = CampaignSpec::new(CampaignKind::Lhs, seed);
+                let SimOutput::Measurements(clean) = simulate(&robot, &c).expect("simulate").0
+                else {
+                    unreachable!()
+                };
+                let o = DiagnoseOptions {
+                    max_effects: 0,
+                    ..opts.clone()
+                };
+                diagnose(&clean, &o, &|_| {})
+                    .expect("diagnose")
+                    .before
+                    .pooled_rmse_mm
+            });
+            let check = d
+                .effects
+                .iter()
+                .filter_map(|e| e.after_check.as_ref())
+                .map(|c| if c.partly { "partly" } else { "explained" })
+                .collect::<Vec<_>>()
+                .join(", ");
             let top = &d.effects[0];
             let found = if top.significant {
                 let p: Vec<String> = top
@@ -133,13 +178,18 @@ fn main() {
             };
             let f = |v: &[f64; 3]| format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2]);
             println!(
-                "| {name} | {seed} | {found} | {:.4} | {:.4} | {ok} | {} | {} | {} | {:.0} |",
+                "| {name} | {seed} | {found} | {:.4} | {:.4} | {ok} | {} | {} | {:.2} | {} | {} | {secs:.0} |",
                 top.p_value,
                 top.q_value,
                 f(&d.before.cv_rmse_mm),
                 f(&d.after.cv_rmse_mm),
+                d.after.pooled_rmse_mm / base,
+                if check.is_empty() {
+                    "–".into()
+                } else {
+                    check
+                },
                 f(&truth.noise_floor_mm.unwrap_or([0.0; 3])),
-                t0.elapsed().as_secs_f64()
             );
         }
     }
@@ -163,6 +213,10 @@ fn step_150(e: &robokrige::diagnose::EffectReport) -> bool {
 fn crosstalk(e: &robokrige::diagnose::EffectReport) -> bool {
     e.kind == EffectKind::Interaction && e.source.iter().any(|s| s == "q2")
         || e.kind == EffectKind::Harmonic && e.source == ["q2"]
+}
+
+fn lag_of(e: &robokrige::diagnose::EffectReport, source: &str) -> bool {
+    e.kind == EffectKind::MotionHistory && e.source == [source] && e.label.starts_with("moves of")
 }
 
 fn hysteresis_q2(e: &robokrige::diagnose::EffectReport) -> bool {

@@ -1,11 +1,18 @@
 //! Extra model inputs beyond `[θ, λ]`: the effects `diagnose` can add
 //! (a covariate column, measurement order, a step, a joint harmonic, a
-//! cross-joint interaction, direction history). A covariate, the order and
-//! direction history become input dimensions of the Kriging model (with
-//! their own correlation length) and a linear trend term, so the GP can also
-//! let the effect vary with the pose; a step, harmonic, interaction or
-//! cross-talk basis has a known shape and enters the trend only
-//! ([`Feature::trend_only`]).
+//! cross-joint interaction, direction history, the motion into the pose).
+//! A covariate, the order, direction history and a joint's moves become
+//! input dimensions of the Kriging model (with their own correlation length)
+//! and a linear trend term, so the GP can also let the effect vary with the
+//! pose; a step, harmonic, interaction, cross-talk basis, a lag mapped
+//! through the Jacobian or a feature times a joint angle has a known shape
+//! and enters the trend only ([`Feature::trend_only`]).
+//!
+//! Motion-history features ([`Feature::Moves`], [`Feature::MoveSize`],
+//! [`Feature::MovesJacobian`], [`Feature::TcpMove`]) are computed from the
+//! pose order: the move into pose k is `q(k) − q(k−1)` (0 for the first row),
+//! so a prediction along a trajectory uses its previous commanded pose, as λ
+//! does.
 //!
 //! Values come from a campaign ([`Feature::columns`]), where a precomputed
 //! covariate column of the same name wins (so a feature keeps the values of the
@@ -65,6 +72,65 @@ pub enum Feature {
         /// 1-based joint j.
         joint: usize,
     },
+    /// Joint j's moves into the pose, `h_k = Δq_k + e^(−1/τ)·h_(k−1)`
+    /// (`Δq_k = q_j(k) − q_j(k−1)`, 0 for the first row; τ = 0: the last move
+    /// alone): servo lag or incomplete settling.
+    Moves {
+        /// 1-based joint j.
+        joint: usize,
+        /// Memory τ of earlier moves, in poses (0: the last move only).
+        tau_poses: f64,
+    },
+    /// `|Δq_j|`, the size of joint j's last move.
+    MoveSize {
+        /// 1-based joint j.
+        joint: usize,
+    },
+    /// A lag of joint j proportional to its moves ([`Feature::Moves`]) mapped
+    /// to the TCP: `∂P/∂θ_j(q)·h_k`, three columns (x, y, z).
+    MovesJacobian {
+        /// The measured robot (its position Jacobian).
+        #[serde(deserialize_with = "crate::kinematics::robot_or_preset_name")]
+        robot: Box<crate::kinematics::Robot>,
+        /// 1-based joint j.
+        joint: usize,
+        /// Memory τ of earlier moves, in poses (0: the last move only).
+        tau_poses: f64,
+    },
+    /// The TCP's last move `P(q_k) − P(q_(k−1))` through the nominal robot
+    /// (x, y, z; 0 for the first row): a Cartesian lag.
+    TcpMove {
+        /// The measured robot (its forward kinematics).
+        #[serde(deserialize_with = "crate::kinematics::robot_or_preset_name")]
+        robot: Box<crate::kinematics::Robot>,
+    },
+    /// Time since the previous pose from a time column, `t_k − t_(k−1)`; the
+    /// first row, and predictions from poses alone, take `reference` (the
+    /// campaign's median interval).
+    Interval {
+        /// The time column's name.
+        column: String,
+        /// Interval used where none is measured; `None`: such predictions
+        /// are refused.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reference: Option<f64>,
+    },
+    /// A one-column feature times joint k's angle: `f·θ_k`, `f·sin θ_k`,
+    /// `f·cos θ_k` (θ in degrees for the first).
+    Times {
+        /// The one-column feature.
+        of: Box<Feature>,
+        /// 1-based joint k.
+        joint: usize,
+    },
+    /// A one-column feature `lag` rows earlier, `f(k − lag)` (the first
+    /// rows take `f(0)`).
+    Lagged {
+        /// The one-column feature.
+        of: Box<Feature>,
+        /// Rows back (≥ 1).
+        lag: usize,
+    },
     /// Joint j deviating with the angle of joint k (cross-talk, seed 000
     /// §5.2): `∂P/∂θ_j(q) · sin θ_k` and `· cos θ_k`, the TCP displacement a
     /// deviation `a·sin θ_k + b·cos θ_k` of joint j causes (six columns: x, y, z
@@ -100,6 +166,25 @@ impl Feature {
                 .iter()
                 .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
                 .collect(),
+            Feature::Moves { joint, tau_poses } => vec![moves_name(*joint, *tau_poses)],
+            Feature::MoveSize { joint } => vec![format!("|move{joint}|")],
+            Feature::MovesJacobian {
+                joint, tau_poses, ..
+            } => {
+                let h = moves_name(*joint, *tau_poses);
+                ["x", "y", "z"].map(|a| format!("J{a}{joint}·{h}")).to_vec()
+            }
+            Feature::TcpMove { .. } => ["x", "y", "z"].map(|a| format!("tcp_move_{a}")).to_vec(),
+            Feature::Interval { column, .. } => vec![format!("Δ{column}")],
+            Feature::Times { of, joint } => {
+                let f = of.names().concat();
+                vec![
+                    format!("{f}·q{joint}"),
+                    format!("{f}·sin(q{joint})"),
+                    format!("{f}·cos(q{joint})"),
+                ]
+            }
+            Feature::Lagged { of, lag } => vec![format!("{}[-{lag}]", of.names().concat())],
         }
     }
 
@@ -116,6 +201,9 @@ impl Feature {
                 | Feature::Harmonic { .. }
                 | Feature::Interaction { .. }
                 | Feature::Crosstalk { .. }
+                | Feature::MovesJacobian { .. }
+                | Feature::TcpMove { .. }
+                | Feature::Times { .. }
         )
     }
 
@@ -132,7 +220,36 @@ impl Feature {
             }
             Feature::Interaction { a, b } => vec![*a, *b],
             Feature::Crosstalk { joint, from, .. } => vec![*joint, *from],
-            Feature::PreviousDirection { joint } | Feature::SinceReversal { joint } => vec![*joint],
+            Feature::PreviousDirection { joint }
+            | Feature::SinceReversal { joint }
+            | Feature::MoveSize { joint } => vec![*joint],
+            Feature::Moves { joint, tau_poses }
+            | Feature::MovesJacobian {
+                joint, tau_poses, ..
+            } => {
+                if !(*tau_poses >= 0.0 && tau_poses.is_finite()) {
+                    return Err(Error::InvalidParameter(format!(
+                        "moves of joint {joint}: tau_poses must be finite and ≥ 0, got {tau_poses}"
+                    )));
+                }
+                vec![*joint]
+            }
+            Feature::Times { of, joint } => {
+                one_column(of)?;
+                of.validate(n)?;
+                vec![*joint]
+            }
+            Feature::Lagged { of, lag } => {
+                one_column(of)?;
+                if *lag == 0 {
+                    return Err(Error::InvalidParameter(format!(
+                        "lagged {:?}: the lag must be ≥ 1 row",
+                        of.names()
+                    )));
+                }
+                of.validate(n)?;
+                Vec::new()
+            }
             _ => Vec::new(),
         };
         match joints.iter().find(|&&j| j == 0 || j > n) {
@@ -173,6 +290,22 @@ impl Feature {
                     .map(|i| if i >= *row { 1.0 } else { 0.0 })
                     .collect(),
             ]),
+            Feature::Interval { column, reference } => {
+                let t = Feature::Covariate {
+                    name: column.clone(),
+                    reference: None,
+                }
+                .columns(data)?
+                .remove(0);
+                let first = reference.unwrap_or(0.0);
+                Ok(vec![
+                    (0..t.len())
+                        .map(|i| if i == 0 { first } else { t[i] - t[i - 1] })
+                        .collect(),
+                ])
+            }
+            Feature::Times { of, joint } => Ok(times(of.columns(data)?.remove(0), &data.q, *joint)),
+            Feature::Lagged { of, lag } => Ok(vec![lagged(&of.columns(data)?[0], *lag)]),
             _ => self.columns_from_poses(&data.q, &data.dir),
         }
     }
@@ -193,6 +326,50 @@ impl Feature {
                 )));
             }
             Feature::Row | Feature::Step { .. } => vec![vec![0.0; m]],
+            Feature::Interval {
+                reference: Some(v), ..
+            } => vec![vec![*v; m]],
+            Feature::Interval { column, .. } => {
+                return Err(Error::InvalidParameter(format!(
+                    "the model uses the interval of time column '{column}': predict from a CSV that has that column"
+                )));
+            }
+            Feature::Moves { joint, tau_poses } => vec![moves(q, *joint, *tau_poses)],
+            Feature::MoveSize { joint } => vec![col(&|i| {
+                if i == 0 {
+                    0.0
+                } else {
+                    (q[i][joint - 1] - q[i - 1][joint - 1]).abs()
+                }
+            })],
+            Feature::MovesJacobian {
+                robot: r,
+                joint,
+                tau_poses,
+            } => {
+                let h = moves(q, *joint, *tau_poses);
+                let mut cols: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(m)).collect();
+                for (qi, hi) in q.iter().zip(&h) {
+                    let jac = r.position_jacobian(qi)?;
+                    for (a, c) in cols.iter_mut().enumerate() {
+                        c.push(jac[(a, joint - 1)] * hi);
+                    }
+                }
+                cols
+            }
+            Feature::TcpMove { robot: r } => {
+                let p: Vec<nalgebra::Vector3<f64>> = q
+                    .iter()
+                    .map(|qi| r.fk(qi).map(|t| t.translation.vector))
+                    .collect::<Result<_>>()?;
+                (0..3)
+                    .map(|a| col(&|i| if i == 0 { 0.0 } else { p[i][a] - p[i - 1][a] }))
+                    .collect()
+            }
+            Feature::Times { of, joint } => {
+                times(of.columns_from_poses(q, dir)?.remove(0), q, *joint)
+            }
+            Feature::Lagged { of, lag } => vec![lagged(&of.columns_from_poses(q, dir)?[0], *lag)],
             Feature::Harmonic { joint, period_deg } => {
                 let w = std::f64::consts::TAU / period_deg;
                 vec![
@@ -240,6 +417,64 @@ impl Feature {
                 vec![out]
             }
         })
+    }
+}
+
+fn moves_name(joint: usize, tau_poses: f64) -> String {
+    if tau_poses > 0.0 {
+        format!("moves{joint}(τ={tau_poses:.2})")
+    } else {
+        format!("move{joint}")
+    }
+}
+
+/// `h_k = Δq_k + e^(−1/τ)·h_(k−1)` of 1-based joint `joint` (Δq_0 = 0).
+fn moves(q: &[Vec<f64>], joint: usize, tau_poses: f64) -> Vec<f64> {
+    let j = joint - 1;
+    let keep = if tau_poses > 0.0 {
+        (-1.0 / tau_poses).exp()
+    } else {
+        0.0
+    };
+    let mut h = 0.0;
+    (0..q.len())
+        .map(|i| {
+            let step = if i == 0 { 0.0 } else { q[i][j] - q[i - 1][j] };
+            h = step + keep * h;
+            h
+        })
+        .collect()
+}
+
+/// `f·θ_k`, `f·sin θ_k`, `f·cos θ_k` of 1-based joint `joint`.
+fn times(f: Vec<f64>, q: &[Vec<f64>], joint: usize) -> Vec<Vec<f64>> {
+    let th = |i: usize| q[i][joint - 1];
+    vec![
+        f.iter().enumerate().map(|(i, v)| v * th(i)).collect(),
+        f.iter()
+            .enumerate()
+            .map(|(i, v)| v * th(i).to_radians().sin())
+            .collect(),
+        f.iter()
+            .enumerate()
+            .map(|(i, v)| v * th(i).to_radians().cos())
+            .collect(),
+    ]
+}
+
+/// `f(k − lag)`, the first `lag` rows taking `f(0)`.
+fn lagged(f: &[f64], lag: usize) -> Vec<f64> {
+    (0..f.len()).map(|i| f[i.saturating_sub(lag)]).collect()
+}
+
+/// `Times` and `Lagged` wrap a feature of one column.
+fn one_column(f: &Feature) -> Result<()> {
+    match f.names().len() {
+        1 => Ok(()),
+        k => Err(Error::InvalidParameter(format!(
+            "a product or lag needs a one-column feature, but {:?} has {k} columns",
+            f.names()
+        ))),
     }
 }
 

@@ -116,8 +116,18 @@ fn a_control_campaign_reports_no_significant_effect() {
     assert!(sig.is_empty(), "{sig:?}");
     assert!(d.steps.is_empty() && d.extras.is_empty());
     assert_eq!(d.before, d.after);
-    // every family was tested once, with p-values in (0, 1]
+    // every family was tested once, with p-values in (0, 1]; the motion
+    // history and the generic search are among them, and the resamples
+    // were raised so that a lone effect could have been significant
     assert!(d.effects.len() > 30);
+    assert_eq!(d.candidates[0], d.effects.len());
+    assert!(
+        d.effects
+            .iter()
+            .any(|e| e.kind == EffectKind::MotionHistory)
+    );
+    assert!(d.permutations >= robokrige::diagnose::min_resamples(d.candidates[0], 0.05));
+    assert!(d.candidates[1] > d.candidates[0]);
     assert!(
         d.effects
             .iter()
@@ -229,6 +239,164 @@ fn direction_history_features_follow_the_sequence() {
         .unwrap();
     // reversal at row 3 (3 → 2) and again at row 5 (2 → 5); row 4 did not move
     assert_eq!(travel[0], vec![0.0, 1.0, 3.0, 1.0, 1.0, 3.0]);
+}
+
+/// Servo lag (issue 22): an error that depends on how the robot moved into
+/// the pose is traced to the joint's moves with the right memory, added as
+/// an input, and modelled to the level of the same campaign without it;
+/// the improved model predicts along a pose sequence from its order alone.
+#[test]
+fn a_servo_lag_is_traced_to_the_joints_moves_and_modelled_end_to_end() {
+    let data = campaign(200, 1, Some("lag:joint=2,gain=0.0005,tau_poses=0"));
+    let o = quick();
+    let d = diagnose(&data, &o, &|_| {}).unwrap();
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::MotionHistory, "{top:?}");
+    assert_eq!(top.source, ["move2"]);
+    assert_eq!(top.params["tau_poses"], 0.0);
+    assert!(top.significant && top.accepted, "{top:?}");
+    let lag = Feature::Moves {
+        joint: 2,
+        tau_poses: 0.0,
+    };
+    assert_eq!(d.extras, [lag.clone()]);
+    let check = top.after_check.as_ref().expect("after check");
+    assert!(!check.partly, "{check:?}");
+    // the same true robot and poses without the lag
+    let clean = campaign(200, 1, None);
+    let c = diagnose(
+        &clean,
+        &DiagnoseOptions {
+            max_effects: 0,
+            ..quick()
+        },
+        &|_| {},
+    )
+    .unwrap();
+    assert!(
+        d.before.pooled_rmse_mm > 2.0 * c.before.pooled_rmse_mm,
+        "the lag is large: {} vs {}",
+        d.before.pooled_rmse_mm,
+        c.before.pooled_rmse_mm
+    );
+    assert!(
+        d.after.pooled_rmse_mm < 1.3 * c.before.pooled_rmse_mm,
+        "after {} vs without the lag {}",
+        d.after.pooled_rmse_mm,
+        c.before.pooled_rmse_mm
+    );
+    // end to end: the improved model, saved and loaded, predicts from the
+    // pose order what it predicts from the campaign
+    let m = robokrige::diagnose::fit_with_effects(&data, &o, &d.extras).unwrap();
+    let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
+    assert_eq!(back.extras(), [lag]);
+    let a = m.predict_dataset(&data).unwrap().mean;
+    let b = back.predict(&data.q, &data.dir).unwrap().mean;
+    for (x, y) in a.iter().zip(&b) {
+        for ax in 0..3 {
+            assert!((x[ax] - y[ax]).abs() < 1e-9);
+        }
+    }
+    // and the lag changes the prediction: the same poses in reverse order
+    let rq: Vec<Vec<f64>> = data.q.iter().rev().cloned().collect();
+    let rd = robokrige::space::derive_directions(&rq, None);
+    let r = back.predict(&rq, &rd).unwrap().mean;
+    let moved = (1..rq.len())
+        .map(|k| (r[k][2] - b[rq.len() - 1 - k][2]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.05, "largest change {moved} mm");
+}
+
+#[test]
+fn motion_history_features_follow_the_sequence() {
+    let q: Vec<Vec<f64>> = [0.0, 1.0, 3.0, 2.0, 2.0, 5.0]
+        .iter()
+        .map(|v| vec![*v, 90.0])
+        .collect();
+    let dir = robokrige::space::derive_directions(&q, None);
+    let col = |f: Feature| f.columns_from_poses(&q, &dir).unwrap();
+    let last = Feature::Moves {
+        joint: 1,
+        tau_poses: 0.0,
+    };
+    assert_eq!(col(last.clone())[0], vec![0.0, 1.0, 2.0, -1.0, 0.0, 3.0]);
+    let k = (-1.0f64).exp();
+    let decayed = col(Feature::Moves {
+        joint: 1,
+        tau_poses: 1.0,
+    });
+    assert!((decayed[0][2] - (2.0 + k)).abs() < 1e-15);
+    assert!((decayed[0][3] - (-1.0 + k * (2.0 + k))).abs() < 1e-15);
+    assert_eq!(
+        col(Feature::MoveSize { joint: 1 })[0],
+        vec![0.0, 1.0, 2.0, 1.0, 0.0, 3.0]
+    );
+    assert_eq!(
+        col(Feature::Lagged {
+            of: Box::new(last.clone()),
+            lag: 1
+        })[0],
+        vec![0.0, 0.0, 1.0, 2.0, -1.0, 0.0]
+    );
+    // × joint 2's angle (90°): θ, sin θ = 1, cos θ ≈ 0
+    let t = col(Feature::Times {
+        of: Box::new(last.clone()),
+        joint: 2,
+    });
+    assert_eq!(t.len(), 3);
+    assert_eq!(t[0][2], 180.0);
+    assert!((t[1][2] - 2.0).abs() < 1e-12 && t[2][2].abs() < 1e-12);
+    // the TCP move through the robot is 0 for the first row
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let q6: Vec<Vec<f64>> = (0..4).map(|i| vec![i as f64 * 5.0; 6]).collect();
+    let d6 = robokrige::space::derive_directions(&q6, None);
+    let tcp = Feature::TcpMove {
+        robot: Box::new(robot.clone()),
+    }
+    .columns_from_poses(&q6, &d6)
+    .unwrap();
+    assert_eq!(tcp.len(), 3);
+    assert!(tcp.iter().all(|c| c[0] == 0.0) && tcp.iter().any(|c| c[1].abs() > 1.0));
+    // the interval of a time column; from poses alone its reference
+    let mut data = campaign(30, 2, None);
+    let iv = Feature::Interval {
+        column: "time_s".into(),
+        reference: Some(4.0),
+    };
+    let t = data.covariate("time_s").unwrap().values.clone();
+    let v = iv.columns(&data).unwrap();
+    assert_eq!(v[0][0], 4.0);
+    assert!((v[0][5] - (t[5] - t[4])).abs() < 1e-12);
+    assert_eq!(
+        iv.columns_from_poses(&data.q, &data.dir).unwrap()[0],
+        vec![4.0; 30]
+    );
+    data.covariates.retain(|c| c.name != "time_s");
+    assert!(iv.columns(&data).is_err());
+    // bad features are clear errors
+    for bad in [
+        Feature::Lagged {
+            of: Box::new(last.clone()),
+            lag: 0,
+        },
+        Feature::Times {
+            of: Box::new(Feature::Harmonic {
+                joint: 1,
+                period_deg: 5.0,
+            }),
+            joint: 1,
+        },
+        Feature::Moves {
+            joint: 1,
+            tau_poses: -1.0,
+        },
+        Feature::MoveSize { joint: 3 },
+    ] {
+        assert!(
+            matches!(bad.validate(2), Err(Error::InvalidParameter(_))),
+            "{bad:?}"
+        );
+    }
 }
 
 #[test]

@@ -54,7 +54,9 @@ Effects (repeatable --effect NAME[:key=value,...]; defaults in brackets):
   tracker-step row [150], dx [0.15], dy [-0.1], dz [0.1] (mm, no column records it)
   crosstalk    joint [1], from [2], gain_deg [0.01]  (joint deviates by gain*sin(q_from))
   hysteresis   joint [2], amp_deg [0.01], travel_deg [20]  (joint deviates by
-               λ*amp*(1 - exp(-s/travel)), s its travel since its last reversal)")]
+               λ*amp*(1 - exp(-s/travel)), s its travel since its last reversal)
+  lag          joint [2], gain [0.0005], tau_poses [0]  (servo lag: joint stops short
+               by gain*h, h = its move into the pose + exp(-1/tau)*h of the pose before)")]
 pub struct SimulateArgs {
     /// Robot: a preset (comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515) or a robot file (TOML/JSON; see `robokrige robot --help`).
     #[arg(long, default_value = "comau-nj220")]

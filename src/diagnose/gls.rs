@@ -61,6 +61,8 @@ pub struct AxisSystem {
     rt: Vec<f64>,
     /// `y_std²`: normalised units → mm².
     scale2: f64,
+    /// Process variance σ² (normalised units).
+    sigma2: f64,
 }
 
 impl AxisSystem {
@@ -88,7 +90,17 @@ impl AxisSystem {
             a,
             gamma,
             scale2: model.data.y_std * model.data.y_std,
+            sigma2: model.data.sigma2,
         })
+    }
+
+    /// The model's own expectation of its leave-one-out RMSE (mm): with
+    /// `Var(y) = σ²R`, `Var(γ) = σ²A`, so a held-out residual
+    /// `e_i = γ_i / A_ii` has variance `σ² / A_ii` — the nugget's noise plus
+    /// the interpolation error at that row — averaged over the rows.
+    pub fn expected_loo_rmse(&self) -> f64 {
+        let m = self.rows() as f64;
+        (self.scale2 * self.sigma2 * self.a_diag.iter().map(|a| 1.0 / a).sum::<f64>() / m).sqrt()
     }
 
     /// Number of training rows m.
@@ -241,6 +253,29 @@ impl FamilyTest {
             }
         }
         total
+    }
+
+    /// Grid points whose pooled leave-one-out gain on the data is within
+    /// `within` (mm²) of the best: a likelihood-ratio style support set of
+    /// the scanned parameter.
+    pub fn near_best(
+        &self,
+        systems: &[AxisSystem],
+        responses: &[Response],
+        within: f64,
+    ) -> Vec<usize> {
+        let gains = self.gains(systems, responses);
+        let best = gains
+            .iter()
+            .copied()
+            .filter(|g| g.is_finite())
+            .fold(f64::NEG_INFINITY, f64::max);
+        gains
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| g.is_finite() && **g >= best - within)
+            .map(|(i, _)| i)
+            .collect()
     }
 
     /// Best grid point and its pooled leave-one-out gain (mm²) on the data;

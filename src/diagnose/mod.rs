@@ -4,9 +4,12 @@
 //! 1. **Residuals**: out-of-fold K-fold CV residuals of the current model
 //!    (refit on every training fold), per axis, in measurement order.
 //! 2. **Candidates** ([`scan::families`]): every numeric covariate not in the
-//!    model (alone, and interacting with the joint angles); the measurement
-//!    order (drift, and a change-point scan); harmonics of each joint over a
-//!    scanned period range; cross-joint products; direction history.
+//!    model (alone, interacting with the joint angles, with one joint angle,
+//!    lagged); the measurement order (drift, and a change-point scan);
+//!    harmonics of each joint over a scanned period range; cross-joint
+//!    products; direction history; the motion into each pose (a joint's
+//!    moves with a scanned memory, their size, the TCP's move, the time
+//!    since the previous pose; issue 22).
 //! 3. **Tracing** ([`scan::test_families`], [`gls`]): each grid point is
 //!    tried inside the current model (its columns join the trend at the
 //!    model's ξ and nugget); a family's statistic is its best leave-one-out
@@ -14,14 +17,23 @@
 //!    p-value a test against sign-flipped pseudo-campaigns of the fitted
 //!    model, Benjamini–Hochberg across families, and its score the
 //!    closed-form K-fold CV drop.
-//! 4. **Adding**: the best-scoring significant family's feature joins the
+//! 4. **Adding**: the significant family with the most evidence (its
+//!    leave-one-out gain beyond the mean of its null distribution: what
+//!    scanning its grid finds by chance is taken off, so a wide harmonic
+//!    scan does not crowd out a clear step) has its feature join the
 //!    model the way its kind needs ([`crate::features::Feature`]): a step,
 //!    harmonic, interaction or cross-talk basis as trend terms; a covariate,
 //!    the order or direction history as an input dimension with a linear
 //!    trend term. The model is refitted and cross-validated again (refit per
-//!    fold); it is kept only if the CV RMSE drops by at least `min_gain`, and
+//!    fold); it is kept only if the CV RMSE drops by at least `min_gain`, or
+//!    by what that is worth at the noise floor ([`Worth`]), and
 //!    the loop repeats until nothing significant remains or `max_effects`.
-//! 5. **Report**: CV statistics before and after every accepted effect.
+//! 5. **Report**: CV statistics before and after every accepted effect, its
+//!    size (trend coefficients with 95 % intervals) and its "after" check
+//!    ([`AfterCheck`]): did the model with it reach the level a campaign
+//!    without it would, estimated from the data (the model's own
+//!    leave-one-out expectation: its nugget's noise plus its interpolation
+//!    error), and did it deliver what its test promised?
 
 pub mod gls;
 pub mod scan;
@@ -56,17 +68,21 @@ pub struct DiagnoseOptions {
     /// Seed of the fold partition and of the resamples.
     pub seed: u64,
     /// Most sign-flip resamples per candidate (a sign-flip permutation test;
-    /// a clearly null candidate stops after a batch or two).
+    /// a clearly null candidate stops after a batch or two). Raised to
+    /// [`min_resamples`] of the round's candidates when lower, so that one
+    /// real effect among F candidates can reach `q ≤ fdr` (its p-value is at
+    /// least `1/(1 + resamples)`); the report gives the number used.
     pub permutations: usize,
     /// False-discovery rate for the Benjamini–Hochberg step.
     pub fdr: f64,
     /// Most effects added before the loop stops.
     pub max_effects: usize,
-    /// Relative drop of the pooled CV RMSE an effect must bring to count:
-    /// a candidate is *significant* when its q-value is within `fdr` and its
-    /// closed-form CV drop reaches this (a detectable but negligible effect
-    /// is ranked, with a note, not flagged), and it is *kept* when the refit
-    /// CV confirms the drop. A candidate whose statistic comes from
+    /// Relative drop of the pooled CV RMSE an effect must bring to count,
+    /// or its worth at the noise floor ([`Worth`]): a candidate is
+    /// *significant* when its q-value is within `fdr` and its closed-form CV
+    /// drop is worth this (a detectable but negligible effect is ranked,
+    /// with a note, not flagged), and it is *kept* when the refit CV
+    /// confirms the drop. A candidate whose statistic comes from
     /// re-estimated ξ stays significant only if that confirmation succeeds.
     pub min_gain: f64,
     /// The measured robot: enables the joint cross-talk candidates (Jacobian).
@@ -107,6 +123,58 @@ impl DiagnoseOptions {
     }
 }
 
+/// Resamples a round with `families` candidates needs so that a single
+/// real effect can be significant after Benjamini–Hochberg: its smallest
+/// p-value `1/(1 + P)` times `families` must stay within `fdr / 2`.
+pub fn min_resamples(families: usize, fdr: f64) -> usize {
+    ((2.0 * families as f64 / fdr).ceil() as usize).saturating_sub(1)
+}
+
+/// When a drop of the CV error is worth an effect (issue 22): the pooled CV
+/// RMSE falls by the share `g` (`min_gain`), **or** the CV mean squared
+/// error falls by what that share is worth at the noise floor,
+/// `(1 − (1 − g)²)·σ̄_ν²` with σ̄_ν the model's noise (its nugget, pooled over
+/// the axes; without a nugget only the first). At the noise floor the two agree; the second keeps a clear
+/// effect from hiding behind an under-fitted base model whose CV RMSE is
+/// far above the noise (a 0.12 mm tracker bump in real UR10 rows lowered an
+/// EJS model's CV RMSE by only 1.2 %).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Worth {
+    /// Share of the mean squared error, `1 − (1 − g)²`.
+    share: f64,
+    /// Absolute drop of the mean squared error, mm².
+    floor_mse: f64,
+}
+
+impl Worth {
+    /// For relative gain `min_gain` and a model with noise `noise_mm` per axis.
+    pub fn new(min_gain: f64, noise_mm: &[f64; 3]) -> Self {
+        let share = 1.0 - (1.0 - min_gain).powi(2);
+        let noise2 = noise_mm.iter().map(|v| v * v).sum::<f64>() / 3.0;
+        Worth {
+            share,
+            // an interpolating model (no nugget) has no noise estimate
+            floor_mse: if noise2 > 0.0 {
+                share * noise2
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// Whether a drop of the mean squared error from `before` to `after`
+    /// (mm², pooled per axis) is worth an effect.
+    pub fn counts(&self, before: f64, after: f64) -> bool {
+        let drop = before - after;
+        drop > 0.0 && (drop >= self.share * before || drop >= self.floor_mse)
+    }
+
+    /// The absolute drop of the mean squared error that counts, mm².
+    pub fn floor_mse(&self) -> f64 {
+        self.floor_mse
+    }
+}
+
 /// CV statistics of one model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CvStats {
@@ -120,14 +188,19 @@ pub struct CvStats {
     pub max_3d_mm: f64,
     /// Extra inputs of the model.
     pub extras: Vec<String>,
+    /// The model's noise standard deviation per axis (mm), from its nugget
+    /// ([`ErrorModel::noise_std`]).
+    #[serde(default)]
+    pub noise_mm: [f64; 3],
     /// Out-of-fold residuals δ − δ̂ (mm), measurement order; not serialised.
     #[serde(skip)]
     pub residuals: Vec<[f64; 3]>,
 }
 
-fn cv_stats(residuals: Vec<[f64; 3]>, extras: &[Feature]) -> CvStats {
+fn cv_stats(residuals: Vec<[f64; 3]>, extras: &[Feature], model: &ErrorModel) -> CvStats {
     let s = summarize(&residuals);
     CvStats {
+        noise_mm: model.noise_std(),
         cv_rmse_mm: s.rms_mm,
         pooled_rmse_mm: (s.rms_mm.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt(),
         mean_3d_mm: s.mean_3d_mm,
@@ -150,6 +223,12 @@ pub struct EffectReport {
     pub label: String,
     /// Parameters of the best grid point (e.g. `period_deg`, `row`).
     pub params: BTreeMap<String, f64>,
+    /// A 95 % support interval of each scanned parameter: the range over
+    /// the grid points whose leave-one-out gain is within `χ²₁(95 %)` times
+    /// the model's expected leave-one-out variance of the best (for a step,
+    /// the rows it may be at).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub params_ci: BTreeMap<String, [f64; 2]>,
     /// Out of sample: relative drop of the closed-form K-fold CV squared
     /// error with the candidate in the trend ([`gls`]).
     pub score: f64,
@@ -159,6 +238,11 @@ pub struct EffectReport {
     /// Sign-flip test p-value `(1 + exceedances) / (1 + resamples)`, before the
     /// multiple-testing correction.
     pub p_value: f64,
+    /// The statistic beyond what scanning its grid finds by chance (minus
+    /// its null distribution's mean), as a share of the model's leave-one-out
+    /// SSE: the ranking of significant candidates.
+    #[serde(default)]
+    pub evidence: f64,
     /// Benjamini–Hochberg adjusted p-value.
     pub q_value: f64,
     /// Counted as a discovery: q-value within `fdr` and a closed-form CV drop
@@ -183,9 +267,54 @@ pub struct EffectReport {
     /// Sign-flip resamples run before its p-value settled.
     #[serde(default)]
     pub resamples: usize,
+    /// For an added effect: its trend coefficients with 95 % intervals
+    /// (the size of a step in mm, the share of a move left as lag, …).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub size: Vec<Coefficient>,
+    /// For an added effect: how much of what it promised the refit model
+    /// delivers, and how close the CV RMSE came to the model's own level.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub after_check: Option<AfterCheck>,
     /// What would be added to the model if it were accepted; not serialised.
     #[serde(skip)]
     pub add: Vec<Feature>,
+}
+
+/// One trend coefficient of an added effect, per axis: the GLS estimate
+/// and its 95 % interval (± 1.96 standard errors, [`ErrorModel::trend_coefficient`]),
+/// in mm per unit of the column (for a step, the step in mm).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Coefficient {
+    /// The model's input column, e.g. `step@150`.
+    pub column: String,
+    /// Estimate per axis (x, y, z).
+    pub estimate: [f64; 3],
+    /// Half-width of the 95 % interval per axis.
+    pub ci95: [f64; 3],
+}
+
+/// The "after" check of an added effect (issue 22): did the model with it
+/// reach the level of a campaign without it?
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AfterCheck {
+    /// Drop of the pooled CV RMSE the closed-form test promised (share).
+    pub promised: f64,
+    /// Drop of the pooled CV RMSE the refit model reached (share).
+    pub achieved: f64,
+    /// CV RMSE of the model with the effect, per axis (mm).
+    pub cv_rmse_mm: [f64; 3],
+    /// The level a campaign without the effect would reach, estimated from
+    /// the data: the refit model's own expectation of its leave-one-out
+    /// error, its nugget's noise plus its interpolation error, per axis (mm).
+    pub level_mm: [f64; 3],
+    /// The nugget's noise alone, per axis (mm).
+    pub noise_mm: [f64; 3],
+    /// Only partly modelled: it delivers under half of what it promised,
+    /// the CV RMSE stays above 1.3× the level, or a candidate of the same
+    /// source is still significant in the next round.
+    pub partly: bool,
+    /// The verdict in words.
+    pub verdict: String,
 }
 
 impl EffectReport {
@@ -230,8 +359,14 @@ pub struct Diagnosis {
     pub folds: usize,
     /// Seed of the fold partition and of the resamples.
     pub seed: u64,
-    /// Most sign-flip resamples per candidate.
+    /// Most sign-flip resamples per candidate, as used (the option, raised
+    /// to [`min_resamples`] of the largest round when lower).
     pub permutations: usize,
+    /// Candidate families tested in the first round, and the grid points
+    /// (parameter values) they scan in all: the multiple testing the
+    /// false-discovery control pays for.
+    #[serde(default)]
+    pub candidates: [usize; 2],
     /// False-discovery rate of the Benjamini–Hochberg step.
     pub fdr: f64,
     /// CV statistics of the model as given (no extra input).
@@ -240,7 +375,8 @@ pub struct Diagnosis {
     pub after: CvStats,
     /// CV statistics after each accepted effect, in order.
     pub steps: Vec<CvStats>,
-    /// Every candidate of every round, each round ranked by score.
+    /// Every candidate of every round, each round ranked: the significant
+    /// ones by evidence, then the others by score.
     pub effects: Vec<EffectReport>,
     /// Extra inputs of the final model.
     pub extras: Vec<Feature>,
@@ -306,7 +442,94 @@ fn cross_validated(
     let res = cross_validate_refit(&work, o.folds, o.seed, |train| {
         ErrorModel::fit_with_extras(train, o.space, &warm, extras)
     })?;
-    Ok((cv_stats(res.residuals, extras), model))
+    Ok((cv_stats(res.residuals, extras, &model), model))
+}
+
+/// The range of every parameter over the grid points `support` of `family`.
+fn support_interval(family: &scan::Family, support: &[usize]) -> BTreeMap<String, [f64; 2]> {
+    let mut out: BTreeMap<String, [f64; 2]> = BTreeMap::new();
+    for &i in support {
+        for (k, v) in &family.grid[i].params {
+            let e = out.entry(k.clone()).or_insert([*v, *v]);
+            e[0] = e[0].min(*v);
+            e[1] = e[1].max(*v);
+        }
+    }
+    out
+}
+
+/// The trend coefficients of the columns `add` brings, with 95 % intervals.
+fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficient> {
+    add.iter()
+        .flat_map(Feature::names)
+        .filter_map(|column| {
+            let c = model.trend_coefficient(&column)?;
+            Some(Coefficient {
+                estimate: c.map(|(b, _)| b),
+                ci95: c.map(|(_, se)| 1.96 * se),
+                column,
+            })
+        })
+        .collect()
+}
+
+/// A CV RMSE above this multiple of the level a campaign without the effect
+/// would reach counts as only partly modelled (the target of issue 22).
+pub const AFTER_LEVEL_RATIO: f64 = 1.3;
+
+/// The "after" check of an added effect: `promised` and `achieved` drops of
+/// the pooled CV RMSE, the CV `after`, the refit model's own leave-one-out
+/// `level` per axis, and the label of a candidate of the same source still
+/// significant in round `round`.
+fn after_check(
+    promised: f64,
+    achieved: f64,
+    after: &CvStats,
+    level: [f64; 3],
+    again: Option<String>,
+    round: usize,
+) -> AfterCheck {
+    let pooled = |v: &[f64; 3]| (v.iter().map(|x| x * x).sum::<f64>() / 3.0).sqrt();
+    let ratio = after.pooled_rmse_mm / pooled(&level).max(f64::MIN_POSITIVE);
+    let mut why = Vec::new();
+    if achieved < 0.5 * promised {
+        why.push(format!(
+            "the refit model lowers the CV RMSE by {:.1} %, under half the {:.1} % its test promised",
+            100.0 * achieved,
+            100.0 * promised
+        ));
+    }
+    if ratio > AFTER_LEVEL_RATIO {
+        why.push(format!(
+            "the CV RMSE stays at {ratio:.2}× the level of a campaign without it ({:.4} mm)",
+            pooled(&level)
+        ));
+    }
+    if let Some(label) = again {
+        why.push(format!(
+            "'{label}', of the same source, is still significant in round {round}"
+        ));
+    }
+    let partly = !why.is_empty();
+    let verdict = if partly {
+        format!("found, but only partly modelled: {}", why.join("; "))
+    } else {
+        format!(
+            "explained: CV RMSE {:.4} mm, {ratio:.2}× the level of a campaign without it ({:.4} mm: noise {:.4} mm plus interpolation)",
+            after.pooled_rmse_mm,
+            pooled(&level),
+            pooled(&after.noise_mm)
+        )
+    };
+    AfterCheck {
+        promised,
+        achieved,
+        cv_rmse_mm: after.cv_rmse_mm,
+        level_mm: level,
+        noise_mm: after.noise_mm,
+        partly,
+        verdict,
+    }
 }
 
 /// The base model a diagnosis starts from, by name: `ejs` (the default)
@@ -362,15 +585,18 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     o.validate()?;
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;
-    // CV RMSE drop `min_gain` as a relative drop of the SSE (the score)
-    let min_score = 1.0 - (1.0 - o.min_gain).powi(2);
     let fold = kfold_partition(data.len(), o.folds, o.seed)?;
     progress("cross-validating the current model");
     let (before, mut model) = cross_validated(data, &[], o, None)?;
     let mut current = before.clone();
     let mut extras: Vec<Feature> = Vec::new();
     let mut steps = Vec::new();
-    let mut effects = Vec::new();
+    let mut effects: Vec<EffectReport> = Vec::new();
+    let mut permutations = o.permutations;
+    let mut candidates = [0; 2];
+    // the effect accepted in the last round, awaiting its "after" check:
+    // (its index in `effects`, promised and achieved RMSE drop, CV after)
+    let mut pending: Option<(usize, f64, f64, CvStats)> = None;
     for round in 1..=o.max_effects + 1 {
         let used: Vec<String> = extras
             .iter()
@@ -380,31 +606,50 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             })
             .collect();
         let fams = scan::families(data, &used, o.robot.as_ref());
+        let resamples = o.permutations.max(min_resamples(fams.len(), o.fdr));
+        permutations = permutations.max(resamples);
+        if round == 1 {
+            candidates = [fams.len(), fams.iter().map(|f| f.grid.len()).sum()];
+        }
         progress(&format!(
-            "round {round}: testing {} candidate effects with {} permutations",
+            "round {round}: testing {} candidate effects with up to {resamples} resamples",
             fams.len(),
-            o.permutations
         ));
         let systems: Vec<gls::AxisSystem> = model
             .outputs
             .iter()
             .map(gls::AxisSystem::new)
             .collect::<Result<_>>()?;
+        let level: [f64; 3] = std::array::from_fn(|a| systems[a].expected_loo_rmse());
         let refit = |cols: &[Vec<f64>]| gls::refit_systems(&model, errors, &o.kriging, cols).ok();
         let mut tested = scan::test_families(
-            &fams,
-            systems,
-            o.permutations,
-            o.seed,
-            &fold,
-            o.refine,
-            &refit,
-            progress,
+            &fams, systems, resamples, o.seed, &fold, o.refine, &refit, progress,
         );
-        tested.sort_by(|a, b| {
-            b.score
+        let worth = Worth::new(o.min_gain, &current.noise_mm);
+        let rows3 = 3.0 * data.len() as f64;
+        // the closed-form CV mean squared error before and with a candidate
+        let cf = |t: &scan::Tested| {
+            let before = t.cv_sse_before / rows3;
+            (before, before * (1.0 - t.score))
+        };
+        // significant candidates first, by evidence (the cap goes to what
+        // the data shows most clearly, not to the largest share of a large
+        // misfit); the others by score
+        let significant = |t: &scan::Tested| {
+            let (b, a) = cf(t);
+            t.q_value <= o.fdr && worth.counts(b, a)
+        };
+        tested.sort_by(|a, b| match (significant(a), significant(b)) {
+            (true, false) => std::cmp::Ordering::Less,
+            (false, true) => std::cmp::Ordering::Greater,
+            (true, true) => b
+                .evidence
+                .total_cmp(&a.evidence)
+                .then(b.score.total_cmp(&a.score)),
+            (false, false) => b
+                .score
                 .total_cmp(&a.score)
-                .then(a.p_value.total_cmp(&b.p_value))
+                .then(a.p_value.total_cmp(&b.p_value)),
         });
         let mut reports: Vec<EffectReport> = tested
             .iter()
@@ -417,22 +662,28 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                     source: f.source.clone(),
                     label: f.label.clone(),
                     params: g.params.clone(),
+                    params_ci: support_interval(f, &t.support),
                     score: t.score,
                     explained: t.explained,
                     p_value: t.p_value,
                     q_value: t.q_value,
-                    significant: t.q_value <= o.fdr && t.score >= min_score,
+                    evidence: t.evidence,
+                    significant: significant(t),
                     accepted: false,
                     confounded_with: Vec::new(),
-                    note: (t.q_value <= o.fdr && t.score < min_score).then(|| {
+                    note: (t.q_value <= o.fdr && !worth.counts(cf(t).0, cf(t).1)).then(|| {
                         format!(
-                            "q within the FDR, but it would lower the CV RMSE by only {:.1} % (closed form), under the {:.0} % that counts",
+                            "q within the FDR, but it would lower the CV RMSE by only {:.1} % (closed form) and its mean square by {:.2e} mm², under the {:.0} % and the {:.2e} mm² (its worth at the noise floor) that count",
                             100.0 * (1.0 - (1.0 - t.score.max(0.0)).sqrt()),
-                            100.0 * o.min_gain
+                            (cf(t).0 - cf(t).1).max(0.0),
+                            100.0 * o.min_gain,
+                            worth.floor_mse()
                         )
                     }),
                     refit_xi: t.refit,
                     resamples: t.resamples,
+                    size: Vec::new(),
+                    after_check: None,
                     add: g.add.clone(),
                 }
             })
@@ -453,6 +704,15 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
                 .collect();
             reports[k].confounded_with = similar;
+        }
+        if let Some((idx, promised, achieved, after)) = pending.take() {
+            let source = &effects[idx].source;
+            let again = reports
+                .iter()
+                .find(|r| r.significant && &r.source == source)
+                .map(|r| r.label.clone());
+            effects[idx].after_check =
+                Some(after_check(promised, achieved, &after, level, again, round));
         }
         // the best significant candidates in turn, until the refit CV
         // confirms one (at most CONFIRMATIONS per round)
@@ -478,8 +738,15 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 reports[k].label
             ));
             let (after, trial_model) = cross_validated(data, &trial, o, Some(&model))?;
-            if after.pooled_rmse_mm <= (1.0 - o.min_gain) * current.pooled_rmse_mm {
+            if worth.counts(current.pooled_rmse_mm.powi(2), after.pooled_rmse_mm.powi(2)) {
                 reports[k].accepted = true;
+                reports[k].size = coefficients(&trial_model, &reports[k].add);
+                pending = Some((
+                    effects.len() + k,
+                    1.0 - (1.0 - reports[k].score.clamp(0.0, 1.0)).sqrt(),
+                    1.0 - after.pooled_rmse_mm / current.pooled_rmse_mm,
+                    after.clone(),
+                ));
                 extras = trial;
                 next_model = Some(trial_model);
                 current = after.clone();
@@ -488,10 +755,11 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 break;
             }
             let drop = format!(
-                "CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop",
+                "CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop or its worth at the noise floor ({:.2e} mm² of mean square)",
                 current.pooled_rmse_mm,
                 after.pooled_rmse_mm,
-                100.0 * o.min_gain
+                100.0 * o.min_gain,
+                worth.floor_mse()
             );
             if reports[k].refit_xi {
                 // its statistic came from ξ re-estimated on these data, whose
@@ -515,7 +783,8 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         space: o.space,
         folds: o.folds,
         seed: o.seed,
-        permutations: o.permutations,
+        permutations,
+        candidates,
         fdr: o.fdr,
         before,
         after: current,

@@ -38,6 +38,10 @@ pub enum EffectKind {
     /// The direction history of a joint: its previous direction, or the travel
     /// since its last reversal.
     DirectionHistory,
+    /// How the robot moved into the pose: a joint's last moves (signed,
+    /// decaying, or their size), the TCP's last move, the time since the
+    /// previous pose (servo lag, incomplete settling).
+    MotionHistory,
 }
 
 impl EffectKind {
@@ -49,6 +53,7 @@ impl EffectKind {
             EffectKind::Harmonic => "harmonic",
             EffectKind::Interaction => "interaction",
             EffectKind::DirectionHistory => "direction-history",
+            EffectKind::MotionHistory => "motion-history",
         }
     }
 }
@@ -373,7 +378,245 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
             grid,
         });
     }
+    motion_families(data, exclude, robot, &u, &mut out);
     out
+}
+
+/// Memories τ (poses) scanned for a joint's decaying sum of moves.
+pub const MOVE_TAUS: [f64; 6] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0];
+
+/// Lags (rows) scanned by the generic search.
+const LAGS: [usize; 3] = [1, 2, 3];
+
+/// Names of a time column: the interval since the previous pose is a
+/// candidate when one of these is present and never decreases.
+const TIME_COLUMNS: [&str; 5] = ["time_s", "time", "t_s", "timestamp", "time_ms"];
+
+/// The time column of a campaign, when it has one that never decreases.
+fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covariate> {
+    usable_covariates(data, exclude).find(|c| {
+        TIME_COLUMNS.contains(&c.name.as_str())
+            && c.values.windows(2).all(|w| w[1] >= w[0])
+            && constant_covariate(c).is_none()
+    })
+}
+
+/// How the robot moved into each pose (issue 22), and the generic search:
+/// - per joint j, its signed moves with a scanned memory τ (through the
+///   robot's Jacobian when it is given, so that the candidate is the TCP
+///   displacement a lag of joint j causes; else the moves and their product
+///   with every joint angle) and the size of its last move;
+/// - the TCP's last move (with the robot), the time since the previous pose
+///   (with a time column);
+/// - for each numeric column, the interval and each joint's last move: the
+///   feature times one joint angle (θ, sin θ, cos θ; the joint and a lag
+///   of 0 or 1 row scanned), and the columns and the interval lagged by
+///   1–3 rows.
+///
+/// The scans are grids of one family each, so a family's p-value pays for
+/// its scan (the null takes the maximum over the same grid).
+fn motion_families(
+    data: &Dataset,
+    exclude: &[String],
+    robot: Option<&Robot>,
+    u: &[Vec<f64>],
+    out: &mut Vec<Family>,
+) {
+    let n = data.n_joints();
+    let from_poses = |f: &Feature| f.columns_from_poses(&data.q, &data.dir).ok();
+    let z_all = |cols: Vec<Vec<f64>>| cols.iter().map(|c| zscore(c)).collect::<Vec<_>>();
+    for j in 1..=n {
+        let mut grid = Vec::new();
+        for tau in MOVE_TAUS {
+            let plain = Feature::Moves {
+                joint: j,
+                tau_poses: tau,
+            };
+            let (columns, add) = match robot {
+                Some(r) => {
+                    let f = Feature::MovesJacobian {
+                        robot: Box::new(r.clone()),
+                        joint: j,
+                        tau_poses: tau,
+                    };
+                    let Some(c) = from_poses(&f) else { continue };
+                    (z_all(c), f)
+                }
+                None => {
+                    let Some(h) = from_poses(&plain) else {
+                        continue;
+                    };
+                    let z = zscore(&h[0]);
+                    let mut cols = vec![z.clone()];
+                    cols.extend(
+                        u.iter()
+                            .map(|uk| z.iter().zip(uk).map(|(a, b)| a * b).collect()),
+                    );
+                    (cols, plain)
+                }
+            };
+            grid.push(GridPoint {
+                params: params(&[("tau_poses", tau)]),
+                columns,
+                add: vec![add],
+            });
+        }
+        if !grid.is_empty() {
+            out.push(Family {
+                kind: EffectKind::MotionHistory,
+                source: vec![format!("move{j}")],
+                label: format!("moves of q{j} into the pose (lag)"),
+                grid,
+            });
+        }
+        let size = Feature::MoveSize { joint: j };
+        if let Some(s) = from_poses(&size) {
+            let lam: Vec<f64> = data.dir.iter().map(|d| d[j - 1]).collect();
+            let signed: Vec<f64> = s[0].iter().zip(&lam).map(|(a, l)| a * l).collect();
+            out.push(Family {
+                kind: EffectKind::MotionHistory,
+                source: vec![format!("move{j}")],
+                label: format!("size of q{j}'s last move"),
+                grid: vec![GridPoint {
+                    params: BTreeMap::new(),
+                    columns: vec![zscore(&s[0]), zscore(&signed)],
+                    add: vec![size],
+                }],
+            });
+        }
+    }
+    if let Some(r) = robot {
+        let f = Feature::TcpMove {
+            robot: Box::new(r.clone()),
+        };
+        if let Some(c) = from_poses(&f) {
+            out.push(Family {
+                kind: EffectKind::MotionHistory,
+                source: vec!["tcp_move".into()],
+                label: "the TCP's last move".into(),
+                grid: vec![GridPoint {
+                    params: BTreeMap::new(),
+                    columns: z_all(c),
+                    add: vec![f],
+                }],
+            });
+        }
+    }
+    // one-column bases of the generic search: (feature, its values, label)
+    let mut bases: Vec<(Feature, Vec<f64>, String)> = Vec::new();
+    for c in usable_covariates(data, exclude).filter(|c| constant_covariate(c).is_none()) {
+        let f = Feature::Covariate {
+            name: c.name.clone(),
+            reference: Some(c.values[0]),
+        };
+        bases.push((f, c.values.clone(), c.name.clone()));
+    }
+    if let Some(t) = time_column(data, exclude) {
+        let mut dt: Vec<f64> = t.values.windows(2).map(|w| w[1] - w[0]).collect();
+        dt.sort_by(f64::total_cmp);
+        let f = Feature::Interval {
+            column: t.name.clone(),
+            reference: dt.get(dt.len() / 2).copied(),
+        };
+        if let Ok(v) = f.columns(data) {
+            out.push(Family {
+                kind: EffectKind::MotionHistory,
+                source: vec![t.name.clone()],
+                label: format!("time since the previous pose (Δ{})", t.name),
+                grid: vec![GridPoint {
+                    params: BTreeMap::new(),
+                    columns: vec![zscore(&v[0])],
+                    add: vec![f.clone()],
+                }],
+            });
+            bases.push((f, v[0].clone(), format!("Δ{}", t.name)));
+        }
+    }
+    let lagged_bases = bases.len();
+    for j in 1..=n {
+        let f = Feature::Moves {
+            joint: j,
+            tau_poses: 0.0,
+        };
+        if let Some(v) = from_poses(&f) {
+            bases.push((f, v[0].clone(), format!("q{j}'s last move")));
+        }
+    }
+    for (b, (f, v, label)) in bases.iter().enumerate() {
+        let (kind, source) = match f {
+            Feature::Covariate { name, .. } => (EffectKind::Covariate, name.clone()),
+            Feature::Interval { column, .. } => (EffectKind::MotionHistory, column.clone()),
+            other => (EffectKind::MotionHistory, other.names().concat()),
+        };
+        let mut grid = Vec::new();
+        for lag in [0usize, 1] {
+            let of = if lag == 0 {
+                f.clone()
+            } else {
+                Feature::Lagged {
+                    of: Box::new(f.clone()),
+                    lag,
+                }
+            };
+            let shifted: Vec<f64> = (0..v.len()).map(|i| v[i.saturating_sub(lag)]).collect();
+            for k in 1..=n {
+                let th = |i: usize| data.q[i][k - 1];
+                let cols = vec![
+                    zscore(
+                        &(0..v.len())
+                            .map(|i| shifted[i] * u[k - 1][i])
+                            .collect::<Vec<_>>(),
+                    ),
+                    zscore(
+                        &(0..v.len())
+                            .map(|i| shifted[i] * th(i).to_radians().sin())
+                            .collect::<Vec<_>>(),
+                    ),
+                    zscore(
+                        &(0..v.len())
+                            .map(|i| shifted[i] * th(i).to_radians().cos())
+                            .collect::<Vec<_>>(),
+                    ),
+                ];
+                grid.push(GridPoint {
+                    params: params(&[("joint", k as f64), ("lag", lag as f64)]),
+                    columns: cols,
+                    add: vec![Feature::Times {
+                        of: Box::new(of.clone()),
+                        joint: k,
+                    }],
+                });
+            }
+        }
+        out.push(Family {
+            kind,
+            source: vec![source.clone()],
+            label: format!("{label} × one joint angle (θ, sin θ, cos θ)"),
+            grid,
+        });
+        if b < lagged_bases {
+            out.push(Family {
+                kind,
+                source: vec![source],
+                label: format!("{label}, lagged"),
+                grid: LAGS
+                    .iter()
+                    .map(|&lag| GridPoint {
+                        params: params(&[("lag", lag as f64)]),
+                        columns: vec![zscore(
+                            &(0..v.len())
+                                .map(|i| v[i.saturating_sub(lag)])
+                                .collect::<Vec<_>>(),
+                        )],
+                        add: vec![Feature::Lagged {
+                            of: Box::new(f.clone()),
+                            lag,
+                        }],
+                    })
+                    .collect(),
+            });
+        }
+    }
 }
 
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
@@ -420,7 +663,25 @@ pub struct Tested {
     pub resamples: usize,
     /// Tested at the ξ the model would choose with it (else at the model's ξ).
     pub refit: bool,
+    /// The closed-form K-fold CV SSE of the model as it is, pooled over the
+    /// axes (mm²): `score` is relative to it.
+    pub cv_sse_before: f64,
+    /// Evidence: the statistic minus the mean of its null distribution (the
+    /// best gain over the same grid in the pseudo-campaigns), as a share of
+    /// the model's leave-one-out SSE — the gain beyond what scanning the
+    /// family's grid finds by chance. A wide scan (a harmonic over hundreds
+    /// of periods) pays for its width here, and unlike the p-value it does
+    /// not saturate at `1/(1 + resamples)`.
+    pub evidence: f64,
+    /// Grid points whose leave-one-out gain is within `χ²₁(95 %) = 3.84`
+    /// times the model's expected leave-one-out variance of the best (a 95 %
+    /// support set of the scanned parameter, e.g. the rows a step may be at).
+    pub support: Vec<usize>,
 }
+
+/// `χ²₁` quantile of 95 %: the drop of a likelihood-ratio statistic that
+/// bounds a 95 % support interval of one scanned parameter.
+const CHI2_1_95: f64 = 3.841_458_820_694_124;
 
 /// Re-estimates ξ with a grid point's columns in the trend and returns the
 /// model's systems there ([`gls::refit_systems`]); `None` keeps the first test.
@@ -531,6 +792,8 @@ pub fn test_families(
     }
     let mut exceed = vec![0usize; families.len()];
     let mut run = vec![0usize; families.len()];
+    // sum and sum of squares of each family's null statistics
+    let mut moments = vec![[0.0f64; 2]; families.len()];
     let mut done = 0;
     while done < permutations {
         let active: Vec<usize> = (0..families.len())
@@ -544,7 +807,7 @@ pub fn test_families(
             active.len()
         ));
         let batch = BATCH.min(permutations - done);
-        let hits: Vec<Vec<usize>> = (done..done + batch)
+        let hits: Vec<Vec<f64>> = (done..done + batch)
             .into_par_iter()
             .map(|b| {
                 let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-signs");
@@ -554,18 +817,19 @@ pub fn test_families(
                 let pseudo = gls::flipped(&sets[0], &signs);
                 active
                     .iter()
-                    .map(|&k| {
-                        let o = trials[k].stat;
-                        let g = trials[k].base.best(&sets[0], &pseudo).1;
-                        usize::from(g >= o - 1e-12 * o.abs())
-                    })
+                    .map(|&k| trials[k].base.best(&sets[0], &pseudo).1)
                     .collect()
             })
             .collect();
         for h in hits {
-            for (&k, x) in active.iter().zip(h) {
-                exceed[k] += x;
+            for (&k, g) in active.iter().zip(h) {
+                let o = trials[k].stat;
+                exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
                 run[k] += 1;
+                if g.is_finite() {
+                    moments[k][0] += g;
+                    moments[k][1] += g * g;
+                }
             }
         }
         done += batch;
@@ -582,6 +846,15 @@ pub fn test_families(
     let q = benjamini_hochberg(&p);
     // score and share against the model as it is (at its own ξ)
     let before = gls::kfold_sse_before(&sets[0], fold);
+    // the support sets: gains within χ²₁ of the best, in units of each set's
+    // expected leave-one-out variance (pooled over the axes)
+    let within: Vec<f64> = sets
+        .iter()
+        .map(|s| {
+            CHI2_1_95 * s.iter().map(|a| a.expected_loo_rmse().powi(2)).sum::<f64>()
+                / s.len() as f64
+        })
+        .collect();
     (0..families.len())
         .into_par_iter()
         .map(|k| {
@@ -609,6 +882,21 @@ pub fn test_families(
                 score,
                 resamples: run[k],
                 refit: t.systems > 0,
+                cv_sse_before: before,
+                evidence: {
+                    let n = run[k] as f64;
+                    if t.stat.is_finite() && n >= 1.0 && loo0 > 0.0 {
+                        (t.stat - moments[k][0] / n) / loo0
+                    } else {
+                        0.0
+                    }
+                },
+                support: if t.stat.is_finite() && families[k].grid.len() > 1 {
+                    let set = &sets[t.systems];
+                    test.near_best(set, &gls::observed(set), within[t.systems])
+                } else {
+                    Vec::new()
+                },
             }
         })
         .collect()
@@ -665,7 +953,14 @@ mod tests {
     #[test]
     fn kind_names_are_the_json_names() {
         use EffectKind::*;
-        for k in [Covariate, Order, Harmonic, Interaction, DirectionHistory] {
+        for k in [
+            Covariate,
+            Order,
+            Harmonic,
+            Interaction,
+            DirectionHistory,
+            MotionHistory,
+        ] {
             assert_eq!(
                 serde_json::to_string(&k).unwrap(),
                 format!("\"{}\"", k.name())

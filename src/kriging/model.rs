@@ -379,6 +379,31 @@ impl KrigingModel {
         self.data.sigma2.sqrt() * self.data.y_std
     }
 
+    /// The noise standard deviation `√(ν·σ²)·y_std` (original units): the
+    /// part of the process the nugget ν attributes to measurement noise
+    /// (0 for an interpolating model).
+    pub fn noise_std(&self) -> f64 {
+        (self.data.sigma2 * self.data.nugget).sqrt() * self.data.y_std
+    }
+
+    /// Standard errors of the GLS trend coefficients β (normalised units):
+    /// `Cov(β) = σ²(FᵀR⁻¹F)⁻¹` (seed 003 eq 11), and with `C⁻¹F = QG` this is
+    /// `σ²(GᵀG)⁻¹ = σ²G⁻¹G⁻ᵀ`, whose diagonal is the squared row norms of
+    /// `G⁻¹` (a p × p triangular solve, no m × m work).
+    pub fn beta_std_errors(&self) -> Vec<f64> {
+        let p = self.g.nrows();
+        let mut ginv = Mat::<f64>::identity(p, p);
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            self.g.as_ref(),
+            ginv.as_mut(),
+            Par::Seq,
+        );
+        let s = self.data.sigma2.sqrt();
+        (0..p)
+            .map(|k| s * (0..p).map(|j| ginv[(k, j)].powi(2)).sum::<f64>().sqrt())
+            .collect()
+    }
+
     /// Predict at normalised inputs (mean and MSE in original units).
     /// Blocks of points run in parallel; each point's result does not depend
     /// on the others. An error only when the factor cannot be recomputed

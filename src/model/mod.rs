@@ -183,6 +183,36 @@ impl ErrorModel {
         self.outputs.first().map_or(0, |o| o.data.x_train.len())
     }
 
+    /// The noise standard deviation of each output (mm), what its nugget
+    /// attributes to measurement noise ([`KrigingModel::noise_std`]).
+    pub fn noise_std(&self) -> [f64; 3] {
+        std::array::from_fn(|a| self.outputs.get(a).map_or(0.0, KrigingModel::noise_std))
+    }
+
+    /// The linear trend term of input column `column` (by name, e.g.
+    /// `step@150`), per output: its GLS coefficient and standard error in mm
+    /// per unit of the raw column (`β·y_std/σ_col`, from
+    /// [`KrigingModel::beta_std_errors`]). `None` when the column is not an
+    /// input or has no linear term of its own in a polynomial trend.
+    pub fn trend_coefficient(&self, column: &str) -> Option<[(f64, f64); 3]> {
+        let i = self.input_names.iter().position(|n| n == column)?;
+        let scale = self.input_norm.std.get(i).copied().filter(|s| *s > 0.0)?;
+        let mut out = [(0.0, 0.0); 3];
+        for (o, k) in out.iter_mut().zip(&self.outputs) {
+            let Trend::Monomials(m) = &k.data.trend else {
+                return None;
+            };
+            let t = m
+                .exponents
+                .iter()
+                .position(|e| e.iter().enumerate().all(|(d, &x)| x == u8::from(d == i)))?;
+            let se = k.beta_std_errors();
+            let unit = k.data.y_std / scale;
+            *o = (k.data.beta[t] * unit, se[t] * unit);
+        }
+        Some(out)
+    }
+
     /// This model's hyperparameters as warm starts of a refit on similar data
     /// ([`KrigingOptions::warm_start`]), one per output.
     pub fn warm_starts(&self) -> Vec<crate::kriging::WarmStart> {

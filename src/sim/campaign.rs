@@ -488,6 +488,7 @@ fn measure(
     let all_q: Vec<Vec<f64>> = visits.iter().map(|v| v.q.clone()).collect();
     let all_dir = derive_directions(&all_q, Some(&robot.nominal.home));
     let travel = super::effects::travel_since_reversal(&all_q, &all_dir, Some(&robot.nominal.home));
+    let lag = super::effects::lag_deviations(&spec.effects, &all_q, &robot.nominal.home);
     let rows: Vec<usize> = (0..visits.len()).filter(|&i| visits[i].measured).collect();
     let m = rows.len();
     let env = Environment::draw(spec, m, rng);
@@ -499,7 +500,7 @@ fn measure(
         let (qk, dk) = (&all_q[i], &all_dir[i]);
         let ctx = env.context(k);
         let mut qa = robot.actual_joints(qk, dk, &ctx);
-        let mut extra = vec![0.0; qk.len()];
+        let mut extra = lag[i].clone();
         for e in &spec.effects {
             e.joint_deviation(qk, &mut extra);
             e.history_deviation(dk, &travel[i], &mut extra);

@@ -8,7 +8,8 @@
 //! `harmonic:joint=2,period_deg=7.5,amp_deg=0.004`,
 //! `tracker-step:row=150,dx=0.15,dy=0,dz=-0.1`,
 //! `crosstalk:joint=1,from=2,gain_deg=0.004`,
-//! `hysteresis:joint=2,amp_deg=0.01,travel_deg=20`.
+//! `hysteresis:joint=2,amp_deg=0.01,travel_deg=20`,
+//! `lag:joint=2,gain=0.0005,tau_poses=0`.
 
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -77,16 +78,31 @@ pub enum Effect {
         /// Travel scale S of the build-up, degrees (> 0).
         travel_deg: f64,
     },
+    /// Servo lag or incomplete settling: joint `joint` stops short of its
+    /// command by a share of the moves that brought it there,
+    /// `−g·h_k` with `h_k = Δq_k + e^(−1/τ)·h_(k−1)` over the visiting
+    /// sequence (`Δq_k` the joint's move into pose k, from home for the
+    /// first; τ = 0: the last move alone). The error depends on how the
+    /// robot moved into the pose, not on the pose or its direction λ.
+    Lag {
+        /// 1-based joint.
+        joint: usize,
+        /// Share g of the move left unfinished (degrees per degree).
+        gain: f64,
+        /// Memory τ of earlier moves, in poses (≥ 0; 0: the last move only).
+        tau_poses: f64,
+    },
 }
 
 /// Names accepted by [`Effect::parse`].
-pub const EFFECT_NAMES: [&str; 6] = [
+pub const EFFECT_NAMES: [&str; 7] = [
     "temperature",
     "payload",
     "harmonic",
     "tracker-step",
     "crosstalk",
     "hysteresis",
+    "lag",
 ];
 
 impl Effect {
@@ -123,6 +139,11 @@ impl Effect {
                 amp_deg: kv.f("amp_deg", 0.01)?,
                 travel_deg: kv.f("travel_deg", 20.0)?,
             },
+            "lag" => Effect::Lag {
+                joint: kv.joint("joint", 2)?,
+                gain: kv.f("gain", 0.0005)?,
+                tau_poses: kv.f("tau_poses", 0.0)?,
+            },
             other => {
                 return Err(Error::InvalidParameter(format!(
                     "unknown effect '{other}' in '{spec}' (known: {})",
@@ -158,6 +179,9 @@ impl Effect {
                     "hysteresis: travel_deg must be > 0, got {travel_deg}"
                 ))
             }
+            Effect::Lag { tau_poses, .. } if !(*tau_poses >= 0.0) => {
+                bad(format!("lag: tau_poses must be ≥ 0, got {tau_poses}"))
+            }
             _ => Ok(()),
         }
     }
@@ -176,7 +200,7 @@ impl Effect {
         match self {
             Effect::Harmonic { joint, .. } => check(*joint),
             Effect::Crosstalk { joint, from, .. } => check(*joint).and(check(*from)),
-            Effect::Hysteresis { joint, .. } => check(*joint),
+            Effect::Hysteresis { joint, .. } | Effect::Lag { joint, .. } => check(*joint),
             _ => Ok(()),
         }
     }
@@ -213,6 +237,36 @@ impl Effect {
             out[j] += dir[j] * amp_deg * (1.0 - (-since_reversal[j] / travel_deg).exp());
         }
     }
+}
+
+/// Joint deviations of the lag effects ([`Effect::Lag`]) at every pose of a
+/// visiting sequence `q` that starts from `start`.
+pub fn lag_deviations(effects: &[Effect], q: &[Vec<f64>], start: &[f64]) -> Vec<Vec<f64>> {
+    let n = start.len();
+    let mut out = vec![vec![0.0; n]; q.len()];
+    for e in effects {
+        let Effect::Lag {
+            joint,
+            gain,
+            tau_poses,
+        } = e
+        else {
+            continue;
+        };
+        let j = joint - 1;
+        let keep = if *tau_poses > 0.0 {
+            (-1.0 / tau_poses).exp()
+        } else {
+            0.0
+        };
+        let (mut h, mut prev) = (0.0, start[j]);
+        for (o, qk) in out.iter_mut().zip(q) {
+            h = (qk[j] - prev) + keep * h;
+            prev = qk[j];
+            o[j] -= gain * h;
+        }
+    }
+    out
 }
 
 /// Every joint's travel since its direction last changed, for a visiting
@@ -348,6 +402,8 @@ mod tests {
         assert!(Effect::parse("temperature:tau_s=-1").is_err());
         assert!(Effect::parse("crosstalk:joint=2,from=2").is_err());
         assert!(Effect::parse("hysteresis:travel_deg=0").is_err());
+        assert!(Effect::parse("lag:tau_poses=-1").is_err());
+        assert!(Effect::parse("lag:joint=0").is_err());
     }
 
     #[test]
@@ -364,5 +420,17 @@ mod tests {
         let mut out = [0.0];
         e.history_deviation(&dir[3], &[5.0], &mut out);
         assert!((out[0] + 0.01 * (1.0 - (-0.5f64).exp())).abs() < 1e-15);
+    }
+
+    #[test]
+    fn lag_follows_the_moves_into_each_pose() {
+        let q: Vec<Vec<f64>> = [10.0, 30.0, 25.0].iter().map(|v| vec![0.0, *v]).collect();
+        let e = Effect::parse("lag:joint=2,gain=0.01,tau_poses=0").unwrap();
+        let d = lag_deviations(std::slice::from_ref(&e), &q, &[0.0, 0.0]);
+        assert_eq!(d, vec![vec![0.0, -0.1], vec![0.0, -0.2], vec![0.0, 0.05]]);
+        let e = Effect::parse("lag:joint=2,gain=0.01,tau_poses=1").unwrap();
+        let d = lag_deviations(&[e], &q, &[0.0, 0.0]);
+        let k = (-1.0f64).exp();
+        assert!((d[1][1] + 0.01 * (20.0 + 10.0 * k)).abs() < 1e-15);
     }
 }
