@@ -125,9 +125,9 @@ impl DiagnoseOptions {
 
 /// Resamples a round with `families` candidates needs so that a single
 /// real effect can be significant after Benjamini–Hochberg: its smallest
-/// p-value `1/(1 + P)` times `families` must stay within `fdr / 2`.
+/// p-value `1/(1 + P)` times `families` must stay within `fdr`.
 pub fn min_resamples(families: usize, fdr: f64) -> usize {
-    ((2.0 * families as f64 / fdr).ceil() as usize).saturating_sub(1)
+    (families as f64 / fdr).ceil() as usize
 }
 
 /// When a drop of the CV error is worth an effect (issue 22): the pooled CV

@@ -409,9 +409,8 @@ fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covar
 /// - the TCP's last move (with the robot), the time since the previous pose
 ///   (with a time column);
 /// - for each numeric column, the interval and each joint's last move: the
-///   feature times one joint angle (θ, sin θ, cos θ; the joint and a lag
-///   of 0 or 1 row scanned), and the columns and the interval lagged by
-///   1–3 rows.
+///   feature times one joint angle (θ, sin θ, cos θ; the joint scanned),
+///   and the columns and the interval lagged by 1–3 rows.
 ///
 /// The scans are grids of one family each, so a family's p-value pays for
 /// its scan (the null takes the maximum over the same grid).
@@ -548,46 +547,20 @@ fn motion_families(
             Feature::Interval { column, .. } => (EffectKind::MotionHistory, column.clone()),
             other => (EffectKind::MotionHistory, other.names().concat()),
         };
-        let mut grid = Vec::new();
-        for lag in [0usize, 1] {
-            let of = if lag == 0 {
-                f.clone()
-            } else {
-                Feature::Lagged {
+        // the columns as the model would get them ([`Feature::Times`])
+        let grid: Vec<GridPoint> = (1..=n)
+            .filter_map(|k| {
+                let t = Feature::Times {
                     of: Box::new(f.clone()),
-                    lag,
-                }
-            };
-            let shifted: Vec<f64> = (0..v.len()).map(|i| v[i.saturating_sub(lag)]).collect();
-            for k in 1..=n {
-                let th = |i: usize| data.q[i][k - 1];
-                let cols = vec![
-                    zscore(
-                        &(0..v.len())
-                            .map(|i| shifted[i] * u[k - 1][i])
-                            .collect::<Vec<_>>(),
-                    ),
-                    zscore(
-                        &(0..v.len())
-                            .map(|i| shifted[i] * th(i).to_radians().sin())
-                            .collect::<Vec<_>>(),
-                    ),
-                    zscore(
-                        &(0..v.len())
-                            .map(|i| shifted[i] * th(i).to_radians().cos())
-                            .collect::<Vec<_>>(),
-                    ),
-                ];
-                grid.push(GridPoint {
-                    params: params(&[("joint", k as f64), ("lag", lag as f64)]),
-                    columns: cols,
-                    add: vec![Feature::Times {
-                        of: Box::new(of.clone()),
-                        joint: k,
-                    }],
-                });
-            }
-        }
+                    joint: k,
+                };
+                Some(GridPoint {
+                    params: params(&[("joint", k as f64)]),
+                    columns: z_all(t.columns(data).ok()?),
+                    add: vec![t],
+                })
+            })
+            .collect();
         out.push(Family {
             kind,
             source: vec![source.clone()],
