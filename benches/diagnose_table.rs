@@ -178,7 +178,11 @@ fn main() {
                         "  control {seed}: added {:?}; held-out RMS 3D {without:.4} → {with:.4} mm",
                         d.extras.iter().flat_map(|f| f.names()).collect::<Vec<_>>()
                     );
-                    if with < without { "added (held-out better)" } else { "FALSE POSITIVE" }
+                    if with < without {
+                        "added (held-out better)"
+                    } else {
+                        "FALSE POSITIVE"
+                    }
                 } else if d.effects.iter().any(|e| e.significant) {
                     "significant, not added"
                 } else {

@@ -460,3 +460,35 @@ fn constant_covariates_are_left_out_and_reported() {
             .contains("all but 3")
     );
 }
+
+/// An effect counts when it lowers the CV RMSE by `min_gain`, or the CV
+/// mean square by what that is worth at the model's noise (issue 22: a
+/// clear effect must not hide behind an under-fitted base model).
+#[test]
+fn an_effect_is_worth_adding_by_its_share_or_by_its_size_against_the_noise() {
+    use robokrige::diagnose::{Worth, min_resamples};
+    let w = Worth::new(0.02, &[0.1, 0.1, 0.1]);
+    let floor = w.floor_mse();
+    assert!((floor - (1.0 - 0.98f64.powi(2)) * 0.01).abs() < 1e-15);
+    // a base far above the noise: 1.5 % of its RMSE is below the share
+    // rule, but above the noise floor's worth
+    let before = 0.3f64.powi(2);
+    let after = (0.3 * 0.985f64).powi(2);
+    assert!(before - after < (1.0 - 0.98f64.powi(2)) * before);
+    assert!(w.counts(before, after));
+    // a tiny drop counts by neither rule, a rise never
+    assert!(!w.counts(before, before - 0.5 * floor));
+    assert!(!w.counts(before, before + 1.0));
+    // at the noise floor the two rules agree
+    let at_floor = 0.01;
+    assert!(w.counts(at_floor, at_floor * 0.98f64.powi(2) - 1e-12));
+    assert!(!w.counts(at_floor, at_floor * 0.985f64.powi(2)));
+    // an interpolating model (no nugget) has only the share rule
+    let interp = Worth::new(0.02, &[0.0; 3]);
+    assert!(!interp.counts(before, after));
+    // BH among F candidates: a lone p = 1/(1 + P) must reach q ≤ fdr
+    for f in [10usize, 64, 95, 400] {
+        let p = min_resamples(f, 0.05);
+        assert!(f as f64 / (1.0 + p as f64) <= 0.05);
+    }
+}

@@ -19,8 +19,10 @@
 //!    closed-form K-fold CV drop.
 //! 4. **Adding**: the significant family with the most evidence (its
 //!    leave-one-out gain beyond the mean of its null distribution: what
-//!    scanning its grid finds by chance is taken off, so a wide harmonic
-//!    scan does not crowd out a clear step) has its feature join the
+//!    scanning its grid finds by chance is taken off), kinds of effect not
+//!    yet in the model first (so that harmonic after harmonic does not
+//!    crowd out a step or a drift the data shows clearly), has its feature
+//!    join the
 //!    model the way its kind needs ([`crate::features::Feature`]): a step,
 //!    harmonic, interaction or cross-talk basis as trend terms; a covariate,
 //!    the order or direction history as an input dimension with a linear
@@ -597,6 +599,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     // the effect accepted in the last round, awaiting its "after" check:
     // (its index in `effects`, promised and achieved RMSE drop, CV after)
     let mut pending: Option<(usize, f64, f64, CvStats)> = None;
+    let mut added_kinds: Vec<EffectKind> = Vec::new();
     for round in 1..=o.max_effects + 1 {
         let used: Vec<String> = extras
             .iter()
@@ -632,19 +635,23 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             let before = t.cv_sse_before / rows3;
             (before, before * (1.0 - t.score))
         };
-        // significant candidates first, by evidence (the cap goes to what
-        // the data shows most clearly, not to the largest share of a large
-        // misfit); the others by score
+        // significant candidates first: kinds of effect not in the model yet
+        // before more of a kind already added (so that a cap of a few
+        // effects is not spent on harmonic after harmonic while a drift the
+        // data shows clearly waits), each by evidence (what the data shows
+        // most clearly, not the largest share of a large misfit); the others
+        // by score
         let significant = |t: &scan::Tested| {
             let (b, a) = cf(t);
             t.q_value <= o.fdr && worth.counts(b, a)
         };
+        let seen = |t: &scan::Tested| added_kinds.contains(&fams[t.family].kind);
         tested.sort_by(|a, b| match (significant(a), significant(b)) {
             (true, false) => std::cmp::Ordering::Less,
             (false, true) => std::cmp::Ordering::Greater,
-            (true, true) => b
-                .evidence
-                .total_cmp(&a.evidence)
+            (true, true) => seen(a)
+                .cmp(&seen(b))
+                .then(b.evidence.total_cmp(&a.evidence))
                 .then(b.score.total_cmp(&a.score)),
             (false, false) => b
                 .score
@@ -740,6 +747,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             let (after, trial_model) = cross_validated(data, &trial, o, Some(&model))?;
             if worth.counts(current.pooled_rmse_mm.powi(2), after.pooled_rmse_mm.powi(2)) {
                 reports[k].accepted = true;
+                added_kinds.push(reports[k].kind);
                 reports[k].size = coefficients(&trial_model, &reports[k].add);
                 pending = Some((
                     effects.len() + k,

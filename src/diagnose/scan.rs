@@ -468,17 +468,17 @@ fn motion_families(
                 grid,
             });
         }
+        // the size alone: signed by λ it would be the signed move, which the
+        // family above tests (and a candidate's columns must be what it adds)
         let size = Feature::MoveSize { joint: j };
         if let Some(s) = from_poses(&size) {
-            let lam: Vec<f64> = data.dir.iter().map(|d| d[j - 1]).collect();
-            let signed: Vec<f64> = s[0].iter().zip(&lam).map(|(a, l)| a * l).collect();
             out.push(Family {
                 kind: EffectKind::MotionHistory,
                 source: vec![format!("move{j}")],
                 label: format!("size of q{j}'s last move"),
                 grid: vec![GridPoint {
                     params: BTreeMap::new(),
-                    columns: vec![zscore(&s[0]), zscore(&signed)],
+                    columns: vec![zscore(&s[0])],
                     add: vec![size],
                 }],
             });

@@ -27,7 +27,8 @@ pub struct Execution {
 /// Execute `commands` on `robot` starting from joints `start`, in the state
 /// at the start of a campaign (default pose context: no payload, reference
 /// temperature, no tracker step) but with the joint-side `effects` (gear
-/// harmonic, cross-talk) that act whenever the robot moves, drawing the noise
+/// harmonic, cross-talk, hysteresis, servo lag) that act whenever the robot
+/// moves, drawing the noise
 /// from `rng`.
 /// The controller's IK seeds each point from `hints` (if given), then from the
 /// previous point ([`first_pass_joints`]).
@@ -51,14 +52,16 @@ pub fn execute(
     ))?;
     let dir = derive_directions(&joints, Some(start));
     let travel = super::effects::travel_since_reversal(&joints, &dir, Some(start));
+    let lag = super::effects::lag_deviations(effects, &joints, start);
     let ctx = Default::default();
     let measured = joints
         .iter()
         .zip(&dir)
         .zip(&travel)
-        .map(|((q, d), s)| {
+        .zip(lag)
+        .map(|(((q, d), s), lagged)| {
             let mut qa = robot.actual_joints(q, d, &ctx);
-            let mut extra = vec![0.0; q.len()];
+            let mut extra = lagged;
             for e in effects {
                 e.joint_deviation(q, &mut extra);
                 e.history_deviation(d, s, &mut extra);
