@@ -76,9 +76,15 @@ pub struct DiagnoseArgs {
     /// Hooke–Jeeves fits with auto encoding blew up in some folds.
     #[arg(long, default_value = "none")]
     periodic: String,
-    /// Use only the first N rows (each CV fit is O(m³): keep m in the hundreds).
+    /// Use only the first N rows.
     #[arg(long)]
     rows: Option<usize>,
+    /// Above this many rows, every CV is closed-form at the hyperparameters
+    /// of the model fitted on all rows (not refitted per fold), and the
+    /// candidates' ξ is re-estimated on a seeded subset of this many rows:
+    /// a whole campaign of thousands of rows in minutes.
+    #[arg(long, default_value_t = robokrige::diagnose::DEFAULT_REFIT_ROWS)]
+    refit_rows: usize,
     /// Write the result as JSON to FILE ("-": standard output).
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -133,6 +139,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         permutations: a.permutations,
         fdr: a.fdr,
         max_effects: a.max_effects,
+        refit_rows: a.refit_rows,
         robot: a
             .robot
             .as_deref()
@@ -244,10 +251,11 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
 
 fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
     say!(
-        "{} ({} rows): {}-fold CV ({}), {} candidates scanning {} parameter values, up to {} resamples, FDR {}, {:.1} s",
+        "{} ({} rows): {}-fold {} CV ({}), {} candidates scanning {} parameter values, up to {} resamples, FDR {}, {:.1} s",
         a.data.display(),
         d.before.residuals.len(),
         d.folds,
+        d.cv_mode,
         a.method,
         d.candidates[0],
         d.candidates[1],
@@ -467,12 +475,17 @@ fn report(
     let _ = writeln!(s, "# Diagnosis of `{}`\n", a.data.display());
     let _ = writeln!(
         s,
-        "Base model `{}`; out-of-fold residuals of a {}-fold CV refitted on every training fold (fold seed {}); \
+        "Base model `{}`; out-of-fold residuals of a {}-fold CV {} (fold seed {}); \
          {} candidates (scanning {} parameter values in all), each tried inside the model and tested against up to {} \
          sign-flipped pseudo-campaigns (maximum over its parameter scan), Benjamini–Hochberg at FDR {}; an effect \
-         is added only if it lowers the pooled CV RMSE by ≥ 2 %. {:.1} s.\n",
+         is added only if it lowers the pooled CV RMSE by ≥ 2 % or by its worth at the noise floor. {:.1} s.\n",
         a.method,
         d.folds,
+        if d.cv_mode == "closed-form" {
+            "in closed form at the hyperparameters of the model fitted on all rows"
+        } else {
+            "refitted on every training fold"
+        },
         d.seed,
         d.candidates[0],
         d.candidates[1],

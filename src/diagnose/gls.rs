@@ -41,22 +41,28 @@ use crate::kriging::{
 };
 use crate::model::ErrorModel;
 use crate::{Error, Result};
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
 use faer::{Mat, Par};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// One output of the current model, prepared for trend updates.
+/// One output of the current model, prepared for trend updates at one K-fold
+/// partition.
 pub struct AxisSystem {
-    /// `Z = C⁻¹`.
-    z: Mat<f64>,
-    /// `M = PZ`.
-    mw: Mat<f64>,
-    /// `Q_Fᵀ Z` (p × m): what the projection removes.
-    b: Mat<f64>,
-    /// `A = MᵀM`.
-    a: Mat<f64>,
+    /// The Cholesky factor `C` of `R`: `Z = C⁻¹` is applied by triangular
+    /// solves (m² flops per column, half a product with a dense m × m
+    /// matrix), and `M`, `A = MᵀM` are never kept.
+    c: Mat<f64>,
+    /// `Q_Fᵀ` (p × m): `P = I − Q_F Q_Fᵀ`.
+    qt: Mat<f64>,
     a_diag: Vec<f64>,
+    /// The partition the blocks are of (fold of every row).
+    fold: Vec<usize>,
+    /// `A_bb = M_bᵀ M_b` of every block of `fold`
+    /// ([`crate::stats::fold_blocks`] order).
+    blocks: Vec<Mat<f64>>,
     gamma: Vec<f64>,
     rt: Vec<f64>,
     /// `y_std²`: normalised units → mm².
@@ -66,32 +72,84 @@ pub struct AxisSystem {
 }
 
 impl AxisSystem {
-    /// From a fitted output (O(m³), once per round).
-    pub fn new(model: &KrigingModel) -> Result<Self> {
+    /// From a fitted output, for the K-fold partition `fold` (O(m³), once
+    /// per round: `Z = C⁻¹`, m³/3 flops, then `M = PZ`, its column norms
+    /// `A_ii` and the blocks `A_bb`, 2m³/K flops).
+    pub fn new(model: &KrigingModel, fold: &[usize]) -> Result<Self> {
         let (c, ft, g) = model.factors()?;
         let m = c.nrows();
-        let mut z = Mat::<f64>::identity(m, m);
-        solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
+        if fold.len() != m {
+            return Err(Error::InvalidParameter(format!(
+                "a fold partition of {} rows for a model of {m}",
+                fold.len()
+            )));
+        }
+        let mut mw = Mat::<f64>::identity(m, m);
+        solve_lower_triangular_in_place(c.as_ref(), mw.as_mut(), faer::get_global_parallelism());
         // Q_Fᵀ = G⁻ᵀ F̃ᵀ
         let mut qt = ft.transpose().to_owned();
         solve_lower_triangular_in_place(g.transpose(), qt.as_mut(), Par::Seq);
-        let b = &qt * &z;
-        let mw = &z - qt.transpose() * &b;
-        let a = mw.transpose() * &mw;
+        // M = Z − Q_F (Q_Fᵀ Z)
+        let b = &qt * &mw;
+        mw -= qt.transpose() * &b;
+        let blocks = crate::stats::fold_blocks(fold)
+            .iter()
+            .map(|idx| {
+                let mb = Mat::<f64>::from_fn(m, idx.len(), |i, c| mw[(i, idx[c])]);
+                mb.transpose() * &mb
+            })
+            .collect();
         let gamma = model.data.gamma.clone();
         let gcol = Mat::<f64>::from_fn(m, 1, |i, _| gamma[i]);
         let rtm = c.transpose() * &gcol;
         Ok(AxisSystem {
-            a_diag: (0..m).map(|i| a[(i, i)]).collect(),
+            // A_ii = ‖M e_i‖²
+            a_diag: (0..m)
+                .map(|i| mw.col(i).iter().map(|v| v * v).sum())
+                .collect(),
             rt: (0..m).map(|i| rtm[(i, 0)]).collect(),
-            z,
-            mw,
-            b,
-            a,
+            c: c.clone(),
+            qt,
+            fold: fold.to_vec(),
+            blocks,
             gamma,
             scale2: model.data.y_std * model.data.y_std,
             sigma2: model.data.sigma2,
         })
+    }
+
+    /// `(MX, Q_FᵀZX)` by one triangular solve: `ZX = C⁻¹X`, then the
+    /// projection.
+    fn whiten(&self, x: Mat<f64>) -> (Mat<f64>, Mat<f64>) {
+        let mut zx = x;
+        solve_lower_triangular_in_place(self.c.as_ref(), zx.as_mut(), faer::get_global_parallelism());
+        let bx = &self.qt * &zx;
+        zx -= self.qt.transpose() * &bx;
+        (zx, bx)
+    }
+
+    /// `MᵀY = C⁻ᵀ(PY)` by one triangular solve.
+    fn m_transpose_times(&self, y: Mat<f64>) -> Mat<f64> {
+        let mut py = y;
+        let proj = &self.qt * &py;
+        py -= self.qt.transpose() * &proj;
+        solve_upper_triangular_in_place(
+            self.c.transpose(),
+            py.as_mut(),
+            faer::get_global_parallelism(),
+        );
+        py
+    }
+
+    /// The blocks `A_bb` of `fold`, which must be the partition the system
+    /// was built for.
+    fn a_blocks(&self, fold: &[usize]) -> &[Mat<f64>] {
+        assert_eq!(
+            fold,
+            &self.fold[..],
+            "an AxisSystem answers for the fold partition it was built for"
+        );
+        &self.blocks
     }
 
     /// The model's own expectation of its leave-one-out RMSE (mm): with
@@ -111,8 +169,7 @@ impl AxisSystem {
     /// `γ* = Mᵀr̃*` for a pseudo whitened residual `r̃*`.
     fn gamma_of(&self, rt: &[f64]) -> Vec<f64> {
         let m = self.rows();
-        let r = Mat::<f64>::from_fn(m, 1, |i, _| rt[i]);
-        let g = self.mw.transpose() * &r;
+        let g = self.m_transpose_times(Mat::<f64>::from_fn(m, 1, |i, _| rt[i]));
         (0..m).map(|i| g[(i, 0)]).collect()
     }
 
@@ -137,6 +194,14 @@ struct Prepared {
     /// (`A'_ii = A_ii − Σ_c U_ic²`); `None` where the point leaves a row
     /// unpredictable (`A'_ii` vanishes).
     inv_den: Vec<Option<Vec<f64>>>,
+    /// For batches of pseudo-campaigns ([`FamilyTest::best_of_batch`]):
+    /// `W²` (m × grid points), column g the squared `1 / A'_ii` of point g
+    /// (zero for an unusable point)…
+    w2: Mat<f64>,
+    /// …`V = U` with each column scaled by its point's `W²`…
+    v: Mat<f64>,
+    /// …and `S_g = U_gᵀ diag(W²_g) U_g` of every point g.
+    s: Vec<Mat<f64>>,
 }
 
 /// Relative size below which a whitened column counts as already in the
@@ -150,8 +215,7 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
         let cols: Vec<&Vec<f64>> = grid.iter().flatten().collect();
         move |i, j| cols[j][i]
     });
-    let xt = &sys.mw * &x;
-    let xb = &sys.b * &x;
+    let (xt, xb) = sys.whiten(x);
     let mut q = Mat::<f64>::zeros(m, k);
     let mut spans = Vec::with_capacity(grid.len());
     let (mut src, mut dst) = (0, 0);
@@ -181,7 +245,8 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
         spans.push(start..dst);
     }
     let q = q.subcols(0, dst).to_owned();
-    let u = sys.z.transpose() * &q;
+    // U = ZᵀQ_X = MᵀQ_X (Q_X lies in the range of P)
+    let u = sys.m_transpose_times(q.clone());
     let inv_den = spans
         .iter()
         .map(|span| {
@@ -192,12 +257,32 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
                 })
                 .collect()
         })
-        .collect();
+        .collect::<Vec<Option<Vec<f64>>>>();
+    let w2 = Mat::<f64>::from_fn(m, spans.len(), |i, g| {
+        inv_den[g].as_ref().map_or(0.0, |w| w[i] * w[i])
+    });
+    let mut v = Mat::<f64>::zeros(m, u.ncols());
+    let mut s = Vec::with_capacity(spans.len());
+    for (g, span) in spans.iter().enumerate() {
+        for c in span.clone() {
+            for i in 0..m {
+                v[(i, c)] = u[(i, c)] * w2[(i, g)];
+            }
+        }
+        let n = span.len();
+        s.push(Mat::<f64>::from_fn(n, n, |x, y| {
+            let (cx, cy) = (span.start + x, span.start + y);
+            (0..m).map(|i| v[(i, cx)] * u[(i, cy)]).sum()
+        }));
+    }
     Prepared {
         q,
         u,
         spans,
         inv_den,
+        w2,
+        v,
+        s,
     }
 }
 
@@ -278,6 +363,52 @@ impl FamilyTest {
             .collect()
     }
 
+    /// The best pooled leave-one-out gain (mm²) over the grid in every
+    /// pseudo-campaign of `batch` (`−∞` where no point is usable): what
+    /// [`FamilyTest::best`] gives for each, from three matrix products per
+    /// axis instead of a pass over the grid per campaign. With `k = Q_Xᵀr̃*`
+    /// and `w = 1/A'_ii`, a point's leave-one-out SSE expands as
+    ///
+    /// `Σ_i w_i²(γ*_i − (Uk)_i)² = (W²)ᵀ(γ*∘γ*) − 2 kᵀ(Vᵀγ*) + kᵀ S k`,
+    ///
+    /// so the batch costs the products `Q_XᵀR̃*`, `VᵀΓ*` and `(W²)ᵀ(Γ*∘Γ*)`.
+    pub fn best_of_batch(&self, systems: &[AxisSystem], batch: &Batch) -> Vec<f64> {
+        let nb = batch.len();
+        let ng = self.axes[0].spans.len();
+        let mut total = vec![0.0; ng * nb];
+        for ((sys, prep), r) in systems.iter().zip(&self.axes).zip(&batch.axes) {
+            let k = prep.q.transpose() * &r.rt;
+            let d = prep.v.transpose() * &r.gamma;
+            let e = prep.w2.transpose() * &r.gamma2;
+            for (g, span) in prep.spans.iter().enumerate() {
+                let row = &mut total[g * nb..(g + 1) * nb];
+                if prep.inv_den[g].is_none() {
+                    row.fill(f64::NAN);
+                    continue;
+                }
+                let sg = &prep.s[g];
+                for (b, t) in row.iter_mut().enumerate() {
+                    let mut sse = e[(g, b)];
+                    for (x, cx) in span.clone().enumerate() {
+                        sse -= 2.0 * k[(cx, b)] * d[(cx, b)];
+                        for (y, cy) in span.clone().enumerate() {
+                            sse += k[(cx, b)] * k[(cy, b)] * sg[(x, y)];
+                        }
+                    }
+                    *t += sys.scale2 * (r.sse0[b] - sse);
+                }
+            }
+        }
+        (0..nb)
+            .map(|b| {
+                (0..ng)
+                    .map(|g| total[g * nb + b])
+                    .filter(|v| v.is_finite())
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect()
+    }
+
     /// Best grid point and its pooled leave-one-out gain (mm²) on the data;
     /// `(0, −∞)` when no point is usable.
     pub fn best(&self, systems: &[AxisSystem], responses: &[Response]) -> (usize, f64) {
@@ -302,9 +433,10 @@ impl FamilyTest {
                     .collect();
                 crate::stats::fold_blocks(fold)
                     .iter()
-                    .map(|idx| {
+                    .zip(sys.a_blocks(fold))
+                    .map(|(idx, a_bb)| {
                         let n = idx.len();
-                        let mut a = Mat::<f64>::from_fn(n, n, |r, c| sys.a[(idx[r], idx[c])]);
+                        let mut a = a_bb.clone();
                         let mut gam = Mat::<f64>::from_fn(n, 1, |r, _| sys.gamma[idx[r]]);
                         for (k, c) in span.clone().enumerate() {
                             for r in 0..n {
@@ -336,9 +468,10 @@ pub fn kfold_sse_before(systems: &[AxisSystem], fold: &[usize]) -> f64 {
         .map(|sys| {
             crate::stats::fold_blocks(fold)
                 .iter()
-                .map(|idx| {
+                .zip(sys.a_blocks(fold))
+                .map(|(idx, a)| {
                     let n = idx.len();
-                    let a = Mat::<f64>::from_fn(n, n, |r, c| sys.a[(idx[r], idx[c])]);
+                    let a = a.clone();
                     let g = Mat::<f64>::from_fn(n, 1, |r, _| sys.gamma[idx[r]]);
                     sys.scale2 * block_sse(a, g)
                 })
@@ -384,6 +517,56 @@ pub fn flipped(systems: &[AxisSystem], signs: &[f64]) -> Vec<Response> {
         .collect()
 }
 
+/// Pseudo-campaigns of one axis in a batch, a column each.
+struct BatchAxis {
+    gamma: Mat<f64>,
+    gamma2: Mat<f64>,
+    rt: Mat<f64>,
+    sse0: Vec<f64>,
+}
+
+/// A batch of sign-flipped pseudo-campaigns ([`flipped`] for several sign
+/// vectors at once: one m × m × batch product per axis).
+pub struct Batch {
+    axes: Vec<BatchAxis>,
+}
+
+impl Batch {
+    /// Number of pseudo-campaigns.
+    pub fn len(&self) -> usize {
+        self.axes.first().map_or(0, |a| a.sse0.len())
+    }
+
+    /// `true` when the batch holds no campaign.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The pseudo-campaigns of `signs` (each one `±1` per row), as [`flipped`].
+pub fn flipped_batch(systems: &[AxisSystem], signs: &[Vec<f64>]) -> Batch {
+    Batch {
+        axes: systems
+            .iter()
+            .map(|s| {
+                let m = s.rows();
+                let rt = Mat::<f64>::from_fn(m, signs.len(), |i, b| s.rt[i] * signs[b][i]);
+                let gamma = s.m_transpose_times(rt.clone());
+                let gamma2 = Mat::<f64>::from_fn(m, signs.len(), |i, b| gamma[(i, b)].powi(2));
+                let sse0 = (0..signs.len())
+                    .map(|b| (0..m).map(|i| gamma2[(i, b)] / s.a_diag[i].powi(2)).sum())
+                    .collect();
+                BatchAxis {
+                    gamma,
+                    gamma2,
+                    rt,
+                    sse0,
+                }
+            })
+            .collect(),
+    }
+}
+
 /// Leave-one-out SSE (mm², pooled) of the model as it is.
 pub fn loo_sse_before(systems: &[AxisSystem]) -> f64 {
     systems
@@ -400,14 +583,19 @@ pub fn loo_sse_before(systems: &[AxisSystem]) -> f64 {
 /// them where they were) with the columns as trend-only inputs, and then
 /// factorised at that ξ with its own trend, so the candidate is tested
 /// where the model would stand with it. `errors` are the campaign's
-/// measured errors (mm).
+/// measured errors (mm). On a campaign larger than `opts.converge_rows`,
+/// ξ and ν are re-estimated on the subset a fit with `opts` converges on
+/// ([`crate::kriging::converge_subset`]: a likelihood step costs m³/3) and
+/// the systems are still factorised on all rows.
 pub fn refit_systems(
     model: &ErrorModel,
     errors: &[[f64; 3]],
     opts: &KrigingOptions,
     columns: &[Vec<f64>],
+    fold: &[usize],
 ) -> Result<Vec<AxisSystem>> {
     let corr = model.correlation_dims();
+    let rows = crate::kriging::converge_subset(errors.len(), opts);
     model
         .outputs
         .par_iter()
@@ -439,9 +627,18 @@ pub fn refit_systems(
                 e[d + j] = 1;
                 terms.exponents.push(e);
             }
-            let inputs =
-                TrainingInputs::new(&x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>());
+            let corr_rows: Vec<Vec<f64>> = x.iter().map(|r| r[..corr].to_vec()).collect();
+            let inputs = TrainingInputs::new(&corr_rows);
             let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
+            // the rows the search sees
+            let (x_fit, inputs_fit, y_fit) = match &rows {
+                Some(r) => (
+                    r.iter().map(|&i| x_aug[i].clone()).collect(),
+                    TrainingInputs::new(&r.iter().map(|&i| corr_rows[i].clone()).collect::<Vec<_>>()),
+                    r.iter().map(|&i| y[i]).collect(),
+                ),
+                None => (x_aug, inputs.clone(), y.clone()),
+            };
             let names: Vec<String> = (1..=d + k).map(|j| format!("s{j}")).collect();
             let start = WarmStart {
                 theta: km.data.theta[..corr].to_vec(),
@@ -456,9 +653,9 @@ pub fn refit_systems(
                 ..opts.clone()
             };
             let (_, report) = fit_output_from(
-                &x_aug,
-                &inputs,
-                &y,
+                &x_fit,
+                &inputs_fit,
+                &y_fit,
                 &Trend::Monomials(terms),
                 &names,
                 &same_family,
@@ -471,7 +668,7 @@ pub fn refit_systems(
                 min_jitter: opts.min_jitter,
             };
             let at = crate::kriging::fit_output_with(x, &inputs, &y, &km.data.trend, &hyper)?;
-            AxisSystem::new(&at)
+            AxisSystem::new(&at, fold)
         })
         .collect()
 }
@@ -517,7 +714,9 @@ mod tests {
         let names = vec!["a".to_string(), "b".to_string()];
         let base = Trend::Monomials(Monomials::constant(2));
         let (model, rep) = fit_output(&x, &inputs, &y, &base, &names, &opts).unwrap();
-        let sys = vec![AxisSystem::new(&model).unwrap()];
+        let m = x.len();
+        let fold: Vec<usize> = (0..m).map(|i| (i * 7) % 6).collect();
+        let sys = vec![AxisSystem::new(&model, &fold).unwrap()];
         let test = FamilyTest::new(&sys, &[vec![extra.clone()]]);
         // the same column in the trend, factorised at the same ξ and nugget
         let x_aug: Vec<Vec<f64>> = x
@@ -538,8 +737,6 @@ mod tests {
         )
         .unwrap();
         assert_eq!(aug.data.theta, vec![rep.theta[0], rep.theta[1], 0.0]);
-        let m = x.len();
-        let fold: Vec<usize> = (0..m).map(|i| (i * 7) % 6).collect();
         let folds: Vec<Vec<usize>> = (0..6)
             .map(|f| (0..m).filter(|&i| fold[i] == f).collect())
             .collect();
@@ -567,5 +764,15 @@ mod tests {
             .collect();
         let pseudo = flipped(&sys, &signs);
         assert!(pseudo[0].sse0 > 0.0 && test.best(&sys, &pseudo).1.is_finite());
+        // a batch of them gives what each gives alone
+        let grid = vec![vec![extra.clone()], vec![extra.clone(), x.iter().map(|r| r[0] * r[1]).collect()]];
+        let two = FamilyTest::new(&sys, &grid);
+        let signs2: Vec<f64> = (0..m).map(|i| if i % 5 < 2 { -1.0 } else { 1.0 }).collect();
+        let batch = flipped_batch(&sys, &[signs.clone(), signs2.clone()]);
+        let together = two.best_of_batch(&sys, &batch);
+        for (s, t) in [signs, signs2].iter().zip(together) {
+            let alone = two.best(&sys, &flipped(&sys, s)).1;
+            assert!((alone - t).abs() <= 1e-9 * alone.abs().max(1e-12), "{alone} {t}");
+        }
     }
 }

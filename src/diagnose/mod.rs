@@ -40,7 +40,7 @@
 pub mod gls;
 pub mod scan;
 
-use crate::cv::{cross_validate_refit, kfold_partition};
+use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partition};
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
 use crate::kriging::KrigingOptions;
@@ -92,6 +92,17 @@ pub struct DiagnoseOptions {
     /// Candidates (largest statistic first) tested again at the ξ the model
     /// would choose with them ([`gls::refit_systems`]).
     pub refine: usize,
+    /// Largest campaign on which every CV refits each fold and every fit
+    /// converges ξ on all rows. Above it (a whole real campaign) each CV is
+    /// closed-form at the hyperparameters of the model fitted on all rows
+    /// ([`crate::cv::cross_validate_closed_form`]: ten refits of an m × m
+    /// likelihood search saved per comparison, and a model with and one
+    /// without an effect are compared alike), and every fit — the models
+    /// compared and each re-estimation of ξ for a candidate — converges ξ
+    /// on the same seeded subset of this many rows, then solves on all of
+    /// them ([`KrigingOptions::converge_rows`]). The report says which CV
+    /// was used ([`Diagnosis::cv_mode`]).
+    pub refit_rows: usize,
 }
 
 impl Default for DiagnoseOptions {
@@ -110,6 +121,7 @@ impl Default for DiagnoseOptions {
             min_gain: 0.02,
             robot: None,
             refine: 6,
+            refit_rows: DEFAULT_REFIT_ROWS,
         }
     }
 }
@@ -121,9 +133,18 @@ impl DiagnoseOptions {
                 "diagnose needs ≥ 19 permutations, 0 < fdr < 1 and min_gain ≥ 0".into(),
             ));
         }
+        if self.refit_rows < 100 {
+            return Err(Error::InvalidParameter(format!(
+                "diagnose refit_rows is {}: re-estimating ξ needs at least 100 rows",
+                self.refit_rows
+            )));
+        }
         self.kriging.validate()
     }
 }
+
+/// Default of [`DiagnoseOptions::refit_rows`].
+pub const DEFAULT_REFIT_ROWS: usize = 1200;
 
 /// Resamples a round with `families` candidates needs so that a single
 /// real effect can be significant after Benjamini–Hochberg: its smallest
@@ -386,8 +407,17 @@ pub struct Diagnosis {
     /// the rows used ([`scan::constant_covariate`]).
     #[serde(default)]
     pub dropped_covariates: Vec<scan::DroppedCovariate>,
+    /// How every CV was run: `"refit"` (each fold refitted) or
+    /// `"closed-form"` (at the hyperparameters of the model fitted on all
+    /// rows, for campaigns above [`DiagnoseOptions::refit_rows`]).
+    #[serde(default = "refit_mode")]
+    pub cv_mode: String,
     /// Wall-clock time of the whole diagnosis, seconds.
     pub seconds: f64,
+}
+
+fn refit_mode() -> String {
+    "refit".into()
 }
 
 /// Precompute the columns of `extras` on the whole campaign (named like the
@@ -441,9 +471,13 @@ fn cross_validated(
         warm_start: model.warm_starts(),
         ..o.kriging.clone()
     };
-    let res = cross_validate_refit(&work, o.folds, o.seed, |train| {
-        ErrorModel::fit_with_extras(train, o.space, &warm, extras)
-    })?;
+    let res = if data.len() > o.refit_rows {
+        cross_validate_closed_form(&work, &model, o.folds, o.seed)?
+    } else {
+        cross_validate_refit(&work, o.folds, o.seed, |train| {
+            ErrorModel::fit_with_extras(train, o.space, &warm, extras)
+        })?
+    };
     Ok((cv_stats(res.residuals, extras, &model), model))
 }
 
@@ -585,6 +619,19 @@ pub fn fit_with_effects(
 /// ```
 pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
     o.validate()?;
+    let closed_form = data.len() > o.refit_rows;
+    // a whole campaign: every fit converges ξ on the same seeded subset
+    let o = &DiagnoseOptions {
+        kriging: KrigingOptions {
+            converge_rows: if closed_form {
+                o.kriging.converge_rows.min(o.refit_rows)
+            } else {
+                o.kriging.converge_rows
+            },
+            ..o.kriging.clone()
+        },
+        ..o.clone()
+    };
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;
     let fold = kfold_partition(data.len(), o.folds, o.seed)?;
@@ -621,10 +668,12 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         let systems: Vec<gls::AxisSystem> = model
             .outputs
             .iter()
-            .map(gls::AxisSystem::new)
+            .map(|km| gls::AxisSystem::new(km, &fold))
             .collect::<Result<_>>()?;
         let level: [f64; 3] = std::array::from_fn(|a| systems[a].expected_loo_rmse());
-        let refit = |cols: &[Vec<f64>]| gls::refit_systems(&model, errors, &o.kriging, cols).ok();
+        let refit = |cols: &[Vec<f64>]| {
+            gls::refit_systems(&model, errors, &o.kriging, cols, &fold).ok()
+        };
         let mut tested = scan::test_families(
             &fams, systems, resamples, o.seed, &fold, o.refine, &refit, progress,
         );
@@ -800,6 +849,11 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         effects,
         extras,
         dropped_covariates: scan::dropped_covariates(data, &[]),
+        cv_mode: if closed_form {
+            "closed-form".into()
+        } else {
+            refit_mode()
+        },
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

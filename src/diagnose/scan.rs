@@ -673,11 +673,23 @@ struct Trial {
     /// Observed statistic (mm²): the best leave-one-out improvement over the
     /// model as it is, at its ξ or at the re-estimated one.
     stat: f64,
-    /// Reported grid point and the systems it is scored at (0: the model's).
+    /// Reported grid point.
     best: usize,
-    systems: usize,
-    /// The family's test at re-estimated ξ, when that is where it is scored.
-    refit: Option<FamilyTest>,
+    /// Scored at re-estimated ξ: its closed-form K-fold CV SSE and support
+    /// set there (computed at once, so that the systems at that ξ — four
+    /// m × m matrices per output — are not kept).
+    refit: Option<(f64, Vec<usize>)>,
+}
+
+/// The support set's width at `systems`: `χ²₁(95 %)` times the expected
+/// leave-one-out variance, pooled over the axes (mm²).
+fn support_width(systems: &[AxisSystem]) -> f64 {
+    CHI2_1_95
+        * systems
+            .iter()
+            .map(|a| a.expected_loo_rmse().powi(2))
+            .sum::<f64>()
+        / systems.len() as f64
 }
 
 /// Test every family inside the current model (`systems`, one per output,
@@ -715,19 +727,19 @@ pub fn test_families(
         .iter()
         .map(|f| f.grid.iter().map(|g| g.columns.clone()).collect())
         .collect();
-    let mut sets = vec![systems];
-    let data = gls::observed(&sets[0]);
-    let loo0 = gls::loo_sse_before(&sets[0]);
+    let data = gls::observed(&systems);
+    let loo0 = gls::loo_sse_before(&systems);
+    // score and share against the model as it is (at its own ξ)
+    let before = gls::kfold_sse_before(&systems, fold);
     let mut trials: Vec<Trial> = grids
         .par_iter()
         .map(|grid| {
-            let base = FamilyTest::new(&sets[0], grid);
-            let (best, stat) = base.best(&sets[0], &data);
+            let base = FamilyTest::new(&systems, grid);
+            let (best, stat) = base.best(&systems, &data);
             Trial {
                 base,
                 stat,
                 best,
-                systems: 0,
                 refit: None,
             }
         })
@@ -754,13 +766,13 @@ pub fn test_families(
         // inflates the second)
         let improvement = gain.min(gain - (gls::loo_sse_before(&sys) - loo0));
         let t = &mut trials[k];
-        // kept only when it wins (4 m × m matrices per output)
         if improvement > t.stat {
-            sets.push(sys);
             t.stat = improvement;
             t.best = best;
-            t.systems = sets.len() - 1;
-            t.refit = Some(test);
+            t.refit = Some((
+                test.kfold_sse(&sys, best, fold),
+                test.near_best(&sys, &gls::observed(&sys), support_width(&sys)),
+            ));
         }
     }
     let mut exceed = vec![0usize; families.len()];
@@ -780,23 +792,23 @@ pub fn test_families(
             active.len()
         ));
         let batch = BATCH.min(permutations - done);
-        let hits: Vec<Vec<f64>> = (done..done + batch)
-            .into_par_iter()
+        let signs: Vec<Vec<f64>> = (done..done + batch)
             .map(|b| {
                 let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-signs");
-                let signs: Vec<f64> = (0..m)
+                (0..m)
                     .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
-                    .collect();
-                let pseudo = gls::flipped(&sets[0], &signs);
-                active
-                    .iter()
-                    .map(|&k| trials[k].base.best(&sets[0], &pseudo).1)
                     .collect()
             })
             .collect();
-        for h in hits {
-            for (&k, g) in active.iter().zip(h) {
-                let o = trials[k].stat;
+        let pseudo = gls::flipped_batch(&systems, &signs);
+        // the best gain of every active family in every pseudo-campaign
+        let hits: Vec<Vec<f64>> = active
+            .par_iter()
+            .map(|&k| trials[k].base.best_of_batch(&systems, &pseudo))
+            .collect();
+        for (&k, h) in active.iter().zip(hits) {
+            let o = trials[k].stat;
+            for g in h {
                 exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
                 run[k] += 1;
                 if g.is_finite() {
@@ -817,56 +829,48 @@ pub fn test_families(
         })
         .collect();
     let q = benjamini_hochberg(&p);
-    // score and share against the model as it is (at its own ξ)
-    let before = gls::kfold_sse_before(&sets[0], fold);
-    // the support sets: gains within χ²₁ of the best, in units of each set's
-    // expected leave-one-out variance (pooled over the axes)
-    let within: Vec<f64> = sets
-        .iter()
-        .map(|s| {
-            CHI2_1_95 * s.iter().map(|a| a.expected_loo_rmse().powi(2)).sum::<f64>()
-                / s.len() as f64
-        })
-        .collect();
+    let within = support_width(&systems);
     (0..families.len())
         .into_par_iter()
         .map(|k| {
             let t = &trials[k];
-            let test = if t.systems > 0 {
-                t.refit.as_ref().expect("refit test")
-            } else {
-                &t.base
-            };
-            let score = if t.stat.is_finite() && before > 0.0 {
-                1.0 - test.kfold_sse(&sets[t.systems], t.best, fold) / before
-            } else {
-                0.0
+            let finite = t.stat.is_finite();
+            let (kfold, support) = match &t.refit {
+                Some((kfold, support)) => (*kfold, support.clone()),
+                None if finite => (
+                    t.base.kfold_sse(&systems, t.best, fold),
+                    t.base.near_best(&systems, &data, within),
+                ),
+                None => (before, Vec::new()),
             };
             Tested {
                 family: k,
                 best: t.best,
-                explained: if t.stat.is_finite() && loo0 > 0.0 {
+                explained: if finite && loo0 > 0.0 {
                     t.stat / loo0
                 } else {
                     0.0
                 },
                 p_value: p[k],
                 q_value: q[k],
-                score,
+                score: if finite && before > 0.0 {
+                    1.0 - kfold / before
+                } else {
+                    0.0
+                },
                 resamples: run[k],
-                refit: t.systems > 0,
+                refit: t.refit.is_some(),
                 cv_sse_before: before,
                 evidence: {
                     let n = run[k] as f64;
-                    if t.stat.is_finite() && n >= 1.0 && loo0 > 0.0 {
+                    if finite && n >= 1.0 && loo0 > 0.0 {
                         (t.stat - moments[k][0] / n) / loo0
                     } else {
                         0.0
                     }
                 },
-                support: if t.stat.is_finite() && families[k].grid.len() > 1 {
-                    let set = &sets[t.systems];
-                    test.near_best(set, &gls::observed(set), within[t.systems])
+                support: if finite && families[k].grid.len() > 1 {
+                    support
                 } else {
                     Vec::new()
                 },

@@ -26,9 +26,11 @@ pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
 pub use family::{FAMILY_FOLDS, FamilyScore, fit_output_auto};
 pub use fused::FusedBasis;
 pub use model::{KrigingModel, KrigingModelData, Pred};
-pub use options::{FitReport, KrigingOptions, OptimizerKind, TrendKind, WarmStart};
+pub use options::{
+    FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind, WarmStart,
+};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
-pub use search::{FitPlan, REFINE_ROWS, SEARCH_ROWS};
+pub use search::{FitPlan, REFINE_ROWS, SEARCH_ROWS, converge_subset};
 use search::{Search, converge_bfgs, ln_psi_objective, optimise, row_subset};
 pub use trend::{
     KinematicTrend, Monomials, Trend, TrendModel, independent_columns, support, supported_columns,

@@ -124,6 +124,15 @@ pub struct KrigingOptions {
     /// ([`crate::space::Space::encode`]); empty = none.
     #[serde(default)]
     pub periodic: Vec<usize>,
+    /// Rows ξ is converged on by the default optimiser: a campaign with
+    /// more converges on a seeded subset of this many (its multistart on at
+    /// most as many), then solves once on all rows at that ξ
+    /// ([`super::converge_subset`]). [`super::REFINE_ROWS`] by default;
+    /// lower it to trade a little likelihood for speed on whole campaigns
+    /// (`diagnose` does, above its `refit_rows`). GPS and Hooke–Jeeves
+    /// search on all rows.
+    #[serde(default = "default_converge_rows")]
+    pub converge_rows: usize,
     /// Warm starts, one per output (empty: none): each output's search is a
     /// local one from its `(ξ, ν)` instead of the multistart (egobox's
     /// `theta_init`). For refits on data close to a fitted model's — CV
@@ -158,6 +167,9 @@ impl WarmStart {
     }
 }
 
+/// Smallest [`KrigingOptions::converge_rows`].
+pub const MIN_CONVERGE_ROWS: usize = 50;
+
 impl Default for KrigingOptions {
     fn default() -> Self {
         KrigingOptions {
@@ -175,9 +187,14 @@ impl Default for KrigingOptions {
             min_jitter: None,
             polish: true,
             periodic: Vec::new(),
+            converge_rows: super::REFINE_ROWS,
             warm_start: Vec::new(),
         }
     }
+}
+
+fn default_converge_rows() -> usize {
+    super::REFINE_ROWS
 }
 
 impl KrigingOptions {
@@ -208,6 +225,12 @@ impl KrigingOptions {
             return Err(Error::InvalidParameter(
                 "starts, max_evals and tol must be positive".into(),
             ));
+        }
+        if self.converge_rows < MIN_CONVERGE_ROWS {
+            return Err(Error::InvalidParameter(format!(
+                "converge_rows is {}: ξ needs at least {MIN_CONVERGE_ROWS} rows to converge on",
+                self.converge_rows
+            )));
         }
         if self.warm_start.iter().any(|w| {
             w.theta.iter().any(|t| !t.is_finite() || *t < 0.0)

@@ -80,15 +80,19 @@ pub struct FitPlan {
 }
 
 impl FitPlan {
-    /// The plan for `outputs` outputs of `rows` rows with `optimizer`, on
+    /// The plan for `outputs` outputs of `rows` rows with `opts`' optimiser
+    /// and `converge_rows`, on
     /// `threads` threads: the largest of the search's workspaces (three
     /// m × m matrices per running start with the gradient), the final
     /// solve's factor per output running at once, plus the factors a fitted
     /// model keeps (up to m = 4096).
-    pub fn new(rows: usize, outputs: usize, optimizer: OptimizerKind, threads: usize) -> Self {
+    pub fn new(rows: usize, outputs: usize, opts: &KrigingOptions, threads: usize) -> Self {
         let sq = |m: usize| crate::memory::square_bytes(m);
-        let (search_rows, refine_rows, per_ws) = match optimizer {
-            OptimizerKind::Bfgs => (rows.min(SEARCH_ROWS), rows.min(REFINE_ROWS), 3),
+        let (search_rows, refine_rows, per_ws) = match opts.optimizer {
+            OptimizerKind::Bfgs => {
+                let refine = rows.min(opts.converge_rows);
+                (refine.min(SEARCH_ROWS), refine, 3)
+            }
             _ => (rows, rows, 2),
         };
         let sequential_outputs = rows > REFINE_ROWS;
@@ -115,11 +119,11 @@ impl FitPlan {
     }
 
     /// The most rows whose plan fits in `bytes`.
-    pub fn max_rows(bytes: u64, outputs: usize, optimizer: OptimizerKind, threads: usize) -> usize {
+    pub fn max_rows(bytes: u64, outputs: usize, opts: &KrigingOptions, threads: usize) -> usize {
         let (mut lo, mut hi) = (1usize, 1usize << 20);
         while lo < hi {
             let mid = (lo + hi).div_ceil(2);
-            if Self::new(mid, outputs, optimizer, threads).bytes <= bytes {
+            if Self::new(mid, outputs, opts, threads).bytes <= bytes {
                 lo = mid;
             } else {
                 hi = mid - 1;
@@ -156,12 +160,13 @@ impl std::fmt::Display for FitPlan {
 
 /// The default search, sized to the campaign (issue 16 §2):
 /// - m ≤ [`SEARCH_ROWS`]: [`multistart_bfgs`] on all rows;
-/// - m ≤ [`REFINE_ROWS`]: the multistart on a seeded random subset of
+/// - m ≤ `converge_rows` ([`REFINE_ROWS`] by default): the multistart on a
+///   seeded random subset of
 ///   [`SEARCH_ROWS`] rows finds the basin, then BFGS converges on **all**
 ///   rows from there: the result is a stationary point of the full
 ///   likelihood, at a few dozen full evaluations instead of hundreds;
-/// - larger: the same with the convergence on a subset of [`REFINE_ROWS`]
-///   rows; [`super::fit_output_from`] then solves once on all rows at that ξ.
+/// - larger: the same with the convergence on a subset of `converge_rows`
+///   rows ([`converge_subset`]); [`super::fit_output_from`] then solves once on all rows at that ξ.
 fn optimise_bfgs(
     problem: &KrigingProblem,
     bounds: &Bounds,
@@ -169,7 +174,8 @@ fn optimise_bfgs(
     opts: &KrigingOptions,
 ) -> Search {
     let m = problem.m();
-    if m <= SEARCH_ROWS {
+    let search_rows = SEARCH_ROWS.min(opts.converge_rows);
+    if m <= search_rows {
         let (best, starts, hinv) = multistart_bfgs(problem, bounds, unpack, opts);
         return Search {
             best,
@@ -178,7 +184,7 @@ fn optimise_bfgs(
             inverse_hessian: Some(hinv),
         };
     }
-    let sub = SubsetData::new(problem, &row_subset(m, SEARCH_ROWS, opts.seed));
+    let sub = SubsetData::new(problem, &row_subset(m, search_rows, opts.seed));
     let (found, starts, hinv) = multistart_bfgs(&sub.problem(problem), bounds, unpack, opts);
     // the subset's curvature is a far better start than the identity (on
     // 2 773 UR10 rows: 40 full-data iterations instead of 67)
@@ -210,7 +216,7 @@ pub(super) struct Search {
 }
 
 /// BFGS from `x0` (inverse Hessian `hinv`, or the identity) to convergence
-/// on all rows, or on a seeded subset of [`REFINE_ROWS`] rows when there are
+/// on all rows, or on a seeded subset of `opts.converge_rows` rows when there are
 /// more (one start).
 pub(super) fn converge_bfgs(
     problem: &KrigingProblem,
@@ -229,13 +235,8 @@ pub(super) fn converge_bfgs(
             optim::QuasiNewtonOptions::default()
         }
     };
-    let refine_rows = m.min(REFINE_ROWS);
-    let refine_sub = (refine_rows < m).then(|| {
-        SubsetData::new(
-            problem,
-            &row_subset(m, refine_rows, opts.seed.wrapping_add(1)),
-        )
-    });
+    let refine_rows = m.min(opts.converge_rows);
+    let refine_sub = converge_subset(m, opts).map(|rows| SubsetData::new(problem, &rows));
     let refine = refine_sub.as_ref().map(|s| s.problem(problem));
     let obj = ln_psi_grad_objective(refine.as_ref().unwrap_or(problem), unpack);
     let (best, h) = optim::quasi_newton_warm(obj, x0, hinv, bounds, &full);
@@ -245,6 +246,14 @@ pub(super) fn converge_bfgs(
         rows: refine_rows,
         inverse_hessian: Some(h),
     }
+}
+
+/// The rows the default optimiser converges ξ on for a campaign of `m`
+/// rows ([`KrigingOptions::converge_rows`]): `None` for all of them, else
+/// the seeded subset it uses (sorted), so that a caller re-estimating ξ
+/// on those rows itself gets the same ξ.
+pub fn converge_subset(m: usize, opts: &KrigingOptions) -> Option<Vec<usize>> {
+    (m > opts.converge_rows).then(|| row_subset(m, opts.converge_rows, opts.seed.wrapping_add(1)))
 }
 
 /// A problem's data restricted to some rows.

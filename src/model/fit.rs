@@ -27,19 +27,33 @@ fn joint_range(q: &[Vec<f64>]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`]),
-/// refused with [`Error::Memory`] when its estimated peak exceeds the
-/// memory limit ([`crate::memory`]); the message says how to fit the most
-/// rows that fit: `subset(rows)` (e.g. "`--rows 5000`"), or raising the limit.
+/// The plan of a 3-output fit of `rows` rows ([`crate::kriging::FitPlan`])
+/// with the default options and `optimizer`, refused with
+/// [`Error::Memory`] when its estimated peak exceeds the memory limit
+/// ([`crate::memory`]); the message says how to fit the most rows that
+/// fit: `subset(rows)` (e.g. "`--rows 5000`"), or raising the limit.
 pub fn check_fit_memory(
     rows: usize,
     optimizer: crate::kriging::OptimizerKind,
     subset: impl Fn(usize) -> String,
 ) -> Result<crate::kriging::FitPlan> {
+    let opts = KrigingOptions {
+        optimizer,
+        ..KrigingOptions::default()
+    };
+    check_fit_memory_with(rows, &opts, subset)
+}
+
+/// [`check_fit_memory`] for a fit with `opts`.
+fn check_fit_memory_with(
+    rows: usize,
+    opts: &KrigingOptions,
+    subset: impl Fn(usize) -> String,
+) -> Result<crate::kriging::FitPlan> {
     let threads = rayon::current_num_threads();
-    let plan = crate::kriging::FitPlan::new(rows, 3, optimizer, threads);
+    let plan = crate::kriging::FitPlan::new(rows, 3, opts, threads);
     if let Some((limit, _)) = crate::memory::limit() {
-        let fits = crate::kriging::FitPlan::max_rows(limit, 3, optimizer, threads);
+        let fits = crate::kriging::FitPlan::max_rows(limit, 3, opts, threads);
         crate::memory::check(
             &format!("a fit of {rows} rows"),
             plan.bytes,
@@ -88,7 +102,7 @@ pub(crate) fn fit_outputs(
             opts.warm_start.len()
         )));
     }
-    let plan = check_fit_memory(data.len(), opts.optimizer, |n| {
+    let plan = check_fit_memory_with(data.len(), opts, |n| {
         format!("a subset of {n} rows")
     })?;
     let fit_axis = |a: usize| {
