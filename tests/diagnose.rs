@@ -66,6 +66,39 @@ fn a_tracker_bump_is_found_at_its_row_added_and_removed_from_the_residual() {
     );
 }
 
+/// Above `refit_rows` (a whole campaign) every CV is closed-form and every
+/// fit converges ξ on one seeded subset: the same step is found, at the
+/// same row, and the report says which CV it used.
+#[test]
+fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
+    let data = campaign(160, 4, Some("tracker-step:row=80,dx=0.2,dy=-0.15,dz=0.15"));
+    let o = DiagnoseOptions {
+        kriging: KrigingOptions::default(),
+        refit_rows: 100,
+        max_effects: 1,
+        ..quick()
+    };
+    let d = diagnose(&data, &o, &|_| {}).unwrap();
+    assert_eq!(d.cv_mode, "closed-form");
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::Order, "{top:?}");
+    assert!((top.params["row"] - 80.0).abs() <= 2.0, "{top:?}");
+    assert!(top.accepted);
+    assert!(d.after.pooled_rmse_mm < 0.7 * d.before.pooled_rmse_mm);
+    // below it, the same campaign is refitted per fold
+    let refit = diagnose(
+        &data,
+        &DiagnoseOptions {
+            refit_rows: 1000,
+            ..o.clone()
+        },
+        &|_| {},
+    )
+    .unwrap();
+    assert_eq!(refit.cv_mode, "refit");
+    assert_eq!(refit.effects[0].params["row"], top.params["row"]);
+}
+
 #[test]
 fn a_gear_harmonic_absorbed_by_the_gp_is_still_found_and_added_as_trend_terms() {
     // the GP shortens its q2 length scale to soak the harmonic up; tested at
@@ -413,6 +446,10 @@ fn bad_options_are_errors() {
         },
         DiagnoseOptions {
             folds: 100,
+            ..quick()
+        },
+        DiagnoseOptions {
+            refit_rows: 99,
             ..quick()
         },
     ] {

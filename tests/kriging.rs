@@ -482,3 +482,46 @@ fn closed_form_cv_of_an_error_model_matches_its_outputs_and_rejects_other_data()
     let other = campaign(81);
     assert!(robokrige::cv::cross_validate_closed_form(&other, &model, 8, 2).is_err());
 }
+
+/// `converge_rows` below m: ξ converges on the seeded subset
+/// `converge_subset` names, and the model still holds and predicts every
+/// row.
+#[test]
+fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
+    let d = campaign(240);
+    let x = normalised(&d, Space::Js);
+    let y = axis(&d, 0);
+    let inputs = TrainingInputs::new(&x);
+    let names = Space::Js.names(6);
+    let trend = Trend::Monomials(Monomials::constant(6));
+    let opts = KrigingOptions {
+        starts: 2,
+        converge_rows: 100,
+        ..KrigingOptions::default()
+    };
+    let (model, rep) =
+        robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &opts).unwrap();
+    assert_eq!(rep.search_rows, 100);
+    assert_eq!(model.data().x_train.len(), 240);
+    let rows = robokrige::kriging::converge_subset(240, &opts).unwrap();
+    assert_eq!(rows.len(), 100);
+    assert!(rows.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(robokrige::kriging::converge_subset(100, &opts), None);
+    // the whole campaign's residual at its own rows is the nugget's smoothing only
+    let fit = model.predict_mean(&x);
+    let rms = (fit
+        .iter()
+        .zip(&y)
+        .map(|(p, t)| (p - t).powi(2))
+        .sum::<f64>()
+        / 240.0)
+        .sqrt();
+    let spread = (y.iter().map(|v| v * v).sum::<f64>() / 240.0).sqrt();
+    assert!(rms < 0.5 * spread, "{rms} {spread}");
+    // too few rows to converge on is refused
+    let bad = KrigingOptions {
+        converge_rows: 10,
+        ..opts
+    };
+    assert!(robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &bad).is_err());
+}

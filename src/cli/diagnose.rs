@@ -80,8 +80,9 @@ pub struct DiagnoseArgs {
     #[arg(long)]
     rows: Option<usize>,
     /// Above this many rows, every CV is closed-form at the hyperparameters
-    /// of the model fitted on all rows (not refitted per fold), and the
-    /// candidates' ξ is re-estimated on a seeded subset of this many rows:
+    /// of the model fitted on all rows (not refitted per fold), and every
+    /// fit (the models compared, each candidate's re-estimated ξ) converges
+    /// ξ on one seeded subset of this many rows, then solves on all rows:
     /// a whole campaign of thousands of rows in minutes.
     #[arg(long, default_value_t = robokrige::diagnose::DEFAULT_REFIT_ROWS)]
     refit_rows: usize,

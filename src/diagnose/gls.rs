@@ -122,7 +122,11 @@ impl AxisSystem {
     /// projection.
     fn whiten(&self, x: Mat<f64>) -> (Mat<f64>, Mat<f64>) {
         let mut zx = x;
-        solve_lower_triangular_in_place(self.c.as_ref(), zx.as_mut(), faer::get_global_parallelism());
+        solve_lower_triangular_in_place(
+            self.c.as_ref(),
+            zx.as_mut(),
+            faer::get_global_parallelism(),
+        );
         let bx = &self.qt * &zx;
         zx -= self.qt.transpose() * &bx;
         (zx, bx)
@@ -634,7 +638,9 @@ pub fn refit_systems(
             let (x_fit, inputs_fit, y_fit) = match &rows {
                 Some(r) => (
                     r.iter().map(|&i| x_aug[i].clone()).collect(),
-                    TrainingInputs::new(&r.iter().map(|&i| corr_rows[i].clone()).collect::<Vec<_>>()),
+                    TrainingInputs::new(
+                        &r.iter().map(|&i| corr_rows[i].clone()).collect::<Vec<_>>(),
+                    ),
                     r.iter().map(|&i| y[i]).collect(),
                 ),
                 None => (x_aug, inputs.clone(), y.clone()),
@@ -765,14 +771,20 @@ mod tests {
         let pseudo = flipped(&sys, &signs);
         assert!(pseudo[0].sse0 > 0.0 && test.best(&sys, &pseudo).1.is_finite());
         // a batch of them gives what each gives alone
-        let grid = vec![vec![extra.clone()], vec![extra.clone(), x.iter().map(|r| r[0] * r[1]).collect()]];
+        let grid = vec![
+            vec![extra.clone()],
+            vec![extra.clone(), x.iter().map(|r| r[0] * r[1]).collect()],
+        ];
         let two = FamilyTest::new(&sys, &grid);
         let signs2: Vec<f64> = (0..m).map(|i| if i % 5 < 2 { -1.0 } else { 1.0 }).collect();
         let batch = flipped_batch(&sys, &[signs.clone(), signs2.clone()]);
         let together = two.best_of_batch(&sys, &batch);
         for (s, t) in [signs, signs2].iter().zip(together) {
             let alone = two.best(&sys, &flipped(&sys, s)).1;
-            assert!((alone - t).abs() <= 1e-9 * alone.abs().max(1e-12), "{alone} {t}");
+            assert!(
+                (alone - t).abs() <= 1e-9 * alone.abs().max(1e-12),
+                "{alone} {t}"
+            );
         }
     }
 }

@@ -102,9 +102,7 @@ pub(crate) fn fit_outputs(
             opts.warm_start.len()
         )));
     }
-    let plan = check_fit_memory_with(data.len(), opts, |n| {
-        format!("a subset of {n} rows")
-    })?;
+    let plan = check_fit_memory_with(data.len(), opts, |n| format!("a subset of {n} rows"))?;
     let fit_axis = |a: usize| {
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
         let fit = if opts.corr_auto {

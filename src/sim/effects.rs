@@ -179,7 +179,7 @@ impl Effect {
                     "hysteresis: travel_deg must be > 0, got {travel_deg}"
                 ))
             }
-            Effect::Lag { tau_poses, .. } if !(*tau_poses >= 0.0) => {
+            Effect::Lag { tau_poses, .. } if tau_poses.is_nan() || *tau_poses < 0.0 => {
                 bad(format!("lag: tau_poses must be ≥ 0, got {tau_poses}"))
             }
             _ => Ok(()),
