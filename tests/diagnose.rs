@@ -79,7 +79,7 @@ fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
         ..quick()
     };
     let d = diagnose(&data, &o, &|_| {}).unwrap();
-    assert_eq!(d.cv_mode, "closed-form");
+    assert_eq!(d.cv_mode(), "closed-form");
     let top = &d.effects[0];
     assert_eq!(top.kind, EffectKind::Order, "{top:?}");
     assert!((top.params["row"] - 80.0).abs() <= 2.0, "{top:?}");
@@ -95,7 +95,7 @@ fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
         &|_| {},
     )
     .unwrap();
-    assert_eq!(refit.cv_mode, "refit");
+    assert_eq!(refit.cv_mode(), "refit");
     assert_eq!(refit.effects[0].params["row"], top.params["row"]);
 }
 

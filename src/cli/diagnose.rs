@@ -256,7 +256,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         a.data.display(),
         d.before.residuals.len(),
         d.folds,
-        d.cv_mode,
+        d.cv_mode(),
         a.method,
         d.candidates[0],
         d.candidates[1],
@@ -482,7 +482,7 @@ fn report(
          is added only if it lowers the pooled CV RMSE by ≥ 2 % or by its worth at the noise floor. {:.1} s.\n",
         a.method,
         d.folds,
-        if d.cv_mode == "closed-form" {
+        if d.cv_mode() == "closed-form" {
             "in closed form at the hyperparameters of the model fitted on all rows"
         } else {
             "refitted on every training fold"

@@ -145,17 +145,6 @@ impl AxisSystem {
         py
     }
 
-    /// The blocks `A_bb` of `fold`, which must be the partition the system
-    /// was built for.
-    fn a_blocks(&self, fold: &[usize]) -> &[Mat<f64>] {
-        assert_eq!(
-            fold,
-            &self.fold[..],
-            "an AxisSystem answers for the fold partition it was built for"
-        );
-        &self.blocks
-    }
-
     /// The model's own expectation of its leave-one-out RMSE (mm): with
     /// `Var(y) = σ²R`, `Var(γ) = σ²A`, so a held-out residual
     /// `e_i = γ_i / A_ii` has variance `σ² / A_ii` — the nugget's noise plus
@@ -424,8 +413,8 @@ impl FamilyTest {
     }
 
     /// Closed-form K-fold CV SSE (mm², pooled over the axes) with grid point
-    /// `g` added (fold of every row in `fold`).
-    pub fn kfold_sse(&self, systems: &[AxisSystem], g: usize, fold: &[usize]) -> f64 {
+    /// `g` added, at the partition the systems were built for.
+    pub fn kfold_sse(&self, systems: &[AxisSystem], g: usize) -> f64 {
         systems
             .iter()
             .zip(&self.axes)
@@ -435,9 +424,9 @@ impl FamilyTest {
                     .clone()
                     .map(|c| (0..sys.rows()).map(|i| prep.q[(i, c)] * sys.rt[i]).sum())
                     .collect();
-                crate::stats::fold_blocks(fold)
+                crate::stats::fold_blocks(&sys.fold)
                     .iter()
-                    .zip(sys.a_blocks(fold))
+                    .zip(&sys.blocks)
                     .map(|(idx, a_bb)| {
                         let n = idx.len();
                         let mut a = a_bb.clone();
@@ -465,14 +454,15 @@ fn block_sse(a: Mat<f64>, gamma: Mat<f64>) -> f64 {
     (0..e.nrows()).map(|r| e[(r, 0)].powi(2)).sum()
 }
 
-/// Closed-form K-fold CV SSE (mm², pooled) of the model as it is.
-pub fn kfold_sse_before(systems: &[AxisSystem], fold: &[usize]) -> f64 {
+/// Closed-form K-fold CV SSE (mm², pooled) of the model as it is, at the
+/// partition the systems were built for.
+pub fn kfold_sse_before(systems: &[AxisSystem]) -> f64 {
     systems
         .iter()
         .map(|sys| {
-            crate::stats::fold_blocks(fold)
+            crate::stats::fold_blocks(&sys.fold)
                 .iter()
-                .zip(sys.a_blocks(fold))
+                .zip(&sys.blocks)
                 .map(|(idx, a)| {
                     let n = idx.len();
                     let a = a.clone();
@@ -759,8 +749,8 @@ mod tests {
         assert!((loo_sse_before(&sys) - loo_before).abs() < 1e-9 * loo_before);
         let kf_before = sse(model.held_out_residuals(&folds).unwrap());
         let kf_after = sse(aug.held_out_residuals(&folds).unwrap());
-        assert!((kfold_sse_before(&sys, &fold) - kf_before).abs() < 1e-8 * kf_before);
-        assert!((test.kfold_sse(&sys, 0, &fold) - kf_after).abs() < 1e-8 * kf_before);
+        assert!((kfold_sse_before(&sys) - kf_before).abs() < 1e-8 * kf_before);
+        assert!((test.kfold_sse(&sys, 0) - kf_after).abs() < 1e-8 * kf_before);
         // a column already in the trend (a constant) adds nothing
         let none = FamilyTest::new(&sys, &[vec![vec![3.0; m]]]);
         assert!(none.best(&sys, &observed(&sys)).1.abs() < 1e-12);

@@ -215,14 +215,24 @@ pub struct CvStats {
     /// ([`ErrorModel::noise_std`]).
     #[serde(default)]
     pub noise_mm: [f64; 3],
+    /// How the folds were predicted ([`crate::cv::CvResult::mode`]):
+    /// `"refit"`, or `"closed-form"` above [`DiagnoseOptions::refit_rows`].
+    #[serde(default = "refit_mode")]
+    pub mode: String,
     /// Out-of-fold residuals δ − δ̂ (mm), measurement order; not serialised.
     #[serde(skip)]
     pub residuals: Vec<[f64; 3]>,
 }
 
-fn cv_stats(residuals: Vec<[f64; 3]>, extras: &[Feature], model: &ErrorModel) -> CvStats {
+fn cv_stats(
+    residuals: Vec<[f64; 3]>,
+    mode: String,
+    extras: &[Feature],
+    model: &ErrorModel,
+) -> CvStats {
     let s = summarize(&residuals);
     CvStats {
+        mode,
         noise_mm: model.noise_std(),
         cv_rmse_mm: s.rms_mm,
         pooled_rmse_mm: (s.rms_mm.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt(),
@@ -407,13 +417,15 @@ pub struct Diagnosis {
     /// the rows used ([`scan::constant_covariate`]).
     #[serde(default)]
     pub dropped_covariates: Vec<scan::DroppedCovariate>,
-    /// How every CV was run: `"refit"` (each fold refitted) or
-    /// `"closed-form"` (at the hyperparameters of the model fitted on all
-    /// rows, for campaigns above [`DiagnoseOptions::refit_rows`]).
-    #[serde(default = "refit_mode")]
-    pub cv_mode: String,
     /// Wall-clock time of the whole diagnosis, seconds.
     pub seconds: f64,
+}
+
+impl Diagnosis {
+    /// How every CV of the diagnosis was run ([`CvStats::mode`]).
+    pub fn cv_mode(&self) -> &str {
+        &self.before.mode
+    }
 }
 
 fn refit_mode() -> String {
@@ -473,7 +485,7 @@ fn cross_validated(
             ErrorModel::fit_with_extras(train, o.space, &warm, extras)
         })?
     };
-    Ok((cv_stats(res.residuals, extras, &model), model))
+    Ok((cv_stats(res.residuals, res.mode, extras, &model), model))
 }
 
 /// Warm starts for the model of `extras` from `from`, whose extras they
@@ -714,7 +726,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         let refit =
             |cols: &[Vec<f64>]| gls::refit_systems(&model, errors, &o.kriging, cols, &fold).ok();
         let mut tested = scan::test_families(
-            &fams, systems, resamples, o.seed, &fold, o.refine, &refit, progress,
+            &fams, systems, resamples, o.seed, o.refine, &refit, progress,
         );
         let worth = Worth::new(o.min_gain, &current.noise_mm);
         let rows3 = 3.0 * data.len() as f64;
@@ -888,11 +900,6 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         effects,
         extras,
         dropped_covariates: scan::dropped_covariates(data, &[]),
-        cv_mode: if closed_form {
-            "closed-form".into()
-        } else {
-            refit_mode()
-        },
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

@@ -710,14 +710,13 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 /// such a candidate only once the refit CV confirms it. (Pseudo-campaigns
 /// at the re-estimated ξ itself were worse: controls reached p = 0.0005.)
 /// Benjamini–Hochberg across families; score, the closed-form K-fold CV
-/// drop with the folds `fold`.
+/// drop at the partition the systems were built for.
 #[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
     systems: Vec<AxisSystem>,
     permutations: usize,
     seed: u64,
-    fold: &[usize],
     refine: usize,
     refit: &Refit<'_>,
     progress: &dyn Fn(&str),
@@ -730,7 +729,7 @@ pub fn test_families(
     let data = gls::observed(&systems);
     let loo0 = gls::loo_sse_before(&systems);
     // score and share against the model as it is (at its own ξ)
-    let before = gls::kfold_sse_before(&systems, fold);
+    let before = gls::kfold_sse_before(&systems);
     let mut trials: Vec<Trial> = grids
         .par_iter()
         .map(|grid| {
@@ -770,7 +769,7 @@ pub fn test_families(
             t.stat = improvement;
             t.best = best;
             t.refit = Some((
-                test.kfold_sse(&sys, best, fold),
+                test.kfold_sse(&sys, best),
                 test.near_best(&sys, &gls::observed(&sys), support_width(&sys)),
             ));
         }
@@ -838,7 +837,7 @@ pub fn test_families(
             let (kfold, support) = match &t.refit {
                 Some((kfold, support)) => (*kfold, support.clone()),
                 None if finite => (
-                    t.base.kfold_sse(&systems, t.best, fold),
+                    t.base.kfold_sse(&systems, t.best),
                     t.base.near_best(&systems, &data, within),
                 ),
                 None => (before, Vec::new()),
