@@ -115,13 +115,20 @@ pub enum Feature {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         reference: Option<f64>,
     },
-    /// A one-column feature times joint k's angle: `f·θ_k`, `f·sin θ_k`,
-    /// `f·cos θ_k` (θ in degrees for the first).
+    /// A one-column feature, less a centre `c`, times joint k's angle:
+    /// `(f − c)·θ_k`, `(f − c)·sin θ_k`, `(f − c)·cos θ_k` (θ in degrees for
+    /// the first). The centre is the feature's campaign mean, so the product
+    /// adds the span of the interaction and not, under the feature's name, a
+    /// joint-angle trend `c·θ_k` (a covariate near 22 °C times θ is mostly
+    /// θ). Files written before the centre load with `c = 0`.
     Times {
         /// The one-column feature.
         of: Box<Feature>,
         /// 1-based joint k.
         joint: usize,
+        /// Value subtracted from the feature before the product.
+        #[serde(default)]
+        centre: f64,
     },
     /// A one-column feature `lag` rows earlier, `f(k − lag)` (the first
     /// rows take `f(0)`).
@@ -176,7 +183,7 @@ impl Feature {
             }
             Feature::TcpMove { .. } => ["x", "y", "z"].map(|a| format!("tcp_move_{a}")).to_vec(),
             Feature::Interval { column, .. } => vec![format!("Δ{column}")],
-            Feature::Times { of, joint } => {
+            Feature::Times { of, joint, .. } => {
                 let f = of.names().concat();
                 vec![
                     format!("{f}·q{joint}"),
@@ -234,8 +241,14 @@ impl Feature {
                 }
                 vec![*joint]
             }
-            Feature::Times { of, joint } => {
+            Feature::Times { of, joint, centre } => {
                 one_column(of)?;
+                if !centre.is_finite() {
+                    return Err(Error::InvalidParameter(format!(
+                        "{:?} × q{joint}: the centre must be finite, got {centre}",
+                        of.names()
+                    )));
+                }
                 of.validate(n)?;
                 vec![*joint]
             }
@@ -304,7 +317,12 @@ impl Feature {
                         .collect(),
                 ])
             }
-            Feature::Times { of, joint } => Ok(times(of.columns(data)?.remove(0), &data.q, *joint)),
+            Feature::Times { of, joint, centre } => Ok(times(
+                of.columns(data)?.remove(0),
+                *centre,
+                &data.q,
+                *joint,
+            )),
             Feature::Lagged { of, lag } => Ok(vec![lagged(&of.columns(data)?[0], *lag)]),
             _ => self.columns_from_poses(&data.q, &data.dir),
         }
@@ -366,9 +384,12 @@ impl Feature {
                     .map(|a| col(&|i| if i == 0 { 0.0 } else { p[i][a] - p[i - 1][a] }))
                     .collect()
             }
-            Feature::Times { of, joint } => {
-                times(of.columns_from_poses(q, dir)?.remove(0), q, *joint)
-            }
+            Feature::Times { of, joint, centre } => times(
+                of.columns_from_poses(q, dir)?.remove(0),
+                *centre,
+                q,
+                *joint,
+            ),
             Feature::Lagged { of, lag } => vec![lagged(&of.columns_from_poses(q, dir)?[0], *lag)],
             Feature::Harmonic { joint, period_deg } => {
                 let w = std::f64::consts::TAU / period_deg;
@@ -446,8 +467,10 @@ fn moves(q: &[Vec<f64>], joint: usize, tau_poses: f64) -> Vec<f64> {
         .collect()
 }
 
-/// `f·θ_k`, `f·sin θ_k`, `f·cos θ_k` of 1-based joint `joint`.
-fn times(f: Vec<f64>, q: &[Vec<f64>], joint: usize) -> Vec<Vec<f64>> {
+/// `(f − c)·θ_k`, `(f − c)·sin θ_k`, `(f − c)·cos θ_k` of 1-based joint
+/// `joint`.
+fn times(mut f: Vec<f64>, c: f64, q: &[Vec<f64>], joint: usize) -> Vec<Vec<f64>> {
+    f.iter_mut().for_each(|v| *v -= c);
     let th = |i: usize| q[i][joint - 1];
     vec![
         f.iter().enumerate().map(|(i, v)| v * th(i)).collect(),

@@ -375,10 +375,18 @@ fn motion_history_features_follow_the_sequence() {
     let t = col(Feature::Times {
         of: Box::new(last.clone()),
         joint: 2,
+        centre: 0.0,
     });
     assert_eq!(t.len(), 3);
     assert_eq!(t[0][2], 180.0);
     assert!((t[1][2] - 2.0).abs() < 1e-12 && t[2][2].abs() < 1e-12);
+    // less a centre: (2 − 0.5)·90°
+    let t = col(Feature::Times {
+        of: Box::new(last.clone()),
+        joint: 2,
+        centre: 0.5,
+    });
+    assert_eq!(t[0][2], 135.0);
     // the TCP move through the robot is 0 for the first row
     let robot = kinematics::preset("comau-nj220").unwrap();
     let q6: Vec<Vec<f64>> = (0..4).map(|i| vec![i as f64 * 5.0; 6]).collect();
@@ -418,6 +426,12 @@ fn motion_history_features_follow_the_sequence() {
                 period_deg: 5.0,
             }),
             joint: 1,
+            centre: 0.0,
+        },
+        Feature::Times {
+            of: Box::new(last.clone()),
+            joint: 1,
+            centre: f64::NAN,
         },
         Feature::Moves {
             joint: 1,
@@ -527,5 +541,35 @@ fn an_effect_is_worth_adding_by_its_share_or_by_its_size_against_the_noise() {
     for f in [10usize, 64, 95, 400] {
         let p = min_resamples(f, 0.05);
         assert!(f as f64 / (1.0 + p as f64) <= 0.05);
+    }
+}
+
+#[test]
+fn a_covariate_times_a_joint_angle_does_not_depend_on_the_covariate_offset() {
+    // temperature near 22 °C times θ is mostly θ: the candidate must test
+    // (and add) the interaction, the same as for the temperature less 22 °C
+    let mut data = campaign(80, 3, None);
+    data.covariates.retain(|c| c.name != "temp_c");
+    let temp: Vec<f64> = (0..80).map(|i| 0.01 * i as f64).collect();
+    data.covariates.push(robokrige::dataset::Covariate {
+        name: "temp_c".into(),
+        values: temp.clone(),
+        missing: 0,
+    });
+    let times_columns = |data: &Dataset| -> Vec<Vec<Vec<f64>>> {
+        robokrige::diagnose::scan::families(data, &[], None)
+            .into_iter()
+            .filter(|f| f.label.starts_with("temp_c × one joint"))
+            .flat_map(|f| f.grid.into_iter().map(|g| g.columns))
+            .collect()
+    };
+    let at_zero = times_columns(&data);
+    assert_eq!(at_zero.len(), data.n_joints());
+    let c = data.covariates.iter_mut().find(|c| c.name == "temp_c").unwrap();
+    c.values = temp.iter().map(|t| t + 22.0).collect();
+    let at_22 = times_columns(&data);
+    for (a, b) in at_zero.iter().flatten().zip(at_22.iter().flatten()) {
+        let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-9, "columns moved by {worst} with the offset");
     }
 }

@@ -547,12 +547,16 @@ fn motion_families(
             Feature::Interval { column, .. } => (EffectKind::MotionHistory, column.clone()),
             other => (EffectKind::MotionHistory, other.names().concat()),
         };
-        // the columns as the model would get them ([`Feature::Times`])
+        // the columns as the model would get them ([`Feature::Times`]),
+        // centred at the feature's mean: the product with a covariate near
+        // 22 °C must not be a joint-angle trend in the covariate's name
+        let centre = v.iter().sum::<f64>() / v.len() as f64;
         let grid: Vec<GridPoint> = (1..=n)
             .filter_map(|k| {
                 let t = Feature::Times {
                     of: Box::new(f.clone()),
                     joint: k,
+                    centre,
                 };
                 Some(GridPoint {
                     params: params(&[("joint", k as f64)]),
