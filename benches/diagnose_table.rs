@@ -54,6 +54,16 @@ fn main() {
             step_150,
         ),
         (
+            "tracker bump 0.1 mm rows 100–200",
+            "tracker-step:row=100,until=200,dx=0.06,dy=-0.05,dz=0.06",
+            bump_100_200,
+        ),
+        (
+            "tracker bump 0.2 mm rows 100–200",
+            "tracker-step:row=100,until=200,dx=0.15,dy=-0.1,dz=0.1",
+            bump_100_200,
+        ),
+        (
             "crosstalk 0.01°·sin q2 on q1",
             "crosstalk:joint=1,from=2,gain_deg=0.01",
             crosstalk,
@@ -225,6 +235,12 @@ fn step_150(e: &robokrige::diagnose::EffectReport) -> bool {
         && e.params
             .get("row")
             .is_some_and(|r| (r - 150.0).abs() <= 3.0)
+}
+
+/// Both edges of the bump, each within 3 rows.
+fn bump_100_200(e: &robokrige::diagnose::EffectReport) -> bool {
+    let near = |k: &str, r: f64| e.params.get(k).is_some_and(|v| (v - r).abs() <= 3.0);
+    e.kind == EffectKind::Order && near("from_row", 100.0) && near("to_row", 200.0)
 }
 
 fn crosstalk(e: &robokrige::diagnose::EffectReport) -> bool {

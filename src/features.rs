@@ -317,12 +317,9 @@ impl Feature {
                         .collect(),
                 ])
             }
-            Feature::Times { of, joint, centre } => Ok(times(
-                of.columns(data)?.remove(0),
-                *centre,
-                &data.q,
-                *joint,
-            )),
+            Feature::Times { of, joint, centre } => {
+                Ok(times(of.columns(data)?.remove(0), *centre, &data.q, *joint))
+            }
             Feature::Lagged { of, lag } => Ok(vec![lagged(&of.columns(data)?[0], *lag)]),
             _ => self.columns_from_poses(&data.q, &data.dir),
         }
@@ -384,12 +381,9 @@ impl Feature {
                     .map(|a| col(&|i| if i == 0 { 0.0 } else { p[i][a] - p[i - 1][a] }))
                     .collect()
             }
-            Feature::Times { of, joint, centre } => times(
-                of.columns_from_poses(q, dir)?.remove(0),
-                *centre,
-                q,
-                *joint,
-            ),
+            Feature::Times { of, joint, centre } => {
+                times(of.columns_from_poses(q, dir)?.remove(0), *centre, q, *joint)
+            }
             Feature::Lagged { of, lag } => vec![lagged(&of.columns_from_poses(q, dir)?[0], *lag)],
             Feature::Harmonic { joint, period_deg } => {
                 let w = std::f64::consts::TAU / period_deg;

@@ -286,7 +286,7 @@ fn a_servo_lag_is_traced_to_the_joints_moves_and_modelled_end_to_end() {
     let top = &d.effects[0];
     assert_eq!(top.kind, EffectKind::MotionHistory, "{top:?}");
     assert_eq!(top.source, ["move2"]);
-    assert_eq!(top.params["tau_poses"], 0.0);
+    assert_eq!(top.params.get("tau_poses"), Some(&0.0), "{top:?}");
     assert!(top.significant && top.accepted, "{top:?}");
     let lag = Feature::Moves {
         joint: 2,
@@ -565,11 +565,55 @@ fn a_covariate_times_a_joint_angle_does_not_depend_on_the_covariate_offset() {
     };
     let at_zero = times_columns(&data);
     assert_eq!(at_zero.len(), data.n_joints());
-    let c = data.covariates.iter_mut().find(|c| c.name == "temp_c").unwrap();
+    let c = data
+        .covariates
+        .iter_mut()
+        .find(|c| c.name == "temp_c")
+        .unwrap();
     c.values = temp.iter().map(|t| t + 22.0).collect();
     let at_22 = times_columns(&data);
     for (a, b) in at_zero.iter().flatten().zip(at_22.iter().flatten()) {
-        let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let worst = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
         assert!(worst < 1e-9, "columns moved by {worst} with the offset");
     }
+}
+
+/// A bump that returns (a tracker knocked and put back) is one effect: the
+/// block of rows is found with both edges, and added as two steps.
+#[test]
+fn a_tracker_bump_is_found_as_a_block_with_both_edges() {
+    let (from, to) = (70, 140);
+    let data = campaign(
+        200,
+        6,
+        Some("tracker-step:row=70,until=140,dx=0.15,dy=-0.12,dz=0.12"),
+    );
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let top = d.effects.iter().find(|e| e.accepted).unwrap();
+    assert_eq!(
+        top.label, "block of rows (a bump, back at its end)",
+        "{top:?}"
+    );
+    assert_eq!(top.round, 1);
+    let (a, b) = (top.params["from_row"], top.params["to_row"]);
+    assert!(
+        (a - from as f64).abs() <= 2.0 && (b - to as f64).abs() <= 2.0,
+        "block found at rows {a}–{b}"
+    );
+    assert!(top.params_ci["from_row"][0] <= a && a <= top.params_ci["from_row"][1]);
+    assert_eq!(
+        d.extras[..2],
+        [
+            Feature::Step { row: a as usize },
+            Feature::Step { row: b as usize }
+        ]
+    );
+    // each edge's height, with its interval, is the planted 0.15 mm on x
+    let up = &top.size[0].estimate;
+    assert!((up[0] - 0.15).abs() < 0.04, "rising edge {up:?}");
+    assert!((top.size[1].estimate[0] + 0.15).abs() < 0.04);
 }

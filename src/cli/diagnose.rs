@@ -367,6 +367,8 @@ pub(super) fn describe(e: &EffectReport) -> String {
             let text = match k.as_str() {
                 "period_deg" => format!("period {v:.3}°"),
                 "row" => format!("at row {v:.0}"),
+                "from_row" => format!("from row {v:.0}"),
+                "to_row" => format!("to row {v:.0}"),
                 "scale_deg" => format!("scale {v:.1}°"),
                 _ => format!("{k} {}", fmt_param(*v)),
             };

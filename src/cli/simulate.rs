@@ -51,7 +51,8 @@ Effects (repeatable --effect NAME[:key=value,...]; defaults in brackets):
   temperature  delta_k [6], tau_s [1200], expansion_per_k [4e-5]  -> drift with time_s/temp_c
   payload      kg [0/60/120] (levels in equal blocks of rows)      -> payload_kg column
   harmonic     joint [2], period_deg [7.5], amp_deg [0.004], phase_rad [0]
-  tracker-step row [150], dx [0.15], dy [-0.1], dz [0.1] (mm, no column records it)
+  tracker-step row [150], until [none: to the end; a row: put back there, a bump],
+               dx [0.15], dy [-0.1], dz [0.1] (mm, no column records it)
   crosstalk    joint [1], from [2], gain_deg [0.01]  (joint deviates by gain*sin(q_from))
   hysteresis   joint [2], amp_deg [0.01], travel_deg [20]  (joint deviates by
                λ*amp*(1 - exp(-s/travel)), s its travel since its last reversal)

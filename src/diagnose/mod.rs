@@ -293,8 +293,9 @@ pub struct EffectReport {
     /// with q within the FDR is not counted as significant.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
-    /// Tested at the correlation parameters refitted with the candidate in
-    /// the trend (the strongest few of a round), else at the model's own.
+    /// Scored at the correlation parameters refitted with the candidate in
+    /// the trend (the strongest few of a round), else at the model's own;
+    /// its p-value is always that of the model's own.
     #[serde(default)]
     pub refit_xi: bool,
     /// Sign-flip resamples run before its p-value settled.
@@ -533,11 +534,14 @@ fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<WarmStar
     )
 }
 
-/// The range of every parameter over the grid points `support` of `family`.
-fn support_interval(family: &scan::Family, support: &[usize]) -> BTreeMap<String, [f64; 2]> {
+/// The range of every parameter over the grid points of a support set (their
+/// parameters).
+fn support_interval<'a>(
+    support: impl IntoIterator<Item = &'a BTreeMap<String, f64>>,
+) -> BTreeMap<String, [f64; 2]> {
     let mut out: BTreeMap<String, [f64; 2]> = BTreeMap::new();
-    for &i in support {
-        for (k, v) in &family.grid[i].params {
+    for params in support {
+        for (k, v) in params {
             let e = out.entry(k.clone()).or_insert([*v, *v]);
             e[0] = e[0].min(*v);
             e[1] = e[1].max(*v);
@@ -560,6 +564,53 @@ fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficient> {
         })
         .collect()
 }
+
+/// Occam's rule for the first candidate of `tested` (in its ranked order):
+/// a significant candidate that adds fewer model columns (its features'
+/// names) and explains the same ([`SAME_FIT`]-alike fitted component of the
+/// residuals, a score at least [`SAME_SCORE`] of the first's) goes first —
+/// a temperature drift is "temp_c", one input, not "temp_c × one joint
+/// angle", whose three trend columns happen to carry it as well. Returns
+/// the new first's index and the label it overtook.
+fn prefer_simpler(
+    tested: &mut Vec<scan::Tested>,
+    fams: &[scan::Family],
+    residuals: &[[f64; 3]],
+    significant: &dyn Fn(&scan::Tested) -> bool,
+) -> Option<(usize, String)> {
+    fn point<'a>(t: &'a scan::Tested, fams: &'a [scan::Family]) -> &'a scan::GridPoint {
+        t.point(&fams[t.family])
+    }
+    let size =
+        |t: &scan::Tested| -> usize { point(t, fams).add.iter().map(|f| f.names().len()).sum() };
+    let first = tested
+        .iter()
+        .position(|t| significant(t) && t.score > 0.0)?;
+    let top = scan::fitted(&point(&tested[first], fams).columns, residuals);
+    let simpler = (0..tested.len())
+        .filter(|&i| {
+            let t = &tested[i];
+            i != first
+                && significant(t)
+                && t.score >= SAME_SCORE * tested[first].score
+                && size(t) < size(&tested[first])
+        })
+        .filter(|&i| {
+            let fit = scan::fitted(&point(&tested[i], fams).columns, residuals);
+            scan::similarity(&top, &fit) >= SAME_FIT
+        })
+        .min_by_key(|&i| (size(&tested[i]), i))?;
+    let over = fams[tested[first].family].label.clone();
+    let t = tested.remove(simpler);
+    tested.insert(first, t);
+    Some((first, over))
+}
+
+/// Cosine similarity of fitted components above which two candidates
+/// explain the same.
+const SAME_FIT: f64 = 0.9;
+/// Share of the first candidate's score a simpler one needs to go first.
+const SAME_SCORE: f64 = 0.8;
 
 /// A CV RMSE above this multiple of the level a campaign without the effect
 /// would reach counts as only partly modelled (the target of issue 22).
@@ -758,18 +809,22 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 .total_cmp(&a.score)
                 .then(a.p_value.total_cmp(&b.p_value)),
         });
+        let preferred = prefer_simpler(&mut tested, &fams, &current.residuals, &significant);
         let mut reports: Vec<EffectReport> = tested
             .iter()
             .map(|t| {
                 let f = &fams[t.family];
-                let g = &f.grid[t.best];
+                let g = t.point(f);
                 EffectReport {
                     round,
                     kind: f.kind,
                     source: f.source.clone(),
                     label: f.label.clone(),
                     params: g.params.clone(),
-                    params_ci: support_interval(f, &t.support),
+                    params_ci: match &t.refined {
+                        Some(r) => support_interval(&r.support),
+                        None => support_interval(t.support.iter().map(|&i| &f.grid[i].params)),
+                    },
                     score: t.score,
                     explained: t.explained,
                     p_value: t.p_value,
@@ -795,18 +850,24 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 }
             })
             .collect();
+        if let Some((k, over)) = preferred {
+            reports[k].note = Some(format!(
+                "ranked before '{over}': it explains the same with fewer model columns"
+            ));
+        }
         let pick = reports.iter().position(|r| r.significant && r.score > 0.0);
         if let Some(k) = pick {
             // `reports` is in the order of `tested`
-            let cols = |i: usize| &fams[tested[i].family].grid[tested[i].best].columns;
+            let cols = |i: usize| &tested[i].point(&fams[tested[i].family]).columns;
             let top_fit = scan::fitted(cols(k), &current.residuals);
             let top_score = reports[k].score;
             let similar: Vec<String> = (0..reports.len())
                 .filter(|&i| {
-                    i != k && reports[i].significant && reports[i].score >= 0.8 * top_score
+                    i != k && reports[i].significant && reports[i].score >= SAME_SCORE * top_score
                 })
                 .filter(|&i| {
-                    scan::similarity(&top_fit, &scan::fitted(cols(i), &current.residuals)) >= 0.9
+                    scan::similarity(&top_fit, &scan::fitted(cols(i), &current.residuals))
+                        >= SAME_FIT
                 })
                 .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
                 .collect();
@@ -869,17 +930,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 100.0 * o.min_gain,
                 worth.floor_mse()
             );
-            if reports[k].refit_xi {
-                // its statistic came from ξ re-estimated on these data, whose
-                // null is optimistic: without the refit CV's confirmation it
-                // does not count
-                reports[k].significant = false;
-                reports[k].note = Some(format!(
-                    "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
-                ));
-            } else {
-                reports[k].note = Some(format!("not added: {drop}"));
-            }
+            reports[k].note = Some(format!("not added: {drop}"));
         }
         effects.extend(reports);
         if done {

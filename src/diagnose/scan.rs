@@ -81,6 +81,68 @@ pub struct Family {
     pub label: String,
     /// The parameter grid; each point is one set of regressor columns.
     pub grid: Vec<GridPoint>,
+    /// For a grid on a lattice coarser than the data resolve (the block's
+    /// edges): the finer points around a grid point, among which the
+    /// reported one is chosen once the lattice is tested ([`Refined`]).
+    pub zoom: Option<Zoom>,
+}
+
+/// The finer grid points around `point` of a campaign of `m` rows.
+pub type Zoom = fn(point: &GridPoint, m: usize) -> Vec<GridPoint>;
+
+/// Edges of the block lattice: its grid has about `BLOCK_EDGES²/2` points
+/// (one column each), as many as the step family's at 1 000 rows.
+const BLOCK_EDGES: usize = 32;
+
+/// Rows before the first and after the last step or block edge scanned.
+fn order_margin(m: usize) -> usize {
+    (m / 20).max(5)
+}
+
+/// The lattice of block edges: about [`BLOCK_EDGES`] rows evenly from the
+/// margin to `m − margin`, and their spacing.
+fn block_lattice(m: usize) -> (Vec<usize>, usize) {
+    let margin = order_margin(m);
+    let span = m.saturating_sub(2 * margin);
+    let spacing = span.div_ceil(BLOCK_EDGES).max(1);
+    ((margin..m - margin).step_by(spacing).collect(), spacing)
+}
+
+/// Grid point of the block `[from, to)`: one indicator column (a bump of one
+/// height, back at its end), added to the model as two steps (each edge its
+/// own height: a second step need not return to the first level).
+fn block_point(m: usize, from: usize, to: usize) -> GridPoint {
+    GridPoint {
+        params: params(&[("from_row", from as f64), ("to_row", to as f64)]),
+        columns: vec![
+            (0..m)
+                .map(|i| if (from..to).contains(&i) { 1.0 } else { 0.0 })
+                .collect(),
+        ],
+        add: vec![Feature::Step { row: from }, Feature::Step { row: to }],
+    }
+}
+
+/// [`Zoom`] of a block: each edge moved row by row within one lattice
+/// spacing, the other held.
+fn zoom_block(point: &GridPoint, m: usize) -> Vec<GridPoint> {
+    let (from, to) = (
+        point.params["from_row"] as usize,
+        point.params["to_row"] as usize,
+    );
+    let margin = order_margin(m);
+    let (_, s) = block_lattice(m);
+    let rows = |c: usize| c.saturating_sub(s).max(margin)..(c + s + 1).min(m - margin);
+    let mut out: Vec<GridPoint> = rows(from)
+        .filter(|&a| to >= a + margin)
+        .map(|a| block_point(m, a, to))
+        .collect();
+    out.extend(
+        rows(to)
+            .filter(|&b| b >= from + margin && b != to)
+            .map(|b| block_point(m, from, b)),
+    );
+    out
 }
 
 fn zscore(v: &[f64]) -> Vec<f64> {
@@ -191,6 +253,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
             source: vec![c.name.clone()],
             label: format!("{} (alone)", c.name),
             grid: vec![single(BTreeMap::new(), z.clone(), add.clone())],
+            zoom: None,
         });
         let mut cols = vec![z.clone()];
         cols.extend(
@@ -206,6 +269,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                 columns: cols,
                 add: vec![add],
             }],
+            zoom: None,
         });
     }
     // measurement order: slow drift and a change point
@@ -222,8 +286,9 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
             ],
             add: vec![Feature::Row],
         }],
+        zoom: None,
     });
-    let margin = (m / 20).max(5);
+    let margin = order_margin(m);
     if m > 2 * margin {
         out.push(Family {
             kind: EffectKind::Order,
@@ -235,7 +300,34 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                     single(params(&[("row", t as f64)]), col, Feature::Step { row: t })
                 })
                 .collect(),
+            zoom: None,
         });
+    }
+    // a block of rows: a bump that returns (a tracker knocked and put back,
+    // a warm-up that settles), both edges scanned on a lattice, the reported
+    // ones then row by row ([`zoom_block`]); one column, so a bump is not
+    // split into two steps that each explain half of it
+    if m > 3 * margin {
+        let (edges, _) = block_lattice(m);
+        let grid: Vec<GridPoint> = edges
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &a)| {
+                edges[i + 1..]
+                    .iter()
+                    .filter(move |&&b| b >= a + margin)
+                    .map(move |&b| block_point(m, a, b))
+            })
+            .collect();
+        if !grid.is_empty() {
+            out.push(Family {
+                kind: EffectKind::Order,
+                source: vec!["row".into()],
+                label: "block of rows (a bump, back at its end)".into(),
+                grid,
+                zoom: Some(zoom_block),
+            });
+        }
     }
     // periodic terms per joint
     for j in 0..n {
@@ -269,6 +361,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                 source: vec![format!("q{}", j + 1)],
                 label: format!("harmonic of q{}", j + 1),
                 grid,
+                zoom: None,
             });
         }
     }
@@ -291,6 +384,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                     col,
                     Feature::Interaction { a: a + 1, b: b + 1 },
                 )],
+                zoom: None,
             });
         }
     }
@@ -315,6 +409,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                         columns: cols.iter().map(|c| zscore(c)).collect(),
                         add: vec![f],
                     }],
+                    zoom: None,
                 });
             }
         }
@@ -343,6 +438,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                     columns: signed(&pv[0]),
                     add: vec![prev],
                 }],
+                zoom: None,
             });
         }
         // travel s since the last reversal: linear, and saturating
@@ -376,6 +472,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
             source: vec![format!("dir{}", j + 1)],
             label: format!("travel of q{} since its last reversal", j + 1),
             grid,
+            zoom: None,
         });
     }
     motion_families(data, exclude, robot, &u, &mut out);
@@ -466,6 +563,7 @@ fn motion_families(
                 source: vec![format!("move{j}")],
                 label: format!("moves of q{j} into the pose (lag)"),
                 grid,
+                zoom: None,
             });
         }
         // the size alone: signed by λ it would be the signed move, which the
@@ -481,6 +579,7 @@ fn motion_families(
                     columns: vec![zscore(&s[0])],
                     add: vec![size],
                 }],
+                zoom: None,
             });
         }
     }
@@ -498,6 +597,7 @@ fn motion_families(
                     columns: z_all(c),
                     add: vec![f],
                 }],
+                zoom: None,
             });
         }
     }
@@ -527,6 +627,7 @@ fn motion_families(
                     columns: vec![zscore(&v[0])],
                     add: vec![f.clone()],
                 }],
+                zoom: None,
             });
             bases.push((f, v[0].clone(), format!("Δ{}", t.name)));
         }
@@ -570,6 +671,7 @@ fn motion_families(
             source: vec![source.clone()],
             label: format!("{label} × one joint angle (θ, sin θ, cos θ)"),
             grid,
+            zoom: None,
         });
         if b < lagged_bases {
             out.push(Family {
@@ -591,6 +693,7 @@ fn motion_families(
                         }],
                     })
                     .collect(),
+                zoom: None,
             });
         }
     }
@@ -654,6 +757,29 @@ pub struct Tested {
     /// times the model's expected leave-one-out variance of the best (a 95 %
     /// support set of the scanned parameter, e.g. the rows a step may be at).
     pub support: Vec<usize>,
+    /// For a family with a [`Family::zoom`]: its best point among the finer
+    /// points around the lattice's best, on the data at the model's ξ (the
+    /// p-value and score stay those of the lattice: the null distribution is
+    /// the lattice's).
+    pub refined: Option<Refined>,
+}
+
+/// A lattice point resolved on the finer grid around it.
+#[derive(Debug, Clone)]
+pub struct Refined {
+    /// The point reported and added.
+    pub point: GridPoint,
+    /// Parameters of the finer points within the support width of it.
+    pub support: Vec<BTreeMap<String, f64>>,
+}
+
+impl Tested {
+    /// The grid point to report and add: the refined one where there is one.
+    pub fn point<'a>(&'a self, family: &'a Family) -> &'a GridPoint {
+        self.refined
+            .as_ref()
+            .map_or(&family.grid[self.best], |r| &r.point)
+    }
 }
 
 /// `χ²₁` quantile of 95 %: the drop of a likelihood-ratio statistic that
@@ -675,8 +801,10 @@ struct Trial {
     /// At the model's ξ: gives the null distribution.
     base: FamilyTest,
     /// Observed statistic (mm²): the best leave-one-out improvement over the
-    /// model as it is, at its ξ or at the re-estimated one.
+    /// model as it is, at its ξ or at the re-estimated one (score, evidence).
     stat: f64,
+    /// The statistic at the model's ξ: what the null distribution tests.
+    base_stat: f64,
     /// Reported grid point.
     best: usize,
     /// Scored at re-estimated ξ: its closed-form K-fold CV SSE and support
@@ -698,23 +826,27 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 
 /// Test every family inside the current model (`systems`, one per output,
 /// [`super::gls`]): statistic, the pooled leave-one-out gain of the best
-/// grid point at the model's ξ. The `refine` families with the largest
-/// statistic are tried again at the ξ the model would choose with their best
-/// grid point (`refit` returns the systems there; `None` keeps the first
-/// test); their statistic becomes the larger of the gain at the model's ξ
-/// and, at the new ξ, the smaller of the candidate's gain there and the
-/// improvement over the model as it is,
-/// `LOO(model) − LOO(model + candidate at its ξ)`. The
-/// null distribution is always that of the model's ξ: pseudo-campaigns
-/// (seeded, the same for every family, sequential: a family stops once
-/// `SETTLED` resamples reach its statistic, `p = (1 + exceed)/(1 + run)`).
-/// The re-estimated statistic has no re-estimation in its null, so its
-/// p-value is optimistic (in a 160-row control, a step reached p = 0.001
-/// and the refit CV showed no gain); [`super::diagnose`] therefore counts
-/// such a candidate only once the refit CV confirms it. (Pseudo-campaigns
-/// at the re-estimated ξ itself were worse: controls reached p = 0.0005.)
-/// Benjamini–Hochberg across families; score, the closed-form K-fold CV
-/// drop at the partition the systems were built for.
+/// grid point at the model's ξ. Its null distribution is that of the same
+/// statistic in pseudo-campaigns (sign-flipped whitened residuals, seeded,
+/// the same for every family, sequential: a family stops once `SETTLED`
+/// resamples reach its statistic, `p = (1 + exceed)/(1 + run)`), so the
+/// p-value accounts for the scan over the family's grid. Benjamini–Hochberg
+/// across families.
+///
+/// The `refine` families with the largest statistic are tried again at the
+/// ξ the model would choose with their best grid point (`refit` returns the
+/// systems there; `None` keeps the first test): an effect the GP has partly
+/// soaked up (a harmonic, by a shorter length scale) shows its real size
+/// there. Their *score* and reported point become those of the new ξ when it
+/// gives more: the smaller of the candidate's gain there and the
+/// improvement over the model as it is, `LOO(model) − LOO(model +
+/// candidate at its ξ)`. Their *p-value* stays that of the model's ξ: the
+/// re-estimated statistic has no re-estimation in its null (in 160-row
+/// controls a step, then a block of rows, reached the smallest p-value the
+/// resamples allow at the re-estimated ξ, and pseudo-campaigns at the
+/// re-estimated ξ itself were no better: p = 0.0005).
+/// Score, the closed-form K-fold CV drop at the partition the systems were
+/// built for.
 #[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
@@ -742,6 +874,7 @@ pub fn test_families(
             Trial {
                 base,
                 stat,
+                base_stat: stat,
                 best,
                 refit: None,
             }
@@ -810,7 +943,7 @@ pub fn test_families(
             .map(|&k| trials[k].base.best_of_batch(&systems, &pseudo))
             .collect();
         for (&k, h) in active.iter().zip(hits) {
-            let o = trials[k].stat;
+            let o = trials[k].base_stat;
             for g in h {
                 exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
                 run[k] += 1;
@@ -877,9 +1010,36 @@ pub fn test_families(
                 } else {
                     Vec::new()
                 },
+                refined: families[k].zoom.filter(|_| finite).and_then(|zoom| {
+                    resolve(zoom(&families[k].grid[t.best], m), &systems, &data, within)
+                }),
             }
         })
         .collect()
+}
+
+/// The best of the finer points `local` on the data, and those within the
+/// support width of it; `None` when none is usable.
+fn resolve(
+    local: Vec<GridPoint>,
+    systems: &[AxisSystem],
+    data: &[gls::Response],
+    within: f64,
+) -> Option<Refined> {
+    if local.is_empty() {
+        return None;
+    }
+    let grid: Vec<Vec<Vec<f64>>> = local.iter().map(|g| g.columns.clone()).collect();
+    let test = FamilyTest::new(systems, &grid);
+    let (best, gain) = test.best(systems, data);
+    gain.is_finite().then(|| Refined {
+        support: test
+            .near_best(systems, data, within)
+            .into_iter()
+            .map(|i| local[i].params.clone())
+            .collect(),
+        point: local[best].clone(),
+    })
 }
 
 /// The least-squares fit of the centred residuals on the centred `columns`

@@ -566,7 +566,7 @@ struct Environment {
     expansion_per_k: f64,
     payload_kg: Vec<f64>,
     payload_column: bool,
-    step: Option<(usize, [f64; 3])>,
+    step: Option<(std::ops::Range<usize>, [f64; 3])>,
 }
 
 impl Environment {
@@ -618,7 +618,11 @@ impl Environment {
                         *p = levels_kg[(k * blocks / m.max(1)).min(blocks - 1)];
                     }
                 }
-                Effect::TrackerStep { row, offset_mm } => env.step = Some((*row, *offset_mm)),
+                Effect::TrackerStep {
+                    row,
+                    until,
+                    offset_mm,
+                } => env.step = Some((*row..until.unwrap_or(usize::MAX), *offset_mm)),
                 _ => {}
             }
         }
@@ -634,7 +638,7 @@ impl Environment {
 
     fn tracker_offset(&self, k: usize) -> Vector3<f64> {
         match self.step {
-            Some((row, off)) if k >= row => Vector3::from(off),
+            Some((ref rows, off)) if rows.contains(&k) => Vector3::from(off),
             _ => Vector3::zeros(),
         }
     }

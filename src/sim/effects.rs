@@ -6,7 +6,7 @@
 //! Command-line syntax: `NAME[:key=value,key=value…]`, e.g.
 //! `temperature:delta_k=6,tau_s=1800`, `payload:kg=0/25/50`,
 //! `harmonic:joint=2,period_deg=7.5,amp_deg=0.004`,
-//! `tracker-step:row=150,dx=0.15,dy=0,dz=-0.1`,
+//! `tracker-step:row=150,dx=0.15,dy=0,dz=-0.1` (`until=250`: put back there),
 //! `crosstalk:joint=1,from=2,gain_deg=0.004`,
 //! `hysteresis:joint=2,amp_deg=0.01,travel_deg=20`,
 //! `lag:joint=2,gain=0.0005,tau_poses=0`.
@@ -49,10 +49,15 @@ pub enum Effect {
         phase_rad: f64,
     },
     /// The tracker set-up is bumped before row `row` (0-based): every later
-    /// measurement is offset by `offset_mm`. No column records it.
+    /// measurement (up to `until`, when it is put back) is offset by
+    /// `offset_mm`. No column records it.
     TrackerStep {
         /// 0-based row from which the offset applies.
         row: usize,
+        /// 0-based row from which the offset is gone again (a bump); `None`:
+        /// to the end of the campaign.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        until: Option<usize>,
         /// Offset added to every later measured position (x, y, z), mm.
         offset_mm: [f64; 3],
     },
@@ -125,10 +130,20 @@ impl Effect {
                 amp_deg: kv.f("amp_deg", 0.004)?,
                 phase_rad: kv.f("phase_rad", 0.0)?,
             },
-            "tracker-step" => Effect::TrackerStep {
-                row: kv.f("row", 150.0)? as usize,
-                offset_mm: [kv.f("dx", 0.15)?, kv.f("dy", -0.1)?, kv.f("dz", 0.1)?],
-            },
+            "tracker-step" => {
+                let row = kv.f("row", 150.0)? as usize;
+                let until = kv.opt("until")?.map(|u| u as usize);
+                if until.is_some_and(|u| u <= row) {
+                    return Err(Error::InvalidParameter(format!(
+                        "effect '{spec}': until must be a row after row={row}"
+                    )));
+                }
+                Effect::TrackerStep {
+                    row,
+                    until,
+                    offset_mm: [kv.f("dx", 0.15)?, kv.f("dy", -0.1)?, kv.f("dz", 0.1)?],
+                }
+            }
             "crosstalk" => Effect::Crosstalk {
                 joint: kv.joint("joint", 1)?,
                 from: kv.joint("from", 2)?,
@@ -324,19 +339,25 @@ impl<'a> Params<'a> {
     }
 
     fn f(&mut self, key: &str, default: f64) -> Result<f64> {
-        match self.map.remove(key) {
-            None => Ok(default),
-            Some(v) => v
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    Error::InvalidParameter(format!(
-                        "effect '{}': {key}={v} is not a finite number",
-                        self.spec
-                    ))
-                }),
-        }
+        Ok(self.opt(key)?.unwrap_or(default))
+    }
+
+    /// The value of `key`, `None` when the spec does not give it.
+    fn opt(&mut self, key: &str) -> Result<Option<f64>> {
+        self.map
+            .remove(key)
+            .map(|v| {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::InvalidParameter(format!(
+                            "effect '{}': {key}={v} is not a finite number",
+                            self.spec
+                        ))
+                    })
+            })
+            .transpose()
     }
 
     fn joint(&mut self, key: &str, default: usize) -> Result<usize> {
