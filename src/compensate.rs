@@ -29,6 +29,14 @@
 //! before) and reports it ([`Stop::Stalled`]) with the points whose λ
 //! changed in the last iteration.
 //!
+//! **Motion history.** A model with history inputs (a joint's moves into the
+//! pose for servo lag, the previous λ, the travel since a reversal) predicts
+//! each point from the path that led to it: the predictions are made along
+//! the start pose followed by the commands' joints ([`predict_along`]), so the
+//! move into the first point is the one from the start, as the robot makes
+//! it. A model without such inputs predicts every point alone; prepending the
+//! start changes nothing for it.
+//!
 //! Only positions are corrected; each command keeps its target's orientation.
 //! Points the IK cannot reach are reported by index ([`Error::Unreachable`]),
 //! never passed through uncorrected.
@@ -163,6 +171,28 @@ fn solve_joints(
     all_reached(results)
 }
 
+/// `model`'s errors at the joints `q` (directions `dir`) visited in order
+/// from `start`: predicted along `[start, q…]` and the start's own dropped,
+/// so that history features (moves, previous λ) see the move from the start
+/// into the first point. The start's λ is taken as +1 (its own history is
+/// unknown).
+pub fn predict_along<M: ErrorPredictor + ?Sized>(
+    model: &M,
+    start: &[f64],
+    q: &[Vec<f64>],
+    dir: &[Vec<f64>],
+) -> Result<Vec<[f64; 3]>> {
+    let path: Vec<Vec<f64>> = std::iter::once(start.to_vec())
+        .chain(q.iter().cloned())
+        .collect();
+    let dirs: Vec<Vec<f64>> = std::iter::once(vec![1.0; start.len()])
+        .chain(dir.iter().cloned())
+        .collect();
+    let mut out = model.predict_errors(&path, &dirs)?;
+    out.remove(0);
+    Ok(out)
+}
+
 /// Compensate the target trajectory `targets` for `robot` with `model`.
 ///
 /// ```
@@ -228,7 +258,7 @@ pub fn compensate<M: ErrorPredictor + ?Sized>(
             &opts.ik,
         )?;
         let dir = derive_directions(&q, Some(&start));
-        let pred = model.predict_errors(&q, &dir)?;
+        let pred = predict_along(model, &start, &q, &dir)?;
         let mut flipped = Vec::new();
         if let Some(pd) = &prev_dir {
             for (i, (a, b)) in dir.iter().zip(pd).enumerate() {
@@ -278,7 +308,7 @@ pub fn compensate<M: ErrorPredictor + ?Sized>(
             // the final commands are `next`; their joints are solved for the report
             let q_final = solve_joints(robot, targets, &next, &start, Some(&q), None, &opts.ik)?;
             let dir_final = derive_directions(&q_final, Some(&start));
-            let predicted = model.predict_errors(&q_final, &dir_final)?;
+            let predicted = predict_along(model, &start, &q_final, &dir_final)?;
             return Ok(Compensated {
                 commands: Trajectory {
                     poses: next,

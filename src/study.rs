@@ -235,6 +235,7 @@ pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
     let opts = CompensationOptions {
         iterative: true,
         hints: targets.hints.clone(),
+        start: Some(start.to_vec()),
         ..CompensationOptions::default()
     };
     let compensation = compensate(robot, model, &targets.traj, &opts)?;

@@ -249,3 +249,69 @@ fn mean_only_prediction_matches_the_full_prediction() {
         }
     }
 }
+
+/// Servo lag (issue 22): a model with the joint's moves as an input
+/// compensates along a path, each point predicted from the move into it
+/// (from the start pose for the first), and leaves less error on the
+/// simulated robot than the same model without the lag input.
+#[test]
+fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
+    use robokrige::features::Feature;
+    use robokrige::params::ErrorModelParams;
+    use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
+    use robokrige::study::{Targets, compensate_and_evaluate};
+    let nominal = robot();
+    let lag = Effect::parse("lag:joint=2,gain=0.0005").unwrap();
+    let mut spec = CampaignSpec::new(CampaignKind::Lhs, 7);
+    spec.poses = 200;
+    spec.effects = vec![lag.clone()];
+    let (SimOutput::Measurements(data), truth) = simulate(&nominal, &spec).unwrap() else {
+        unreachable!()
+    };
+    // a path through 40 random poses of the same true robot
+    let mut path = CampaignSpec::new(CampaignKind::Verify, 7);
+    path.poses = 40;
+    let SimOutput::Measurements(poses) = simulate(&nominal, &path).unwrap().0 else {
+        unreachable!()
+    };
+    let targets = Targets::from_joints(&nominal, &poses.q).unwrap();
+    let kriging = KrigingOptions {
+        optimizer: OptimizerKind::HookeJeeves,
+        max_evals: 300,
+        starts: 2,
+        ..KrigingOptions::default()
+    };
+    let fit = |extras: Vec<Feature>| {
+        ErrorModelParams::new()
+            .kriging(kriging.clone())
+            .extras(extras)
+            .check()
+            .unwrap()
+            .fit(&data)
+            .unwrap()
+    };
+    let plain = fit(Vec::new());
+    let with_lag = fit(vec![Feature::Moves {
+        joint: 2,
+        tau_poses: 0.0,
+    }]);
+    let home = nominal.home.clone();
+    let run = |m: &ErrorModel| {
+        compensate_and_evaluate(&nominal, m, Path::new("t"), &truth, &targets, &home, 3)
+            .unwrap()
+            .evaluation
+    };
+    let (a, b) = (run(&plain), run(&with_lag));
+    assert_eq!(a.before, b.before, "the same nominal run");
+    assert!(
+        b.after.mean_abs_mm < 0.7 * a.after.mean_abs_mm,
+        "lag model {:.4} mm vs plain {:.4} mm (nominal {:.4})",
+        b.after.mean_abs_mm,
+        a.after.mean_abs_mm,
+        a.before.mean_abs_mm
+    );
+    eprintln!(
+        "nominal {:.4} mm, plain {:.4}, lag {:.4}",
+        a.before.mean_abs_mm, a.after.mean_abs_mm, b.after.mean_abs_mm
+    );
+}

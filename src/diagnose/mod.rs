@@ -295,7 +295,8 @@ pub struct EffectReport {
     pub note: Option<String>,
     /// Scored at the correlation parameters refitted with the candidate in
     /// the trend (the strongest few of a round), else at the model's own;
-    /// its p-value is always that of the model's own.
+    /// its p-value is the model's own but for a kind the GP can soak up
+    /// ([`EffectKind::pose_function`]).
     #[serde(default)]
     pub refit_xi: bool,
     /// Sign-flip resamples run before its p-value settled.
@@ -930,7 +931,17 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 100.0 * o.min_gain,
                 worth.floor_mse()
             );
-            reports[k].note = Some(format!("not added: {drop}"));
+            if reports[k].refit_xi && reports[k].kind.pose_function() {
+                // tested at ξ re-estimated on these data, whose null is
+                // optimistic: without the refit CV's confirmation it does
+                // not count
+                reports[k].significant = false;
+                reports[k].note = Some(format!(
+                    "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
+                ));
+            } else {
+                reports[k].note = Some(format!("not added: {drop}"));
+            }
         }
         effects.extend(reports);
         if done {
