@@ -74,12 +74,17 @@ pub enum Feature {
     },
     /// Joint j's moves into the pose, `h_k = Δq_k + e^(−1/τ)·h_(k−1)`
     /// (`Δq_k = q_j(k) − q_j(k−1)`, 0 for the first row; τ = 0: the last move
-    /// alone): servo lag or incomplete settling.
+    /// alone): servo lag or incomplete settling. With a [`Clock`] the memory
+    /// is counted in time: `h_k = Δq_k + e^(−Δt_k/τ_s)·h_(k−1)`.
     Moves {
         /// 1-based joint j.
         joint: usize,
-        /// Memory τ of earlier moves, in poses (0: the last move only).
+        /// Memory τ of earlier moves, in poses (0: the last move only; 0
+        /// with a clock).
         tau_poses: f64,
+        /// A memory in seconds from a time column instead.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        clock: Option<Clock>,
     },
     /// `|Δq_j|`, the size of joint j's last move.
     MoveSize {
@@ -94,8 +99,12 @@ pub enum Feature {
         robot: Box<crate::kinematics::Robot>,
         /// 1-based joint j.
         joint: usize,
-        /// Memory τ of earlier moves, in poses (0: the last move only).
+        /// Memory τ of earlier moves, in poses (0: the last move only; 0
+        /// with a clock).
         tau_poses: f64,
+        /// A memory in seconds from a time column instead.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        clock: Option<Clock>,
     },
     /// The TCP's last move `P(q_k) − P(q_(k−1))` through the nominal robot
     /// (x, y, z; 0 for the first row): a Cartesian lag.
@@ -155,6 +164,73 @@ pub enum Feature {
     },
 }
 
+/// The memory of a joint's moves counted in time ([`Feature::Moves`]): each
+/// earlier move decays by `e^(−Δt/τ_s)` over the interval `Δt` between two
+/// poses, from a time column. A robot that pauses between poses settles
+/// further than one that goes on at once; a memory in poses cannot tell.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Clock {
+    /// The time column's name (seconds).
+    pub column: String,
+    /// Memory τ_s, seconds (> 0).
+    pub tau_s: f64,
+    /// Interval between poses where none is measured (predictions from poses
+    /// alone: the campaign's median interval); `None`: such predictions are
+    /// refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval_s: Option<f64>,
+}
+
+impl Clock {
+    fn validate(&self, joint: usize) -> Result<()> {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if !ok(self.tau_s)
+            || self
+                .interval_s
+                .is_some_and(|v| !(v.is_finite() && v >= 0.0))
+        {
+            return Err(Error::InvalidParameter(format!(
+                "moves of joint {joint}: the clock's tau_s must be finite and > 0 and its interval_s finite and ≥ 0, got {} and {:?}",
+                self.tau_s, self.interval_s
+            )));
+        }
+        Ok(())
+    }
+
+    /// The share of the earlier moves kept at each row: `e^(−Δt/τ_s)` from
+    /// the times `t` (0 for the first row; a negative interval counts as 0).
+    fn keep_from_times(&self, t: &[f64]) -> Vec<f64> {
+        (0..t.len())
+            .map(|i| {
+                if i == 0 {
+                    0.0
+                } else {
+                    (-(t[i] - t[i - 1]).max(0.0) / self.tau_s).exp()
+                }
+            })
+            .collect()
+    }
+
+    /// The same at the reference interval, for `m` poses without times.
+    fn keep_at_reference(&self, m: usize, joint: usize) -> Result<Vec<f64>> {
+        let dt = self.interval_s.ok_or_else(|| {
+            Error::InvalidParameter(format!(
+                "the model uses the moves of joint {joint} with a memory in time column '{}': predict from a CSV that has that column",
+                self.column
+            ))
+        })?;
+        Ok((0..m)
+            .map(|i| {
+                if i == 0 {
+                    0.0
+                } else {
+                    (-dt / self.tau_s).exp()
+                }
+            })
+            .collect())
+    }
+}
+
 impl Feature {
     /// Column names, one per input dimension this feature adds.
     pub fn names(&self) -> Vec<String> {
@@ -173,12 +249,19 @@ impl Feature {
                 .iter()
                 .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
                 .collect(),
-            Feature::Moves { joint, tau_poses } => vec![moves_name(*joint, *tau_poses)],
+            Feature::Moves {
+                joint,
+                tau_poses,
+                clock,
+            } => vec![moves_name(*joint, *tau_poses, clock.as_ref())],
             Feature::MoveSize { joint } => vec![format!("|move{joint}|")],
             Feature::MovesJacobian {
-                joint, tau_poses, ..
+                joint,
+                tau_poses,
+                clock,
+                ..
             } => {
-                let h = moves_name(*joint, *tau_poses);
+                let h = moves_name(*joint, *tau_poses, clock.as_ref());
                 ["x", "y", "z"].map(|a| format!("J{a}{joint}·{h}")).to_vec()
             }
             Feature::TcpMove { .. } => ["x", "y", "z"].map(|a| format!("tcp_move_{a}")).to_vec(),
@@ -214,6 +297,36 @@ impl Feature {
         )
     }
 
+    /// The clock of a joint's moves counted in time, if any.
+    fn clock(&self) -> Option<&Clock> {
+        match self {
+            Feature::Moves { clock, .. } | Feature::MovesJacobian { clock, .. } => clock.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// Columns of [`Feature::Moves`] (one) or [`Feature::MovesJacobian`]
+    /// (the TCP displacement, three) at poses `q` with the memory `keep`.
+    fn moves_columns(&self, q: &[Vec<f64>], keep: &[f64]) -> Result<Vec<Vec<f64>>> {
+        match self {
+            Feature::Moves { joint, .. } => Ok(vec![moves(q, *joint, keep)]),
+            Feature::MovesJacobian {
+                robot: r, joint, ..
+            } => {
+                let h = moves(q, *joint, keep);
+                let mut cols: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(q.len())).collect();
+                for (qi, hi) in q.iter().zip(&h) {
+                    let jac = r.position_jacobian(qi)?;
+                    for (a, c) in cols.iter_mut().enumerate() {
+                        c.push(jac[(a, joint - 1)] * hi);
+                    }
+                }
+                Ok(cols)
+            }
+            _ => unreachable!("moves_columns of a feature that is not a joint's moves"),
+        }
+    }
+
     /// Check joint indices against `n` joints.
     pub fn validate(&self, n: usize) -> Result<()> {
         let joints: Vec<usize> = match self {
@@ -230,14 +343,30 @@ impl Feature {
             Feature::PreviousDirection { joint }
             | Feature::SinceReversal { joint }
             | Feature::MoveSize { joint } => vec![*joint],
-            Feature::Moves { joint, tau_poses }
+            Feature::Moves {
+                joint,
+                tau_poses,
+                clock,
+            }
             | Feature::MovesJacobian {
-                joint, tau_poses, ..
+                joint,
+                tau_poses,
+                clock,
+                ..
             } => {
                 if !(*tau_poses >= 0.0 && tau_poses.is_finite()) {
                     return Err(Error::InvalidParameter(format!(
                         "moves of joint {joint}: tau_poses must be finite and ≥ 0, got {tau_poses}"
                     )));
+                }
+                if let Some(c) = clock {
+                    c.validate(*joint)?;
+                    if *tau_poses != 0.0 {
+                        return Err(Error::InvalidParameter(format!(
+                            "moves of joint {joint}: a memory in poses (tau_poses {tau_poses}) and one in time (tau_s {}) cannot both be given",
+                            c.tau_s
+                        )));
+                    }
                 }
                 vec![*joint]
             }
@@ -320,6 +449,16 @@ impl Feature {
             Feature::Times { of, joint, centre } => {
                 Ok(times(of.columns(data)?.remove(0), *centre, &data.q, *joint))
             }
+            Feature::Moves { clock: Some(c), .. }
+            | Feature::MovesJacobian { clock: Some(c), .. } => {
+                let t = Feature::Covariate {
+                    name: c.column.clone(),
+                    reference: None,
+                }
+                .columns(data)?
+                .remove(0);
+                self.moves_columns(&data.q, &c.keep_from_times(&t))
+            }
             Feature::Lagged { of, lag } => Ok(vec![lagged(&of.columns(data)?[0], *lag)]),
             _ => self.columns_from_poses(&data.q, &data.dir),
         }
@@ -349,7 +488,18 @@ impl Feature {
                     "the model uses the interval of time column '{column}': predict from a CSV that has that column"
                 )));
             }
-            Feature::Moves { joint, tau_poses } => vec![moves(q, *joint, *tau_poses)],
+            Feature::Moves {
+                joint, tau_poses, ..
+            }
+            | Feature::MovesJacobian {
+                joint, tau_poses, ..
+            } => {
+                let keep = match self.clock() {
+                    Some(c) => c.keep_at_reference(m, *joint)?,
+                    None => keep_in_poses(m, *tau_poses),
+                };
+                self.moves_columns(q, &keep)?
+            }
             Feature::MoveSize { joint } => vec![col(&|i| {
                 if i == 0 {
                     0.0
@@ -357,21 +507,6 @@ impl Feature {
                     (q[i][joint - 1] - q[i - 1][joint - 1]).abs()
                 }
             })],
-            Feature::MovesJacobian {
-                robot: r,
-                joint,
-                tau_poses,
-            } => {
-                let h = moves(q, *joint, *tau_poses);
-                let mut cols: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(m)).collect();
-                for (qi, hi) in q.iter().zip(&h) {
-                    let jac = r.position_jacobian(qi)?;
-                    for (a, c) in cols.iter_mut().enumerate() {
-                        c.push(jac[(a, joint - 1)] * hi);
-                    }
-                }
-                cols
-            }
             Feature::TcpMove { robot: r } => {
                 let p: Vec<nalgebra::Vector3<f64>> = q
                     .iter()
@@ -435,27 +570,35 @@ impl Feature {
     }
 }
 
-fn moves_name(joint: usize, tau_poses: f64) -> String {
-    if tau_poses > 0.0 {
+fn moves_name(joint: usize, tau_poses: f64, clock: Option<&Clock>) -> String {
+    if let Some(c) = clock {
+        format!("moves{joint}(τ={:.3}s)", c.tau_s)
+    } else if tau_poses > 0.0 {
         format!("moves{joint}(τ={tau_poses:.2})")
     } else {
         format!("move{joint}")
     }
 }
 
-/// `h_k = Δq_k + e^(−1/τ)·h_(k−1)` of 1-based joint `joint` (Δq_0 = 0).
-fn moves(q: &[Vec<f64>], joint: usize, tau_poses: f64) -> Vec<f64> {
-    let j = joint - 1;
-    let keep = if tau_poses > 0.0 {
+/// The share `e^(−1/τ)` of the earlier moves kept at each of `m` rows (0 for
+/// the first; τ = 0: none).
+fn keep_in_poses(m: usize, tau_poses: f64) -> Vec<f64> {
+    let k = if tau_poses > 0.0 {
         (-1.0 / tau_poses).exp()
     } else {
         0.0
     };
+    (0..m).map(|i| if i == 0 { 0.0 } else { k }).collect()
+}
+
+/// `h_k = Δq_k + keep_k·h_(k−1)` of 1-based joint `joint` (Δq_0 = 0).
+fn moves(q: &[Vec<f64>], joint: usize, keep: &[f64]) -> Vec<f64> {
+    let j = joint - 1;
     let mut h = 0.0;
     (0..q.len())
         .map(|i| {
             let step = if i == 0 { 0.0 } else { q[i][j] - q[i - 1][j] };
-            h = step + keep * h;
+            h = step + keep[i] * h;
             h
         })
         .collect()

@@ -294,6 +294,7 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
     let with_lag = fit(vec![Feature::Moves {
         joint: 2,
         tau_poses: 0.0,
+        clock: None,
     }]);
     let home = nominal.home.clone();
     let run = |m: &ErrorModel| {

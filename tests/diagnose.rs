@@ -291,6 +291,7 @@ fn a_servo_lag_is_traced_to_the_joints_moves_and_modelled_end_to_end() {
     let lag = Feature::Moves {
         joint: 2,
         tau_poses: 0.0,
+        clock: None,
     };
     assert_eq!(d.extras[0], lag);
     let check = top.after_check.as_ref().expect("after check");
@@ -351,12 +352,14 @@ fn motion_history_features_follow_the_sequence() {
     let last = Feature::Moves {
         joint: 1,
         tau_poses: 0.0,
+        clock: None,
     };
     assert_eq!(col(last.clone())[0], vec![0.0, 1.0, 2.0, -1.0, 0.0, 3.0]);
     let k = (-1.0f64).exp();
     let decayed = col(Feature::Moves {
         joint: 1,
         tau_poses: 1.0,
+        clock: None,
     });
     assert!((decayed[0][2] - (2.0 + k)).abs() < 1e-15);
     assert!((decayed[0][3] - (-1.0 + k * (2.0 + k))).abs() < 1e-15);
@@ -436,6 +439,7 @@ fn motion_history_features_follow_the_sequence() {
         Feature::Moves {
             joint: 1,
             tau_poses: -1.0,
+            clock: None,
         },
         Feature::MoveSize { joint: 3 },
     ] {
@@ -616,4 +620,85 @@ fn a_tracker_bump_is_found_as_a_block_with_both_edges() {
     let up = &top.size[0].estimate;
     assert!((up[0] - 0.15).abs() < 0.04, "rising edge {up:?}");
     assert!((top.size[1].estimate[0] + 0.15).abs() < 0.04);
+}
+
+/// A joint's moves with a memory in time (issue 22): each earlier move
+/// decays over the measured interval, a pause lets the robot settle, and a
+/// pose sequence without times takes the reference interval.
+#[test]
+fn a_memory_in_time_decays_over_the_interval_between_poses() {
+    use robokrige::features::Clock;
+    let mut data = campaign(6, 3, None);
+    for (row, v) in data.q.iter_mut().zip([0.0, 1.0, 3.0, 2.0, 2.0, 5.0]) {
+        row[0] = v;
+    }
+    let time = data
+        .covariates
+        .iter_mut()
+        .find(|c| c.name == "time_s")
+        .expect("the simulator writes time_s");
+    // 2 s between poses, and a 60 s pause before the fourth
+    time.values = vec![0.0, 2.0, 4.0, 64.0, 66.0, 68.0];
+    let clock = Clock {
+        column: "time_s".into(),
+        tau_s: 2.0,
+        interval_s: Some(2.0),
+    };
+    let f = Feature::Moves {
+        joint: 1,
+        tau_poses: 0.0,
+        clock: Some(clock.clone()),
+    };
+    let h = f.columns(&data).unwrap().remove(0);
+    let k = (-1.0f64).exp();
+    let expect = [0.0, 1.0, 2.0 + k, -1.0 + (-30.0f64).exp() * (2.0 + k)];
+    for (a, b) in h.iter().zip(expect) {
+        assert!((a - b).abs() < 1e-12, "{h:?}");
+    }
+    // from poses alone: every interval is the reference 2 s, as τ = 1 pose
+    let in_poses = Feature::Moves {
+        joint: 1,
+        tau_poses: 1.0,
+        clock: None,
+    };
+    assert_eq!(
+        f.columns_from_poses(&data.q, &data.dir).unwrap(),
+        in_poses.columns_from_poses(&data.q, &data.dir).unwrap()
+    );
+    // saved and loaded with its clock; a file without one loads as before
+    let json = serde_json::to_string(&f).unwrap();
+    assert_eq!(serde_json::from_str::<Feature>(&json).unwrap(), f);
+    let old: Feature =
+        serde_json::from_str(r#"{"feature":"moves","joint":1,"tau_poses":1.0}"#).unwrap();
+    assert_eq!(old, in_poses);
+    // both memories at once, or a memory of zero seconds, are errors
+    for bad in [
+        Feature::Moves {
+            joint: 1,
+            tau_poses: 1.0,
+            clock: Some(clock.clone()),
+        },
+        Feature::Moves {
+            joint: 1,
+            tau_poses: 0.0,
+            clock: Some(Clock {
+                tau_s: 0.0,
+                ..clock.clone()
+            }),
+        },
+    ] {
+        assert!(bad.columns(&data).is_err(), "{bad:?}");
+    }
+    // the scan offers memories in seconds beside those in poses
+    let moves = robokrige::diagnose::scan::families(&data, &[], None)
+        .into_iter()
+        .find(|f| f.label == "moves of q1 into the pose (lag)")
+        .unwrap();
+    assert!(moves.grid.iter().any(|g| g.params.contains_key("tau_s")));
+    assert!(
+        moves
+            .grid
+            .iter()
+            .any(|g| g.params.contains_key("tau_poses"))
+    );
 }

@@ -15,7 +15,7 @@
 
 use super::gls::{self, AxisSystem, FamilyTest};
 use crate::dataset::{Covariate, Dataset};
-use crate::features::Feature;
+use crate::features::{Clock, Feature};
 use crate::kinematics::Robot;
 use crate::stats::rng_for;
 use rand::RngExt;
@@ -523,6 +523,13 @@ fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covar
 ///
 /// The scans are grids of one family each, so a family's p-value pays for
 /// its scan (the null takes the maximum over the same grid).
+/// The median interval between consecutive rows of a time column.
+fn median_interval(t: &Covariate) -> Option<f64> {
+    let mut dt: Vec<f64> = t.values.windows(2).map(|w| w[1] - w[0]).collect();
+    dt.sort_by(f64::total_cmp);
+    dt.get(dt.len() / 2).copied()
+}
+
 fn motion_families(
     data: &Dataset,
     exclude: &[String],
@@ -533,12 +540,35 @@ fn motion_families(
     let n = data.n_joints();
     let from_poses = |f: &Feature| f.columns_from_poses(&data.q, &data.dir).ok();
     let z_all = |cols: Vec<Vec<f64>>| cols.iter().map(|c| zscore(c)).collect::<Vec<_>>();
+    // memories in time, when the campaign has a time column: the same
+    // multiples of its median interval as `MOVE_TAUS` in poses
+    let clocks: Vec<Clock> = time_column(data, exclude)
+        .and_then(|t| {
+            let median = median_interval(t)?;
+            (median > 0.0).then(|| {
+                MOVE_TAUS
+                    .iter()
+                    .filter(|&&k| k > 0.0)
+                    .map(|&k| Clock {
+                        column: t.name.clone(),
+                        tau_s: k * median,
+                        interval_s: Some(median),
+                    })
+                    .collect()
+            })
+        })
+        .unwrap_or_default();
+    let memories = MOVE_TAUS
+        .iter()
+        .map(|&tau| (tau, None))
+        .chain(clocks.into_iter().map(|c| (0.0, Some(c))));
     for j in 1..=n {
         let mut grid = Vec::new();
-        for tau in MOVE_TAUS {
+        for (tau, clock) in memories.clone() {
             let plain = Feature::Moves {
                 joint: j,
                 tau_poses: tau,
+                clock: clock.clone(),
             };
             let (columns, add) = match robot {
                 Some(r) => {
@@ -546,12 +576,13 @@ fn motion_families(
                         robot: Box::new(r.clone()),
                         joint: j,
                         tau_poses: tau,
+                        clock: clock.clone(),
                     };
-                    let Some(c) = from_poses(&f) else { continue };
+                    let Ok(c) = f.columns(data) else { continue };
                     (z_all(c), f)
                 }
                 None => {
-                    let Some(h) = from_poses(&plain) else {
+                    let Ok(h) = plain.columns(data) else {
                         continue;
                     };
                     let z = zscore(&h[0]);
@@ -564,7 +595,10 @@ fn motion_families(
                 }
             };
             grid.push(GridPoint {
-                params: params(&[("tau_poses", tau)]),
+                params: match &clock {
+                    Some(c) => params(&[("tau_s", c.tau_s)]),
+                    None => params(&[("tau_poses", tau)]),
+                },
                 columns,
                 add: vec![add],
             });
@@ -623,11 +657,9 @@ fn motion_families(
         bases.push((f, c.values.clone(), c.name.clone()));
     }
     if let Some(t) = time_column(data, exclude) {
-        let mut dt: Vec<f64> = t.values.windows(2).map(|w| w[1] - w[0]).collect();
-        dt.sort_by(f64::total_cmp);
         let f = Feature::Interval {
             column: t.name.clone(),
-            reference: dt.get(dt.len() / 2).copied(),
+            reference: median_interval(t),
         };
         if let Ok(v) = f.columns(data) {
             out.push(Family {
@@ -649,6 +681,7 @@ fn motion_families(
         let f = Feature::Moves {
             joint: j,
             tau_poses: 0.0,
+            clock: None,
         };
         if let Some(v) = from_poses(&f) {
             bases.push((f, v[0].clone(), format!("q{j}'s last move")));
@@ -1030,36 +1063,57 @@ pub fn test_families(
                     Vec::new()
                 },
                 refined: families[k].zoom.filter(|_| finite).and_then(|zoom| {
-                    resolve(zoom(&families[k].grid[t.best], m), &systems, &data, within)
+                    resolve(zoom, &families[k].grid[t.best], m, &systems, &data, within)
                 }),
             }
         })
         .collect()
 }
 
-/// The best of the finer points `local` on the data, and those within the
-/// support width of it; `None` when none is usable.
+/// The best of the finer points around `start` ([`Zoom`]) on the data, the
+/// zoom repeated around each new best (a block's edges move one at a time,
+/// so both settle after a few passes; at most [`ZOOM_PASSES`]), and the
+/// points of the last pass within the support width of it; `None` when none
+/// is usable.
 fn resolve(
-    local: Vec<GridPoint>,
+    zoom: Zoom,
+    start: &GridPoint,
+    m: usize,
     systems: &[AxisSystem],
     data: &[gls::Response],
     within: f64,
 ) -> Option<Refined> {
-    if local.is_empty() {
-        return None;
+    let mut found: Option<Refined> = None;
+    for _ in 0..ZOOM_PASSES {
+        let centre = found.as_ref().map_or(start, |r| &r.point);
+        let local = zoom(centre, m);
+        if local.is_empty() {
+            break;
+        }
+        let grid: Vec<Vec<Vec<f64>>> = local.iter().map(|g| g.columns.clone()).collect();
+        let test = FamilyTest::new(systems, &grid);
+        let (best, gain) = test.best(systems, data);
+        if !gain.is_finite() {
+            break;
+        }
+        let settled = local[best].params == centre.params;
+        found = Some(Refined {
+            support: test
+                .near_best(systems, data, within)
+                .into_iter()
+                .map(|i| local[i].params.clone())
+                .collect(),
+            point: local[best].clone(),
+        });
+        if settled {
+            break;
+        }
     }
-    let grid: Vec<Vec<Vec<f64>>> = local.iter().map(|g| g.columns.clone()).collect();
-    let test = FamilyTest::new(systems, &grid);
-    let (best, gain) = test.best(systems, data);
-    gain.is_finite().then(|| Refined {
-        support: test
-            .near_best(systems, data, within)
-            .into_iter()
-            .map(|i| local[i].params.clone())
-            .collect(),
-        point: local[best].clone(),
-    })
+    found
 }
+
+/// Passes of a [`Zoom`] at most.
+const ZOOM_PASSES: usize = 4;
 
 /// The least-squares fit of the centred residuals on the centred `columns`
 /// (m × 3), for comparing what two candidates explain.
