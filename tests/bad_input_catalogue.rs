@@ -1353,7 +1353,12 @@ fn memory_cases() -> Vec<Case> {
             "memory_diagnose_over_limit",
             &["diagnose", &d],
             &[data],
-            fail(&["needs about", "fit at most", "`--rows "]),
+            fail(&[
+                "a diagnosis of",
+                "needs about",
+                "diagnose at most",
+                "`--rows ",
+            ]),
         ),
     ];
     for c in &mut cases {

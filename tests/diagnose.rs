@@ -702,3 +702,22 @@ fn a_memory_in_time_decays_over_the_interval_between_poses() {
             .any(|g| g.params.contains_key("tau_poses"))
     );
 }
+
+/// The memory a diagnosis needs is estimated before it allocates (issue
+/// 16): it grows with rows × scanned values, and the number of rows it
+/// names for a smaller limit does fit that limit.
+#[test]
+fn the_diagnosis_memory_plan_names_a_row_count_that_fits() {
+    use robokrige::diagnose::DiagnosePlan;
+    let data = campaign(240, 2, None);
+    let o = DiagnoseOptions::default();
+    let plan = DiagnosePlan::new(&data, &o);
+    let half = DiagnosePlan::new(&data.select(&(0..120).collect::<Vec<_>>()), &o);
+    assert!(plan.values() > half.values() && plan.bytes() > 2 * half.bytes());
+    assert!(plan.bytes() > (240 * plan.values()) as u64 * 300, "{plan}");
+    let limit = plan.bytes() / 3;
+    let n = plan.max_rows(limit);
+    assert!(n > 10 && n < 240, "{n} rows");
+    let fits = DiagnosePlan::new(&data.select(&(0..n).collect::<Vec<_>>()), &o);
+    assert!(fits.bytes() <= limit, "{fits} over {limit} bytes");
+}

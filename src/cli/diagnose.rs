@@ -192,12 +192,11 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
             lm.rms_after_mm
         );
     }
-    super::plan_fit(
-        "diagnose",
-        data.len(),
-        opts.kriging.optimizer,
-        Some("--rows"),
-    )?;
+    let plan = robokrige::diagnose::DiagnosePlan::new(&data, &opts);
+    plan.check(|n| format!("`--rows {n}`"))?;
+    if data.len() > robokrige::kriging::SEARCH_ROWS {
+        eprintln!("diagnose: {plan}");
+    }
     let pb = spinner("diagnose");
     let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
     pb.finish_and_clear();

@@ -38,6 +38,7 @@
 //!    error), and did it deliver what its test promised?
 
 pub mod gls;
+mod plan;
 pub mod scan;
 
 use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partition};
@@ -48,6 +49,7 @@ use crate::model::ErrorModel;
 use crate::space::Space;
 use crate::stats::summarize;
 use crate::{Error, Result};
+pub use plan::DiagnosePlan;
 pub use scan::EffectKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -127,6 +129,18 @@ impl Default for DiagnoseOptions {
 }
 
 impl DiagnoseOptions {
+    /// The options as [`diagnose`] runs them on a campaign of `rows` rows:
+    /// above [`DiagnoseOptions::refit_rows`] (a whole campaign, closed-form
+    /// CV) every fit converges ξ on one seeded subset of at most that many
+    /// rows, then solves on all rows.
+    pub fn for_rows(&self, rows: usize) -> DiagnoseOptions {
+        let mut o = self.clone();
+        if rows > self.refit_rows {
+            o.kriging.converge_rows = o.kriging.converge_rows.min(o.refit_rows);
+        }
+        o
+    }
+
     fn validate(&self) -> Result<()> {
         if self.permutations < 19 || !(self.fdr > 0.0 && self.fdr < 1.0) || self.min_gain < 0.0 {
             return Err(Error::InvalidParameter(
@@ -723,19 +737,10 @@ pub fn fit_with_effects(
 /// ```
 pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
     o.validate()?;
-    let closed_form = data.len() > o.refit_rows;
+    DiagnosePlan::new(data, o)
+        .check(|n| format!("a subset, e.g. `Dataset::select` of {n} rows"))?;
     // a whole campaign: every fit converges ξ on the same seeded subset
-    let o = &DiagnoseOptions {
-        kriging: KrigingOptions {
-            converge_rows: if closed_form {
-                o.kriging.converge_rows.min(o.refit_rows)
-            } else {
-                o.kriging.converge_rows
-            },
-            ..o.kriging.clone()
-        },
-        ..o.clone()
-    };
+    let o = &o.for_rows(data.len());
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;
     let fold = kfold_partition(data.len(), o.folds, o.seed)?;
