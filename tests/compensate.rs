@@ -2,7 +2,7 @@
 //! running the commands on the simulator's true robot.
 
 use nalgebra::{Translation3, Vector3};
-use robokrige::compensate::{CompensationOptions, Stop, compensate};
+use robokrige::compensate::{CompensationOptions, Stop, compensate, predict_along};
 use robokrige::dataset::read_csv;
 use robokrige::kinematics::{self, Robot};
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
@@ -297,6 +297,25 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
         clock: None,
     }]);
     let home = nominal.home.clone();
+    // along the path: the first point is predicted with the move from the
+    // start; a model without history inputs predicts every point alone
+    let q = &poses.q[..5];
+    let dir = robokrige::space::derive_directions(q, Some(&home));
+    let mut path = vec![home.clone()];
+    path.extend(q.iter().cloned());
+    let mut dirs = vec![vec![1.0; home.len()]];
+    dirs.extend(dir.iter().cloned());
+    use robokrige::predictor::ErrorPredictor;
+    let along = predict_along(&with_lag, &home, q, &dir).unwrap();
+    assert_eq!(
+        along[..],
+        with_lag.predict_errors(&path, &dirs).unwrap()[1..]
+    );
+    assert_ne!(along[0], with_lag.predict_errors(q, &dir).unwrap()[0]);
+    assert_eq!(
+        predict_along(&plain, &home, q, &dir).unwrap(),
+        plain.predict_errors(q, &dir).unwrap()
+    );
     let run = |m: &ErrorModel| {
         compensate_and_evaluate(&nominal, m, Path::new("t"), &truth, &targets, &home, 3)
             .unwrap()

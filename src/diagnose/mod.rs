@@ -580,6 +580,17 @@ fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficient> {
         .collect()
 }
 
+impl EffectReport {
+    /// Add `text` to the report's note (after any note it has: "ranked
+    /// before …; not added: …").
+    fn add_note(&mut self, text: String) {
+        self.note = Some(match self.note.take() {
+            Some(n) => format!("{n}; {text}"),
+            None => text,
+        });
+    }
+}
+
 /// Occam's rule for the first candidate of `tested` (in its ranked order):
 /// a significant candidate that adds fewer model columns (its features'
 /// names) and explains the same ([`SAME_FIT`]-alike fitted component of the
@@ -737,13 +748,13 @@ pub fn fit_with_effects(
 /// ```
 pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
     o.validate()?;
+    let t0 = std::time::Instant::now();
+    let errors = data.errors_or_err()?;
+    let fold = kfold_partition(data.len(), o.folds, o.seed)?;
     DiagnosePlan::new(data, o)
         .check(|n| format!("a subset, e.g. `Dataset::select` of {n} rows"))?;
     // a whole campaign: every fit converges ξ on the same seeded subset
     let o = &o.for_rows(data.len());
-    let t0 = std::time::Instant::now();
-    let errors = data.errors_or_err()?;
-    let fold = kfold_partition(data.len(), o.folds, o.seed)?;
     progress("cross-validating the current model");
     let (before, mut model) = cross_validated(data, &[], o, None)?;
     let mut current = before.clone();
@@ -857,7 +868,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             })
             .collect();
         if let Some((k, over)) = preferred {
-            reports[k].note = Some(format!(
+            reports[k].add_note(format!(
                 "ranked before '{over}': it explains the same with fewer model columns"
             ));
         }
@@ -898,7 +909,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             .collect();
         for k in order {
             if round > o.max_effects {
-                reports[k].note = Some(format!("not added: the cap of {} effects", o.max_effects));
+                reports[k].add_note(format!("not added: the cap of {} effects", o.max_effects));
                 break;
             }
             let mut trial = extras.clone();
@@ -941,11 +952,11 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
                 // optimistic: without the refit CV's confirmation it does
                 // not count
                 reports[k].significant = false;
-                reports[k].note = Some(format!(
+                reports[k].add_note(format!(
                     "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
                 ));
             } else {
-                reports[k].note = Some(format!("not added: {drop}"));
+                reports[k].add_note(format!("not added: {drop}"));
             }
         }
         effects.extend(reports);

@@ -20,37 +20,66 @@ use crate::{Error, Result};
 /// ratio, rounded up; see the module docs).
 pub const BYTES_PER_ROW_VALUE: u64 = 330;
 
+/// Rows, evenly spread over the campaign, the candidate families are
+/// generated on to count their values (the families hold m numbers per
+/// value: counting on all rows of a large campaign would allocate what the
+/// plan is there to foresee).
+const COUNT_ROWS: usize = 1000;
+
 /// The memory a diagnosis of a campaign needs.
 #[derive(Debug, Clone)]
 pub struct DiagnosePlan {
     rows: usize,
-    values: usize,
-    fit: FitPlan,
+    /// Scanned values that do not grow with the rows (all but the step's).
+    fixed_values: usize,
+    options: DiagnoseOptions,
     bytes: u64,
 }
 
 impl DiagnosePlan {
-    /// The plan for diagnosing `data` with `o` (its candidate families are
-    /// generated and counted, then dropped: `m` numbers per scanned value).
+    /// The plan for diagnosing `data` with `o`: the candidate families are
+    /// generated on at most [`COUNT_ROWS`] rows spread over the campaign and
+    /// counted (the step's grid, one value a row, scaled to all rows).
     pub fn new(data: &Dataset, o: &DiagnoseOptions) -> Self {
         let rows = data.len();
-        let values = super::scan::families(data, &[], o.robot.as_ref())
+        let sample = if rows > COUNT_ROWS {
+            data.select(
+                &(0..COUNT_ROWS)
+                    .map(|i| i * rows / COUNT_ROWS)
+                    .collect::<Vec<_>>(),
+            )
+        } else {
+            data.clone()
+        };
+        let counted: usize = super::scan::families(&sample, &[], o.robot.as_ref())
             .iter()
             .map(|f| f.grid.len())
             .sum();
-        let fit = FitPlan::new(
+        let fixed_values = counted - super::scan::step_rows(sample.len()).len();
+        let mut plan = DiagnosePlan {
             rows,
+            fixed_values,
+            options: o.clone(),
+            bytes: 0,
+        };
+        plan.bytes = plan.bytes_at(rows);
+        plan
+    }
+
+    /// Scanned values at `n` rows.
+    fn values_at(&self, n: usize) -> usize {
+        self.fixed_values + super::scan::step_rows(n).len()
+    }
+
+    /// Estimated peak at `n` rows: the fit's plan, and the candidate test.
+    fn bytes_at(&self, n: usize) -> u64 {
+        let fit = FitPlan::new(
+            n,
             3,
-            &o.for_rows(rows).kriging,
+            &self.options.for_rows(n).kriging,
             rayon::current_num_threads(),
         );
-        let bytes = fit.bytes + BYTES_PER_ROW_VALUE * (rows * values) as u64;
-        DiagnosePlan {
-            rows,
-            values,
-            fit,
-            bytes,
-        }
+        fit.bytes + BYTES_PER_ROW_VALUE * (n * self.values_at(n)) as u64
     }
 
     /// Estimated peak memory, bytes.
@@ -60,32 +89,49 @@ impl DiagnosePlan {
 
     /// Parameter values the candidate families scan.
     pub fn values(&self) -> usize {
-        self.values
+        self.values_at(self.rows)
     }
 
-    /// The most rows that fit in `limit` bytes: a smaller campaign scans at
-    /// most as many values per family, so this is on the safe side.
+    /// The most rows of this campaign whose diagnosis fits in `limit`
+    /// bytes (0 when none does).
     pub fn max_rows(&self, limit: u64) -> usize {
-        let per_row = BYTES_PER_ROW_VALUE * self.values.max(1) as u64
-            + self.fit.bytes / self.rows.max(1) as u64;
-        (limit / per_row.max(1)) as usize
+        let (mut lo, mut hi) = (0, self.rows);
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if self.bytes_at(mid) <= limit {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        lo
     }
 
     /// Refuse when the plan needs more than the memory limit
     /// ([`crate::memory::limit`]); `hint(n)` says how to run on `n` rows.
     pub fn check(&self, hint: impl Fn(usize) -> String) -> Result<()> {
         match crate::memory::limit() {
-            Some((limit, source)) if self.bytes > limit => Err(Error::Memory {
-                what: format!("a diagnosis of {} rows", self.rows),
-                needed: crate::memory::human(self.bytes),
-                limit: format!("{} ({source})", crate::memory::human(limit)),
-                hint: format!(
-                    "diagnose at most {} rows ({}), or raise {}",
-                    self.max_rows(limit),
-                    hint(self.max_rows(limit)),
-                    crate::memory::LIMIT_ENV
-                ),
-            }),
+            Some((limit, source)) if self.bytes > limit => {
+                let n = self.max_rows(limit);
+                let smallest = 2 * self.options.folds.max(10);
+                Err(Error::Memory {
+                    what: format!("a diagnosis of {} rows", self.rows),
+                    needed: crate::memory::human(self.bytes),
+                    limit: format!("{} ({source})", crate::memory::human(limit)),
+                    hint: if n >= smallest {
+                        format!(
+                            "diagnose at most {n} rows ({}), or raise {}",
+                            hint(n),
+                            crate::memory::LIMIT_ENV
+                        )
+                    } else {
+                        format!(
+                            "not even {smallest} rows would fit: raise {}",
+                            crate::memory::LIMIT_ENV
+                        )
+                    },
+                })
+            }
             _ => Ok(()),
         }
     }
@@ -93,13 +139,18 @@ impl DiagnosePlan {
 
 impl std::fmt::Display for DiagnosePlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let fit = FitPlan::new(
+            self.rows,
+            3,
+            &self.options.for_rows(self.rows).kriging,
+            rayon::current_num_threads(),
+        );
         write!(
             f,
-            "{} rows, {} scanned candidate values, about {} of memory (the fit: {})",
+            "{} rows, {} scanned candidate values, about {} of memory (the fit: {fit})",
             self.rows,
-            self.values,
+            self.values(),
             crate::memory::human(self.bytes),
-            self.fit
         )
     }
 }

@@ -111,6 +111,13 @@ fn order_margin(m: usize) -> usize {
     (m / 20).max(5)
 }
 
+/// The rows a step is scanned at in a campaign of `m` rows (the step
+/// family's grid: the one that grows with the campaign, one value a row).
+pub fn step_rows(m: usize) -> std::ops::Range<usize> {
+    let margin = order_margin(m);
+    margin..m.saturating_sub(margin).max(margin)
+}
+
 /// The lattice of block edges: about [`BLOCK_EDGES`] rows evenly from the
 /// margin to `m − margin`, and their spacing.
 fn block_lattice(m: usize) -> (Vec<usize>, usize) {
@@ -193,7 +200,7 @@ pub struct DroppedCovariate {
 pub fn constant_covariate(c: &Covariate) -> Option<String> {
     let mut v: Vec<f64> = c.values.iter().copied().filter(|x| x.is_finite()).collect();
     if v.is_empty() {
-        return None;
+        return Some(format!("no values in the {} rows used", c.values.len()));
     }
     v.sort_by(f64::total_cmp);
     let median = v[v.len() / 2];
@@ -300,13 +307,12 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
         }],
         zoom: None,
     });
-    let margin = order_margin(m);
-    if m > 2 * margin {
+    if !step_rows(m).is_empty() {
         out.push(Family {
             kind: EffectKind::Order,
             source: vec!["row".into()],
             label: "step in the measurement order".into(),
-            grid: (margin..m - margin)
+            grid: step_rows(m)
                 .map(|t| {
                     let col = (0..m).map(|i| if i >= t { 1.0 } else { 0.0 }).collect();
                     single(params(&[("row", t as f64)]), col, Feature::Step { row: t })
@@ -319,6 +325,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
     // a warm-up that settles), both edges scanned on a lattice, the reported
     // ones then row by row ([`zoom_block`]); one column, so a bump is not
     // split into two steps that each explain half of it
+    let margin = order_margin(m);
     if m > 3 * margin {
         let (edges, _) = block_lattice(m);
         let grid: Vec<GridPoint> = edges
@@ -959,6 +966,14 @@ pub fn test_families(
             ));
         }
     }
+    // the statistic each family's null distribution tests
+    let tested = |k: usize| {
+        if families[k].kind.pose_function() {
+            trials[k].stat
+        } else {
+            trials[k].base_stat
+        }
+    };
     let mut exceed = vec![0usize; families.len()];
     let mut run = vec![0usize; families.len()];
     // sum and sum of squares of each family's null statistics
@@ -991,11 +1006,7 @@ pub fn test_families(
             .map(|&k| trials[k].base.best_of_batch(&systems, &pseudo))
             .collect();
         for (&k, h) in active.iter().zip(hits) {
-            let o = if families[k].kind.pose_function() {
-                trials[k].stat
-            } else {
-                trials[k].base_stat
-            };
+            let o = tested(k);
             for g in h {
                 exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
                 run[k] += 1;
@@ -1052,7 +1063,7 @@ pub fn test_families(
                 evidence: {
                     let n = run[k] as f64;
                     if finite && n >= 1.0 && loo0 > 0.0 {
-                        (t.stat - moments[k][0] / n) / loo0
+                        (tested(k) - moments[k][0] / n) / loo0
                     } else {
                         0.0
                     }
