@@ -339,13 +339,27 @@ fn effect_lines(e: &EffectReport) -> Vec<String> {
         .size
         .iter()
         .map(|c| {
+            // per unit of a column in degree·mm/rad (a lag through the
+            // Jacobian) a coefficient is ~1e-5: four decimals would print 0
+            let largest = c
+                .estimate
+                .iter()
+                .chain(&c.ci95)
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            let num = |v: f64| {
+                if largest > 0.0 && largest < 1e-3 {
+                    format!("{v:.3e}")
+                } else {
+                    format!("{v:.4}")
+                }
+            };
             let v: Vec<String> = (0..3)
                 .map(|a| {
                     format!(
-                        "{} {:.4} ± {:.4}",
+                        "{} {} ± {}",
                         ["x", "y", "z"][a],
-                        c.estimate[a],
-                        c.ci95[a]
+                        num(c.estimate[a]),
+                        num(c.ci95[a])
                     )
                 })
                 .collect();
