@@ -1353,11 +1353,12 @@ fn memory_cases() -> Vec<Case> {
             "memory_diagnose_over_limit",
             &["diagnose", &d],
             &[data],
+            // 1 kB: no campaign fits, so no row count is offered
             fail(&[
                 "a diagnosis of",
                 "needs about",
-                "diagnose at most",
-                "`--rows ",
+                "not even",
+                "raise ROBOKRIGE_MEMORY_LIMIT",
             ]),
         ),
     ];
