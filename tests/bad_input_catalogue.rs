@@ -1365,6 +1365,16 @@ fn memory_cases() -> Vec<Case> {
     for c in &mut cases {
         c.env.push(("ROBOKRIGE_MEMORY_LIMIT", "1K"));
     }
+    // 30 MB: a few dozen of the shipped campaign's 300 rows fit
+    let lhs = shipped("comau_lhs.csv");
+    let mut fewer = case(
+        "memory_diagnose_names_the_rows_that_fit",
+        &["diagnose", &s(&lhs)],
+        &[&lhs],
+        fail(&["a diagnosis of 300 rows", "diagnose at most", "`--rows "]),
+    );
+    fewer.env.push(("ROBOKRIGE_MEMORY_LIMIT", "30M"));
+    cases.push(fewer);
     cases
 }
 
