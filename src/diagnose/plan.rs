@@ -38,7 +38,7 @@ pub struct DiagnosePlan {
 
 impl DiagnosePlan {
     /// The plan for diagnosing `data` with `o`: the candidate families are
-    /// generated on at most [`COUNT_ROWS`] rows spread over the campaign and
+    /// generated on at most 1 000 rows spread over the campaign and
     /// counted (the step's grid, one value a row, scaled to all rows).
     pub fn new(data: &Dataset, o: &DiagnoseOptions) -> Self {
         let rows = data.len();
