@@ -981,3 +981,81 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scan::{Family, GridPoint, Tested};
+
+    fn family(label: &str, columns: Vec<Vec<f64>>, add: Vec<Feature>) -> Family {
+        Family {
+            kind: EffectKind::Covariate,
+            source: vec!["t".into()],
+            label: label.into(),
+            grid: vec![GridPoint {
+                params: BTreeMap::new(),
+                columns,
+                add,
+            }],
+            zoom: None,
+        }
+    }
+
+    fn tested(family: usize, score: f64) -> Tested {
+        Tested {
+            family,
+            best: 0,
+            explained: score,
+            p_value: 0.001,
+            q_value: 0.01,
+            score,
+            resamples: 999,
+            refit: false,
+            cv_sse_before: 1.0,
+            evidence: score,
+            support: Vec::new(),
+            refined: None,
+        }
+    }
+
+    /// Occam's rule: of two significant candidates that explain the same
+    /// residual, the one with fewer model columns goes first; one that
+    /// explains something else, or is not significant, does not.
+    #[test]
+    fn a_simpler_candidate_that_explains_the_same_is_ranked_first() {
+        let m = 40;
+        let t: Vec<f64> = (0..m).map(|i| i as f64 / m as f64).collect();
+        let wiggle: Vec<f64> = (0..m).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+        let resid: Vec<[f64; 3]> = t.iter().map(|v| [*v, -*v, 0.5 * v]).collect();
+        let cov = |name: &str| Feature::Covariate {
+            name: name.into(),
+            reference: None,
+        };
+        let fams = vec![
+            // three columns (the drift among them) against one
+            family(
+                "t × joint angles",
+                vec![t.clone(), t.iter().map(|v| v * v).collect(), wiggle.clone()],
+                vec![cov("a"), cov("b"), cov("c")],
+            ),
+            family("t (alone)", vec![t.clone()], vec![cov("t")]),
+            family("something else", vec![wiggle], vec![cov("w")]),
+        ];
+        let all = |_: &Tested| true;
+        let mut order = vec![tested(0, 0.90), tested(1, 0.85)];
+        let moved = prefer_simpler(&mut order, &fams, &resid, &all);
+        assert_eq!(moved, Some((0, "t × joint angles".to_string())));
+        assert_eq!(order[0].family, 1);
+        // not significant: it stays where it is
+        let mut order = vec![tested(0, 0.90), tested(1, 0.85)];
+        let only_first = |x: &Tested| x.family == 0;
+        assert_eq!(prefer_simpler(&mut order, &fams, &resid, &only_first), None);
+        assert_eq!(order[0].family, 0);
+        // fewer columns, but it explains another part of the residual
+        let mut order = vec![tested(0, 0.90), tested(2, 0.85)];
+        assert_eq!(prefer_simpler(&mut order, &fams, &resid, &all), None);
+        // too weak a score to stand in for the first
+        let mut order = vec![tested(0, 0.90), tested(1, 0.50)];
+        assert_eq!(prefer_simpler(&mut order, &fams, &resid, &all), None);
+    }
+}
