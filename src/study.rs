@@ -116,6 +116,12 @@ pub fn load_truth(path: &Path) -> Result<Truth> {
             message: format!("format '{}' is not a simulator truth", truth.format),
         });
     }
+    for e in &truth.spec.effects {
+        e.validate().map_err(|e| Error::Input {
+            source_name: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+    }
     Ok(truth)
 }
 

@@ -180,3 +180,25 @@ fn bad_parameters_are_errors_not_panics() {
     spec.poses = 0;
     assert!(simulate(&robot, &spec).is_err());
 }
+
+/// A tracker bump (`until`): the offset is in the rows from `row` up to
+/// `until` only; an `until` not after `row` is an error.
+#[test]
+fn a_tracker_bump_offsets_only_its_rows() {
+    let (plain, _) = lhs(3, 40, &[]);
+    let (bumped, truth) = lhs(3, 40, &["tracker-step:row=10,until=25,dx=1,dy=0,dz=0"]);
+    let ex = |d: &robokrige::dataset::Dataset| d.errors.as_ref().unwrap().clone();
+    for (i, (a, b)) in ex(&plain).iter().zip(ex(&bumped)).enumerate() {
+        let shift = b[0] - a[0];
+        let expect = if (10..25).contains(&i) { 1.0 } else { 0.0 };
+        assert!((shift - expect).abs() < 1e-9, "row {i}: {shift}");
+    }
+    let back: Truth = serde_json::from_str(&serde_json::to_string(&truth).unwrap()).unwrap();
+    assert_eq!(back, truth);
+    for bad in [
+        "tracker-step:row=10,until=10",
+        "tracker-step:row=10,until=3",
+    ] {
+        assert!(Effect::parse(bad).is_err(), "{bad}");
+    }
+}

@@ -143,6 +143,7 @@ pub fn measurements(robot: &TrueRobot, spec: &CampaignSpec) -> Result<Dataset> {
 pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput, Truth)> {
     let nominal = &robot.nominal;
     for e in &spec.effects {
+        e.validate()?;
         e.check_joints(nominal.dof())?;
     }
     let ranges = spec

@@ -130,20 +130,11 @@ impl Effect {
                 amp_deg: kv.f("amp_deg", 0.004)?,
                 phase_rad: kv.f("phase_rad", 0.0)?,
             },
-            "tracker-step" => {
-                let row = kv.f("row", 150.0)? as usize;
-                let until = kv.opt("until")?.map(|u| u as usize);
-                if until.is_some_and(|u| u <= row) {
-                    return Err(Error::InvalidParameter(format!(
-                        "effect '{spec}': until must be a row after row={row}"
-                    )));
-                }
-                Effect::TrackerStep {
-                    row,
-                    until,
-                    offset_mm: [kv.f("dx", 0.15)?, kv.f("dy", -0.1)?, kv.f("dz", 0.1)?],
-                }
-            }
+            "tracker-step" => Effect::TrackerStep {
+                row: kv.f("row", 150.0)? as usize,
+                until: kv.opt("until")?.map(|u| u as usize),
+                offset_mm: [kv.f("dx", 0.15)?, kv.f("dy", -0.1)?, kv.f("dz", 0.1)?],
+            },
             "crosstalk" => Effect::Crosstalk {
                 joint: kv.joint("joint", 1)?,
                 from: kv.joint("from", 2)?,
@@ -194,6 +185,13 @@ impl Effect {
                     "hysteresis: travel_deg must be > 0, got {travel_deg}"
                 ))
             }
+            Effect::TrackerStep {
+                row,
+                until: Some(until),
+                ..
+            } if until <= row => bad(format!(
+                "tracker-step: until must be a row after row={row}, got {until}"
+            )),
             Effect::Lag { tau_poses, .. } if tau_poses.is_nan() || *tau_poses < 0.0 => {
                 bad(format!("lag: tau_poses must be ≥ 0, got {tau_poses}"))
             }
