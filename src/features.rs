@@ -197,10 +197,17 @@ impl Clock {
         Ok(())
     }
 
-    /// The share of the earlier moves kept at each row: `e^(−Δt/τ_s)` from
-    /// the times `t` (0 for the first row; a negative interval counts as 0).
-    fn keep_from_times(&self, t: &[f64]) -> Vec<f64> {
-        (0..t.len())
+    /// The share of the earlier moves kept at each row of `data`:
+    /// `e^(−Δt/τ_s)` over the intervals of its time column (0 for the first
+    /// row; a negative interval counts as 0).
+    fn keep_in(&self, data: &Dataset) -> Result<Vec<f64>> {
+        let t = Feature::Covariate {
+            name: self.column.clone(),
+            reference: None,
+        }
+        .columns(data)?
+        .remove(0);
+        Ok((0..t.len())
             .map(|i| {
                 if i == 0 {
                     0.0
@@ -208,7 +215,7 @@ impl Clock {
                     (-(t[i] - t[i - 1]).max(0.0) / self.tau_s).exp()
                 }
             })
-            .collect()
+            .collect())
     }
 
     /// The same at the reference interval, for `m` poses without times.
@@ -219,15 +226,7 @@ impl Clock {
                 self.column
             ))
         })?;
-        Ok((0..m)
-            .map(|i| {
-                if i == 0 {
-                    0.0
-                } else {
-                    (-dt / self.tau_s).exp()
-                }
-            })
-            .collect())
+        Ok(steady_keep(m, (-dt / self.tau_s).exp()))
     }
 }
 
@@ -295,36 +294,6 @@ impl Feature {
                 | Feature::TcpMove { .. }
                 | Feature::Times { .. }
         )
-    }
-
-    /// The clock of a joint's moves counted in time, if any.
-    fn clock(&self) -> Option<&Clock> {
-        match self {
-            Feature::Moves { clock, .. } | Feature::MovesJacobian { clock, .. } => clock.as_ref(),
-            _ => None,
-        }
-    }
-
-    /// Columns of [`Feature::Moves`] (one) or [`Feature::MovesJacobian`]
-    /// (the TCP displacement, three) at poses `q` with the memory `keep`.
-    fn moves_columns(&self, q: &[Vec<f64>], keep: &[f64]) -> Result<Vec<Vec<f64>>> {
-        match self {
-            Feature::Moves { joint, .. } => Ok(vec![moves(q, *joint, keep)]),
-            Feature::MovesJacobian {
-                robot: r, joint, ..
-            } => {
-                let h = moves(q, *joint, keep);
-                let mut cols: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(q.len())).collect();
-                for (qi, hi) in q.iter().zip(&h) {
-                    let jac = r.position_jacobian(qi)?;
-                    for (a, c) in cols.iter_mut().enumerate() {
-                        c.push(jac[(a, joint - 1)] * hi);
-                    }
-                }
-                Ok(cols)
-            }
-            _ => unreachable!("moves_columns of a feature that is not a joint's moves"),
-        }
     }
 
     /// Check joint indices against `n` joints.
@@ -449,16 +418,17 @@ impl Feature {
             Feature::Times { of, joint, centre } => {
                 Ok(times(of.columns(data)?.remove(0), *centre, &data.q, *joint))
             }
-            Feature::Moves { clock: Some(c), .. }
-            | Feature::MovesJacobian { clock: Some(c), .. } => {
-                let t = Feature::Covariate {
-                    name: c.column.clone(),
-                    reference: None,
-                }
-                .columns(data)?
-                .remove(0);
-                self.moves_columns(&data.q, &c.keep_from_times(&t))
-            }
+            Feature::Moves {
+                joint,
+                clock: Some(c),
+                ..
+            } => moves_columns(&data.q, *joint, None, &c.keep_in(data)?),
+            Feature::MovesJacobian {
+                robot,
+                joint,
+                clock: Some(c),
+                ..
+            } => moves_columns(&data.q, *joint, Some(robot), &c.keep_in(data)?),
             Feature::Lagged { of, lag } => Ok(vec![lagged(&of.columns(data)?[0], *lag)]),
             _ => self.columns_from_poses(&data.q, &data.dir),
         }
@@ -489,17 +459,21 @@ impl Feature {
                 )));
             }
             Feature::Moves {
-                joint, tau_poses, ..
-            }
-            | Feature::MovesJacobian {
-                joint, tau_poses, ..
-            } => {
-                let keep = match self.clock() {
-                    Some(c) => c.keep_at_reference(m, *joint)?,
-                    None => keep_in_poses(m, *tau_poses),
-                };
-                self.moves_columns(q, &keep)?
-            }
+                joint,
+                tau_poses,
+                clock,
+            } => moves_columns(q, *joint, None, &memory(m, *joint, *tau_poses, clock)?)?,
+            Feature::MovesJacobian {
+                robot,
+                joint,
+                tau_poses,
+                clock,
+            } => moves_columns(
+                q,
+                *joint,
+                Some(robot),
+                &memory(m, *joint, *tau_poses, clock)?,
+            )?,
             Feature::MoveSize { joint } => vec![col(&|i| {
                 if i == 0 {
                     0.0
@@ -580,15 +554,43 @@ fn moves_name(joint: usize, tau_poses: f64, clock: Option<&Clock>) -> String {
     }
 }
 
-/// The share `e^(−1/τ)` of the earlier moves kept at each of `m` rows (0 for
-/// the first; τ = 0: none).
-fn keep_in_poses(m: usize, tau_poses: f64) -> Vec<f64> {
-    let k = if tau_poses > 0.0 {
-        (-1.0 / tau_poses).exp()
-    } else {
-        0.0
-    };
+/// The share `k` of the earlier moves kept at each of `m` rows (0 for the
+/// first).
+fn steady_keep(m: usize, k: f64) -> Vec<f64> {
     (0..m).map(|i| if i == 0 { 0.0 } else { k }).collect()
+}
+
+/// The memory of a joint's moves along `m` poses without times: `e^(−1/τ)`
+/// in poses (τ = 0: none), or the clock's at its reference interval.
+fn memory(m: usize, joint: usize, tau_poses: f64, clock: &Option<Clock>) -> Result<Vec<f64>> {
+    match clock {
+        Some(c) => c.keep_at_reference(m, joint),
+        None if tau_poses > 0.0 => Ok(steady_keep(m, (-1.0 / tau_poses).exp())),
+        None => Ok(steady_keep(m, 0.0)),
+    }
+}
+
+/// Joint `joint`'s moves into each pose `q` with the memory `keep`: one
+/// column, or through `robot`'s position Jacobian the TCP displacement
+/// (three columns).
+fn moves_columns(
+    q: &[Vec<f64>],
+    joint: usize,
+    robot: Option<&crate::kinematics::Robot>,
+    keep: &[f64],
+) -> Result<Vec<Vec<f64>>> {
+    let h = moves(q, joint, keep);
+    let Some(r) = robot else {
+        return Ok(vec![h]);
+    };
+    let mut cols: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(q.len())).collect();
+    for (qi, hi) in q.iter().zip(&h) {
+        let jac = r.position_jacobian(qi)?;
+        for (a, c) in cols.iter_mut().enumerate() {
+            c.push(jac[(a, joint - 1)] * hi);
+        }
+    }
+    Ok(cols)
 }
 
 /// `h_k = Δq_k + keep_k·h_(k−1)` of 1-based joint `joint` (Δq_0 = 0).

@@ -330,8 +330,4 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
         a.after.mean_abs_mm,
         a.before.mean_abs_mm
     );
-    eprintln!(
-        "nominal {:.4} mm, plain {:.4}, lag {:.4}",
-        a.before.mean_abs_mm, a.after.mean_abs_mm, b.after.mean_abs_mm
-    );
 }

@@ -591,40 +591,51 @@ impl EffectReport {
     }
 }
 
+/// The significant candidates of `tested` other than `k` that explain what
+/// `k` explains: a score at least [`SAME_SCORE`] of its, and a fitted
+/// component of the residuals within cosine [`SAME_FIT`] of its.
+fn alike(
+    tested: &[scan::Tested],
+    fams: &[scan::Family],
+    residuals: &[[f64; 3]],
+    k: usize,
+    significant: &dyn Fn(&scan::Tested) -> bool,
+) -> Vec<usize> {
+    let fit = |t: &scan::Tested| scan::fitted(&t.point(&fams[t.family]).columns, residuals);
+    let top = fit(&tested[k]);
+    (0..tested.len())
+        .filter(|&i| {
+            i != k && significant(&tested[i]) && tested[i].score >= SAME_SCORE * tested[k].score
+        })
+        .filter(|&i| scan::similarity(&top, &fit(&tested[i])) >= SAME_FIT)
+        .collect()
+}
+
 /// Occam's rule for the first candidate of `tested` (in its ranked order):
-/// a significant candidate that adds fewer model columns (its features'
-/// names) and explains the same ([`SAME_FIT`]-alike fitted component of the
-/// residuals, a score at least [`SAME_SCORE`] of the first's) goes first —
-/// a temperature drift is "temp_c", one input, not "temp_c × one joint
-/// angle", whose three trend columns happen to carry it as well. Returns
-/// the new first's index and the label it overtook.
+/// of the candidates [`alike`] it, one that adds fewer model columns (its
+/// features' names) goes first — a temperature drift is "temp_c", one
+/// input, not "temp_c × one joint angle", whose three trend columns happen
+/// to carry it as well. Returns the new first's index and the label it
+/// overtook.
 fn prefer_simpler(
     tested: &mut Vec<scan::Tested>,
     fams: &[scan::Family],
     residuals: &[[f64; 3]],
     significant: &dyn Fn(&scan::Tested) -> bool,
 ) -> Option<(usize, String)> {
-    fn point<'a>(t: &'a scan::Tested, fams: &'a [scan::Family]) -> &'a scan::GridPoint {
+    let size = |t: &scan::Tested| -> usize {
         t.point(&fams[t.family])
-    }
-    let size =
-        |t: &scan::Tested| -> usize { point(t, fams).add.iter().map(|f| f.names().len()).sum() };
+            .add
+            .iter()
+            .map(|f| f.names().len())
+            .sum()
+    };
     let first = tested
         .iter()
         .position(|t| significant(t) && t.score > 0.0)?;
-    let top = scan::fitted(&point(&tested[first], fams).columns, residuals);
-    let simpler = (0..tested.len())
-        .filter(|&i| {
-            let t = &tested[i];
-            i != first
-                && significant(t)
-                && t.score >= SAME_SCORE * tested[first].score
-                && size(t) < size(&tested[first])
-        })
-        .filter(|&i| {
-            let fit = scan::fitted(&point(&tested[i], fams).columns, residuals);
-            scan::similarity(&top, &fit) >= SAME_FIT
-        })
+    let simpler = alike(tested, fams, residuals, first, significant)
+        .into_iter()
+        .filter(|&i| size(&tested[i]) < size(&tested[first]))
         .min_by_key(|&i| (size(&tested[i]), i))?;
     let over = fams[tested[first].family].label.clone();
     let t = tested.remove(simpler);
@@ -875,20 +886,10 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         let pick = reports.iter().position(|r| r.significant && r.score > 0.0);
         if let Some(k) = pick {
             // `reports` is in the order of `tested`
-            let cols = |i: usize| &tested[i].point(&fams[tested[i].family]).columns;
-            let top_fit = scan::fitted(cols(k), &current.residuals);
-            let top_score = reports[k].score;
-            let similar: Vec<String> = (0..reports.len())
-                .filter(|&i| {
-                    i != k && reports[i].significant && reports[i].score >= SAME_SCORE * top_score
-                })
-                .filter(|&i| {
-                    scan::similarity(&top_fit, &scan::fitted(cols(i), &current.residuals))
-                        >= SAME_FIT
-                })
+            reports[k].confounded_with = alike(&tested, &fams, &current.residuals, k, &significant)
+                .into_iter()
                 .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
                 .collect();
-            reports[k].confounded_with = similar;
         }
         if let Some((idx, promised, achieved, after)) = pending.take() {
             let source = &effects[idx].source;

@@ -71,15 +71,19 @@ impl DiagnosePlan {
         self.fixed_values + super::scan::step_rows(n).len()
     }
 
-    /// Estimated peak at `n` rows: the fit's plan, and the candidate test.
-    fn bytes_at(&self, n: usize) -> u64 {
-        let fit = FitPlan::new(
+    /// The fit's plan at `n` rows, as [`super::diagnose`] fits them.
+    fn fit_at(&self, n: usize) -> FitPlan {
+        FitPlan::new(
             n,
             3,
             &self.options.for_rows(n).kriging,
             rayon::current_num_threads(),
-        );
-        fit.bytes + BYTES_PER_ROW_VALUE * (n * self.values_at(n)) as u64
+        )
+    }
+
+    /// Estimated peak at `n` rows: the fit's plan, and the candidate test.
+    fn bytes_at(&self, n: usize) -> u64 {
+        self.fit_at(n).bytes + BYTES_PER_ROW_VALUE * (n * self.values_at(n)) as u64
     }
 
     /// Estimated peak memory, bytes.
@@ -139,12 +143,7 @@ impl DiagnosePlan {
 
 impl std::fmt::Display for DiagnosePlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let fit = FitPlan::new(
-            self.rows,
-            3,
-            &self.options.for_rows(self.rows).kriging,
-            rayon::current_num_threads(),
-        );
+        let fit = self.fit_at(self.rows);
         write!(
             f,
             "{} rows, {} scanned candidate values, about {} of memory (the fit: {fit})",

@@ -118,13 +118,11 @@ pub fn step_rows(m: usize) -> std::ops::Range<usize> {
     margin..m.saturating_sub(margin).max(margin)
 }
 
-/// The lattice of block edges: about [`BLOCK_EDGES`] rows evenly from the
-/// margin to `m − margin`, and their spacing.
-fn block_lattice(m: usize) -> (Vec<usize>, usize) {
-    let margin = order_margin(m);
-    let span = m.saturating_sub(2 * margin);
-    let spacing = span.div_ceil(BLOCK_EDGES).max(1);
-    ((margin..m - margin).step_by(spacing).collect(), spacing)
+/// Rows between two edges of the block lattice: about [`BLOCK_EDGES`]
+/// edges evenly from the margin to `m − margin`.
+fn block_spacing(m: usize) -> usize {
+    let span = m.saturating_sub(2 * order_margin(m));
+    span.div_ceil(BLOCK_EDGES).max(1)
 }
 
 /// Grid point of the block `[from, to)`: one indicator column (a bump of one
@@ -150,7 +148,7 @@ fn zoom_block(point: &GridPoint, m: usize) -> Vec<GridPoint> {
         point.params["to_row"] as usize,
     );
     let margin = order_margin(m);
-    let (_, s) = block_lattice(m);
+    let s = block_spacing(m);
     let rows = |c: usize| c.saturating_sub(s).max(margin)..(c + s + 1).min(m - margin);
     let mut out: Vec<GridPoint> = rows(from)
         .filter(|&a| to >= a + margin)
@@ -327,7 +325,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
     // split into two steps that each explain half of it
     let margin = order_margin(m);
     if m > 3 * margin {
-        let (edges, _) = block_lattice(m);
+        let edges: Vec<usize> = (margin..m - margin).step_by(block_spacing(m)).collect();
         let grid: Vec<GridPoint> = edges
             .iter()
             .enumerate()
@@ -517,6 +515,13 @@ fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covar
     })
 }
 
+/// The median interval between consecutive rows of a time column.
+fn median_interval(t: &Covariate) -> Option<f64> {
+    let mut dt: Vec<f64> = t.values.windows(2).map(|w| w[1] - w[0]).collect();
+    dt.sort_by(f64::total_cmp);
+    dt.get(dt.len() / 2).copied()
+}
+
 /// How the robot moved into each pose (issue 22), and the generic search:
 /// - per joint j, its signed moves with a scanned memory τ (through the
 ///   robot's Jacobian when it is given, so that the candidate is the TCP
@@ -530,13 +535,6 @@ fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covar
 ///
 /// The scans are grids of one family each, so a family's p-value pays for
 /// its scan (the null takes the maximum over the same grid).
-/// The median interval between consecutive rows of a time column.
-fn median_interval(t: &Covariate) -> Option<f64> {
-    let mut dt: Vec<f64> = t.values.windows(2).map(|w| w[1] - w[0]).collect();
-    dt.sort_by(f64::total_cmp);
-    dt.get(dt.len() / 2).copied()
-}
-
 fn motion_families(
     data: &Dataset,
     exclude: &[String],
