@@ -304,7 +304,8 @@ pub(super) fn row_subset(m: usize, k: usize, seed: u64) -> Vec<usize> {
 /// of the start box and LHS points in it, `opts.starts` in all), by
 /// successive halving: every start runs [`SCREEN_ITER`] iterations in
 /// parallel; the better half continues for twice as many, and so on until
-/// [`FINALISTS`] remain, which run to convergence; the best wins (ties by
+/// [`FINALISTS`] remain, which run to convergence unless they meet a better
+/// one in its basin ([`converge_finalists`]); the best wins (ties by
 /// start order). Runs continue with their own inverse Hessian. The
 /// likelihood is multimodal, and a ranking after a few iterations favours
 /// the basin that explains everything as noise (the nugget at its bound):
@@ -330,54 +331,198 @@ fn multistart_bfgs(
     }
     let starts = optim::lhs_starts(&start_box, opts.starts, opts.seed);
     let full_iter = optim::QuasiNewtonOptions::default().max_iter;
-    // a pool of `n` runs stops after `iters` iterations, or converges once
-    // only the finalists are left
-    let limit = |n: usize, iters: usize| optim::QuasiNewtonOptions {
-        max_iter: if n <= FINALISTS { full_iter } else { iters },
+    let screen = |iters: usize| optim::QuasiNewtonOptions {
+        max_iter: iters,
         max_evals: opts.max_evals,
         ..optim::QuasiNewtonOptions::default()
     };
-    // (start index, from, inverse Hessian) → (start index, result, its
-    // inverse Hessian): runs continue where they stopped
-    let run = |pool: Vec<(usize, Vec<f64>, Option<Hessian>)>, o: optim::QuasiNewtonOptions| {
-        pool.into_par_iter()
-            .map(|(i, x, h)| {
-                let obj = ln_psi_grad_objective(problem, unpack);
-                let (r, h) = optim::quasi_newton_warm(obj, &x, h, bounds, &o);
-                (i, r, h)
-            })
-            .collect::<Vec<(usize, OptimResult, Hessian)>>()
-    };
+    let mut pool: Vec<Run> = starts
+        .iter()
+        .enumerate()
+        .map(|(i, x)| Run::new(i, x.clone()))
+        .collect();
     let mut iters = SCREEN_ITER;
-    let mut pool = run(
-        starts
-            .iter()
-            .enumerate()
-            .map(|(i, x)| (i, x.clone(), None))
-            .collect(),
-        limit(starts.len(), iters),
-    );
-    let mut evals: usize = pool.iter().map(|p| p.1.evals).sum();
+    let mut evals = 0;
     while pool.len() > FINALISTS {
-        // successive halving: the better half (start order breaks ties)
-        // continues for twice as many iterations
-        pool.sort_by(|a, b| a.1.f.total_cmp(&b.1.f).then(a.0.cmp(&b.0)));
+        // successive halving: every run continues for `iters` iterations,
+        // the better half (start order breaks ties) goes on for twice as many
+        evals += run_all(&mut pool, problem, bounds, unpack, &|_| screen(iters));
+        pool.sort_by(Run::order);
         pool.truncate(pool.len().div_ceil(2));
         iters *= 2;
-        let o = limit(pool.len(), iters);
-        pool = run(
-            pool.into_iter()
-                .map(|(i, r, h)| (i, r.x, Some(h)))
-                .collect(),
-            o,
-        );
-        evals += pool.iter().map(|p| p.1.evals).sum::<usize>();
     }
-    // the first of the best (start order breaks ties)
-    pool.sort_by(|a, b| a.1.f.total_cmp(&b.1.f).then(a.0.cmp(&b.0)));
-    let (_, mut best, hinv) = pool.into_iter().next().expect("at least one start");
-    best.evals = evals;
-    (best, starts.len(), hinv)
+    evals += converge_finalists(&mut pool, problem, bounds, unpack, opts, full_iter);
+    pool.sort_by(Run::order);
+    let best = pool.into_iter().next().expect("at least one start");
+    let (mut result, hinv) = (best.result.expect("every run ran"), best.hinv);
+    result.evals = evals;
+    (result, starts.len(), hinv)
+}
+
+/// One BFGS run of the multistart, continued stage after stage with its
+/// own inverse Hessian.
+struct Run {
+    /// Index of its start (breaks ties between equal ln ψ).
+    start: usize,
+    /// Where it stands.
+    x: Vec<f64>,
+    /// Its inverse Hessian (empty before the first stage).
+    hinv: Hessian,
+    /// ∇ ln ψ at `x` (empty before the first stage).
+    grad: Vec<f64>,
+    /// Its last stage's result.
+    result: Option<OptimResult>,
+    /// Iterations and evaluations over all its stages.
+    iterations: usize,
+    evals: usize,
+    /// Converged, out of budget, or dropped as a duplicate.
+    done: bool,
+}
+
+impl Run {
+    fn new(start: usize, x: Vec<f64>) -> Self {
+        Run {
+            start,
+            x,
+            hinv: Vec::new(),
+            grad: Vec::new(),
+            result: None,
+            iterations: 0,
+            evals: 0,
+            done: false,
+        }
+    }
+
+    fn f(&self) -> f64 {
+        self.result.as_ref().map_or(f64::INFINITY, |r| r.f)
+    }
+
+    /// Better ln ψ first, then start order.
+    fn order(a: &Run, b: &Run) -> std::cmp::Ordering {
+        a.f().total_cmp(&b.f()).then(a.start.cmp(&b.start))
+    }
+}
+
+/// Continue every run that is not done for one stage, in parallel, each
+/// within the limits `stage` gives it; returns the evaluations spent.
+fn run_all(
+    pool: &mut [Run],
+    problem: &KrigingProblem,
+    bounds: &Bounds,
+    unpack: &Unpack<'_>,
+    stage: &(dyn Fn(&Run) -> optim::QuasiNewtonOptions + Sync),
+) -> usize {
+    pool.par_iter_mut()
+        .filter(|r| !r.done)
+        .map(|r| {
+            let o = stage(r);
+            let mut obj = ln_psi_grad_objective(problem, unpack);
+            // the gradient at the best point (the one the run returns)
+            let (mut best_f, mut best_g) = (f64::INFINITY, Vec::new());
+            let tracked = |z: &[f64], g: &mut [f64]| {
+                let f = obj(z, g);
+                if f < best_f {
+                    best_f = f;
+                    best_g = g.to_vec();
+                }
+                f
+            };
+            let warm = (!r.hinv.is_empty()).then(|| std::mem::take(&mut r.hinv));
+            let (res, h) = optim::quasi_newton_warm(tracked, &r.x, warm, bounds, &o);
+            r.grad = best_g;
+            let spent = res.evals;
+            r.x.clone_from(&res.x);
+            r.iterations += res.iterations;
+            r.evals += spent;
+            r.hinv = h;
+            // stopped before the stage's limits: converged (or stuck)
+            r.done = res.stop != optim::StopReason::Budget
+                || (res.iterations < o.max_iter && res.evals < o.max_evals);
+            r.result = Some(res);
+            spent
+        })
+        .sum()
+}
+
+/// Iterations a finalist runs between two checks for runs that have met.
+const FINAL_STAGE_ITER: usize = 10;
+/// Two runs whose points differ by less than this in every coordinate
+/// (log10 units: 26 % in ξ or ν) are in one basin of ln ψ.
+const SAME_BASIN: f64 = 0.1;
+/// Below this log10 ξ an input is inert: with normalised inputs
+/// `ξ (s − s')² ≲ 0.01` over the campaign, so ln ψ is flat there and two
+/// runs at, say, 10⁻⁴ and 10⁻⁶ are in one basin.
+const INERT_LOG10_THETA: f64 = -3.0;
+
+/// A running finalist is dropped when even this many times the decrease
+/// its quasi-Newton model still predicts ([`optim::predicted_decrease`])
+/// would leave it above the best ln ψ found: a run converging slowly into a
+/// worse basin.
+const HOPELESS: f64 = 10.0;
+
+/// Run the finalists to convergence, [`FINAL_STAGE_ITER`] iterations at a
+/// time, each within `full_iter` iterations and `opts.max_evals`
+/// evaluations in all. After each stage a run that has come within
+/// [`SAME_BASIN`] of a better one (lower ln ψ; start order breaks ties) is
+/// dropped: both would converge to the same optimum, and converging such
+/// duplicates was most of the multistart's cost (on the bench campaigns,
+/// two to four of the four finalists reached the same ln ψ). So is a run
+/// that cannot catch up with the best ([`HOPELESS`]). Returns the
+/// evaluations spent.
+fn converge_finalists(
+    pool: &mut [Run],
+    problem: &KrigingProblem,
+    bounds: &Bounds,
+    unpack: &Unpack<'_>,
+    opts: &KrigingOptions,
+    full_iter: usize,
+) -> usize {
+    let d = problem.inputs.d;
+    let stage = |r: &Run| optim::QuasiNewtonOptions {
+        max_iter: FINAL_STAGE_ITER.min(full_iter.saturating_sub(r.iterations)),
+        max_evals: opts.max_evals.saturating_sub(r.evals),
+        ..optim::QuasiNewtonOptions::default()
+    };
+    let mut evals = 0;
+    for r in pool.iter_mut() {
+        let o = stage(r);
+        // a run that converged while screening stays done
+        r.done |= o.max_iter == 0 || o.max_evals == 0;
+    }
+    while pool.iter().any(|r| !r.done) {
+        evals += run_all(pool, problem, bounds, unpack, &stage);
+        for r in pool.iter_mut() {
+            let o = stage(r);
+            r.done |= o.max_iter == 0 || o.max_evals == 0;
+        }
+        let points: Vec<(usize, f64, Vec<f64>)> =
+            pool.iter().map(|r| (r.start, r.f(), r.x.clone())).collect();
+        let f_best = points.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        for r in pool.iter_mut().filter(|r| !r.done) {
+            let (f, start) = (r.f(), r.start);
+            let duplicate = points
+                .iter()
+                .any(|(s, g, x)| (*g < f || (*g == f && *s < start)) && same_basin(x, &r.x, d));
+            let hopeless = r.grad.len() == r.x.len()
+                && f - HOPELESS * optim::predicted_decrease(&r.x, &r.grad, &r.hinv, bounds)
+                    > f_best;
+            r.done = duplicate || hopeless;
+        }
+    }
+    evals
+}
+
+/// [`SAME_BASIN`] apart at most in every coordinate, the first `d` (log10
+/// ξ) floored at [`INERT_LOG10_THETA`].
+fn same_basin(a: &[f64], b: &[f64], d: usize) -> bool {
+    a.iter().zip(b).enumerate().all(|(k, (x, y))| {
+        let (x, y) = if k < d {
+            (x.max(INERT_LOG10_THETA), y.max(INERT_LOG10_THETA))
+        } else {
+            (*x, *y)
+        };
+        (x - y).abs() < SAME_BASIN
+    })
 }
 
 /// A BFGS inverse Hessian approximation.
@@ -476,4 +621,20 @@ pub(super) fn optimise(
     let mut polished = optim::bfgs(obj, &best.x, bounds, &optim::BfgsOptions::default());
     polished.evals += evals;
     done(polished, starts.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One basin: every coordinate within [`SAME_BASIN`], ξ below
+    /// [`INERT_LOG10_THETA`] counted as equal; the nugget (after the `d`
+    /// ξ coordinates) is not floored.
+    #[test]
+    fn same_basin_floors_inert_inputs_only() {
+        assert!(same_basin(&[-1.0, -4.0, -2.0], &[-1.05, -6.0, -2.05], 2));
+        assert!(!same_basin(&[-1.0, -2.5, -2.0], &[-1.0, -6.0, -2.0], 2));
+        assert!(!same_basin(&[-1.0, -4.0, -4.0], &[-1.0, -4.0, -6.0], 2));
+        assert!(!same_basin(&[-1.0, -4.0, -2.0], &[-0.8, -4.0, -2.0], 2));
+    }
 }
