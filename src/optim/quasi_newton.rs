@@ -14,7 +14,7 @@
 //!
 //! It stops when the largest free gradient component is below `gtol`, when
 //! an iteration lowers f by less than `ftol·max(1, |f|)` (the `factr` test of
-//! L-BFGS-B), on the iteration or evaluation budget, or when no step along
+//! L-BFGS-B) or than `fatol`, on the iteration or evaluation budget, or when no step along
 //! the projected path lowers f. With d ≤ 13 the dense d × d inverse Hessian
 //! costs nothing next to one evaluation, so the limited-memory form of
 //! L-BFGS-B buys nothing here; the projection does what its Cauchy-point
@@ -35,6 +35,8 @@ pub struct QuasiNewtonOptions {
     pub gtol: f64,
     /// Stop when an iteration lowers f by less than `ftol·max(1, |f|)`.
     pub ftol: f64,
+    /// Stop when an iteration lowers f by less than this (absolute; 0: off).
+    pub fatol: f64,
     /// Longest step per iteration (units of x).
     pub max_step: f64,
     /// Iteration limit.
@@ -48,6 +50,7 @@ impl Default for QuasiNewtonOptions {
         QuasiNewtonOptions {
             gtol: 1e-5,
             ftol: 1e-10,
+            fatol: 0.0,
             max_step: 1.0,
             max_iter: 200,
             max_evals: 400,
@@ -175,7 +178,7 @@ where
             scaled = true;
         }
         bfgs_update(&mut hinv, &s, &y);
-        let small = fx - fxn < opts.ftol * fx.abs().max(1.0);
+        let small = fx - fxn < (opts.ftol * fx.abs().max(1.0)).max(opts.fatol);
         x = xn;
         fx = fxn;
         g.copy_from_slice(&gn);
