@@ -36,7 +36,8 @@
 //! | studies | [`study`] | compensation targets, simulator truth files, before/after evaluation on the simulated robot |
 //! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
 //! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
-//! | output | `plot` | SVG charts (box plots, x–y plots); Cargo feature `plot` (default) |
+//! | studies | [`demo`] | the demo's job on the simulated COMAU: methods by CV, compensation, a diagnosis |
+//! | output | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
 //!
 //! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
 //! `plot` (plotters), both on by default; `default-features = false` gives
@@ -48,6 +49,7 @@ pub mod batch;
 pub mod compensate;
 pub mod cv;
 pub mod dataset;
+pub mod demo;
 pub mod diagnose;
 pub mod error;
 pub mod features;

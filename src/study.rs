@@ -259,3 +259,21 @@ pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
         runs,
     })
 }
+
+/// [`compensate_and_evaluate`] with each of `models`, in order, on the same
+/// targets, truth, start and noise seed: the models compared on the same
+/// simulated runs.
+pub fn compensate_and_evaluate_each<M: ErrorPredictor + ?Sized>(
+    robot: &Robot,
+    models: &[&M],
+    truth_path: &Path,
+    truth: &Truth,
+    targets: &Targets,
+    start: &[f64],
+    seed: u64,
+) -> Result<Vec<CompensatedRun>> {
+    models
+        .iter()
+        .map(|m| compensate_and_evaluate(robot, *m, truth_path, truth, targets, start, seed))
+        .collect()
+}

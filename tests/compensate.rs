@@ -259,7 +259,7 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
     use robokrige::features::Feature;
     use robokrige::params::ErrorModelParams;
     use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
-    use robokrige::study::{Targets, compensate_and_evaluate};
+    use robokrige::study::{Targets, compensate_and_evaluate, compensate_and_evaluate_each};
     let nominal = robot();
     let lag = Effect::parse("lag:joint=2,gain=0.0005").unwrap();
     let mut spec = CampaignSpec::new(CampaignKind::Lhs, 7);
@@ -323,6 +323,18 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
     };
     let (a, b) = (run(&plain), run(&with_lag));
     assert_eq!(a.before, b.before, "the same nominal run");
+    // both at once: the same runs, in order
+    let each = compensate_and_evaluate_each(
+        &nominal,
+        &[&plain, &with_lag],
+        Path::new("t"),
+        &truth,
+        &targets,
+        &home,
+        3,
+    )
+    .unwrap();
+    assert_eq!([&each[0].evaluation, &each[1].evaluation], [&a, &b]);
     assert!(
         b.after.mean_abs_mm < 0.7 * a.after.mean_abs_mm,
         "lag model {:.4} mm vs plain {:.4} mm (nominal {:.4})",

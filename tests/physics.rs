@@ -37,25 +37,23 @@ fn scara_errors(seed: u64, noise: bool) -> [f64; 5] {
     let Geometry::Scara(g) = &id.model.geometry else {
         panic!("not a SCARA geometry")
     };
-    let tr = ScaraTruth::of(&robot, &g.rest);
-    let mut out = [
+    let check = id.model.check_against(&robot).expect("a SCARA model");
+    let (tr, apd) = (&check.truth, &check.apd);
+    assert_eq!(
+        apd.iter().map(|a| (a.joint, a.entries)).collect::<Vec<_>>(),
+        [1, 2].map(|j| (
+            j,
+            2 * id.model.apd[j - 1].as_ref().unwrap().angles_deg.len()
+        ))
+    );
+    assert!(apd.iter().all(|a| a.max_deg >= a.rms_deg));
+    [
         g.dl1_mm - tr.dl1_mm,
         g.dl2_mm - tr.dl2_mm,
         g.theta20_deg - tr.theta20_deg,
-        0.0,
-        0.0,
-    ];
-    for j in 0..2 {
-        let tab = id.model.apd[j].as_ref().unwrap();
-        let mut sq = 0.0;
-        for (i, a) in tab.angles_deg.iter().enumerate() {
-            for (d, v) in [(1.0, tab.plus[i]), (-1.0, tab.minus[i])] {
-                sq += (v - ScaraTruth::apd(&robot, j, g.rest[j], *a, d)).powi(2);
-            }
-        }
-        out[3 + j] = (sq / (2 * tab.angles_deg.len()) as f64).sqrt();
-    }
-    out
+        apd[0].rms_deg,
+        apd[1].rms_deg,
+    ]
 }
 
 #[test]

@@ -5,11 +5,10 @@ use clap::Args;
 use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
 use robokrige::kinematics::{self, Robot};
 use robokrige::physics::AnyModel;
-use robokrige::plot::{Labels, Series, xy_plot};
+use robokrige::plot::{Labels, error_along_path};
 use robokrige::stats::PositionErrorTable;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
-use robokrige::vec3::Vec3;
 use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -116,13 +115,6 @@ pub(super) fn read_targets(
     Ok(t)
 }
 
-fn norms(e: &[[f64; 3]]) -> Vec<(f64, f64)> {
-    e.iter()
-        .enumerate()
-        .map(|(i, v)| (i as f64, v.norm()))
-        .collect()
-}
-
 fn print_table(label: &str, t: &PositionErrorTable) {
     say!(
         "  {label:<22} mean x/y/z {:>8.4} {:>8.4} {:>8.4}   |δ| mean {:.4}  std {:.4}  min {:.4}  max {:.4}",
@@ -136,17 +128,14 @@ fn print_table(label: &str, t: &PositionErrorTable) {
     );
 }
 
+/// The measured 3D error along the trajectory, one line per run.
 fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()> {
-    let series: Vec<Series> = runs
-        .iter()
-        .map(|(n, e)| Series::line(n.clone(), norms(e)))
-        .collect();
     let labels = Labels {
         title,
         x: "trajectory point",
         y: "measured 3D position error (mm)",
     };
-    xy_plot(path, &labels, &series, false)?;
+    error_along_path(path, &labels, runs)?;
     say!("plot: {}", path.display());
     Ok(())
 }
@@ -160,13 +149,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
-    let model_name = a.model.display().to_string();
-    match &model {
-        AnyModel::Kriging(m) => m.check_robot(&robot, &model_name)?,
-        AnyModel::Physics(m) => {
-            robokrige::model::RobotRecord::of(&m.nominal).check(&robot, &model_name)?
-        }
-    }
+    model.check_robot(&robot, &a.model.display().to_string())?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start)?;
     let targets = read_targets(&a.traj, &robot, a.orientation.as_deref(), &start)?;

@@ -9,10 +9,10 @@ use robokrige::diagnose::{
 };
 use robokrige::kinematics;
 use robokrige::kriging::KrigingOptions;
-use robokrige::model::{AXES, ErrorModel};
-use robokrige::plot::{Labels, Series, xy_plot};
+use robokrige::model::ErrorModel;
+use robokrige::plot::effect_plots;
 use robokrige::stats::PositionErrorTable;
-use robokrige::study::{compensate_and_evaluate, load_truth};
+use robokrige::study::{compensate_and_evaluate_each, load_truth};
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -205,7 +205,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let mut plots = Vec::new();
     if let Some(dir) = &a.plots {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        plots = draw_plots(dir, &data, &d)?;
+        plots = effect_plots(dir, &data, &d)?;
         for p in &plots {
             say!("plot: {}", p.display());
         }
@@ -289,7 +289,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         if rank < 5 || e.accepted {
             say!(
                 "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}  evidence {:>6.3}{}{}",
-                describe(e),
+                e.describe(),
                 e.score,
                 if e.refit_xi { " ξ" } else { "  " },
                 e.p_value,
@@ -372,84 +372,6 @@ fn effect_lines(e: &EffectReport) -> Vec<String> {
     out
 }
 
-pub(super) fn describe(e: &EffectReport) -> String {
-    let params: Vec<String> = e
-        .params
-        .iter()
-        .map(|(k, v)| {
-            let text = match k.as_str() {
-                "period_deg" => format!("period {v:.3}°"),
-                "row" => format!("at row {v:.0}"),
-                "from_row" => format!("from row {v:.0}"),
-                "to_row" => format!("to row {v:.0}"),
-                "scale_deg" => format!("scale {v:.1}°"),
-                _ => format!("{k} {}", fmt_param(*v)),
-            };
-            match e.params_ci.get(k) {
-                Some([lo, hi]) if lo < hi && e.accepted => {
-                    format!("{text}, 95 %: {}–{}", fmt_param(*lo), fmt_param(*hi))
-                }
-                _ => text,
-            }
-        })
-        .collect();
-    if params.is_empty() {
-        e.label.clone()
-    } else {
-        format!("{} ({})", e.label, params.join(", "))
-    }
-}
-
-fn fmt_param(v: f64) -> String {
-    if v.fract() == 0.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.3}")
-    }
-}
-
-pub(super) fn draw_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    let mut prev: &CvStats = &d.before;
-    for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
-        let next = &d.steps[k];
-        // the axis whose residual the effect reduced most
-        let gain = |a: usize| {
-            prev.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
-                - next.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
-        };
-        let axis = (0..3)
-            .max_by(|x, y| gain(*x).total_cmp(&gain(*y)))
-            .unwrap_or(0);
-        let (xlabel, x) = e.traced_variable(data);
-        let pts = |s: &CvStats| {
-            x.iter()
-                .zip(&s.residuals)
-                .map(|(xi, r)| (*xi, r[axis]))
-                .collect()
-        };
-        let path = dir.join(format!("effect{}_{}.svg", k + 1, e.kind.name()));
-        let title = format!("{}: residual before / after", describe(e));
-        let ylabel = format!("out-of-fold residual {} (mm)", AXES[axis]);
-        xy_plot(
-            &path,
-            &Labels {
-                title: &title,
-                x: &xlabel,
-                y: &ylabel,
-            },
-            &[
-                Series::points("before", pts(prev)),
-                Series::points("after", pts(next)),
-            ],
-            false,
-        )?;
-        out.push(path);
-        prev = next;
-    }
-    Ok(out)
-}
-
 type Comparison = (PositionErrorTable, PositionErrorTable);
 
 /// Iterative compensation of `traj` with the models before and after, both run
@@ -466,11 +388,16 @@ fn compare_compensation(
     let truth = load_truth(truth_path)?;
     let start = robot.home.clone();
     let targets = read_targets(traj, &robot, None, &start)?;
-    let run = |m: &ErrorModel| {
-        compensate_and_evaluate(&robot, m, truth_path, &truth, &targets, &start, seed)
-            .map(|r| (r.evaluation.before, r.evaluation.after))
-    };
-    let (b, a) = (run(before)?, run(after)?);
+    let runs = compensate_and_evaluate_each(
+        &robot,
+        &[before, after],
+        truth_path,
+        &truth,
+        &targets,
+        &start,
+        seed,
+    )?;
+    let [b, a] = [&runs[0], &runs[1]].map(|r| (r.evaluation.before, r.evaluation.after));
     say!(
         "compensation of {} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
         traj.display(),
@@ -546,7 +473,7 @@ fn report(
             "Effect {}, {}:
 ",
             k + 1,
-            describe(e)
+            e.describe()
         );
         for line in effect_lines(e) {
             let _ = writeln!(s, "- {line}");
@@ -600,7 +527,7 @@ fn report(
                 "| {rank} | {} | {} | {} | {:.3} | {:.4} | {:.4} | {:.3} | {status} |",
                 e.kind.name(),
                 e.source.join(", "),
-                describe(e),
+                e.describe(),
                 e.score,
                 e.p_value,
                 e.q_value,

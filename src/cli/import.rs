@@ -3,7 +3,7 @@
 use clap::{Args, ValueEnum};
 use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
 use robokrige::dataset::write_csv;
-use robokrige::kinematics::{self, JointKind, locate_tracker};
+use robokrige::kinematics::{self, Robot, errors_from_positions};
 use robokrige::{Error, Result};
 use std::path::PathBuf;
 
@@ -109,14 +109,9 @@ pub fn run(a: ImportArgs) -> Result<()> {
         };
     }
     let robot = a.robot.as_deref().map(kinematics::load_robot).transpose()?;
-    let prismatic: Vec<bool> = robot
+    let prismatic = robot
         .as_ref()
-        .map(|r| {
-            r.links
-                .iter()
-                .map(|l| l.kind == JointKind::Prismatic)
-                .collect()
-        })
+        .map(Robot::prismatic_joints)
         .unwrap_or_default();
     let imported = import(&a.export, &spec, &prismatic)?;
     let mut data = imported.data;
@@ -145,46 +140,43 @@ pub fn run(a: ImportArgs) -> Result<()> {
             imported.ignored.join(", ")
         );
     }
-    let mut located = None;
-    match (&robot, data.positions.take()) {
-        (Some(r), Some(pos)) => {
-            if data.errors.is_some() {
-                return Err(Error::InvalidParameter(
-                    "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one".into(),
-                ));
-            }
-            let fit = locate_tracker(r, &data.q, &pos)?;
-            let t = fit.tracker_to_base.translation.vector;
-            let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
-            say!(
-                "  tracker → base of '{}' by least squares over all {} rows ({} iterations): translation ({:.3}, {:.3}, {:.3}) mm, rpy ({:.4}, {:.4}, {:.4})°",
-                r.name,
-                data.len(),
-                fit.iterations,
-                t.x,
-                t.y,
-                t.z,
-                roll.to_degrees(),
-                pitch.to_degrees(),
-                yaw.to_degrees()
-            );
-            say!(
-                "  TCP offset in the flange frame: ({:.4}, {:.4}, {:.4}) mm; errors measured − nominal: rms |e| {:.4} mm",
-                fit.tool_xyz_mm.x,
-                fit.tool_xyz_mm.y,
-                fit.tool_xyz_mm.z,
-                fit.rms_mm
-            );
-            data.errors = Some(fit.errors.clone());
-            located = Some(fit);
-        }
-        (None, Some(pos)) => {
-            say!(
-                "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
-            );
-            data.positions = Some(pos);
-        }
-        (_, None) => {}
+    if robot.is_some() && data.errors.is_some() && data.positions.is_some() {
+        return Err(Error::InvalidParameter(
+            "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one"
+                .into(),
+        ));
+    }
+    let located = match &robot {
+        Some(r) => errors_from_positions(r, &mut data)?,
+        None => None,
+    };
+    if let (Some(r), Some(fit)) = (&robot, &located) {
+        let t = fit.tracker_to_base.translation.vector;
+        let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
+        say!(
+            "  tracker → base of '{}' by least squares over all {} rows ({} iterations): translation ({:.3}, {:.3}, {:.3}) mm, rpy ({:.4}, {:.4}, {:.4})°",
+            r.name,
+            data.len(),
+            fit.iterations,
+            t.x,
+            t.y,
+            t.z,
+            roll.to_degrees(),
+            pitch.to_degrees(),
+            yaw.to_degrees()
+        );
+        say!(
+            "  TCP offset in the flange frame: ({:.4}, {:.4}, {:.4}) mm; errors measured − nominal: rms |e| {:.4} mm",
+            fit.tool_xyz_mm.x,
+            fit.tool_xyz_mm.y,
+            fit.tool_xyz_mm.z,
+            fit.rms_mm
+        );
+    }
+    if robot.is_none() && data.positions.is_some() {
+        say!(
+            "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
+        );
     }
     write_csv(&a.output, &data)?;
     say!("wrote {}", a.output.display());

@@ -9,7 +9,7 @@ use robokrige::physics::{
     CompareOptions, Comparison, Geometry, PhysicsIdentification, compare, identify_physics,
     is_scara,
 };
-use robokrige::sim::{ScaraTruth, Truth};
+use robokrige::sim::Truth;
 use robokrige::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -323,37 +323,27 @@ fn identify_text(id: &PhysicsIdentification) -> String {
 
 fn truth_text(id: &PhysicsIdentification, truth: &Truth) -> String {
     let mut s = String::new();
-    let Geometry::Scara(g) = &id.full.geometry else {
+    let (Geometry::Scara(g), Some(check)) =
+        (&id.full.geometry, id.full.check_against(&truth.robot))
+    else {
         let _ = writeln!(
             s,
             "(--truth: parameter comparison is printed for a SCARA only)"
         );
         return s;
     };
-    let t = ScaraTruth::of(&truth.robot, &g.rest);
+    let t = &check.truth;
     let _ = writeln!(s, "identified vs simulator truth:");
     let _ = writeln!(
         s,
         "  ΔL1 {:+.4} vs {:+.4} mm, ΔL2 {:+.4} vs {:+.4} mm, θ20 {:+.5} vs {:+.5}°",
         g.dl1_mm, t.dl1_mm, g.dl2_mm, t.dl2_mm, g.theta20_deg, t.theta20_deg
     );
-    for (j, tab) in id.full.apd.iter().enumerate() {
-        let Some(tab) = tab else { continue };
-        let (mut sq, mut mx, mut k) = (0.0, 0.0_f64, 0);
-        for (i, q) in tab.angles_deg.iter().enumerate() {
-            for (d, v) in [(1.0, tab.plus[i]), (-1.0, tab.minus[i])] {
-                let e = v - ScaraTruth::apd(&truth.robot, j, g.rest[j], *q, d);
-                sq += e * e;
-                mx = mx.max(e.abs());
-                k += 1;
-            }
-        }
+    for a in &check.apd {
         let _ = writeln!(
             s,
-            "  J{} APD table: error rms {:.5}°, max {:.5}° over {k} entries",
-            j + 1,
-            (sq / k as f64).sqrt(),
-            mx
+            "  J{} APD table: error rms {:.5}°, max {:.5}° over {} entries",
+            a.joint, a.rms_deg, a.max_deg, a.entries
         );
     }
     s
@@ -401,60 +391,12 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         super::write_json(p, &res, "comparison")?;
     }
     if let Some(dir) = &a.plots {
-        for f in path_plots(&res, dir)? {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        for f in robokrige::plot::path_plots(&res, dir)? {
             say!("plot: {}", f.display());
         }
     }
     Ok(())
-}
-
-/// Seed 000 Figs 9–11: the nominal path, the measured path and a model's
-/// predicted path in XY, errors magnified ×1000; one SVG per model.
-fn path_plots(c: &Comparison, dir: &Path) -> Result<Vec<PathBuf>> {
-    use robokrige::plot::{Labels, Series, xy_plot};
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let k = 1000.0;
-    let shifted = |e: &[[f64; 3]]| -> Vec<(f64, f64)> {
-        c.path_nominal
-            .iter()
-            .zip(e)
-            .map(|(p, d)| (p[0] + k * d[0], p[1] + k * d[1]))
-            .collect()
-    };
-    let nominal: Vec<(f64, f64)> = c.path_nominal.iter().map(|p| (p[0], p[1])).collect();
-    let mut out = Vec::new();
-    for r in c.rows.iter().filter(|r| r.model != "nominal") {
-        let slug: String = r
-            .model
-            .chars()
-            .map(|ch| {
-                if ch.is_ascii_alphanumeric() {
-                    ch.to_ascii_lowercase()
-                } else {
-                    '_'
-                }
-            })
-            .collect::<String>()
-            .split('_')
-            .filter(|t| !t.is_empty())
-            .collect::<Vec<_>>()
-            .join("_");
-        let path = dir.join(format!("path_{slug}.svg"));
-        let title = format!("{}: {} (errors ×1000)", c.options.robot, r.model);
-        let labels = Labels {
-            title: &title,
-            x: "X (mm)",
-            y: "Y (mm)",
-        };
-        let series = [
-            Series::line("command (nominal)", nominal.clone()),
-            Series::points("measured", shifted(&c.path_errors)),
-            Series::line("predicted", shifted(&r.path_predicted)),
-        ];
-        xy_plot(&path, &labels, &series, true)?;
-        out.push(path);
-    }
-    Ok(out)
 }
 
 /// The comparison as Markdown.
@@ -545,7 +487,7 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
             f(&r.nominal),
             f(&r.dh),
             f(&r.full),
-            100.0 * (1.0 - r.full.straightness_mm / r.nominal.straightness_mm)
+            r.reduction_pct()
         );
     }
     if let Some(p) = &a.json {

@@ -1,7 +1,9 @@
 //! `robokrige simulate`.
 
 use clap::{Args, ValueEnum};
-use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
+use robokrige::sim::{
+    CampaignKind, CampaignSpec, Effect, MEASUREMENT_EFFECTS, SimOutput, simulate,
+};
 use robokrige::stats::summarize;
 use robokrige::{Error, Result, dataset, kinematics};
 use std::path::{Path, PathBuf};
@@ -122,7 +124,7 @@ fn check_kind_options(a: &SimulateArgs) -> Result<()> {
         }
         for spec in &a.effects {
             let name = spec.split(':').next().unwrap_or("");
-            if ["temperature", "payload", "tracker-step"].contains(&name) {
+            if MEASUREMENT_EFFECTS.contains(&name) {
                 return refuse(&format!(
                     "--effect {name} acts on measurements, and a circle is a trajectory to compensate, not measured; evaluate runs it without that effect"
                 ));

@@ -37,6 +37,7 @@
 //!    leave-one-out expectation: its nugget's noise plus its interpolation
 //!    error), and did it deliver what its test promised?
 
+mod describe;
 pub mod gls;
 mod plan;
 pub mod scan;

@@ -16,6 +16,7 @@
 //! rotation does not move the TCP position, so it is not identified.
 
 use super::Robot;
+use crate::dataset::Dataset;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Rotation3, Translation3, Vector3};
 
@@ -115,6 +116,27 @@ pub fn locate_tracker(robot: &Robot, q: &[Vec<f64>], measured: &[[f64; 3]]) -> R
     })
 }
 
+/// Turn a campaign's measured positions (tracker frame) into errors:
+/// locate the tracker and the tool ([`locate_tracker`]) and replace its
+/// `x,y,z` by `ex,ey,ez` = measured − nominal in the base frame. Returns the
+/// fit, or `None` with `data` unchanged when it has no positions. Refuses a
+/// campaign with errors too (which of them would be kept?).
+pub fn errors_from_positions(robot: &Robot, data: &mut Dataset) -> Result<Option<TrackerFit>> {
+    let Some(positions) = data.positions.as_deref() else {
+        return Ok(None);
+    };
+    if data.errors.is_some() {
+        return Err(Error::Input {
+            source_name: data.source.clone(),
+            message: "has both errors (ex,ey,ez) and positions (x,y,z): keep one".into(),
+        });
+    }
+    let fit = locate_tracker(robot, &data.q, positions)?;
+    data.positions = None;
+    data.errors = Some(fit.errors.clone());
+    Ok(Some(fit))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,5 +177,15 @@ mod tests {
         );
         assert!((fit.tracker_to_base.translation.vector - truth.translation.vector).norm() < 1e-7);
         assert!(fit.rms_mm < 1e-8, "{}", fit.rms_mm);
+        // the same on a campaign: its positions become the errors
+        let mut data = Dataset::from_poses("c.csv", q, None).unwrap();
+        assert_eq!(errors_from_positions(&robot, &mut data).unwrap(), None);
+        data.positions = Some(measured);
+        let located = errors_from_positions(&robot, &mut data).unwrap().unwrap();
+        assert_eq!((located, data.positions.is_none()), (fit.clone(), true));
+        assert_eq!(data.errors.as_ref(), Some(&fit.errors));
+        data.positions = Some(vec![[0.0; 3]; data.len()]);
+        let both = errors_from_positions(&robot, &mut data).unwrap_err();
+        assert!(both.to_string().contains("both errors"), "{both}");
     }
 }

@@ -25,7 +25,7 @@ pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
-pub use locate::{TrackerFit, locate_tracker};
+pub use locate::{TrackerFit, errors_from_positions, locate_tracker};
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
 pub use robot_file::{
@@ -145,6 +145,14 @@ impl Robot {
     /// Number of joints.
     pub fn dof(&self) -> usize {
         self.links.len()
+    }
+
+    /// Whether each joint is prismatic (its values in mm, not degrees).
+    pub fn prismatic_joints(&self) -> Vec<bool> {
+        self.links
+            .iter()
+            .map(|l| l.kind == JointKind::Prismatic)
+            .collect()
     }
 
     /// Error unless the campaign `data` has one joint column per joint of

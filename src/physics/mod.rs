@@ -12,6 +12,7 @@
 //! | [`register_campaign`] | tracker frame → base frame by SVD registration (seed 004 eqs 29–35) |
 //! | [`probe`], [`straightness`], [`probing_example`] | seed 002 eqs 3–6: probing a straightedge, straightness before/after (Table 2) |
 //! | [`compare`] | nominal / D-H / D-H+APD / Kriging JS, EJS / hybrid on one simulated robot |
+//! | [`PhysicsModel::check_against`] | an identified SCARA against the simulator's truth (checking only) |
 
 mod compare;
 mod crosstalk;
@@ -20,6 +21,7 @@ mod model;
 mod probing;
 mod scara;
 mod table;
+mod truth;
 
 pub use compare::{CompareOptions, CompareRow, Comparison, Score, compare};
 pub use crosstalk::{CrosstalkGroup, CrosstalkReport, identify_crosstalk};
@@ -33,6 +35,7 @@ pub use probing::{
 };
 pub use scara::{AxisReport, ScaraIdentification, ScaraOptions, identify_scara};
 pub use table::BidirectionalTable;
+pub use truth::{ApdCheck, TruthCheck};
 
 use crate::Result;
 use crate::dataset::Dataset;

@@ -2,7 +2,7 @@
 
 use super::BidirectionalTable;
 use crate::kinematics::{JointKind, Robot};
-use crate::model::ErrorModel;
+use crate::model::{ErrorModel, RobotRecord};
 use crate::predictor::ErrorPredictor;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -318,6 +318,17 @@ impl AnyModel {
                 &text,
                 &path.display().to_string(),
             )?)))
+        }
+    }
+
+    /// Error unless the model is for `robot`: a Kriging model checks the
+    /// robot it records ([`ErrorModel::check_robot`]), a physics model its
+    /// nominal robot's kinematic table and tool (`source_name`: the model
+    /// file, for the message).
+    pub fn check_robot(&self, robot: &Robot, source_name: &str) -> Result<()> {
+        match self {
+            AnyModel::Kriging(m) => m.check_robot(robot, source_name),
+            AnyModel::Physics(m) => RobotRecord::of(&m.nominal).check(robot, source_name),
         }
     }
 

@@ -218,6 +218,14 @@ pub struct ProbingRow {
     pub full: Straightness,
 }
 
+impl ProbingRow {
+    /// Reduction of the straightness error by the full model against the
+    /// nominal one, `100 (1 − full/nominal)`, %.
+    pub fn reduction_pct(&self) -> f64 {
+        100.0 * (1.0 - self.full.straightness_mm / self.nominal.straightness_mm)
+    }
+}
+
 /// Simulate robot `name` of `seed`, identify its physics models from its
 /// indexing tests (each axis indexed over the range the probing uses, 5°
 /// margin, and at least the campaign's range) and its Latin-hypercube

@@ -110,6 +110,11 @@ pub const EFFECT_NAMES: [&str; 7] = [
     "lag",
 ];
 
+/// Effects of [`EFFECT_NAMES`] that act on a campaign's measurements only
+/// (its pose context, its tracker): a commanded trajectory runs without them
+/// ([`execute`](super::execute())), so they mean nothing for a circle.
+pub const MEASUREMENT_EFFECTS: [&str; 3] = ["temperature", "payload", "tracker-step"];
+
 impl Effect {
     /// Parse `NAME[:key=value,…]` (see module docs); missing keys take defaults.
     pub fn parse(spec: &str) -> Result<Effect> {

@@ -21,7 +21,7 @@ mod scara_truth;
 mod true_robot;
 
 pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, simulate};
-pub use effects::{EFFECT_NAMES, Effect};
+pub use effects::{EFFECT_NAMES, Effect, MEASUREMENT_EFFECTS};
 pub use execute::{Execution, execute};
 pub use scara_truth::ScaraTruth;
 pub use true_robot::{

@@ -1,6 +1,13 @@
 //! SVG charts with `plotters` (SVG backend only, no system fonts needed):
 //! box plots of error sets (seed 004 Fig 8) and x–y line/point plots
 //! (trajectories before and after compensation, residual against a variable).
+//! The charts of the studies are drawn with them: [`error_along_path`]
+//! (compensation), [`effect_plots`] (diagnosis), [`path_plots`] (physics
+//! comparison).
+
+mod studies;
+
+pub use studies::{effect_plots, error_along_path, path_plots};
 
 use crate::stats::box_stats;
 use crate::{Error, Result};

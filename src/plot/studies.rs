@@ -1,0 +1,146 @@
+//! The charts of the studies: the 3D error along a trajectory (before and
+//! after compensation), each added effect's residual against its traced
+//! variable (`diagnose`), and the paths of a physics comparison (seed 000
+//! Figs 9–11).
+
+use super::{Labels, Series, xy_plot};
+use crate::Result;
+use crate::dataset::Dataset;
+use crate::diagnose::{CvStats, Diagnosis};
+use crate::model::AXES;
+use crate::physics::Comparison;
+use crate::vec3::Vec3;
+use std::path::{Path, PathBuf};
+
+/// The 3D error |δ| of each run along the trajectory (x: the point's
+/// index), one line per `(name, errors)` run.
+pub fn error_along_path(
+    path: &Path,
+    labels: &Labels,
+    runs: &[(String, Vec<[f64; 3]>)],
+) -> Result<()> {
+    let series: Vec<Series> = runs
+        .iter()
+        .map(|(n, e)| {
+            Series::line(
+                n.clone(),
+                e.iter()
+                    .enumerate()
+                    .map(|(i, v)| (i as f64, v.norm()))
+                    .collect(),
+            )
+        })
+        .collect();
+    xy_plot(path, labels, &series, false)
+}
+
+/// One SVG per effect the diagnosis added, in the existing folder `dir`
+/// (`effect{k}_{kind}.svg`): the out-of-fold residual before and after the
+/// effect against its traced variable
+/// ([`EffectReport::traced_variable`](crate::diagnose::EffectReport::traced_variable)),
+/// on the axis whose residual it reduced most. `data` is the diagnosed
+/// campaign. Returns the files written.
+pub fn effect_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut prev: &CvStats = &d.before;
+    for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
+        let next = &d.steps[k];
+        // the axis whose residual the effect reduced most
+        let gain = |a: usize| {
+            prev.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
+                - next.residuals.iter().map(|r| r[a] * r[a]).sum::<f64>()
+        };
+        let axis = (0..3)
+            .max_by(|x, y| gain(*x).total_cmp(&gain(*y)))
+            .unwrap_or(0);
+        let (xlabel, x) = e.traced_variable(data);
+        let pts = |s: &CvStats| {
+            x.iter()
+                .zip(&s.residuals)
+                .map(|(xi, r)| (*xi, r[axis]))
+                .collect()
+        };
+        let path = dir.join(format!("effect{}_{}.svg", k + 1, e.kind.name()));
+        let title = format!("{}: residual before / after", e.describe());
+        let ylabel = format!("out-of-fold residual {} (mm)", AXES[axis]);
+        xy_plot(
+            &path,
+            &Labels {
+                title: &title,
+                x: &xlabel,
+                y: &ylabel,
+            },
+            &[
+                Series::points("before", pts(prev)),
+                Series::points("after", pts(next)),
+            ],
+            false,
+        )?;
+        out.push(path);
+        prev = next;
+    }
+    Ok(out)
+}
+
+/// Seed 000 Figs 9–11, one SVG per model of the comparison but the nominal
+/// one, in the existing folder `dir` (`path_{model}.svg`): the nominal path,
+/// the measured path and the model's predicted path in XY, errors magnified
+/// ×1000. Returns the files written.
+pub fn path_plots(c: &Comparison, dir: &Path) -> Result<Vec<PathBuf>> {
+    let k = 1000.0;
+    let shifted = |e: &[[f64; 3]]| -> Vec<(f64, f64)> {
+        c.path_nominal
+            .iter()
+            .zip(e)
+            .map(|(p, d)| (p[0] + k * d[0], p[1] + k * d[1]))
+            .collect()
+    };
+    let nominal: Vec<(f64, f64)> = c.path_nominal.iter().map(|p| (p[0], p[1])).collect();
+    let mut out = Vec::new();
+    for r in c.rows.iter().filter(|r| r.model != "nominal") {
+        let path = dir.join(format!("path_{}.svg", slug(&r.model)));
+        let title = format!("{}: {} (errors ×1000)", c.options.robot, r.model);
+        let labels = Labels {
+            title: &title,
+            x: "X (mm)",
+            y: "Y (mm)",
+        };
+        let series = [
+            Series::line("command (nominal)", nominal.clone()),
+            Series::points("measured", shifted(&c.path_errors)),
+            Series::line("predicted", shifted(&r.path_predicted)),
+        ];
+        xy_plot(&path, &labels, &series, true)?;
+        out.push(path);
+    }
+    Ok(out)
+}
+
+/// A model's name as a file name: lower-case ASCII letters and digits,
+/// every other run of characters one `_` ("D-H + APD" → "d_h_apd").
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() {
+                ch.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .collect::<String>()
+        .split('_')
+        .filter(|t| !t.is_empty())
+        .collect::<Vec<_>>()
+        .join("_")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slug;
+
+    #[test]
+    fn a_model_name_becomes_a_file_name() {
+        assert_eq!(slug("D-H + APD"), "d_h_apd");
+        assert_eq!(slug("Kriging EJS (ejs-gps)"), "kriging_ejs_ejs_gps");
+    }
+}
