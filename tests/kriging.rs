@@ -188,7 +188,7 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
     let text =
         std::fs::read_to_string(&path)
             .unwrap()
-            .replacen("\"version\":2", "\"version\":99", 1);
+            .replacen("\"version\":3", "\"version\":99", 1);
     let err = ErrorModel::from_json(&text, "old.json")
         .unwrap_err()
         .to_string();
@@ -199,10 +199,10 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
 }
 
 /// Model files are O(m·d): no Cholesky factor is written, and the MSE after
-/// loading (factor recomputed) is bit-identical. A version-1 file, which
-/// stores the factor, still loads and predicts the same.
+/// loading (factor recomputed) is bit-identical. (Files of versions 1 and 2
+/// still load: `tests/model_file.rs`.)
 #[test]
-fn model_files_store_no_factor_and_version_1_files_still_load() {
+fn model_files_store_no_factor_and_load_bit_identically() {
     let d = campaign(80);
     let opts = KrigingOptions {
         optimizer: OptimizerKind::HookeJeeves,
@@ -213,41 +213,21 @@ fn model_files_store_no_factor_and_version_1_files_still_load() {
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let text = serde_json::to_string(&model).unwrap();
     assert!(!text.contains("chol_lower"));
-    let back = ErrorModel::from_json(&text, "v2.json").unwrap();
-    // a version-1 file: the same model with each output's packed factor
-    let mut v1: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v1["version"] = 1.into();
-    for (a, out) in model.outputs().iter().enumerate() {
-        let (c, _, _) = out.factors().unwrap();
-        let packed: Vec<f64> = (0..c.nrows())
-            .flat_map(|i| (0..=i).map(move |j| (i, j)))
-            .map(|(i, j)| c[(i, j)])
-            .collect();
-        v1["outputs"][a]["chol_lower"] = serde_json::to_value(packed).unwrap();
-    }
-    let v1_text = v1.to_string();
-    assert!(
-        v1_text.len() > 2 * text.len(),
-        "the factor dominates a v1 file"
-    );
-    let old = ErrorModel::from_json(&v1_text, "v1.json").unwrap();
-    assert_eq!(old.version(), 2);
+    let back = ErrorModel::from_json(&text, "v3.json").unwrap();
     let probe_q: Vec<Vec<f64>> =
         d.q.iter()
             .map(|q| q.iter().map(|v| v - 0.4).collect())
             .collect();
     let p0 = model.predict(&probe_q, &d.dir).unwrap();
-    for other in [&back, &old] {
-        let p = other.predict(&probe_q, &d.dir).unwrap();
-        for (x, y) in p0
-            .mean
-            .iter()
-            .chain(&p0.std)
-            .flatten()
-            .zip(p.mean.iter().chain(&p.std).flatten())
-        {
-            assert_eq!(x.to_bits(), y.to_bits());
-        }
+    let p = back.predict(&probe_q, &d.dir).unwrap();
+    for (x, y) in p0
+        .mean
+        .iter()
+        .chain(&p0.std)
+        .flatten()
+        .zip(p.mean.iter().chain(&p.std).flatten())
+    {
+        assert_eq!(x.to_bits(), y.to_bits());
     }
     // an impossible ξ or scale is refused on load, with one clear error
     for (field, value) in [("theta", "[-1.0]"), ("y_std", "1e300"), ("nugget", "-0.5")] {

@@ -33,6 +33,11 @@ pub fn reports(m: &ErrorModel) -> &[FitReport] {
     m.reports()
 }
 
+/// Joints entered as (sin θ, cos θ), 0-based.
+pub fn periodic(m: &ErrorModel) -> &[usize] {
+    m.periodic()
+}
+
 /// Extra inputs (effects added by `diagnose`).
 pub fn extras(m: &ErrorModel) -> &[Feature] {
     m.extras()
@@ -73,7 +78,6 @@ pub fn fit_options(
     nugget: bool,
     starts: usize,
     seed: u64,
-    periodic: Vec<usize>,
 ) -> KrigingOptions {
     KrigingOptions {
         trend,
@@ -83,23 +87,16 @@ pub fn fit_options(
         nugget,
         starts,
         seed,
-        periodic,
         ..KrigingOptions::default()
     }
 }
 
 /// `KrigingOptions::default()` with what `robokrige diagnose` sets.
-pub fn diagnose_options(
-    optimizer: OptimizerKind,
-    nugget: bool,
-    seed: u64,
-    periodic: Vec<usize>,
-) -> KrigingOptions {
+pub fn diagnose_options(optimizer: OptimizerKind, nugget: bool, seed: u64) -> KrigingOptions {
     KrigingOptions {
         optimizer,
         nugget,
         seed,
-        periodic,
         ..KrigingOptions::default()
     }
 }

@@ -128,11 +128,11 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     let (space, optimizer) = robokrige::diagnose::base_method(&a.method)?;
     Ok(DiagnoseOptions {
         space,
+        periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
         kriging: KrigingOptions {
             optimizer,
             nugget: !a.no_nugget,
             seed: a.seed,
-            periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
             ..KrigingOptions::default()
         },
         folds: a.folds,

@@ -85,6 +85,7 @@ pub struct ModelArgs {
 /// constant`, …), for reports: `(name, value)` pairs.
 pub fn settings(
     space: Space,
+    periodic: &[usize],
     opts: &KrigingOptions,
     kinematic: bool,
 ) -> Vec<(&'static str, String)> {
@@ -122,30 +123,33 @@ pub fn settings(
             .to_string(),
         ),
     ];
-    if !opts.periodic.is_empty() {
-        let p: Vec<String> = opts
-            .periodic
-            .iter()
-            .map(|j| format!("q{}", j + 1))
-            .collect();
+    if !periodic.is_empty() {
+        let p: Vec<String> = periodic.iter().map(|j| format!("q{}", j + 1)).collect();
         v.push(("periodic", p.join(",")));
     }
     v
 }
 
 /// [`settings`] as one line: `space ejs, trend constant, …`.
-pub fn settings_line(space: Space, opts: &KrigingOptions, kinematic: bool) -> String {
-    settings(space, opts, kinematic)
+pub fn settings_line(
+    space: Space,
+    periodic: &[usize],
+    opts: &KrigingOptions,
+    kinematic: bool,
+) -> String {
+    settings(space, periodic, opts, kinematic)
         .iter()
         .map(|(k, v)| format!("{k} {v}"))
         .collect::<Vec<_>>()
         .join(", ")
 }
 
-/// What [`ModelArgs::resolve`] gives: space, options, the measured robot
-/// (recorded in the model) and whether it forms the kinematic trend.
+/// What [`ModelArgs::resolve`] gives: space, periodic joints, options, the
+/// measured robot (recorded in the model) and whether it forms the
+/// kinematic trend.
 pub struct ModelChoice {
     pub space: Space,
+    pub periodic: Vec<usize>,
     pub opts: KrigingOptions,
     pub robot: Option<robokrige::kinematics::Robot>,
     pub kinematic: bool,
@@ -162,6 +166,7 @@ impl ModelChoice {
         let p = self.with_robot(
             ErrorModelParams::new()
                 .space(self.space)
+                .periodic(self.periodic.clone())
                 .kriging(self.opts.clone()),
         );
         match self.kinematic_robot() {
@@ -192,8 +197,8 @@ impl ModelArgs {
                 "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
             ));
         }
-        let (space, mut opts) = self.options();
-        opts.periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
+        let (space, opts) = self.options();
+        let periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
         if self.kinematic && self.robot.is_none() {
             return Err(Error::InvalidParameter(
                 "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
@@ -211,6 +216,7 @@ impl ModelArgs {
         }
         Ok(ModelChoice {
             space,
+            periodic,
             opts,
             robot,
             kinematic: self.kinematic,
@@ -306,11 +312,15 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     }
     model.save(&a.output)?;
     if let Some(path) = &a.json {
-        let settings: serde_json::Map<String, serde_json::Value> =
-            settings(model.space(), model.options(), choice.kinematic)
-                .into_iter()
-                .map(|(k, v)| (k.to_string(), v.into()))
-                .collect();
+        let settings: serde_json::Map<String, serde_json::Value> = settings(
+            model.space(),
+            model.periodic(),
+            model.options(),
+            choice.kinematic,
+        )
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.into()))
+        .collect();
         let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
             "settings": settings, "method": a.method, "robot": model.robot(),
             "seconds": secs, "outputs": model.reports(), "selection": model.selection()});

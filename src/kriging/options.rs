@@ -120,10 +120,6 @@ pub struct KrigingOptions {
     /// Finish GPS with a finite-difference BFGS polish of the winning start
     /// (ψ to gradient-method precision; ~30 % more evaluations).
     pub polish: bool,
-    /// Joints (0-based) entered as `(sin θ, cos θ)` instead of θ
-    /// ([`crate::space::Space::encode`]); empty = none.
-    #[serde(default)]
-    pub periodic: Vec<usize>,
     /// Rows ξ is converged on by the default optimiser: a campaign with
     /// more converges on a seeded subset of this many (its multistart on at
     /// most as many), then solves once on all rows at that ξ
@@ -186,7 +182,6 @@ impl Default for KrigingOptions {
             tol: 1e-2,
             min_jitter: None,
             polish: true,
-            periodic: Vec::new(),
             converge_rows: super::REFINE_ROWS,
             warm_start: Vec::new(),
         }
