@@ -15,11 +15,9 @@ use std::path::Path;
 
 /// The papers' set-up: Hooke–Jeeves, interpolating.
 fn hj() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        nugget: false,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .nugget(false)
 }
 
 fn rms3(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {

@@ -81,10 +81,7 @@ fn kinematic_trend_is_well_conditioned_on_every_axis() {
 #[test]
 fn kinematic_trend_does_not_blow_up_off_the_campaign() {
     let (robot, truth, data) = tool_down(150);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().optimizer(OptimizerKind::HookeJeeves);
     let uk = ErrorModelParams::new()
         .space(Space::Js)
         .periodic(periodic_joints(&data.q))

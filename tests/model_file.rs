@@ -113,13 +113,11 @@ fn a_refit_with_todays_code_writes_the_same_model() {
     // the fit of the fixture (tests/fixtures/README.md), through today's API
     let data = read_csv(&repo("datasets/comau_lhs.csv")).unwrap();
     let data = data.select(&(0..40).collect::<Vec<_>>());
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        starts: 4,
-        max_evals: 80,
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .starts(4)
+        .max_evals(80)
+        .nugget(true);
     let refit = ErrorModelParams::new()
         .space(Space::Ejs)
         .periodic(vec![0, 5])

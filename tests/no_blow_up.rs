@@ -40,10 +40,7 @@ fn no_fold_of_a_wide_range_campaign_blows_up() {
         })
         .collect();
     data.errors = Some(errors);
-    let opts = KrigingOptions {
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().nugget(true);
     let periodic = periodic_joints(&data.q);
     assert_eq!(periodic, vec![0, 1, 2, 3, 5]);
     let base = ErrorModelParams::new().periodic(periodic).kriging(opts);

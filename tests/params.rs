@@ -30,11 +30,9 @@ fn assert_same(a: &ErrorModel, b: &ErrorModel) {
 }
 
 fn quick() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        nugget: false,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .nugget(false)
 }
 
 #[test]
@@ -80,13 +78,11 @@ fn the_params_path_gives_the_models_of_its_parts() {
         assert!(db.fold(0.0, f64::max) < 1e-9);
     }
     // a paper method's params hold its constants: EJS, Hooke–Jeeves, no nugget
-    let hj = KrigingOptions {
-        seed: 3,
-        optimizer: OptimizerKind::HookeJeeves,
-        starts: robokrige::methods::PAPER_GPS_STARTS,
-        nugget: false,
-        ..KrigingOptions::default()
-    };
+    let hj = KrigingOptions::default()
+        .seed(3)
+        .optimizer(OptimizerKind::HookeJeeves)
+        .starts(robokrige::methods::PAPER_GPS_STARTS)
+        .nugget(false);
     let a = Method::EjsHj
         .params(3, false)
         .check()

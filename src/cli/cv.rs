@@ -75,7 +75,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let (space, opts) = (choice.space, &choice.opts);
-    super::plan_fit("cv", data.len(), opts.optimizer, None)?;
+    super::plan_fit("cv", data.len(), opts.get_optimizer(), None)?;
     if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
         return Err(Error::InvalidParameter(
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),

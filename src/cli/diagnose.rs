@@ -129,12 +129,10 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     Ok(DiagnoseOptions {
         space,
         periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
-        kriging: KrigingOptions {
-            optimizer,
-            nugget: !a.no_nugget,
-            seed: a.seed,
-            ..KrigingOptions::default()
-        },
+        kriging: KrigingOptions::default()
+            .optimizer(optimizer)
+            .nugget(!a.no_nugget)
+            .seed(a.seed),
         folds: a.folds,
         seed: a.seed,
         permutations: a.permutations,

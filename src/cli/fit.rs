@@ -93,20 +93,20 @@ pub fn settings(
         ("space", format!("{space:?}").to_lowercase()),
         (
             "trend",
-            format!("{:?}", opts.trend).to_lowercase()
+            format!("{:?}", opts.get_trend()).to_lowercase()
                 + if kinematic { " + kinematic" } else { "" },
         ),
         (
             "corr",
-            if opts.corr_auto {
+            if opts.get_corr_auto() {
                 "auto".to_string()
             } else {
-                opts.corr.to_string()
+                opts.get_corr().to_string()
             },
         ),
         (
             "optimizer",
-            match opts.optimizer {
+            match opts.get_optimizer() {
                 OptimizerKind::Bfgs => "bfgs",
                 OptimizerKind::Gps => "gps",
                 OptimizerKind::HookeJeeves => "hj",
@@ -115,7 +115,7 @@ pub fn settings(
         ),
         (
             "nugget",
-            if opts.nugget {
+            if opts.get_nugget() {
                 "estimated"
             } else {
                 "none (interpolating)"
@@ -228,16 +228,14 @@ impl ModelArgs {
     pub fn options(&self) -> (Space, KrigingOptions) {
         let (corr, corr_auto) = self.corr.resolve();
         let optimizer = self.optimizer;
-        let opts = KrigingOptions {
-            trend: self.trend,
-            corr,
-            corr_auto,
-            optimizer,
-            nugget: !self.no_nugget,
-            starts: self.starts.unwrap_or(optimizer.default_starts()),
-            seed: self.seed,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default()
+            .trend(self.trend)
+            .corr(corr)
+            .corr_auto(corr_auto)
+            .optimizer(optimizer)
+            .nugget(!self.no_nugget)
+            .starts(self.starts.unwrap_or(optimizer.default_starts()))
+            .seed(self.seed);
         (self.space, opts)
     }
 }
@@ -275,7 +273,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
-    super::plan_fit("fit", data.len(), opts.optimizer, None)?;
+    super::plan_fit("fit", data.len(), opts.get_optimizer(), None)?;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => {
@@ -295,7 +293,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                 (Some(_), _) => Err(Error::InvalidParameter(
                     "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
                 )),
-                (None, _) => Ok(choice.with_robot(method.params(opts.seed, false))),
+                (None, _) => Ok(choice.with_robot(method.params(opts.get_seed(), false))),
             };
             let model = params
                 .and_then(ErrorModelParams::check)
@@ -330,7 +328,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
-        if model.options().corr_auto {
+        if model.options().get_corr_auto() {
             let c: Vec<String> = model
                 .outputs()
                 .iter()
@@ -340,7 +338,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         } else {
             format!("{} correlation", model.outputs()[0].corr())
         },
-        if model.options().nugget {
+        if model.options().get_nugget() {
             "nugget estimated"
         } else {
             "interpolating"

@@ -103,15 +103,13 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<(KrigingOptions, Vec<
         }
     };
     let (corr, corr_auto) = a.corr.resolve();
-    let opts = KrigingOptions {
-        optimizer,
-        corr,
-        corr_auto,
-        starts: optimizer.default_starts(),
-        seed: a.seed,
-        nugget: !a.no_nugget,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(optimizer)
+        .corr(corr)
+        .corr_auto(corr_auto)
+        .starts(optimizer.default_starts())
+        .seed(a.seed)
+        .nugget(!a.no_nugget);
     Ok((opts, robokrige::space::parse_periodic(&a.periodic, q)?))
 }
 
@@ -138,7 +136,7 @@ fn joint_list(periodic: &[usize]) -> String {
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
     let (opts, periodic) = kriging_opts(a, &data.q)?;
-    super::plan_fit("holdout", data.len(), opts.optimizer, None)?;
+    super::plan_fit("holdout", data.len(), opts.get_optimizer(), None)?;
     let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
     let base = base_params(&opts, &periodic);
@@ -226,7 +224,12 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
     let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
     let (opts, periodic) = kriging_opts(&a, &train.q)?;
-    super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
+    super::plan_fit(
+        "holdout",
+        train.len(),
+        opts.get_optimizer(),
+        Some("--train"),
+    )?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,

@@ -94,7 +94,7 @@ impl ErrorModel {
     /// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
     /// let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
     /// let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
-    /// assert!(model.options().nugget); // tracker data is noisy
+    /// assert!(model.options().get_nugget()); // tracker data is noisy
     /// # Ok::<(), robokrige::Error>(())
     /// ```
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
