@@ -52,10 +52,7 @@ fn full_fit(c: &mut Criterion) {
     let mut g = c.benchmark_group("fit_3_outputs_gps");
     g.sample_size(10).measurement_time(Duration::from_secs(40));
     for kind in TRENDS {
-        let opts = KrigingOptions {
-            trend: kind,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default().trend(kind);
         g.bench_function(format!("{kind:?}").to_lowercase(), |b| {
             b.iter(|| ErrorModel::fit(black_box(&data), Space::Ejs, &opts).unwrap())
         });
@@ -69,10 +66,7 @@ fn predict_10k(c: &mut Criterion) {
     let mut g = c.benchmark_group("predict_10000_points_3_outputs");
     g.sample_size(20);
     for kind in TRENDS {
-        let opts = KrigingOptions {
-            trend: kind,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default().trend(kind);
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
         g.bench_function(format!("{kind:?}").to_lowercase(), |b| {
             b.iter(|| model.predict(black_box(&q), &dir).unwrap())

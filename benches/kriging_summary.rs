@@ -15,10 +15,7 @@ use std::time::Instant;
 fn main() {
     let data = common::campaign();
     for kind in [TrendKind::Constant, TrendKind::Linear, TrendKind::Quadratic] {
-        let opts = KrigingOptions {
-            trend: kind,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default().trend(kind);
         let t0 = Instant::now();
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).expect("fit");
         let secs = t0.elapsed().as_secs_f64();

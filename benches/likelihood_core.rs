@@ -190,18 +190,13 @@ fn scale(args: &[String]) {
         for nugget in [false, true] {
             let n = if nugget { " + nugget" } else { "" };
             if m <= old_max {
-                let old = KrigingOptions {
-                    optimizer: OptimizerKind::Gps,
-                    starts: 4,
-                    nugget,
-                    ..KrigingOptions::default()
-                };
+                let old = KrigingOptions::default()
+                    .optimizer(OptimizerKind::Gps)
+                    .starts(4)
+                    .nugget(nugget);
                 scale_row(&case, &format!("GPS + polish (previous default){n}"), &old);
             }
-            let new = KrigingOptions {
-                nugget,
-                ..KrigingOptions::default()
-            };
+            let new = KrigingOptions::default().nugget(nugget);
             scale_row(&case, &format!("BFGS (new default){n}"), &new);
         }
     }
@@ -240,12 +235,10 @@ fn families() {
             .collect();
         for nugget in [false, true] {
             for corr in &choices {
-                let opts = KrigingOptions {
-                    corr: corr.unwrap_or_default(),
-                    corr_auto: corr.is_none(),
-                    nugget,
-                    ..KrigingOptions::default()
-                };
+                let opts = KrigingOptions::default()
+                    .corr(corr.unwrap_or_default())
+                    .corr_auto(corr.is_none())
+                    .nugget(nugget);
                 let t0 = Instant::now();
                 let model = ErrorModel::fit(&case.train, Space::Ejs, &opts).expect("fit");
                 let secs = t0.elapsed().as_secs_f64();
@@ -316,18 +309,13 @@ fn main() {
         for nugget in [false, true] {
             let n = if nugget { " + nugget" } else { "" };
             if !new_only {
-                let old = KrigingOptions {
-                    optimizer: OptimizerKind::Gps,
-                    starts: 4,
-                    nugget,
-                    ..KrigingOptions::default()
-                };
+                let old = KrigingOptions::default()
+                    .optimizer(OptimizerKind::Gps)
+                    .starts(4)
+                    .nugget(nugget);
                 run(case, &format!("GPS + polish{n}"), &old);
             }
-            let new = KrigingOptions {
-                nugget,
-                ..KrigingOptions::default()
-            };
+            let new = KrigingOptions::default().nugget(nugget);
             run(case, &format!("BFGS (gradient){n}"), &new);
         }
     }

@@ -15,6 +15,7 @@ use crate::dataset::read_csv;
 use crate::kinematics::{Robot, read_robot_file};
 use crate::kriging::KrigingOptions;
 use crate::model::ErrorModel;
+use crate::params::ErrorModelParams;
 use crate::space::{Space, periodic_joints};
 use crate::stats::{ErrorSummary, summarize};
 use crate::{Error, Result};
@@ -106,10 +107,14 @@ pub fn run_campaign(campaign: &Path, opts: &BatchOptions) -> Result<CampaignRepo
     }
     let kriging = KrigingOptions {
         seed: opts.seed,
-        periodic: periodic_joints(&data.q),
         ..KrigingOptions::recommended()
     };
-    let mut model = ErrorModel::fit(&data, Space::Ejs, &kriging)?;
+    let mut model = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .periodic(periodic_joints(&data.q))
+        .kriging(kriging)
+        .check()?
+        .fit(&data)?;
     if let Some(r) = &robot {
         model.record_robot(r)?;
     }

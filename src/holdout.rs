@@ -7,12 +7,16 @@
 //! and universal Kriging with the kinematic trend (the GLS does the
 //! calibration), JS and EJS. [`holdout_cv`] is the K-fold version on all
 //! rows; the CLI's `holdout` prints its table.
+//!
+//! Every Kriging fit starts from the caller's [`ErrorModelParams`] (Kriging
+//! options and periodic joints); each model then sets its own space and
+//! trend.
 
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
-use crate::kriging::KrigingOptions;
 use crate::model::ErrorModel;
+use crate::params::{ErrorModelParams, TrendSpec};
 use crate::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
 use crate::predictor::ErrorPredictor;
 use crate::space::Space;
@@ -103,7 +107,8 @@ pub struct HoldoutCv {
 
 /// K-fold CV (fold partition from `seed`) of the five models on all rows.
 /// The D-H calibration is refitted on every training fold. The Kriging
-/// models keep the hyperparameters (ξ, nugget) chosen with `opts` on the
+/// models keep the hyperparameters (ξ, nugget) chosen with `base` (Kriging
+/// options and periodic joints; space and trend set per model) on the
 /// first `hyper_rows` rows and are refitted on every training fold at those
 /// values: the hybrid on the fold's own calibration residual, the
 /// kinematic-trend model on the fold. `progress(done, message)` is called
@@ -111,7 +116,7 @@ pub struct HoldoutCv {
 pub fn holdout_cv(
     data: &Dataset,
     robot: &Robot,
-    opts: &KrigingOptions,
+    base: &ErrorModelParams,
     k: usize,
     seed: u64,
     hyper_rows: usize,
@@ -136,8 +141,8 @@ pub fn holdout_cv(
     let mut hybrid_t = Vec::new();
     let mut kin_t = Vec::new();
     for space in spaces {
-        hybrid_t.push(ErrorModel::fit(&first_resid, space, opts)?);
-        kin_t.push(fit_kinematic(&first, space, opts, robot)?);
+        hybrid_t.push(fit_plain(&first_resid, space, base)?);
+        kin_t.push(fit_kinematic(&first, space, base, robot)?);
     }
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
     let mut pred = vec![vec![[0.0; 3]; m]; 5];
@@ -243,18 +248,18 @@ pub struct HoldoutSplit {
 
 /// Train every model on `train`, score it on `test` (rows it never saw):
 /// nominal, the D-H calibration, the hybrid and the kinematic-trend Kriging
-/// in JS and EJS, and the `extras`. `progress(message)` is called before
-/// each model.
+/// in JS and EJS, and the `extras`. The Kriging fits start from `base`
+/// (Kriging options and periodic joints; space and trend set per model).
+/// `progress(message)` is called before each model.
 pub fn holdout_split(
     train: &Dataset,
     test: &Dataset,
     robot: &Robot,
-    opts: &KrigingOptions,
+    base: &ErrorModelParams,
     extras: SplitExtras,
     progress: &dyn Fn(&str),
 ) -> Result<HoldoutSplit> {
     use crate::methods::{PAPER_GA_FOLDS, PAPER_PCC_THRESHOLD, PAPER_VARIANCE_SHARE};
-    use crate::params::{ErrorModelParams, TrendSpec};
     let truth = test.errors_or_err()?.to_vec();
     let mut rows = vec![score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0)];
     progress("D-H calibration");
@@ -274,7 +279,7 @@ pub fn holdout_split(
         let t0 = Instant::now();
         let h = HybridModel {
             physics: dh.clone(),
-            residual: ErrorModel::fit(&resid, space, opts)?,
+            residual: fit_plain(&resid, space, base)?,
         };
         let secs = dh_secs + t0.elapsed().as_secs_f64();
         rows.push(score(
@@ -285,7 +290,7 @@ pub fn holdout_split(
         ));
         progress(&format!("UK kinematic trend {label}"));
         let t0 = Instant::now();
-        let m = fit_kinematic(train, space, opts, robot)?;
+        let m = fit_kinematic(train, space, base, robot)?;
         rows.push(score(
             &format!("universal Kriging {label}, kinematic trend"),
             &truth,
@@ -315,8 +320,9 @@ pub fn holdout_split(
     for (what, name, trend) in selected {
         progress(what);
         let t0 = Instant::now();
-        let m = ErrorModelParams::new()
-            .kriging(opts.clone())
+        let m = base
+            .clone()
+            .space(Space::Ejs)
             .trend(trend)
             .check()?
             .fit(train)?;
@@ -326,17 +332,25 @@ pub fn holdout_split(
     Ok(HoldoutSplit { rows, calibration })
 }
 
-/// Universal Kriging with the kinematic trend of `robot` on `data`.
+/// Kriging in `space` with the options' trend, from `base`, on `data`.
+fn fit_plain(data: &Dataset, space: Space, base: &ErrorModelParams) -> Result<ErrorModel> {
+    base.clone()
+        .space(space)
+        .trend(TrendSpec::Options)
+        .check()?
+        .fit(data)
+}
+
+/// Universal Kriging with the kinematic trend of `robot`, from `base`, on `data`.
 fn fit_kinematic(
     data: &Dataset,
     space: Space,
-    opts: &KrigingOptions,
+    base: &ErrorModelParams,
     robot: &Robot,
 ) -> Result<ErrorModel> {
-    crate::params::ErrorModelParams::new()
+    base.clone()
         .space(space)
-        .kriging(opts.clone())
-        .trend(crate::params::TrendSpec::Kinematic(Box::new(robot.clone())))
+        .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
         .check()?
         .fit(data)
 }

@@ -7,18 +7,29 @@
 //! (zero mean, unit standard deviation per column, fitted on the training
 //! rows). One type owns that chain, so a fit, a prediction, a CV and a
 //! selection encode the same way.
+//!
+//! The periodic joints are part of the map, not of the Kriging options: a
+//! joint `j` in [`InputMap::periodic`] enters as the two columns
+//! `(sin θ_j, cos θ_j)` instead of `θ_j`, so that θ and θ ± 360° give the
+//! same input. A fit is told them by `params::ErrorModelParams::periodic`;
+//! a fitted model keeps its map (`model::ErrorModel::input_map`),
+//! and its file stores the map as one field, `inputs` (model file version 3).
 
 use crate::dataset::Dataset;
 use crate::features::{Feature, append_columns, trend_only_dims};
 use crate::space::{Normalizer, Space};
 use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
 
 /// Space, periodic joints, extra features and the fitted normalisation.
-#[derive(Debug, Clone, PartialEq)]
+/// Saved with a model as its `inputs` field.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InputMap {
     space: Space,
     n_joints: usize,
+    #[serde(default)]
     periodic: Vec<usize>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     extras: Vec<Feature>,
     names: Vec<String>,
     norm: Normalizer,
@@ -61,23 +72,32 @@ impl InputMap {
         Ok((map, x))
     }
 
-    /// The map of a saved model, from its parts (no refit of the normalisation).
-    pub fn from_parts(
-        space: Space,
-        n_joints: usize,
-        periodic: &[usize],
-        extras: &[Feature],
-        names: &[String],
-        norm: &Normalizer,
-    ) -> Self {
-        InputMap {
-            space,
-            n_joints,
-            periodic: periodic.to_vec(),
-            extras: extras.to_vec(),
-            names: names.to_vec(),
-            norm: norm.clone(),
+    /// Check the shape of a map read from a file: periodic joints that
+    /// exist (each once), extras valid for the joints, and one name and one
+    /// normalisation entry per input column (the space encoding's, then the
+    /// extras'). The values of the normalisation are the loader's to check.
+    pub(crate) fn check_shape(&self) -> std::result::Result<(), String> {
+        let n = self.n_joints;
+        for (k, &j) in self.periodic.iter().enumerate() {
+            if j >= n || self.periodic[..k].contains(&j) {
+                return Err(format!(
+                    "periodic joint {} is out of range or repeated ({n} joints)",
+                    j + 1
+                ));
+            }
         }
+        if self.extras.iter().any(|f| f.validate(n).is_err()) {
+            return Err(format!("an extra input does not fit {n} joints"));
+        }
+        let dim = self.space_dim() + self.extras.iter().map(|f| f.names().len()).sum::<usize>();
+        if self.names.len() != dim || self.norm.mean.len() != dim {
+            return Err(format!(
+                "{} names and {} normalisation entries for {dim} input columns",
+                self.names.len(),
+                self.norm.mean.len()
+            ));
+        }
+        Ok(())
     }
 
     /// The rows of `data` before normalisation.

@@ -78,6 +78,7 @@ pub enum HyperSpec {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ErrorModelParams {
     space: Space,
+    periodic: Vec<usize>,
     kriging: KrigingOptions,
     trend: TrendSpec,
     hyper: HyperSpec,
@@ -96,11 +97,13 @@ impl Default for ErrorModelParams {
 }
 
 impl ErrorModelParams {
-    /// EJS, [`KrigingOptions::recommended`] (nugget, family by CV, BFGS),
-    /// the options' trend, hyperparameters searched, no extras.
+    /// EJS, no periodic joint, [`KrigingOptions::recommended`] (nugget,
+    /// family by CV, BFGS), the options' trend, hyperparameters searched, no
+    /// extras.
     pub fn new() -> Self {
         ErrorModelParams {
             space: Space::Ejs,
+            periodic: Vec::new(),
             kriging: KrigingOptions::recommended(),
             trend: TrendSpec::Options,
             hyper: HyperSpec::Search,
@@ -110,11 +113,12 @@ impl ErrorModelParams {
     }
 
     /// The parameters of a refit of `model` at its own hyperparameters (ξ,
-    /// nugget, trend kind, space, options, robot): one factorisation on the
-    /// new rows, no search ([`HyperSpec::FixedFrom`]).
+    /// nugget, trend kind, space, periodic joints, options, robot): one
+    /// factorisation on the new rows, no search ([`HyperSpec::FixedFrom`]).
     pub fn fixed_from(model: ErrorModel) -> Self {
         ErrorModelParams::new()
             .space(model.space())
+            .periodic(model.periodic().to_vec())
             .kriging(model.options().clone())
             .hyper(HyperSpec::FixedFrom(Box::new(model)))
     }
@@ -125,8 +129,19 @@ impl ErrorModelParams {
         self
     }
 
+    /// Joints (0-based) entered as `(sin θ, cos θ)` instead of θ, so that θ
+    /// and θ ± 360° are the same input ([`crate::space::Space::encode`];
+    /// [`crate::space::periodic_joints`] chooses those that turn over half a
+    /// turn). Empty (the default): none. Part of the model's input map
+    /// ([`InputMap::periodic`]); a joint the data does not have is refused
+    /// by the fit.
+    pub fn periodic(mut self, joints: Vec<usize>) -> Self {
+        self.periodic = joints;
+        self
+    }
+
     /// The Kriging options: trend kind, correlation, optimiser, nugget,
-    /// periodic joints, seed.
+    /// seed.
     pub fn kriging(mut self, options: KrigingOptions) -> Self {
         self.kriging = options;
         self
@@ -170,8 +185,10 @@ impl ErrorModelParams {
                     "fixed hyperparameters keep the model's own trend and inputs: give no trend or extras",
                 );
             }
-            if m.space != self.space {
-                return bad("fixed hyperparameters come from a model of another space");
+            if m.space() != self.space || m.periodic() != self.periodic {
+                return bad(
+                    "fixed hyperparameters come from a model of another space or other periodic joints",
+                );
             }
         }
         match &self.trend {
@@ -209,14 +226,14 @@ impl ValidErrorModelParams {
     /// [`ValidErrorModelParams::fit`], reporting GA generations to `progress`.
     pub fn fit_with_progress(&self, data: &Dataset, progress: GaProgress) -> Result<ErrorModel> {
         let p = &self.0;
-        let (space, opts) = (p.space, &p.kriging);
+        let (space, periodic, opts) = (p.space, &p.periodic, &p.kriging);
         let mut model = match &p.hyper {
             HyperSpec::FixedFrom(m) => m.refit_at_hyperparameters(data)?,
             HyperSpec::Search if !p.extras.is_empty() => {
-                ErrorModel::fit_with_extras(data, space, opts, &p.extras)?
+                ErrorModel::fit_with_extras(data, space, periodic, opts, &p.extras)?
             }
             HyperSpec::Search => {
-                let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+                let (map, x) = InputMap::fit(data, space, periodic, &[])?;
                 let (trends, selection) = self.trends(data, &map, &x, progress)?;
                 let mut model = fit_outputs(data, &map, &x, opts, &trends)?;
                 model.selection = selection;

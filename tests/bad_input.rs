@@ -538,19 +538,13 @@ fn a_per_axis_failure_keeps_its_cause() {
         .collect();
     let mut d = Dataset::from_poses("t", q, None).unwrap();
     d.errors = Some((0..12).map(|i| [i as f64 * 0.01, 0.0, 0.0]).collect());
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        corr: Correlation::Gaussian,
-        warm_start: vec![
-            robokrige::kriging::WarmStart {
-                theta: vec![1.0; 1],
-                nugget: 0.0,
-                inverse_hessian: None,
-            };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .corr(Correlation::Gaussian)
+        .warm_start(vec![
+            robokrige::kriging::WarmStart::new(vec![1.0; 1], 0.0);
             3
-        ],
-        ..KrigingOptions::default()
-    };
+        ]);
     let e = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap_err();
     match &e {
         Error::Axis { axis, source } => {

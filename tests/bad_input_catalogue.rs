@@ -746,12 +746,14 @@ fn model_cases() -> Vec<Case> {
         ),
         predict_case(
             "model_zero_input_std",
-            tampered("std0.json", |v| v["input_norm"]["std"][0] = json!(0.0)),
-            fail(&["std0.json", "input_norm", "std[0]"]),
+            tampered("std0.json", |v| v["inputs"]["norm"]["std"][0] = json!(0.0)),
+            fail(&["std0.json", "inputs.norm", "std[0]"]),
         ),
         predict_case(
             "model_huge_input_mean",
-            tampered("mean.json", |v| v["input_norm"]["mean"][2] = json!(1e300)),
+            tampered("mean.json", |v| {
+                v["inputs"]["norm"]["mean"][2] = json!(1e300)
+            }),
             fail(&["mean.json", "mean[2]"]),
         ),
         predict_case(
@@ -828,8 +830,13 @@ fn model_cases() -> Vec<Case> {
             fail(&["xt.json", "training input"]),
         ),
         predict_case(
+            "model_periodic_joint_out_of_range",
+            tampered("periodic.json", |v| v["inputs"]["periodic"] = json!([9])),
+            fail(&["periodic.json", "inconsistent", "periodic joint 10"]),
+        ),
+        predict_case(
             "model_zero_joints",
-            tampered("nj.json", |v| v["n_joints"] = json!(0)),
+            tampered("nj.json", |v| v["inputs"]["n_joints"] = json!(0)),
             fail(&["nj.json"]),
         ),
         predict_case(

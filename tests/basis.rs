@@ -74,11 +74,9 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
         "/datasets/comau_lhs.csv"
     )))
     .unwrap();
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 60,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(60);
     let (model, reports) = common::fit_pcc_pca(&d, &opts, None);
     for (r, out) in reports.iter().zip(model.outputs()) {
         eprintln!(

@@ -31,12 +31,10 @@ fn models() -> &'static (ErrorModel, ErrorModel) {
     static M: OnceLock<(ErrorModel, ErrorModel)> = OnceLock::new();
     M.get_or_init(|| {
         let data = read_csv(&shipped("comau_lhs.csv")).unwrap();
-        let opts = KrigingOptions {
-            optimizer: OptimizerKind::HookeJeeves,
-            max_evals: 400,
-            starts: 2,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default()
+            .optimizer(OptimizerKind::HookeJeeves)
+            .max_evals(400)
+            .starts(2);
         (
             ErrorModel::fit(&data, Space::Ejs, &opts).unwrap(),
             ErrorModel::fit(&data, Space::Js, &opts).unwrap(),
@@ -275,12 +273,10 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
         unreachable!()
     };
     let targets = Targets::from_joints(&nominal, &poses.q).unwrap();
-    let kriging = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 300,
-        starts: 2,
-        ..KrigingOptions::default()
-    };
+    let kriging = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(300)
+        .starts(2);
     let fit = |extras: Vec<Feature>| {
         ErrorModelParams::new()
             .kriging(kriging.clone())

@@ -62,11 +62,7 @@ fn every_family_saves_by_name_and_predicts_the_same_after_loading() {
     std::fs::create_dir_all(&dir).unwrap();
     let mut means = Vec::new();
     for corr in Correlation::ALL {
-        let opts = KrigingOptions {
-            corr,
-            nugget: false,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default().corr(corr).nugget(false);
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
         let path = dir.join(format!("{corr}.json"));
         model.save(&path).unwrap();
@@ -111,11 +107,7 @@ fn files_without_a_family_load_as_gaussian() {
 #[test]
 fn auto_keeps_the_family_with_the_lowest_cv_error() {
     let data = campaign(80);
-    let opts = KrigingOptions {
-        corr_auto: true,
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().corr_auto(true).nugget(true);
     let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
     for (out, rep) in model.outputs().iter().zip(model.reports()) {
         // tried from the smoothest, stopping after the first rougher family
@@ -175,10 +167,7 @@ fn auto_on_a_large_campaign_chooses_on_the_search_subset() {
     let inputs = TrainingInputs::new(&x);
     let names = vec!["a".to_string(), "b".to_string()];
     // two starts keep the test fast; the path is the same
-    let opts = KrigingOptions {
-        starts: 2,
-        ..KrigingOptions::recommended()
-    };
+    let opts = KrigingOptions::recommended().starts(2);
     let trend = Trend::Monomials(Monomials::constant(2));
     let (model, rep) = fit_output_auto(&x, &inputs, &y, &trend, &names, &opts, None).unwrap();
     assert!(rep.families.len() >= 2);

@@ -15,12 +15,10 @@ fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
         "/datasets/comau_lhs.csv"
     )))
     .unwrap();
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 100,
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(100)
+        .nugget(true);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let (lo, hi) = model.joint_range()[0];
     assert!(lo < hi && hi < 170.0, "campaign range of q1: [{lo}, {hi}]");

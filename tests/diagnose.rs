@@ -27,13 +27,11 @@ fn campaign(rows: usize, seed: u64, effect: Option<&str>) -> Dataset {
 
 fn quick() -> DiagnoseOptions {
     DiagnoseOptions {
-        kriging: KrigingOptions {
-            optimizer: OptimizerKind::HookeJeeves,
-            nugget: true,
-            max_evals: 300,
-            starts: 2,
-            ..KrigingOptions::default()
-        },
+        kriging: KrigingOptions::default()
+            .optimizer(OptimizerKind::HookeJeeves)
+            .nugget(true)
+            .max_evals(300)
+            .starts(2),
         folds: 5,
         permutations: 999,
         max_effects: 2,
@@ -182,11 +180,9 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
         },
         Feature::SinceReversal { joint: 3 },
     ];
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 200,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(200);
     let m = ErrorModelParams::new()
         .space(Space::Ejs)
         .kriging(opts.clone())

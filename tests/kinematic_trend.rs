@@ -15,11 +15,9 @@ use std::path::Path;
 
 /// The papers' set-up: Hooke–Jeeves, interpolating.
 fn hj() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        nugget: false,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .nugget(false)
 }
 
 fn rms3(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
@@ -57,11 +55,14 @@ fn periodic_model_predicts_the_same_a_turn_later() {
     let (SimOutput::Measurements(d), _) = simulate_on(&robot, &spec).unwrap() else {
         panic!()
     };
-    let opts = KrigingOptions {
-        periodic: vec![0, 5],
-        ..hj()
-    };
-    let m = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    let m = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .periodic(vec![0, 5])
+        .kriging(hj())
+        .check()
+        .and_then(|p| p.fit(&d))
+        .unwrap();
+    assert_eq!(m.periodic(), &[0, 5]);
     let q = vec![vec![30.0, -80.0, 70.0, -90.0, 80.0, 10.0]];
     let mut q2 = q.clone();
     q2[0][0] += 360.0;
@@ -84,6 +85,7 @@ fn periodic_model_predicts_the_same_a_turn_later() {
     m.save(&path).unwrap();
     let back = ErrorModel::load(&path).unwrap();
     assert_eq!(back.predict_mean(&q2, &dir).unwrap(), b);
+    assert_eq!(back.input_map(), m.input_map());
     std::fs::remove_file(path).ok();
 }
 
@@ -170,13 +172,10 @@ fn ur10_real_data_small_split() {
         robokrige::physics::Geometry::Mdh { robot: cal },
     );
     let lm = mean3(&dh.predict(&test.q, &test.dir).unwrap());
-    let opts = KrigingOptions {
-        periodic: periodic_joints(&train.q),
-        ..hj()
-    };
     let uk = ErrorModelParams::new()
         .space(Space::Js)
-        .kriging(opts.clone())
+        .periodic(periodic_joints(&train.q))
+        .kriging(hj())
         .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
         .check()
         .and_then(|p| p.fit(&train))

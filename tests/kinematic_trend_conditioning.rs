@@ -53,14 +53,12 @@ fn scaled_condition(f: &faer::Mat<f64>) -> f64 {
 #[test]
 fn kinematic_trend_is_well_conditioned_on_every_axis() {
     let (robot, _, data) = tool_down(150);
-    let opts = KrigingOptions {
-        periodic: periodic_joints(&data.q),
-        ..KrigingOptions::default()
-    };
-    assert_eq!(opts.periodic, vec![0, 1, 2, 3, 5]);
-    let rows = Space::Js.encode_rows(&opts.periodic, &data.q, &data.dir);
+    let opts = KrigingOptions::default();
+    let periodic = periodic_joints(&data.q);
+    assert_eq!(periodic, vec![0, 1, 2, 3, 5]);
+    let rows = Space::Js.encode_rows(&periodic, &data.q, &data.dir);
     let x = Normalizer::fit(&rows).apply_rows(&rows);
-    for (a, t) in kinematic_trends(&data, Space::Js, &opts, &robot)
+    for (a, t) in kinematic_trends(&data, Space::Js, &periodic, &opts, &robot)
         .unwrap()
         .iter()
         .enumerate()
@@ -83,13 +81,10 @@ fn kinematic_trend_is_well_conditioned_on_every_axis() {
 #[test]
 fn kinematic_trend_does_not_blow_up_off_the_campaign() {
     let (robot, truth, data) = tool_down(150);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        periodic: periodic_joints(&data.q),
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().optimizer(OptimizerKind::HookeJeeves);
     let uk = ErrorModelParams::new()
         .space(Space::Js)
+        .periodic(periodic_joints(&data.q))
         .kriging(opts.clone())
         .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
         .check()

@@ -138,12 +138,10 @@ fn row_order_does_not_change_predictions() {
 #[test]
 fn quadratic_trend_over_ejs_drops_the_direction_squares() {
     let d = campaign(150);
-    let opts = KrigingOptions {
-        trend: TrendKind::Quadratic,
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 60,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .trend(TrendKind::Quadratic)
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(60);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     for r in model.reports() {
         assert_eq!(r.trend_terms.len() + r.dropped_terms.len(), 91);
@@ -158,11 +156,9 @@ fn quadratic_trend_over_ejs_drops_the_direction_squares() {
 #[test]
 fn save_load_predicts_bit_identically_and_rejects_other_formats() {
     let d = campaign(60);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 80,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(80);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let path = std::env::temp_dir().join(format!("robokrige-model-{}.json", std::process::id()));
     model.save(&path).unwrap();
@@ -188,7 +184,7 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
     let text =
         std::fs::read_to_string(&path)
             .unwrap()
-            .replacen("\"version\":2", "\"version\":99", 1);
+            .replacen("\"version\":3", "\"version\":99", 1);
     let err = ErrorModel::from_json(&text, "old.json")
         .unwrap_err()
         .to_string();
@@ -199,55 +195,33 @@ fn save_load_predicts_bit_identically_and_rejects_other_formats() {
 }
 
 /// Model files are O(m·d): no Cholesky factor is written, and the MSE after
-/// loading (factor recomputed) is bit-identical. A version-1 file, which
-/// stores the factor, still loads and predicts the same.
+/// loading (factor recomputed) is bit-identical. (Files of versions 1 and 2
+/// still load: `tests/model_file.rs`.)
 #[test]
-fn model_files_store_no_factor_and_version_1_files_still_load() {
+fn model_files_store_no_factor_and_load_bit_identically() {
     let d = campaign(80);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 60,
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(60)
+        .nugget(true);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let text = serde_json::to_string(&model).unwrap();
     assert!(!text.contains("chol_lower"));
-    let back = ErrorModel::from_json(&text, "v2.json").unwrap();
-    // a version-1 file: the same model with each output's packed factor
-    let mut v1: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v1["version"] = 1.into();
-    for (a, out) in model.outputs().iter().enumerate() {
-        let (c, _, _) = out.factors().unwrap();
-        let packed: Vec<f64> = (0..c.nrows())
-            .flat_map(|i| (0..=i).map(move |j| (i, j)))
-            .map(|(i, j)| c[(i, j)])
-            .collect();
-        v1["outputs"][a]["chol_lower"] = serde_json::to_value(packed).unwrap();
-    }
-    let v1_text = v1.to_string();
-    assert!(
-        v1_text.len() > 2 * text.len(),
-        "the factor dominates a v1 file"
-    );
-    let old = ErrorModel::from_json(&v1_text, "v1.json").unwrap();
-    assert_eq!(old.version(), 2);
+    let back = ErrorModel::from_json(&text, "v3.json").unwrap();
     let probe_q: Vec<Vec<f64>> =
         d.q.iter()
             .map(|q| q.iter().map(|v| v - 0.4).collect())
             .collect();
     let p0 = model.predict(&probe_q, &d.dir).unwrap();
-    for other in [&back, &old] {
-        let p = other.predict(&probe_q, &d.dir).unwrap();
-        for (x, y) in p0
-            .mean
-            .iter()
-            .chain(&p0.std)
-            .flatten()
-            .zip(p.mean.iter().chain(&p.std).flatten())
-        {
-            assert_eq!(x.to_bits(), y.to_bits());
-        }
+    let p = back.predict(&probe_q, &d.dir).unwrap();
+    for (x, y) in p0
+        .mean
+        .iter()
+        .chain(&p0.std)
+        .flatten()
+        .zip(p.mean.iter().chain(&p.std).flatten())
+    {
+        assert_eq!(x.to_bits(), y.to_bits());
     }
     // an impossible ξ or scale is refused on load, with one clear error
     for (field, value) in [("theta", "[-1.0]"), ("y_std", "1e300"), ("nugget", "-0.5")] {
@@ -273,21 +247,10 @@ fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
     let hj = ErrorModel::fit(
         &d,
         Space::Ejs,
-        &KrigingOptions {
-            optimizer: OptimizerKind::HookeJeeves,
-            ..KrigingOptions::default()
-        },
+        &KrigingOptions::default().optimizer(OptimizerKind::HookeJeeves),
     )
     .unwrap();
-    let gps = ErrorModel::fit(
-        &d,
-        Space::Ejs,
-        &KrigingOptions {
-            starts: 3,
-            ..KrigingOptions::default()
-        },
-    )
-    .unwrap();
+    let gps = ErrorModel::fit(&d, Space::Ejs, &KrigingOptions::default().starts(3)).unwrap();
     let x = normalised(&d, Space::Ejs);
     let inputs = TrainingInputs::new(&x);
     for a in 0..3 {
@@ -323,11 +286,9 @@ fn constant_response_fits_and_predicts_the_constant() {
     let model = ErrorModel::fit(
         &d,
         Space::Ejs,
-        &KrigingOptions {
-            optimizer: OptimizerKind::HookeJeeves,
-            max_evals: 50,
-            ..KrigingOptions::default()
-        },
+        &KrigingOptions::default()
+            .optimizer(OptimizerKind::HookeJeeves)
+            .max_evals(50),
     )
     .unwrap();
     let p = model.predict(&d.q, &d.dir).unwrap();
@@ -354,11 +315,7 @@ fn estimated_nugget_is_positive_on_noisy_data_and_small_on_clean_data() {
     let noisy: Vec<f64> = clean.iter().map(|v| v + noise()).collect();
     let inputs = TrainingInputs::new(&x);
     let names = Space::Js.names(6);
-    let opts = KrigingOptions {
-        nugget: true,
-        starts: 2,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().nugget(true).starts(2);
     let (_, r_noisy) = robokrige::kriging::fit_output(
         &x,
         &inputs,
@@ -393,11 +350,9 @@ fn estimated_nugget_is_positive_on_noisy_data_and_small_on_clean_data() {
 #[test]
 fn cross_validation_predicts_every_row_once_out_of_fold() {
     let d = campaign(60);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 60,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(60);
     let cv = robokrige::cv::cross_validate_refit(&d, 5, 3, |train| {
         assert_eq!(train.len(), 48);
         ErrorModel::fit(train, Space::Ejs, &opts)
@@ -469,11 +424,9 @@ fn closed_form_cv_equals_refit_at_fixed_theta() {
 #[test]
 fn closed_form_cv_of_an_error_model_matches_its_outputs_and_rejects_other_data() {
     let d = campaign(80);
-    let opts = KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 60,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(60);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let cv = robokrige::cv::cross_validate_closed_form(&d, &model, 8, 2).unwrap();
     assert_eq!(cv.mode, "closed-form");
@@ -494,11 +447,7 @@ fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
     let inputs = TrainingInputs::new(&x);
     let names = Space::Js.names(6);
     let trend = Trend::Monomials(Monomials::constant(6));
-    let opts = KrigingOptions {
-        starts: 2,
-        converge_rows: 100,
-        ..KrigingOptions::default()
-    };
+    let opts = KrigingOptions::default().starts(2).converge_rows(100);
     let (model, rep) =
         robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &opts).unwrap();
     assert_eq!(rep.search_rows, 100);
@@ -519,9 +468,59 @@ fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
     let spread = (y.iter().map(|v| v * v).sum::<f64>() / 240.0).sqrt();
     assert!(rms < 0.5 * spread, "{rms} {spread}");
     // too few rows to converge on is refused
-    let bad = KrigingOptions {
-        converge_rows: 10,
-        ..opts
-    };
+    let bad = opts.converge_rows(10);
     assert!(robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &bad).is_err());
+}
+
+/// `KrigingOptions`' fields are private: each builder setter sets what its
+/// getter reads, and the rest stays as it was.
+#[test]
+fn options_setters_set_what_the_getters_read() {
+    use robokrige::kriging::{Correlation, WarmStart};
+    let d = KrigingOptions::default();
+    let start = WarmStart::new(vec![0.5; 2], 1e-3);
+    let o = d
+        .clone()
+        .trend(TrendKind::Linear)
+        .corr(Correlation::Matern32)
+        .corr_auto(true)
+        .optimizer(OptimizerKind::Gps)
+        .nugget(false)
+        .log10_theta((-4.0, 1.0))
+        .log10_nugget((-7.0, -1.0))
+        .starts(3)
+        .seed(9)
+        .max_evals(123)
+        .tol(0.05)
+        .min_jitter(Some(1e-9))
+        .polish(false)
+        .converge_rows(200)
+        .warm_start(vec![start.clone(); 3]);
+    assert_eq!(o.get_trend(), TrendKind::Linear);
+    assert_eq!(o.get_corr(), Correlation::Matern32);
+    assert!(o.get_corr_auto() && !o.get_nugget() && !o.get_polish());
+    assert_eq!(o.get_optimizer(), OptimizerKind::Gps);
+    assert_eq!(o.get_log10_theta(), (-4.0, 1.0));
+    assert_eq!(o.get_log10_nugget(), (-7.0, -1.0));
+    assert_eq!(
+        (o.get_starts(), o.get_seed(), o.get_max_evals()),
+        (3, 9, 123)
+    );
+    assert_eq!(o.get_tol(), 0.05);
+    assert_eq!(o.get_min_jitter(), Some(1e-9));
+    assert_eq!(o.get_converge_rows(), 200);
+    assert_eq!(o.get_warm_start(), &[start.clone(), start.clone(), start]);
+    assert!(o.validate().is_ok());
+    // the defaults: a nugget, BFGS from its 8 starts, the family not chosen
+    assert!(d.get_nugget() && !d.get_corr_auto());
+    assert_eq!(d.get_optimizer(), OptimizerKind::Bfgs);
+    assert_eq!(d.get_starts(), OptimizerKind::Bfgs.default_starts());
+    assert!(KrigingOptions::recommended().get_corr_auto());
+    let w = WarmStart::new(vec![0.1, 0.2], 0.3);
+    assert_eq!((w.theta(), w.nugget()), (&[0.1, 0.2][..], 0.3));
+    assert!(w.inverse_hessian().is_none());
+    // ranges are still checked by validate
+    assert!(d.clone().log10_theta((1.0, -1.0)).validate().is_err());
+    assert!(d.clone().converge_rows(10).validate().is_err());
+    assert!(d.starts(0).validate().is_err());
 }

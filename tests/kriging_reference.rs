@@ -220,11 +220,9 @@ fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
         );
         // our optimiser does at least as well
         // the same diagonal as SMT (its nugget 100·eps) so ψ values compare exactly
-        let opts = KrigingOptions {
-            trend,
-            min_jitter: Some(ref_nugget(&fx)),
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default()
+            .trend(trend)
+            .min_jitter(Some(ref_nugget(&fx)));
         let (_, report) =
             fit_output(&s.x, &inputs, &y, &monos, &names[..space.dim(6)], &opts).unwrap();
         let ours = report.ln_psi.exp();

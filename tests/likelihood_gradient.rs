@@ -21,11 +21,9 @@ fn campaign(rows: usize) -> Dataset {
 
 /// A quick fit whose only purpose is to produce each kind of trend.
 fn quick() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 30,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(30)
 }
 
 /// ln ψ at `z` = (log10 ξ, [log10 ν]).
@@ -106,7 +104,7 @@ fn gradient_matches_central_differences_constant_and_linear_trends() {
         robokrige::kriging::TrendKind::Constant,
         robokrige::kriging::TrendKind::Linear,
     ] {
-        let opts = KrigingOptions { trend, ..quick() };
+        let opts = quick().trend(trend);
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
         check_model(&model, &data, &format!("{trend:?}"));
     }
@@ -116,11 +114,9 @@ fn gradient_matches_central_differences_constant_and_linear_trends() {
 fn gradient_matches_central_differences_every_correlation_family() {
     let data = campaign(60);
     for corr in Correlation::ALL {
-        let opts = KrigingOptions {
-            corr,
-            trend: robokrige::kriging::TrendKind::Linear,
-            ..quick()
-        };
+        let opts = quick()
+            .corr(corr)
+            .trend(robokrige::kriging::TrendKind::Linear);
         let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
         assert!(model.outputs().iter().all(|o| o.corr() == corr));
         check_model(&model, &data, corr.name());

@@ -13,6 +13,7 @@ mod tool_down;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{CV_MODELS, holdout_cv};
 use robokrige::kriging::KrigingOptions;
+use robokrige::params::ErrorModelParams;
 use robokrige::sim::{PoseContext, gaussian, rng_for};
 use robokrige::space::periodic_joints;
 
@@ -39,13 +40,11 @@ fn no_fold_of_a_wide_range_campaign_blows_up() {
         })
         .collect();
     data.errors = Some(errors);
-    let opts = KrigingOptions {
-        nugget: true,
-        periodic: periodic_joints(&data.q),
-        ..KrigingOptions::default()
-    };
-    assert_eq!(opts.periodic, vec![0, 1, 2, 3, 5]);
-    let cv = holdout_cv(&data, &robot, &opts, 10, 3, 300, &|_, _| {}).unwrap();
+    let opts = KrigingOptions::default().nugget(true);
+    let periodic = periodic_joints(&data.q);
+    assert_eq!(periodic, vec![0, 1, 2, 3, 5]);
+    let base = ErrorModelParams::new().periodic(periodic).kriging(opts);
+    let cv = holdout_cv(&data, &robot, &base, 10, 3, 300, &|_, _| {}).unwrap();
     for (f, (worst, covered)) in cv
         .fold_max_mm
         .iter()

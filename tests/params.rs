@@ -30,11 +30,9 @@ fn assert_same(a: &ErrorModel, b: &ErrorModel) {
 }
 
 fn quick() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        nugget: false,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .nugget(false)
 }
 
 #[test]
@@ -80,13 +78,11 @@ fn the_params_path_gives_the_models_of_its_parts() {
         assert!(db.fold(0.0, f64::max) < 1e-9);
     }
     // a paper method's params hold its constants: EJS, Hooke–Jeeves, no nugget
-    let hj = KrigingOptions {
-        seed: 3,
-        optimizer: OptimizerKind::HookeJeeves,
-        starts: robokrige::methods::PAPER_GPS_STARTS,
-        nugget: false,
-        ..KrigingOptions::default()
-    };
+    let hj = KrigingOptions::default()
+        .seed(3)
+        .optimizer(OptimizerKind::HookeJeeves)
+        .starts(robokrige::methods::PAPER_GPS_STARTS)
+        .nugget(false);
     let a = Method::EjsHj
         .params(3, false)
         .check()
@@ -153,4 +149,42 @@ fn combinations_that_do_not_fit_together_are_refused_at_check() {
         ErrorModelParams::new().hyper(HyperSpec::FixedFrom(Box::new(js))),
         "another space",
     );
+}
+
+/// Periodic joints are an input of the fit (the model's input map), not a
+/// Kriging option: the model keeps them, a refit at fixed hyperparameters
+/// keeps them, and a fixed-hyperparameter refit with others is refused.
+#[test]
+fn periodic_joints_are_part_of_the_inputs() {
+    let data = campaign(40);
+    let model = ErrorModelParams::new()
+        .periodic(vec![0, 5])
+        .kriging(quick())
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    assert_eq!(model.periodic(), &[0, 5]);
+    assert_eq!(model.input_names()[..2], ["sin q1", "cos q1"]);
+    assert_eq!(model.input_map().dim(), 12 + 2);
+    let refit = ErrorModelParams::fixed_from(model.clone())
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    assert_eq!(refit.input_map(), model.input_map());
+    assert_eq!(refit.outputs(), model.outputs());
+    let e = ErrorModelParams::fixed_from(model)
+        .periodic(vec![0])
+        .check()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("periodic"), "{e}");
+    // a joint the data does not have
+    let e = ErrorModelParams::new()
+        .periodic(vec![6])
+        .kriging(quick())
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("periodic joint 7"), "{e}");
 }

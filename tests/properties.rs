@@ -112,12 +112,10 @@ fn nearly_coincident_points_and_extreme_correlation_lengths_stay_finite() {
 }
 
 fn quick() -> KrigingOptions {
-    KrigingOptions {
-        optimizer: OptimizerKind::HookeJeeves,
-        max_evals: 150,
-        starts: 2,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(150)
+        .starts(2)
 }
 
 #[test]

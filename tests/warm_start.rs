@@ -12,15 +12,9 @@ use robokrige::space::Space;
 fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
     let data = read_csv(std::path::Path::new("datasets/comau_lhs.csv")).unwrap();
     let data = data.select(&(0..200).collect::<Vec<_>>());
-    let o = KrigingOptions {
-        nugget: true,
-        ..KrigingOptions::default()
-    };
+    let o = KrigingOptions::default().nugget(true);
     let full = ErrorModel::fit(&data, Space::Ejs, &o).unwrap();
-    let warm = KrigingOptions {
-        warm_start: full.warm_starts(),
-        ..o.clone()
-    };
+    let warm = o.clone().warm_start(full.warm_starts());
     let fold = data.select(&(0..200).filter(|i| i % 10 != 3).collect::<Vec<_>>());
     let w = ErrorModel::fit(&fold, Space::Ejs, &warm).unwrap();
     let c = ErrorModel::fit(&fold, Space::Ejs, &o).unwrap();
@@ -35,36 +29,19 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
         assert_eq!(rw.starts, 1);
     }
     // the start is how the fit began, not part of the model
-    assert!(w.options().warm_start.is_empty());
+    assert!(w.options().get_warm_start().is_empty());
 }
 
 #[test]
 fn warm_starts_of_the_wrong_size_are_refused() {
     let data = read_csv(std::path::Path::new("datasets/comau_lhs.csv")).unwrap();
     let data = data.select(&(0..60).collect::<Vec<_>>());
-    let one = WarmStart {
-        theta: vec![0.1; 3],
-        nugget: 0.0,
-        inverse_hessian: None,
-    };
+    let one = WarmStart::new(vec![0.1; 3], 0.0);
     for starts in [vec![one.clone()], vec![one.clone(), one.clone(), one]] {
-        let o = KrigingOptions {
-            warm_start: starts,
-            ..KrigingOptions::default()
-        };
+        let o = KrigingOptions::default().warm_start(starts);
         assert!(ErrorModel::fit(&data, Space::Ejs, &o).is_err());
     }
-    let bad = KrigingOptions {
-        warm_start: vec![
-            WarmStart {
-                theta: vec![-1.0; 12],
-                nugget: 0.0,
-                inverse_hessian: None,
-            };
-            3
-        ],
-        ..KrigingOptions::default()
-    };
+    let bad = KrigingOptions::default().warm_start(vec![WarmStart::new(vec![-1.0; 12], 0.0); 3]);
     assert!(bad.validate().is_err());
 }
 

@@ -290,7 +290,7 @@ class ErrorModel:
     @classmethod
     def _wrap(cls, model: "_robokrige.Model") -> "ErrorModel":
         opts = json.loads(model.options_json())
-        periodic = opts.get("periodic") or []
+        periodic = list(model.periodic)
         est = cls(
             space=model.space,
             trend=opts.get("trend", "constant"),

@@ -1,7 +1,7 @@
-//! Every read of a field of `ErrorModel`, `KrigingModel` or `KrigingOptions`,
-//! and every `KrigingOptions { .. }` literal, is here and nowhere else in
-//! this crate: when the library makes those fields private (getters of the
-//! same name), only this file changes, each `m.field` becoming `m.field()`.
+//! Every read of `ErrorModel`, `KrigingModel` or `KrigingOptions`, and every
+//! `KrigingOptions` built, is here and nowhere else in this crate. Their
+//! fields are private in the library: models have getters of the fields'
+//! names, options builder setters of the fields' names and `get_` getters.
 
 use robokrige::features::Feature;
 use robokrige::kriging::{Correlation, FitReport, KrigingOptions, OptimizerKind, TrendKind};
@@ -33,6 +33,11 @@ pub fn reports(m: &ErrorModel) -> &[FitReport] {
     m.reports()
 }
 
+/// Joints entered as (sin θ, cos θ), 0-based.
+pub fn periodic(m: &ErrorModel) -> &[usize] {
+    m.periodic()
+}
+
 /// Extra inputs (effects added by `diagnose`).
 pub fn extras(m: &ErrorModel) -> &[Feature] {
     m.extras()
@@ -55,12 +60,12 @@ pub fn families(m: &ErrorModel) -> Vec<String> {
 
 /// Whether each output's family was chosen by CV.
 pub fn corr_auto(o: &KrigingOptions) -> bool {
-    o.corr_auto
+    o.get_corr_auto()
 }
 
 /// Whether a nugget was estimated.
 pub fn nugget(o: &KrigingOptions) -> bool {
-    o.nugget
+    o.get_nugget()
 }
 
 /// `KrigingOptions::default()` with what `robokrige fit` sets from its flags.
@@ -73,33 +78,21 @@ pub fn fit_options(
     nugget: bool,
     starts: usize,
     seed: u64,
-    periodic: Vec<usize>,
 ) -> KrigingOptions {
-    KrigingOptions {
-        trend,
-        corr,
-        corr_auto,
-        optimizer,
-        nugget,
-        starts,
-        seed,
-        periodic,
-        ..KrigingOptions::default()
-    }
+    KrigingOptions::default()
+        .trend(trend)
+        .corr(corr)
+        .corr_auto(corr_auto)
+        .optimizer(optimizer)
+        .nugget(nugget)
+        .starts(starts)
+        .seed(seed)
 }
 
 /// `KrigingOptions::default()` with what `robokrige diagnose` sets.
-pub fn diagnose_options(
-    optimizer: OptimizerKind,
-    nugget: bool,
-    seed: u64,
-    periodic: Vec<usize>,
-) -> KrigingOptions {
-    KrigingOptions {
-        optimizer,
-        nugget,
-        seed,
-        periodic,
-        ..KrigingOptions::default()
-    }
+pub fn diagnose_options(optimizer: OptimizerKind, nugget: bool, seed: u64) -> KrigingOptions {
+    KrigingOptions::default()
+        .optimizer(optimizer)
+        .nugget(nugget)
+        .seed(seed)
 }

@@ -244,6 +244,12 @@ impl Model {
         access::corr_auto(access::options(&self.inner))
     }
 
+    /// Joints entered as (sin θ, cos θ), 0-based.
+    #[getter]
+    fn periodic(&self) -> Vec<usize> {
+        access::periodic(&self.inner).to_vec()
+    }
+
     /// Names of the extra inputs (effects added by `diagnose`).
     #[getter]
     fn extras(&self) -> Vec<String> {

@@ -115,9 +115,9 @@ pub fn robot_with_tool(spec: &str, tool: Option<(f64, f64, f64)>) -> Result<Robo
 }
 
 impl FitParams {
-    /// Space and options as `robokrige fit` makes them from its flags, the
-    /// periodic joints resolved on `data`.
-    fn options(&self, data: &Dataset) -> Result<(Space, KrigingOptions)> {
+    /// Space, periodic joints (resolved on `data`) and options as
+    /// `robokrige fit` makes them from its flags.
+    fn options(&self, data: &Dataset) -> Result<(Space, Vec<usize>, KrigingOptions)> {
         let optimizer = parse_optimizer(&self.optimizer)?;
         if self.starts.is_some() && optimizer == OptimizerKind::HookeJeeves {
             return Err(bad(
@@ -133,9 +133,9 @@ impl FitParams {
             self.nugget,
             self.starts.unwrap_or(optimizer.default_starts()),
             self.seed,
-            parse_periodic(&self.periodic, &data.q)?,
         );
-        Ok((parse_space(&self.space)?, opts))
+        let periodic = parse_periodic(&self.periodic, &data.q)?;
+        Ok((parse_space(&self.space)?, periodic, opts))
     }
 
     /// The checked fit parameters for `data` (periodic joints resolved on
@@ -165,8 +165,9 @@ impl FitParams {
                 match (kinematic, method) {
                     (Some(r), Method::EjsGa | Method::EjsPca) => {
                         // as `fit --method … --kinematic`: the flags' options
-                        let (_, opts) = self.options(data)?;
+                        let (_, periodic, opts) = self.options(data)?;
                         ErrorModelParams::new()
+                            .periodic(periodic)
                             .kriging(opts)
                             .trend(method.trend(Some(r)))
                     }
@@ -179,8 +180,11 @@ impl FitParams {
                 }
             }
             None => {
-                let (space, opts) = self.options(data)?;
-                let p = ErrorModelParams::new().space(space).kriging(opts);
+                let (space, periodic, opts) = self.options(data)?;
+                let p = ErrorModelParams::new()
+                    .space(space)
+                    .periodic(periodic)
+                    .kriging(opts);
                 match kinematic {
                     Some(r) => p.trend(TrendSpec::Kinematic(Box::new(r.clone()))),
                     None => p,

@@ -350,12 +350,8 @@ pub fn diagnose(
             let (space, optimizer) = diagnose_method(method)?;
             let o = DiagnoseOptions {
                 space,
-                kriging: crate::access::diagnose_options(
-                    optimizer,
-                    nugget,
-                    seed,
-                    parse_periodic(periodic, &d.q)?,
-                ),
+                periodic: parse_periodic(periodic, &d.q)?,
+                kriging: crate::access::diagnose_options(optimizer, nugget, seed),
                 folds,
                 seed,
                 permutations,

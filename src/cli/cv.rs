@@ -75,7 +75,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let (space, opts) = (choice.space, &choice.opts);
-    super::plan_fit("cv", data.len(), opts.optimizer, None)?;
+    super::plan_fit("cv", data.len(), opts.get_optimizer(), None)?;
     if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
         return Err(Error::InvalidParameter(
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),
@@ -125,7 +125,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     };
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
-    let words = super::fit::settings_line(space, opts, choice.kinematic);
+    let words = super::fit::settings_line(space, &choice.periodic, opts, choice.kinematic);
     say!(
         "{}-fold CV ({}) of {} on {} rows ({words}), {:.1} s",
         a.folds,
@@ -153,7 +153,7 @@ pub fn run(a: CvArgs) -> Result<()> {
         if let Some(o) = v.as_object_mut() {
             o.insert("data".into(), serde_json::json!(a.data));
             let s: serde_json::Map<String, serde_json::Value> =
-                super::fit::settings(space, opts, choice.kinematic)
+                super::fit::settings(space, &choice.periodic, opts, choice.kinematic)
                     .into_iter()
                     .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
                     .collect();

@@ -128,13 +128,11 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     let (space, optimizer) = robokrige::diagnose::base_method(&a.method)?;
     Ok(DiagnoseOptions {
         space,
-        kriging: KrigingOptions {
-            optimizer,
-            nugget: !a.no_nugget,
-            seed: a.seed,
-            periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
-            ..KrigingOptions::default()
-        },
+        periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
+        kriging: KrigingOptions::default()
+            .optimizer(optimizer)
+            .nugget(!a.no_nugget)
+            .seed(a.seed),
         folds: a.folds,
         seed: a.seed,
         permutations: a.permutations,

@@ -85,6 +85,7 @@ pub struct ModelArgs {
 /// constant`, …), for reports: `(name, value)` pairs.
 pub fn settings(
     space: Space,
+    periodic: &[usize],
     opts: &KrigingOptions,
     kinematic: bool,
 ) -> Vec<(&'static str, String)> {
@@ -92,20 +93,20 @@ pub fn settings(
         ("space", format!("{space:?}").to_lowercase()),
         (
             "trend",
-            format!("{:?}", opts.trend).to_lowercase()
+            format!("{:?}", opts.get_trend()).to_lowercase()
                 + if kinematic { " + kinematic" } else { "" },
         ),
         (
             "corr",
-            if opts.corr_auto {
+            if opts.get_corr_auto() {
                 "auto".to_string()
             } else {
-                opts.corr.to_string()
+                opts.get_corr().to_string()
             },
         ),
         (
             "optimizer",
-            match opts.optimizer {
+            match opts.get_optimizer() {
                 OptimizerKind::Bfgs => "bfgs",
                 OptimizerKind::Gps => "gps",
                 OptimizerKind::HookeJeeves => "hj",
@@ -114,7 +115,7 @@ pub fn settings(
         ),
         (
             "nugget",
-            if opts.nugget {
+            if opts.get_nugget() {
                 "estimated"
             } else {
                 "none (interpolating)"
@@ -122,30 +123,33 @@ pub fn settings(
             .to_string(),
         ),
     ];
-    if !opts.periodic.is_empty() {
-        let p: Vec<String> = opts
-            .periodic
-            .iter()
-            .map(|j| format!("q{}", j + 1))
-            .collect();
+    if !periodic.is_empty() {
+        let p: Vec<String> = periodic.iter().map(|j| format!("q{}", j + 1)).collect();
         v.push(("periodic", p.join(",")));
     }
     v
 }
 
 /// [`settings`] as one line: `space ejs, trend constant, …`.
-pub fn settings_line(space: Space, opts: &KrigingOptions, kinematic: bool) -> String {
-    settings(space, opts, kinematic)
+pub fn settings_line(
+    space: Space,
+    periodic: &[usize],
+    opts: &KrigingOptions,
+    kinematic: bool,
+) -> String {
+    settings(space, periodic, opts, kinematic)
         .iter()
         .map(|(k, v)| format!("{k} {v}"))
         .collect::<Vec<_>>()
         .join(", ")
 }
 
-/// What [`ModelArgs::resolve`] gives: space, options, the measured robot
-/// (recorded in the model) and whether it forms the kinematic trend.
+/// What [`ModelArgs::resolve`] gives: space, periodic joints, options, the
+/// measured robot (recorded in the model) and whether it forms the
+/// kinematic trend.
 pub struct ModelChoice {
     pub space: Space,
+    pub periodic: Vec<usize>,
     pub opts: KrigingOptions,
     pub robot: Option<robokrige::kinematics::Robot>,
     pub kinematic: bool,
@@ -162,6 +166,7 @@ impl ModelChoice {
         let p = self.with_robot(
             ErrorModelParams::new()
                 .space(self.space)
+                .periodic(self.periodic.clone())
                 .kriging(self.opts.clone()),
         );
         match self.kinematic_robot() {
@@ -192,8 +197,8 @@ impl ModelArgs {
                 "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
             ));
         }
-        let (space, mut opts) = self.options();
-        opts.periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
+        let (space, opts) = self.options();
+        let periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
         if self.kinematic && self.robot.is_none() {
             return Err(Error::InvalidParameter(
                 "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
@@ -211,6 +216,7 @@ impl ModelArgs {
         }
         Ok(ModelChoice {
             space,
+            periodic,
             opts,
             robot,
             kinematic: self.kinematic,
@@ -222,16 +228,14 @@ impl ModelArgs {
     pub fn options(&self) -> (Space, KrigingOptions) {
         let (corr, corr_auto) = self.corr.resolve();
         let optimizer = self.optimizer;
-        let opts = KrigingOptions {
-            trend: self.trend,
-            corr,
-            corr_auto,
-            optimizer,
-            nugget: !self.no_nugget,
-            starts: self.starts.unwrap_or(optimizer.default_starts()),
-            seed: self.seed,
-            ..KrigingOptions::default()
-        };
+        let opts = KrigingOptions::default()
+            .trend(self.trend)
+            .corr(corr)
+            .corr_auto(corr_auto)
+            .optimizer(optimizer)
+            .nugget(!self.no_nugget)
+            .starts(self.starts.unwrap_or(optimizer.default_starts()))
+            .seed(self.seed);
         (self.space, opts)
     }
 }
@@ -269,7 +273,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let choice = a.model.resolve(&data)?;
     let opts = &choice.opts;
-    super::plan_fit("fit", data.len(), opts.optimizer, None)?;
+    super::plan_fit("fit", data.len(), opts.get_optimizer(), None)?;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => {
@@ -289,7 +293,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                 (Some(_), _) => Err(Error::InvalidParameter(
                     "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
                 )),
-                (None, _) => Ok(choice.with_robot(method.params(opts.seed, false))),
+                (None, _) => Ok(choice.with_robot(method.params(opts.get_seed(), false))),
             };
             let model = params
                 .and_then(ErrorModelParams::check)
@@ -306,11 +310,15 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     }
     model.save(&a.output)?;
     if let Some(path) = &a.json {
-        let settings: serde_json::Map<String, serde_json::Value> =
-            settings(model.space(), model.options(), choice.kinematic)
-                .into_iter()
-                .map(|(k, v)| (k.to_string(), v.into()))
-                .collect();
+        let settings: serde_json::Map<String, serde_json::Value> = settings(
+            model.space(),
+            model.periodic(),
+            model.options(),
+            choice.kinematic,
+        )
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.into()))
+        .collect();
         let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
             "settings": settings, "method": a.method, "robot": model.robot(),
             "seconds": secs, "outputs": model.reports(), "selection": model.selection()});
@@ -320,7 +328,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
-        if model.options().corr_auto {
+        if model.options().get_corr_auto() {
             let c: Vec<String> = model
                 .outputs()
                 .iter()
@@ -330,7 +338,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         } else {
             format!("{} correlation", model.outputs()[0].corr())
         },
-        if model.options().nugget {
+        if model.options().get_nugget() {
             "nugget estimated"
         } else {
             "interpolating"

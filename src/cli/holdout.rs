@@ -9,6 +9,7 @@ use robokrige::dataset::Dataset;
 use robokrige::holdout::{HoldoutRow, SplitExtras, holdout_cv, holdout_split};
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::params::ErrorModelParams;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
 
@@ -88,8 +89,9 @@ pub struct HoldoutArgs {
     json: Option<PathBuf>,
 }
 
-/// The Kriging options of `a` for training rows `q`.
-fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
+/// The Kriging options of `a` and the periodic joints it gives for training
+/// rows `q`.
+fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<(KrigingOptions, Vec<usize>)> {
     let optimizer = match a.optimizer.as_str() {
         "bfgs" => OptimizerKind::Bfgs,
         "hj" => OptimizerKind::HookeJeeves,
@@ -101,25 +103,44 @@ fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<KrigingOptions> {
         }
     };
     let (corr, corr_auto) = a.corr.resolve();
-    Ok(KrigingOptions {
-        optimizer,
-        corr,
-        corr_auto,
-        starts: optimizer.default_starts(),
-        seed: a.seed,
-        nugget: !a.no_nugget,
-        periodic: robokrige::space::parse_periodic(&a.periodic, q)?,
-        ..KrigingOptions::default()
-    })
+    let opts = KrigingOptions::default()
+        .optimizer(optimizer)
+        .corr(corr)
+        .corr_auto(corr_auto)
+        .starts(optimizer.default_starts())
+        .seed(a.seed)
+        .nugget(!a.no_nugget);
+    Ok((opts, robokrige::space::parse_periodic(&a.periodic, q)?))
+}
+
+/// The base parameters of the Kriging fits: `opts` and `periodic`.
+fn base_params(opts: &KrigingOptions, periodic: &[usize]) -> ErrorModelParams {
+    ErrorModelParams::new()
+        .periodic(periodic.to_vec())
+        .kriging(opts.clone())
+}
+
+/// `q1, q4` (or `none`).
+fn joint_list(periodic: &[usize]) -> String {
+    if periodic.is_empty() {
+        "none".to_string()
+    } else {
+        periodic
+            .iter()
+            .map(|j| format!("q{}", j + 1))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
-    let opts = kriging_opts(a, &data.q)?;
-    super::plan_fit("holdout", data.len(), opts.optimizer, None)?;
+    let (opts, periodic) = kriging_opts(a, &data.q)?;
+    super::plan_fit("holdout", data.len(), opts.get_optimizer(), None)?;
     let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
-    let cv = holdout_cv(data, robot, &opts, k, a.seed, hyper_rows, &|done, msg| {
+    let base = base_params(&opts, &periodic);
+    let cv = holdout_cv(data, robot, &base, k, a.seed, hyper_rows, &|done, msg| {
         pb.set_position(done as u64);
         pb.set_message(msg.to_string());
     })?;
@@ -132,15 +153,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         if a.no_nugget { "" } else { " and nugget" },
         cv.hyper_rows,
         cv.hyper_seconds,
-        if opts.periodic.is_empty() {
-            "none".to_string()
-        } else {
-            opts.periodic
-                .iter()
-                .map(|j| format!("q{}", j + 1))
-                .collect::<Vec<_>>()
-                .join(", ")
-        }
+        joint_list(&periodic)
     );
     print_rows(&cv.rows);
     for (name, (rows, worst)) in robokrige::holdout::CV_MODELS
@@ -210,15 +223,20 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     }
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
     let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
-    let opts = kriging_opts(&a, &train.q)?;
-    super::plan_fit("holdout", train.len(), opts.optimizer, Some("--train"))?;
-    let periodic = opts.periodic.clone();
+    let (opts, periodic) = kriging_opts(&a, &train.q)?;
+    super::plan_fit(
+        "holdout",
+        train.len(),
+        opts.get_optimizer(),
+        Some("--train"),
+    )?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,
         ga: a.ga,
     };
-    let split = holdout_split(&train, &test, &robot, &opts, extras, &|what| {
+    let base = base_params(&opts, &periodic);
+    let split = holdout_split(&train, &test, &robot, &base, extras, &|what| {
         pb.inc(1);
         pb.set_message(what.to_string());
     })?;
@@ -240,15 +258,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         } else {
             ", nugget estimated"
         },
-        if periodic.is_empty() {
-            "none".to_string()
-        } else {
-            periodic
-                .iter()
-                .map(|j| format!("q{}", j + 1))
-                .collect::<Vec<_>>()
-                .join(", ")
-        }
+        joint_list(&periodic)
     );
     say!(
         "D-H calibration: {} parameters fitted ({} frozen as unidentifiable), rms {:.4} → {:.4} mm on the training rows",

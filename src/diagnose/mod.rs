@@ -66,6 +66,9 @@ const CONFIRMATIONS: usize = 3;
 pub struct DiagnoseOptions {
     /// Input space of every model fitted: JS `[θ]` or EJS `[θ, λ]`.
     pub space: Space,
+    /// Joints (0-based) entered as `(sin θ, cos θ)` in every model fitted
+    /// ([`crate::params::ErrorModelParams::periodic`]); empty by default.
+    pub periodic: Vec<usize>,
     /// Kriging options of every fit (trend, correlation, nugget, optimiser).
     pub kriging: KrigingOptions,
     /// Number of CV folds K.
@@ -112,6 +115,7 @@ impl Default for DiagnoseOptions {
     fn default() -> Self {
         DiagnoseOptions {
             space: Space::Ejs,
+            periodic: Vec::new(),
             kriging: KrigingOptions {
                 nugget: true,
                 ..KrigingOptions::default()
@@ -490,7 +494,7 @@ fn cross_validated(
             .unwrap_or_default(),
         ..o.kriging.clone()
     };
-    let model = ErrorModel::fit_with_extras(&work, o.space, &start, extras)?;
+    let model = ErrorModel::fit_with_extras(&work, o.space, &o.periodic, &start, extras)?;
     let warm = KrigingOptions {
         warm_start: model.warm_starts(),
         ..o.kriging.clone()
@@ -499,7 +503,7 @@ fn cross_validated(
         cross_validate_closed_form(&work, &model, o.folds, o.seed)?
     } else {
         cross_validate_refit(&work, o.folds, o.seed, |train| {
-            ErrorModel::fit_with_extras(train, o.space, &warm, extras)
+            ErrorModel::fit_with_extras(train, o.space, &o.periodic, &warm, extras)
         })?
     };
     Ok((cv_stats(res.residuals, res.mode, extras, &model), model))
@@ -522,13 +526,13 @@ fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<WarmStar
     // in their order (`ErrorModel::extras` holds them first)
     let inputs =
         |e: &[Feature]| -> Vec<Feature> { e.iter().filter(|f| !f.trend_only()).cloned().collect() };
-    if !from.extras.iter().all(|f| extras.contains(f))
-        || !inputs(extras).starts_with(&inputs(&from.extras))
+    if !from.extras().iter().all(|f| extras.contains(f))
+        || !inputs(extras).starts_with(&inputs(from.extras()))
     {
         return None;
     }
     let new_dims = crate::features::correlation_dims(extras)
-        .checked_sub(crate::features::correlation_dims(&from.extras))?;
+        .checked_sub(crate::features::correlation_dims(from.extras()))?;
     let starts = from.warm_starts();
     if new_dims == 0 {
         return Some(starts);
@@ -739,6 +743,7 @@ pub fn fit_with_effects(
     let work = with_columns(data, extras)?;
     crate::params::ErrorModelParams::new()
         .space(o.space)
+        .periodic(o.periodic.clone())
         .kriging(o.kriging.clone())
         .extras(extras.to_vec())
         .check()?

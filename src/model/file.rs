@@ -1,6 +1,18 @@
 //! The model file: versioned JSON, written atomically, checked on load.
-//! Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
-//! first needed); version 1 files, which store it, still load.
+//!
+//! - Version 3 stores the input map ([`crate::inputs::InputMap`]: space,
+//!   joints, periodic joints, extras, column names, normalisation) as one
+//!   object, `inputs`.
+//! - Version 2 kept those parts at the top level (`space`, `n_joints`,
+//!   `input_names`, `input_norm`, `extras`) and the periodic joints in the
+//!   options (`options.periodic`); it stopped storing the Cholesky factor
+//!   (O(m·d) files; it is recomputed when first needed).
+//! - Version 1 stored the factor.
+//!
+//! Files of versions 1 and 2 load: their parts are moved into `inputs`
+//! ([`migrate_to_v3`]) before the model is read, and the model is held (and
+//! saved again) as version 3. An older robokrige refuses a version-3 file
+//! by its version.
 
 use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION, MODEL_VERSION_MIN};
 use crate::{Error, Result};
@@ -35,17 +47,17 @@ impl ErrorModel {
     /// finiteness by [`KrigingModel`]'s own loader.
     fn check_values(&self) -> std::result::Result<(), String> {
         use crate::dataset::{MAX_ABS_ERROR_MM, MAX_ABS_JOINT};
-        if self.n_joints == 0 {
+        let n_joints = self.n_joints();
+        if n_joints == 0 {
             return Err("n_joints is 0".into());
         }
-        self.input_norm
+        self.input_norm()
             .validate(crate::dataset::MAX_ABS_COVARIATE)
-            .map_err(|why| format!("input_norm: {why}"))?;
-        if !self.joint_range.is_empty() && self.joint_range.len() != self.n_joints {
+            .map_err(|why| format!("inputs.norm: {why}"))?;
+        if !self.joint_range.is_empty() && self.joint_range.len() != n_joints {
             return Err(format!(
-                "joint_range has {} entries for {} joints",
+                "joint_range has {} entries for {n_joints} joints",
                 self.joint_range.len(),
-                self.n_joints
             ));
         }
         for (j, &(lo, hi)) in self.joint_range.iter().enumerate() {
@@ -97,27 +109,27 @@ impl ErrorModel {
                 ),
             });
         }
+        let mut head = head;
+        if version < 3 {
+            migrate_to_v3(&mut head);
+        }
         let mut model: ErrorModel = serde_json::from_value(head).map_err(|e| Error::Json {
             context: source_name.into(),
             source: e,
         })?;
-        let dim = model
-            .space
-            .encoded_dim(model.n_joints, &model.options.periodic)
-            + model.extras.iter().map(|f| f.names().len()).sum::<usize>();
-        let extras_ok = model
-            .extras
-            .iter()
-            .all(|f| f.validate(model.n_joints).is_ok());
-        if model.outputs.len() != 3
-            || model.input_norm.mean.len() != dim
-            || model.outputs.iter().any(|o| o.dim() != dim)
-            || !extras_ok
-        {
-            return Err(Error::Input {
-                source_name: source_name.into(),
-                message: "model file is inconsistent (outputs or input dimension)".into(),
-            });
+        let inconsistent = |message: String| Error::Input {
+            source_name: source_name.into(),
+            message,
+        };
+        model
+            .inputs
+            .check_shape()
+            .map_err(|why| inconsistent(format!("model file is inconsistent (inputs: {why})")))?;
+        let dim = model.inputs.dim();
+        if model.outputs.len() != 3 || model.outputs.iter().any(|o| o.dim() != dim) {
+            return Err(inconsistent(
+                "model file is inconsistent (outputs or input dimension)".into(),
+            ));
         }
         model.check_values().map_err(|why| Error::Input {
             source_name: source_name.into(),
@@ -127,4 +139,36 @@ impl ErrorModel {
         model.version = MODEL_VERSION;
         Ok(model)
     }
+}
+
+/// Rewrite the JSON of a version 1 or 2 model in the version 3 layout: its
+/// top-level `space`, `n_joints`, `input_names` (→ `names`), `input_norm`
+/// (→ `norm`), `extras` and the options' `periodic` become the object
+/// `inputs` (an [`crate::inputs::InputMap`]). Parts it lacks stay missing,
+/// and reading the model then names them.
+fn migrate_to_v3(head: &mut serde_json::Value) {
+    let Some(top) = head.as_object_mut() else {
+        return;
+    };
+    let mut inputs = serde_json::Map::new();
+    for (old, new) in [
+        ("space", "space"),
+        ("n_joints", "n_joints"),
+        ("periodic", "periodic"),
+        ("extras", "extras"),
+        ("input_names", "names"),
+        ("input_norm", "norm"),
+    ] {
+        let part = if old == "periodic" {
+            top.get_mut("options")
+                .and_then(serde_json::Value::as_object_mut)
+                .and_then(|o| o.remove("periodic"))
+        } else {
+            top.remove(old)
+        };
+        if let Some(v) = part {
+            inputs.insert(new.into(), v);
+        }
+    }
+    top.insert("inputs".into(), serde_json::Value::Object(inputs));
 }

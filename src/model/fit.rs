@@ -89,7 +89,6 @@ pub(crate) fn fit_outputs(
             ),
         });
     }
-    let n = data.n_joints();
     let corr_dims = map.corr_dims();
     let inputs = TrainingInputs::new(
         &x.iter()
@@ -139,10 +138,7 @@ pub(crate) fn fit_outputs(
     Ok(ErrorModel {
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION,
-        space: map.space(),
-        n_joints: n,
-        input_names: map.names().to_vec(),
-        input_norm: map.normalizer().clone(),
+        inputs: map.clone(),
         // a warm start is how this fit began, not what the model is
         options: KrigingOptions {
             warm_start: Vec::new(),
@@ -150,7 +146,6 @@ pub(crate) fn fit_outputs(
         },
         outputs,
         reports,
-        extras: map.extras().to_vec(),
         selection: None,
         joint_range: joint_range(&data.q),
         robot: None,
@@ -159,7 +154,8 @@ pub(crate) fn fit_outputs(
 }
 
 impl ErrorModel {
-    /// Fit with extra inputs `extras` after `[θ, λ]`: each gets a linear
+    /// Fit with extra inputs `extras` after `[θ, λ]` (the joints `periodic`
+    /// as sin/cos): each gets a linear
     /// trend term next to the options' trend in `[θ, λ]`, and those that are
     /// not [`Feature::trend_only`] are also input dimensions of the
     /// correlation. The model stores the extras with the correlation inputs
@@ -167,13 +163,14 @@ impl ErrorModel {
     pub(crate) fn fit_with_extras(
         data: &Dataset,
         space: Space,
+        periodic: &[usize],
         opts: &KrigingOptions,
         extras: &[Feature],
     ) -> Result<Self> {
         let mut extras = extras.to_vec();
         extras.sort_by_key(Feature::trend_only);
         let extras = &extras[..];
-        let d0 = space.encoded_dim(data.n_joints(), &opts.periodic);
+        let d0 = space.encoded_dim(data.n_joints(), periodic);
         let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
         let mut terms = opts.trend.monomials(d0);
         terms.dim = d0 + extra_dims;
@@ -186,19 +183,20 @@ impl ErrorModel {
             terms.exponents.push(e);
         }
         let trend = Trend::from(terms);
-        let (map, x) = InputMap::fit(data, space, &opts.periodic, extras)?;
+        let (map, x) = InputMap::fit(data, space, periodic, extras)?;
         fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
     }
 
     /// Refit on `data` at this model's correlation parameters ξ and nugget
     /// (no search): the way to scale to thousands of rows when the O(m³)
     /// search is too slow — choose ξ on a subset, then one factorisation on
-    /// everything (issue 10). Same space, options and kind of trend; a
+    /// everything (issue 10). Same space, periodic joints, options and kind
+    /// of trend; a
     /// kinematic trend is rebuilt for `data` (its parameters and the input
     /// normalisation are re-derived), a polynomial one reused. The reports
     /// keep the subset's search figures (ln ψ, evaluations).
     pub(crate) fn refit_at_hyperparameters(&self, data: &Dataset) -> Result<Self> {
-        if !self.extras.is_empty() {
+        if !self.extras().is_empty() {
             return Err(Error::InvalidParameter(
                 "refit at fixed hyperparameters does not support extra inputs".into(),
             ));
@@ -206,7 +204,7 @@ impl ErrorModel {
         let t0 = std::time::Instant::now();
         let errors = data.errors_or_err()?;
         self.check_rows(&data.q, &data.dir)?;
-        let (map, x) = InputMap::fit(data, self.space, &self.options.periodic, &[])?;
+        let (map, x) = InputMap::fit(data, self.space(), self.periodic(), &[])?;
         let trends: [Trend; 3] = match &self.outputs[0].data.trend {
             Trend::Kinematic(k) => kinematic_trend_set_in(
                 data,
@@ -218,7 +216,6 @@ impl ErrorModel {
             )?,
             _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
         };
-        let input_norm = map.normalizer().clone();
         let inputs = TrainingInputs::new(&x);
         let fits: Vec<Result<KrigingModel>> = (0..3)
             .into_par_iter()
@@ -251,7 +248,7 @@ impl ErrorModel {
             })
             .collect();
         Ok(ErrorModel {
-            input_norm,
+            inputs: map,
             outputs,
             reports,
             joint_range: joint_range(&data.q),

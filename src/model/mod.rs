@@ -27,9 +27,12 @@ use serde::{Deserialize, Serialize};
 
 /// Format tag and version of saved models.
 pub const MODEL_FORMAT: &str = "robokrige-error-model";
-/// Version 2 stores no Cholesky factor (O(m·d) files; it is recomputed when
-/// first needed). Version 1 files, which store it, still load.
-pub const MODEL_VERSION: u32 = 2;
+/// Version 3 stores the input map (space, periodic joints, extras, names,
+/// normalisation) as one field, `inputs`; versions 1 and 2 kept those parts
+/// at the top level and the periodic joints in the options, and still load.
+/// Version 2 stopped storing the Cholesky factor (O(m·d) files; it is
+/// recomputed when first needed).
+pub const MODEL_VERSION: u32 = 3;
 /// Oldest model-file version that loads.
 pub const MODEL_VERSION_MIN: u32 = 1;
 
@@ -43,23 +46,15 @@ pub struct ErrorModel {
     pub(crate) format: String,
     /// File format version, [`MODEL_VERSION_MIN`]..=[`MODEL_VERSION`].
     pub(crate) version: u32,
-    /// JS `[θ]` or EJS `[θ, λ]` (seed 003 eq 5).
-    pub(crate) space: Space,
-    /// Joints of the robot (columns q1..qN of the campaign).
-    pub(crate) n_joints: usize,
-    /// Name of every input column, space encoding first, then the extras.
-    pub(crate) input_names: Vec<String>,
-    /// Z-score of the input columns, fitted on the training rows.
-    pub(crate) input_norm: Normalizer,
-    /// The options the model was fitted with (periodic joints included).
+    /// How a pose becomes the inputs: space, periodic joints, extras and
+    /// the normalisation fitted on the training rows.
+    pub(crate) inputs: InputMap,
+    /// The Kriging options the model was fitted with.
     pub(crate) options: KrigingOptions,
     /// One model per axis, in [`AXES`] order.
     pub(crate) outputs: Vec<KrigingModel>,
     /// One fit report per axis (ln ψ, ξ, nugget, evaluations, time).
     pub(crate) reports: Vec<FitReport>,
-    /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub(crate) extras: Vec<Feature>,
     /// Basis selection that chose the trends (PCC+PCA or GA), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) selection: Option<Selection>,
@@ -91,17 +86,19 @@ pub struct Prediction {
 impl ErrorModel {
     /// Fit the three outputs of `data` (which needs `ex,ey,ez`) in `space`
     /// with the given options' trend. Outputs and starts run in parallel.
+    /// No joint is periodic here: periodic joints, extra inputs and the
+    /// other trends are set on `params::ErrorModelParams`.
     ///
     /// ```
     /// use robokrige::{dataset::read_csv, kriging::KrigingOptions, model::ErrorModel, space::Space};
     /// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
     /// let data = read_csv(path.as_ref())?.select(&(0..60).collect::<Vec<_>>());
     /// let model = ErrorModel::fit(&data, Space::Ejs, &KrigingOptions::default())?;
-    /// assert!(model.options().nugget); // tracker data is noisy
+    /// assert!(model.options().get_nugget()); // tracker data is noisy
     /// # Ok::<(), robokrige::Error>(())
     /// ```
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
-        let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+        let (map, x) = InputMap::fit(data, space, &[], &[])?;
         let trend: Trend = opts.trend.trend(map.dim());
         fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
     }
@@ -118,25 +115,30 @@ impl ErrorModel {
 
     /// JS `[θ]` or EJS `[θ, λ]` (seed 003 eq 5).
     pub fn space(&self) -> Space {
-        self.space
+        self.inputs.space()
     }
 
     /// Joints of the robot (columns q1..qN of the campaign).
     pub fn n_joints(&self) -> usize {
-        self.n_joints
+        self.inputs.n_joints()
     }
 
     /// Name of every input column, space encoding first, then the extras.
     pub fn input_names(&self) -> &[String] {
-        &self.input_names
+        self.inputs.names()
     }
 
     /// Z-score of the input columns, fitted on the training rows.
     pub fn input_norm(&self) -> &Normalizer {
-        &self.input_norm
+        self.inputs.normalizer()
     }
 
-    /// The options the model was fitted with (periodic joints included).
+    /// Joints entered as `(sin θ, cos θ)`, 0-based ([`InputMap::periodic`]).
+    pub fn periodic(&self) -> &[usize] {
+        self.inputs.periodic()
+    }
+
+    /// The Kriging options the model was fitted with.
     pub fn options(&self) -> &KrigingOptions {
         &self.options
     }
@@ -154,7 +156,7 @@ impl ErrorModel {
 
     /// Extra inputs after `[θ, λ]` (effects added by `diagnose`).
     pub fn extras(&self) -> &[Feature] {
-        &self.extras
+        self.inputs.extras()
     }
 
     /// The basis selection that chose the trends (PCC+PCA or GA), if any.
@@ -195,8 +197,8 @@ impl ErrorModel {
     /// [`KrigingModel::beta_std_errors`]). `None` when the column is not an
     /// input or has no linear term of its own in a polynomial trend.
     pub fn trend_coefficient(&self, column: &str) -> Option<[(f64, f64); 3]> {
-        let i = self.input_names.iter().position(|n| n == column)?;
-        let scale = self.input_norm.std.get(i).copied().filter(|s| *s > 0.0)?;
+        let i = self.input_names().iter().position(|n| n == column)?;
+        let scale = self.input_norm().std.get(i).copied().filter(|s| *s > 0.0)?;
         let mut out = [(0.0, 0.0); 3];
         for (o, k) in out.iter_mut().zip(&self.outputs) {
             let Trend::Monomials(m) = &k.data.trend else {
@@ -227,7 +229,7 @@ impl ErrorModel {
     /// extras that are not trend-only (those come first, see
     /// `params::ErrorModelParams::extras`).
     pub fn correlation_dims(&self) -> usize {
-        self.input_names.len() - crate::features::trend_only_dims(&self.extras)
+        self.inputs.corr_dims()
     }
 
     /// Warnings about the conditioning of the fit: an output whose correlation
@@ -258,19 +260,13 @@ impl ErrorModel {
     /// ([`Feature::columns_from_poses`]).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
-        self.predict_inputs(&self.input_map().encode(q, dir)?)
+        self.predict_inputs(&self.inputs.encode(q, dir)?)
     }
 
-    /// The map from poses to this model's normalised inputs.
-    pub fn input_map(&self) -> InputMap {
-        InputMap::from_parts(
-            self.space,
-            self.n_joints,
-            &self.options.periodic,
-            &self.extras,
-            &self.input_names,
-            &self.input_norm,
-        )
+    /// The map from poses to this model's normalised inputs: space,
+    /// periodic joints, extras and normalisation.
+    pub fn input_map(&self) -> &InputMap {
+        &self.inputs
     }
 
     fn predict_inputs(&self, s: &[Vec<f64>]) -> Result<Prediction> {
@@ -317,7 +313,7 @@ impl ErrorModel {
     /// joint's direction `dir` is reversed: what an assumed λ can be worth
     /// (0 in joint space, which ignores λ).
     pub fn direction_sensitivity(&self, q: &[f64], dir: &[f64]) -> Result<f64> {
-        if self.space == Space::Js {
+        if self.space() == Space::Js {
             return Ok(0.0);
         }
         let flipped: Vec<f64> = dir.iter().map(|v| -v).collect();
@@ -345,7 +341,7 @@ impl ErrorModel {
     /// ```
     pub fn predict_mean(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.check_rows(q, dir)?;
-        let s = self.input_map().encode(q, dir)?;
+        let s = self.inputs.encode(q, dir)?;
         let per_axis: Vec<Vec<f64>> = self
             .outputs
             .par_iter()
@@ -363,9 +359,9 @@ impl ErrorModel {
             ));
         }
         for r in q.iter().chain(dir) {
-            if r.len() != self.n_joints {
+            if r.len() != self.n_joints() {
                 return Err(Error::JointCount {
-                    expected: self.n_joints,
+                    expected: self.n_joints(),
                     got: r.len(),
                 });
             }
@@ -376,13 +372,13 @@ impl ErrorModel {
     /// Predict for every row of a dataset (extra inputs from its columns).
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
-        self.predict_inputs(&self.input_map().encode_dataset(data)?)
+        self.predict_inputs(&self.inputs.encode_dataset(data)?)
     }
 }
 
 impl crate::predictor::ErrorPredictor for ErrorModel {
     fn n_joints(&self) -> usize {
-        self.n_joints
+        self.inputs.n_joints()
     }
     fn predict_errors(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         self.predict_mean(q, dir)

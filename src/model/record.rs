@@ -70,9 +70,9 @@ impl ErrorModel {
     /// commands given another robot refuse the model ([`RobotRecord::check`]).
     /// Error if the robot's joint count differs from the model's.
     pub fn record_robot(&mut self, robot: &Robot) -> Result<()> {
-        if robot.dof() != self.n_joints {
+        if robot.dof() != self.n_joints() {
             return Err(Error::JointCount {
-                expected: self.n_joints,
+                expected: self.n_joints(),
                 got: robot.dof(),
             });
         }
@@ -84,12 +84,12 @@ impl ErrorModel {
     /// joint count (`source_name`: the model file, for the message). A model
     /// that records no robot passes on its joint count alone.
     pub fn check_robot(&self, robot: &Robot, source_name: &str) -> Result<()> {
-        if robot.dof() != self.n_joints {
+        if robot.dof() != self.n_joints() {
             return Err(Error::Input {
                 source_name: source_name.into(),
                 message: format!(
                     "the model has {} joints but robot '{}' has {}",
-                    self.n_joints,
+                    self.n_joints(),
                     robot.name,
                     robot.dof()
                 ),

@@ -335,7 +335,7 @@ impl AnyModel {
     /// Short label: "EJS", "JS", "physics".
     pub fn label(&self) -> String {
         match self {
-            AnyModel::Kriging(m) => format!("{:?}", m.space).to_uppercase(),
+            AnyModel::Kriging(m) => format!("{:?}", m.space()).to_uppercase(),
             AnyModel::Physics(_) => "physics".into(),
         }
     }
@@ -343,7 +343,7 @@ impl AnyModel {
     /// One phrase: "a Kriging Ejs model", "a physics model (…)".
     pub fn describe(&self) -> String {
         match self {
-            AnyModel::Kriging(m) => format!("a Kriging {:?} model", m.space),
+            AnyModel::Kriging(m) => format!("a Kriging {:?} model", m.space()),
             AnyModel::Physics(m) => format!(
                 "a physics model ({})",
                 if m.has_tables() {

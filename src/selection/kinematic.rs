@@ -51,13 +51,17 @@ pub const KINEMATIC_ZERO_TOL: f64 = 1e-6;
 /// they do not cancel (the home pose of a campaign whose tool points one
 /// way) is predicted millimetres to metres off. Likewise a column that is
 /// rounding noise on the training poses but not zero elsewhere.
+///
+/// The inputs are `data` in `space` with the joints `periodic` as sin/cos
+/// (the model's [`InputMap`]); the monomials are those of `opts`' trend kind.
 pub fn kinematic_trends(
     data: &Dataset,
     space: Space,
+    periodic: &[usize],
     opts: &KrigingOptions,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    kinematic_trend_set(data, space, opts, robot, Some(KINEMATIC_AXIS_TOL))
+    kinematic_trend_set(data, space, periodic, opts, robot, Some(KINEMATIC_AXIS_TOL))
 }
 
 /// The kinematic *candidates* of the basis selections (PCC + PCA, GA): as
@@ -66,20 +70,22 @@ pub fn kinematic_trends(
 pub fn kinematic_candidates(
     data: &Dataset,
     space: Space,
+    periodic: &[usize],
     opts: &KrigingOptions,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    kinematic_trend_set(data, space, opts, robot, None)
+    kinematic_trend_set(data, space, periodic, opts, robot, None)
 }
 
 fn kinematic_trend_set(
     data: &Dataset,
     space: Space,
+    periodic: &[usize],
     opts: &KrigingOptions,
     robot: &Robot,
     axis_tol: Option<f64>,
 ) -> Result<[Trend; 3]> {
-    let (map, x) = InputMap::fit(data, space, &opts.periodic, &[])?;
+    let (map, x) = InputMap::fit(data, space, periodic, &[])?;
     kinematic_trend_set_in(data, &map, &x, opts.trend, robot, axis_tol)
 }
 

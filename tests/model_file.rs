@@ -1,0 +1,182 @@
+//! Model files across versions (issue 19). Version 3 stores the input map
+//! (space, periodic joints, extras, names, normalisation) as one field,
+//! `inputs`. A version-2 file written by the code before that
+//! (`tests/fixtures/model_v2.json`: periodic joints, two extras) loads and
+//! predicts bit for bit what it predicted then, and so does its version-1
+//! form (with the Cholesky factors); a refit with today's code writes the
+//! same model in the version-3 layout.
+
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::features::Feature;
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::{ErrorModel, MODEL_VERSION, Prediction};
+use robokrige::params::ErrorModelParams;
+use robokrige::space::Space;
+use serde_json::{Value, json};
+use std::path::Path;
+
+fn repo(path: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+fn fixture(name: &str) -> String {
+    std::fs::read_to_string(repo("tests/fixtures").join(name)).unwrap()
+}
+
+fn verify() -> Dataset {
+    read_csv(&repo("datasets/comau_verify.csv")).unwrap()
+}
+
+/// Every mean and standard deviation of `p`, bit for bit as `expected`
+/// (`{"mean": [[x, y, z], …], "std": …}`).
+fn assert_same_bits(p: &Prediction, expected: &Value) {
+    for (key, got) in [("mean", &p.mean), ("std", &p.std)] {
+        let want: Vec<[f64; 3]> = serde_json::from_value(expected[key].clone()).unwrap();
+        assert_eq!(want.len(), got.len(), "{key}");
+        for (w, g) in want.iter().flatten().zip(got.iter().flatten()) {
+            assert_eq!(w.to_bits(), g.to_bits(), "{key}: {w} vs {g}");
+        }
+    }
+}
+
+fn expected_predictions() -> Value {
+    serde_json::from_str(&fixture("model_v2.predictions.json")).unwrap()
+}
+
+#[test]
+fn a_version_2_file_loads_and_predicts_as_it_did() {
+    let text = fixture("model_v2.json");
+    let v2: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v2["version"], 2);
+    assert_eq!(v2["options"]["periodic"], json!([0, 5]));
+    let model = ErrorModel::from_json(&text, "model_v2.json").unwrap();
+    assert_eq!(model.version(), MODEL_VERSION);
+    assert_eq!(model.space(), Space::Ejs);
+    assert_eq!(model.periodic(), &[0, 5]);
+    assert_eq!(model.input_map().periodic(), &[0, 5]);
+    assert_eq!(model.extras().len(), 2);
+    let names: Vec<String> = serde_json::from_value(v2["input_names"].clone()).unwrap();
+    assert_eq!(model.input_names(), &names[..]);
+    assert_eq!(model.input_norm().mean.len(), names.len());
+    let v = verify();
+    let p = model.predict(&v.q, &v.dir).unwrap();
+    assert_same_bits(&p, &expected_predictions());
+
+    // saved again: version 3, the map as one field, no periodic joints in
+    // the options
+    let v3_text = model.to_json().unwrap();
+    let v3: Value = serde_json::from_str(&v3_text).unwrap();
+    assert_eq!(v3["version"], 3);
+    assert_eq!(v3["inputs"]["periodic"], json!([0, 5]));
+    assert_eq!(v3["inputs"]["names"], v2["input_names"]);
+    assert_eq!(v3["inputs"]["norm"], v2["input_norm"]);
+    assert_eq!(v3["inputs"]["extras"], v2["extras"]);
+    assert!(v3["options"].get("periodic").is_none());
+    for old in ["space", "n_joints", "input_names", "input_norm", "extras"] {
+        assert!(v3.get(old).is_none(), "{old} at the top level");
+    }
+    let back = ErrorModel::from_json(&v3_text, "model_v3.json").unwrap();
+    assert_eq!(back, model);
+    assert_same_bits(
+        &back.predict(&v.q, &v.dir).unwrap(),
+        &expected_predictions(),
+    );
+}
+
+#[test]
+fn a_version_1_file_loads_and_predicts_as_it_did() {
+    // version 1 = version 2 with each output's packed lower Cholesky factor
+    let text = fixture("model_v2.json");
+    let model = ErrorModel::from_json(&text, "model_v2.json").unwrap();
+    let v = verify();
+    model.predict(&v.q, &v.dir).unwrap(); // computes the factors
+    let mut v1: Value = serde_json::from_str(&text).unwrap();
+    v1["version"] = 1.into();
+    for (a, out) in model.outputs().iter().enumerate() {
+        let (c, _, _) = out.factors().unwrap();
+        let packed: Vec<f64> = (0..c.nrows())
+            .flat_map(|i| (0..=i).map(move |j| (i, j)))
+            .map(|(i, j)| c[(i, j)])
+            .collect();
+        v1["outputs"][a]["chol_lower"] = serde_json::to_value(packed).unwrap();
+    }
+    let v1_text = v1.to_string();
+    assert!(v1_text.len() > text.len(), "v1 stores the factors");
+    let old = ErrorModel::from_json(&v1_text, "model_v1.json").unwrap();
+    assert_eq!(old.version(), MODEL_VERSION);
+    assert_eq!(old.periodic(), &[0, 5]);
+    assert_same_bits(&old.predict(&v.q, &v.dir).unwrap(), &expected_predictions());
+}
+
+#[test]
+fn a_refit_with_todays_code_writes_the_same_model() {
+    // the fit of the fixture (tests/fixtures/README.md), through today's API
+    let data = read_csv(&repo("datasets/comau_lhs.csv")).unwrap();
+    let data = data.select(&(0..40).collect::<Vec<_>>());
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .starts(4)
+        .max_evals(80)
+        .nugget(true);
+    let refit = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .periodic(vec![0, 5])
+        .kriging(opts)
+        .extras(vec![
+            Feature::Harmonic {
+                joint: 2,
+                period_deg: 30.0,
+            },
+            Feature::PreviousDirection { joint: 1 },
+        ])
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    let loaded = ErrorModel::from_json(&fixture("model_v2.json"), "model_v2.json").unwrap();
+    // the same file, byte for byte: only the version and the layout changed
+    assert_eq!(refit.to_json().unwrap(), loaded.to_json().unwrap());
+    let v = verify();
+    assert_same_bits(
+        &refit.predict(&v.q, &v.dir).unwrap(),
+        &expected_predictions(),
+    );
+}
+
+#[test]
+fn a_version_2_file_with_impossible_inputs_is_refused() {
+    let text = fixture("model_v2.json");
+    for (what, edit) in [
+        (
+            "periodic joint 9",
+            Box::new(|v: &mut Value| v["options"]["periodic"] = json!([0, 8]))
+                as Box<dyn Fn(&mut Value)>,
+        ),
+        (
+            "a repeated periodic joint",
+            Box::new(|v: &mut Value| v["options"]["periodic"] = json!([0, 0])),
+        ),
+        (
+            "one name short",
+            Box::new(|v: &mut Value| {
+                v["input_names"].as_array_mut().unwrap().pop();
+            }),
+        ),
+        (
+            "no space",
+            Box::new(|v: &mut Value| {
+                v.as_object_mut().unwrap().remove("space");
+            }),
+        ),
+    ] {
+        let mut v: Value = serde_json::from_str(&text).unwrap();
+        edit(&mut v);
+        let e = ErrorModel::from_json(&v.to_string(), "bad_v2.json").unwrap_err();
+        assert!(e.to_string().contains("bad_v2.json"), "{what}: {e}");
+    }
+    // in version 3 too
+    let model = ErrorModel::from_json(&text, "model_v2.json").unwrap();
+    let mut v: Value = serde_json::from_str(&model.to_json().unwrap()).unwrap();
+    v["inputs"]["periodic"] = json!([6]);
+    let e = ErrorModel::from_json(&v.to_string(), "bad_v3.json").unwrap_err();
+    assert!(e.to_string().contains("periodic joint 7"), "{e}");
+}
