@@ -430,8 +430,16 @@ fn run_all(
         .map(|r| {
             let o = stage(r);
             let mut obj = ln_psi_grad_objective(problem, unpack);
+            // a run that has stopped once resumes from its known ln ψ and
+            // gradient instead of evaluating its point again
+            let known = match &r.result {
+                Some(last) if r.grad.len() == r.x.len() => {
+                    Some((last.f, std::mem::take(&mut r.grad)))
+                }
+                _ => None,
+            };
             // the gradient at the best point (the one the run returns)
-            let (mut best_f, mut best_g) = (f64::INFINITY, Vec::new());
+            let (mut best_f, mut best_g) = known.clone().unwrap_or((f64::INFINITY, Vec::new()));
             let tracked = |z: &[f64], g: &mut [f64]| {
                 let f = obj(z, g);
                 if f < best_f {
@@ -441,7 +449,12 @@ fn run_all(
                 f
             };
             let warm = (!r.hinv.is_empty()).then(|| std::mem::take(&mut r.hinv));
-            let (res, h) = optim::quasi_newton_warm(tracked, &r.x, warm, bounds, &o);
+            let (res, h) = match &known {
+                Some((f0, g0)) => {
+                    optim::quasi_newton_resume(tracked, &r.x, *f0, g0, warm, bounds, &o)
+                }
+                None => optim::quasi_newton_warm(tracked, &r.x, warm, bounds, &o),
+            };
             r.grad = best_g;
             let spent = res.evals;
             r.x.clone_from(&res.x);
