@@ -32,9 +32,7 @@ pub use ga::{GaOptions, GaResult, ga};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
 pub use lm::{LmOptions, LmResult, LmStop, levenberg_marquardt, numerical_jacobian};
-pub use quasi_newton::{
-    QuasiNewtonOptions, predicted_decrease, quasi_newton, quasi_newton_resume, quasi_newton_warm,
-};
+pub use quasi_newton::{QuasiNewtonOptions, quasi_newton, quasi_newton_resume, quasi_newton_warm};
 
 use rand::RngExt;
 use rayon::prelude::*;

@@ -69,17 +69,6 @@ where
     quasi_newton_warm(fg, x0, None, bounds, opts).0
 }
 
-/// The decrease of `f` the quasi-Newton model predicts from `x` (gradient
-/// `g`, inverse Hessian approximation `hinv`) to its minimum over the free
-/// coordinates (those not held at a bound by the gradient):
-/// `½ gᵀ H g` (half the squared Newton decrement). Exact for a quadratic
-/// with the true inverse Hessian; a guide otherwise.
-pub fn predicted_decrease(x: &[f64], g: &[f64], hinv: &[Vec<f64>], bounds: &Bounds) -> f64 {
-    let (free, _) = free_set(x, g, bounds);
-    let p = newton_direction(hinv, g, &free);
-    -0.5 * p.iter().zip(g).map(|(a, b)| a * b).sum::<f64>()
-}
-
 /// [`quasi_newton`] from a given inverse Hessian approximation (e.g. the
 /// one a run on a subset of the data ended with), returning the final one
 /// too. `None` starts from the identity, scaled after the first step.
@@ -268,31 +257,6 @@ mod tests {
         assert_eq!(hw, hr);
         assert_eq!(warm.iterations, resumed.iterations);
         assert_eq!(warm.evals, resumed.evals + 1);
-    }
-
-    /// For a quadratic `f = ½ xᵀAx` and the true inverse Hessian, the
-    /// predicted decrease is `f(x) − f(0)`; a coordinate the gradient holds
-    /// at its bound does not count.
-    #[test]
-    fn predicted_decrease_is_exact_on_a_quadratic() {
-        let a = [[4.0, 1.0], [1.0, 2.0]];
-        let det = 4.0 * 2.0 - 1.0;
-        let hinv = vec![vec![2.0 / det, -1.0 / det], vec![-1.0 / det, 4.0 / det]];
-        let x = [0.7, -1.3];
-        let g = [
-            a[0][0] * x[0] + a[0][1] * x[1],
-            a[1][0] * x[0] + a[1][1] * x[1],
-        ];
-        let f = 0.5 * (x[0] * g[0] + x[1] * g[1]);
-        let free = Bounds::uniform(2, -5.0, 5.0);
-        assert!((predicted_decrease(&x, &g, &hinv, &free) - f).abs() < 1e-12);
-        // x1 at its upper bound with the gradient pushing up: only x0 is free
-        let held = Bounds {
-            lo: vec![-5.0, -5.0],
-            hi: vec![5.0, -1.3],
-        };
-        let want = 0.5 * g[0] * hinv[0][0] * g[0];
-        assert!((predicted_decrease(&x, &g, &hinv, &held) - want).abs() < 1e-12);
     }
 
     /// An ill-scaled quadratic with one coordinate pushed onto its bound: the
