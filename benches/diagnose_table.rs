@@ -135,11 +135,9 @@ fn main() {
                 unreachable!()
             };
             let t0 = Instant::now();
-            let opts = DiagnoseOptions {
-                seed,
-                robot: Some(robokrige::kinematics::preset("comau-nj220").unwrap()),
-                ..DiagnoseOptions::default()
-            };
+            let opts = DiagnoseOptions::default()
+                .seed(seed)
+                .robot(Some(robokrige::kinematics::preset("comau-nj220").unwrap()));
             let d = diagnose(&data, &opts, &|_| {}).expect("diagnose");
             let secs = t0.elapsed().as_secs_f64();
             let base = *without.entry(seed).or_insert_with(|| {
@@ -148,10 +146,7 @@ fn main() {
                 else {
                     unreachable!()
                 };
-                let o = DiagnoseOptions {
-                    max_effects: 0,
-                    ..opts.clone()
-                };
+                let o = opts.clone().max_effects(0);
                 diagnose(&clean, &o, &|_| {})
                     .expect("diagnose")
                     .before

@@ -26,17 +26,17 @@ fn campaign(rows: usize, seed: u64, effect: Option<&str>) -> Dataset {
 }
 
 fn quick() -> DiagnoseOptions {
-    DiagnoseOptions {
-        kriging: KrigingOptions::default()
-            .optimizer(OptimizerKind::HookeJeeves)
-            .nugget(true)
-            .max_evals(300)
-            .starts(2),
-        folds: 5,
-        permutations: 999,
-        max_effects: 2,
-        ..DiagnoseOptions::default()
-    }
+    DiagnoseOptions::default()
+        .kriging(
+            KrigingOptions::default()
+                .optimizer(OptimizerKind::HookeJeeves)
+                .nugget(true)
+                .max_evals(300)
+                .starts(2),
+        )
+        .folds(5)
+        .permutations(999)
+        .max_effects(2)
 }
 
 #[test]
@@ -70,12 +70,10 @@ fn a_tracker_bump_is_found_at_its_row_added_and_removed_from_the_residual() {
 #[test]
 fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
     let data = campaign(160, 4, Some("tracker-step:row=80,dx=0.2,dy=-0.15,dz=0.15"));
-    let o = DiagnoseOptions {
-        kriging: KrigingOptions::default(),
-        refit_rows: 100,
-        max_effects: 1,
-        ..quick()
-    };
+    let o = quick()
+        .kriging(KrigingOptions::default())
+        .refit_rows(100)
+        .max_effects(1);
     let d = diagnose(&data, &o, &|_| {}).unwrap();
     assert_eq!(d.cv_mode(), "closed-form");
     let top = &d.effects[0];
@@ -84,15 +82,7 @@ fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
     assert!(top.accepted);
     assert!(d.after.pooled_rmse_mm < 0.7 * d.before.pooled_rmse_mm);
     // below it, the same campaign is refitted per fold
-    let refit = diagnose(
-        &data,
-        &DiagnoseOptions {
-            refit_rows: 1000,
-            ..o.clone()
-        },
-        &|_| {},
-    )
-    .unwrap();
+    let refit = diagnose(&data, &o.clone().refit_rows(1000), &|_| {}).unwrap();
     assert_eq!(refit.cv_mode(), "refit");
     assert_eq!(refit.effects[0].params["row"], top.params["row"]);
 }
@@ -294,15 +284,7 @@ fn a_servo_lag_is_traced_to_the_joints_moves_and_modelled_end_to_end() {
     assert!(!check.partly, "{check:?}");
     // the same true robot and poses without the lag
     let clean = campaign(200, 1, None);
-    let c = diagnose(
-        &clean,
-        &DiagnoseOptions {
-            max_effects: 0,
-            ..quick()
-        },
-        &|_| {},
-    )
-    .unwrap();
+    let c = diagnose(&clean, &quick().max_effects(0), &|_| {}).unwrap();
     assert!(
         d.before.pooled_rmse_mm > 2.0 * c.before.pooled_rmse_mm,
         "the lag is large: {} vs {}",
@@ -450,22 +432,10 @@ fn motion_history_features_follow_the_sequence() {
 fn bad_options_are_errors() {
     let data = campaign(40, 1, None);
     for o in [
-        DiagnoseOptions {
-            permutations: 5,
-            ..quick()
-        },
-        DiagnoseOptions {
-            fdr: 0.0,
-            ..quick()
-        },
-        DiagnoseOptions {
-            folds: 100,
-            ..quick()
-        },
-        DiagnoseOptions {
-            refit_rows: 99,
-            ..quick()
-        },
+        quick().permutations(5),
+        quick().fdr(0.0),
+        quick().folds(100),
+        quick().refit_rows(99),
     ] {
         assert!(diagnose(&data, &o, &|_| {}).is_err());
     }

@@ -348,21 +348,21 @@ pub fn diagnose(
     let (v, model) = py
         .detach(|| {
             let (space, optimizer) = diagnose_method(method)?;
-            let o = DiagnoseOptions {
-                space,
-                periodic: parse_periodic(periodic, &d.q)?,
-                kriging: crate::access::diagnose_options(optimizer, nugget, seed),
-                folds,
-                seed,
-                permutations,
-                fdr,
-                max_effects,
-                robot: robot
-                    .as_deref()
-                    .map(robokrige::kinematics::load_robot)
-                    .transpose()?,
-                ..DiagnoseOptions::default()
-            };
+            let o = DiagnoseOptions::default()
+                .space(space)
+                .periodic(parse_periodic(periodic, &d.q)?)
+                .kriging(crate::access::diagnose_options(optimizer, nugget, seed))
+                .folds(folds)
+                .seed(seed)
+                .permutations(permutations)
+                .fdr(fdr)
+                .max_effects(max_effects)
+                .robot(
+                    robot
+                        .as_deref()
+                        .map(robokrige::kinematics::load_robot)
+                        .transpose()?,
+                );
             robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
                 format!("e.g. the first {n} rows")
             })?;

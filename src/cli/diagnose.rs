@@ -126,26 +126,27 @@ pub struct DiagnoseArgs {
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
     let (space, optimizer) = robokrige::diagnose::base_method(&a.method)?;
-    Ok(DiagnoseOptions {
-        space,
-        periodic: robokrige::space::parse_periodic(&a.periodic, &data.q)?,
-        kriging: KrigingOptions::default()
-            .optimizer(optimizer)
-            .nugget(!a.no_nugget)
-            .seed(a.seed),
-        folds: a.folds,
-        seed: a.seed,
-        permutations: a.permutations,
-        fdr: a.fdr,
-        max_effects: a.max_effects,
-        refit_rows: a.refit_rows,
-        robot: a
-            .robot
-            .as_deref()
-            .map(|r| kinematics::load_robot_with_tool(r, a.tool.as_deref()))
-            .transpose()?,
-        ..DiagnoseOptions::default()
-    })
+    Ok(DiagnoseOptions::default()
+        .space(space)
+        .periodic(robokrige::space::parse_periodic(&a.periodic, &data.q)?)
+        .kriging(
+            KrigingOptions::default()
+                .optimizer(optimizer)
+                .nugget(!a.no_nugget)
+                .seed(a.seed),
+        )
+        .folds(a.folds)
+        .seed(a.seed)
+        .permutations(a.permutations)
+        .fdr(a.fdr)
+        .max_effects(a.max_effects)
+        .refit_rows(a.refit_rows)
+        .robot(
+            a.robot
+                .as_deref()
+                .map(|r| kinematics::load_robot_with_tool(r, a.tool.as_deref()))
+                .transpose()?,
+        ))
 }
 
 pub(super) fn rmse3(v: &[f64; 3]) -> String {
@@ -177,8 +178,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let opts = options(&a, &data)?;
     if a.calibrate {
         let robot = opts
-            .robot
-            .as_ref()
+            .get_robot()
             .expect("clap: --calibrate requires --robot");
         let (dh, lm) = robokrige::holdout::calibrate(&data, robot)?;
         data = robokrige::holdout::residual(&data, &dh)?;

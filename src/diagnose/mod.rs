@@ -65,26 +65,26 @@ const CONFIRMATIONS: usize = 3;
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiagnoseOptions {
     /// Input space of every model fitted: JS `[θ]` or EJS `[θ, λ]`.
-    pub space: Space,
+    pub(crate) space: Space,
     /// Joints (0-based) entered as `(sin θ, cos θ)` in every model fitted
     /// ([`crate::params::ErrorModelParams::periodic`]); empty by default.
-    pub periodic: Vec<usize>,
+    pub(crate) periodic: Vec<usize>,
     /// Kriging options of every fit (trend, correlation, nugget, optimiser).
-    pub kriging: KrigingOptions,
+    pub(crate) kriging: KrigingOptions,
     /// Number of CV folds K.
-    pub folds: usize,
+    pub(crate) folds: usize,
     /// Seed of the fold partition and of the resamples.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Most sign-flip resamples per candidate (a sign-flip permutation test;
     /// a clearly null candidate stops after a batch or two). Raised to
     /// [`min_resamples`] of the round's candidates when lower, so that one
     /// real effect among F candidates can reach `q ≤ fdr` (its p-value is at
     /// least `1/(1 + resamples)`); the report gives the number used.
-    pub permutations: usize,
+    pub(crate) permutations: usize,
     /// False-discovery rate for the Benjamini–Hochberg step.
-    pub fdr: f64,
+    pub(crate) fdr: f64,
     /// Most effects added before the loop stops.
-    pub max_effects: usize,
+    pub(crate) max_effects: usize,
     /// Relative drop of the pooled CV RMSE an effect must bring to count,
     /// or its worth at the noise floor ([`Worth`]): a candidate is
     /// *significant* when its q-value is within `fdr` and its closed-form CV
@@ -92,12 +92,12 @@ pub struct DiagnoseOptions {
     /// with a note, not flagged), and it is *kept* when the refit CV
     /// confirms the drop. A candidate whose statistic comes from
     /// re-estimated ξ stays significant only if that confirmation succeeds.
-    pub min_gain: f64,
+    pub(crate) min_gain: f64,
     /// The measured robot: enables the joint cross-talk candidates (Jacobian).
-    pub robot: Option<crate::kinematics::Robot>,
+    pub(crate) robot: Option<crate::kinematics::Robot>,
     /// Candidates (largest statistic first) tested again at the ξ the model
     /// would choose with them ([`gls::refit_systems`]).
-    pub refine: usize,
+    pub(crate) refine: usize,
     /// Largest campaign on which every CV refits each fold and every fit
     /// converges ξ on all rows. Above it (a whole real campaign) each CV is
     /// closed-form at the hyperparameters of the model fitted on all rows
@@ -108,7 +108,7 @@ pub struct DiagnoseOptions {
     /// on the same seeded subset of this many rows, then solves on all of
     /// them ([`KrigingOptions::converge_rows`]). The report says which CV
     /// was used ([`Diagnosis::cv_mode`]).
-    pub refit_rows: usize,
+    pub(crate) refit_rows: usize,
 }
 
 impl Default for DiagnoseOptions {
@@ -159,6 +159,141 @@ impl DiagnoseOptions {
             )));
         }
         self.kriging.validate()
+    }
+}
+
+/// Builder setters (named after the fields; they document each option) and
+/// getters (`get_*`).
+impl DiagnoseOptions {
+    /// Input space of every model fitted: JS `[θ]` or EJS `[θ, λ]`.
+    pub fn space(mut self, space: Space) -> Self {
+        self.space = space;
+        self
+    }
+    /// Joints (0-based) entered as `(sin θ, cos θ)` in every model fitted
+    /// ([`crate::params::ErrorModelParams::periodic`]); empty by default.
+    pub fn periodic(mut self, joints: Vec<usize>) -> Self {
+        self.periodic = joints;
+        self
+    }
+    /// Kriging options of every fit (trend, correlation, nugget, optimiser).
+    pub fn kriging(mut self, kriging: KrigingOptions) -> Self {
+        self.kriging = kriging;
+        self
+    }
+    /// Number of CV folds K.
+    pub fn folds(mut self, k: usize) -> Self {
+        self.folds = k;
+        self
+    }
+    /// Seed of the fold partition and of the resamples.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+    /// Most sign-flip resamples per candidate (a sign-flip permutation test;
+    /// a clearly null candidate stops after a batch or two). Raised to
+    /// [`min_resamples`] of the round's candidates when lower, so that one
+    /// real effect among F candidates can reach `q ≤ fdr` (its p-value is at
+    /// least `1/(1 + resamples)`); the report gives the number used.
+    pub fn permutations(mut self, n: usize) -> Self {
+        self.permutations = n;
+        self
+    }
+    /// False-discovery rate for the Benjamini–Hochberg step.
+    pub fn fdr(mut self, rate: f64) -> Self {
+        self.fdr = rate;
+        self
+    }
+    /// Most effects added before the loop stops.
+    pub fn max_effects(mut self, n: usize) -> Self {
+        self.max_effects = n;
+        self
+    }
+    /// Relative drop of the pooled CV RMSE an effect must bring to count,
+    /// or its worth at the noise floor ([`Worth`]): a candidate is
+    /// *significant* when its q-value is within `fdr` and its closed-form CV
+    /// drop is worth this (a detectable but negligible effect is ranked,
+    /// with a note, not flagged), and it is *kept* when the refit CV
+    /// confirms the drop. A candidate whose statistic comes from
+    /// re-estimated ξ stays significant only if that confirmation succeeds.
+    pub fn min_gain(mut self, gain: f64) -> Self {
+        self.min_gain = gain;
+        self
+    }
+    /// The measured robot: enables the joint cross-talk candidates (Jacobian).
+    pub fn robot(mut self, robot: Option<crate::kinematics::Robot>) -> Self {
+        self.robot = robot;
+        self
+    }
+    /// Candidates (largest statistic first) tested again at the ξ the model
+    /// would choose with them ([`gls::refit_systems`]).
+    pub fn refine(mut self, n: usize) -> Self {
+        self.refine = n;
+        self
+    }
+    /// Largest campaign on which every CV refits each fold and every fit
+    /// converges ξ on all rows. Above it (a whole real campaign) each CV is
+    /// closed-form at the hyperparameters of the model fitted on all rows
+    /// ([`crate::cv::cross_validate_closed_form`]: ten refits of an m × m
+    /// likelihood search saved per comparison, and a model with and one
+    /// without an effect are compared alike), and every fit — the models
+    /// compared and each re-estimation of ξ for a candidate — converges ξ
+    /// on the same seeded subset of this many rows, then solves on all of
+    /// them ([`KrigingOptions::converge_rows`]). The report says which CV
+    /// was used ([`Diagnosis::cv_mode`]).
+    pub fn refit_rows(mut self, rows: usize) -> Self {
+        self.refit_rows = rows;
+        self
+    }
+
+    /// The input space of every model fitted.
+    pub fn get_space(&self) -> Space {
+        self.space
+    }
+    /// The joints (0-based) entered as (sin θ, cos θ).
+    pub fn get_periodic(&self) -> &[usize] {
+        &self.periodic
+    }
+    /// The Kriging options of every fit.
+    pub fn get_kriging(&self) -> &KrigingOptions {
+        &self.kriging
+    }
+    /// The number of CV folds K.
+    pub fn get_folds(&self) -> usize {
+        self.folds
+    }
+    /// The seed of the fold partition and of the resamples.
+    pub fn get_seed(&self) -> u64 {
+        self.seed
+    }
+    /// The most sign-flip resamples per candidate.
+    pub fn get_permutations(&self) -> usize {
+        self.permutations
+    }
+    /// The false-discovery rate of the Benjamini–Hochberg step.
+    pub fn get_fdr(&self) -> f64 {
+        self.fdr
+    }
+    /// The most effects added before the loop stops.
+    pub fn get_max_effects(&self) -> usize {
+        self.max_effects
+    }
+    /// The relative drop of the pooled CV RMSE an effect must bring.
+    pub fn get_min_gain(&self) -> f64 {
+        self.min_gain
+    }
+    /// The measured robot (enables the cross-talk candidates).
+    pub fn get_robot(&self) -> Option<&crate::kinematics::Robot> {
+        self.robot.as_ref()
+    }
+    /// The candidates tested again at re-estimated ξ.
+    pub fn get_refine(&self) -> usize {
+        self.refine
+    }
+    /// The largest campaign on which every CV refits each fold.
+    pub fn get_refit_rows(&self) -> usize {
+        self.refit_rows
     }
 }
 
