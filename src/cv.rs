@@ -14,7 +14,10 @@
 //! with their statistics.
 
 use crate::dataset::Dataset;
+use crate::methods::Method;
 use crate::model::ErrorModel;
+use crate::params::{ErrorModelParams, ValidErrorModelParams};
+use crate::selection::GaProgress;
 use crate::stats::{ErrorSummary, summarize};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -122,6 +125,76 @@ pub fn cross_validate_closed_form(
     })
 }
 
+/// Rows of the largest training set of a `k`-fold CV of `rows` rows
+/// ([`kfold_partition`]'s smallest fold held out): what a fit in a fold
+/// must be sized for.
+pub fn largest_training_rows(rows: usize, k: usize) -> usize {
+    rows - rows / k.max(1)
+}
+
+/// K-fold CV of a named method, refitting it ([`Method::params`] with
+/// `seed`, no nugget for the papers' methods) on every training fold, its
+/// trend selection included; the folds come from `seed` too. `fold_done`
+/// is called after each fold's fit, `ga` with the GA's generations.
+pub fn cross_validate_method(
+    data: &Dataset,
+    method: Method,
+    k: usize,
+    seed: u64,
+    fold_done: &dyn Fn(),
+    ga: GaProgress,
+) -> Result<CvResult> {
+    let params = method.params(seed, false).check()?;
+    cross_validate_refit(data, k, seed, |train| {
+        let model = params.fit_with_progress(train, ga);
+        fold_done();
+        model
+    })
+}
+
+/// How [`closed_form_model`] chose the hyperparameters on a subset.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HyperSubset {
+    /// The first rows ξ and the nugget were chosen on.
+    pub rows: usize,
+    /// Wall time of that fit, s.
+    pub seconds: f64,
+    /// Wall time of the factorisation of all rows at those values, s.
+    pub refit_seconds: f64,
+}
+
+/// The model of a closed-form CV ([`cross_validate_closed_form`]) of
+/// `data`: `params` fitted on all rows or, with `hyper_rows = Some(n)`, ξ
+/// and the nugget chosen on the first `n < data.len()` rows and all rows
+/// then factorised once at those values ([`ErrorModelParams::fixed_from`]):
+/// the way to CV thousands of rows. The subset's figures come with it.
+pub fn closed_form_model(
+    data: &Dataset,
+    params: &ValidErrorModelParams,
+    hyper_rows: Option<usize>,
+) -> Result<(ErrorModel, Option<HyperSubset>)> {
+    let Some(n) = hyper_rows else {
+        return Ok((params.fit(data)?, None));
+    };
+    if n >= data.len() {
+        return Err(Error::InvalidParameter(format!(
+            "hyperparameters on the first {n} rows: the campaign has only {} rows",
+            data.len()
+        )));
+    }
+    let t = Instant::now();
+    let sub = params.fit(&data.select(&(0..n).collect::<Vec<_>>()))?;
+    let seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let model = ErrorModelParams::fixed_from(sub).check()?.fit(data)?;
+    let subset = HyperSubset {
+        rows: n,
+        seconds,
+        refit_seconds: t.elapsed().as_secs_f64(),
+    };
+    Ok((model, Some(subset)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,5 +211,50 @@ mod tests {
         assert_ne!(f, kfold_partition(23, 5, 2).unwrap());
         assert!(kfold_partition(3, 5, 1).is_err());
         assert!(kfold_partition(10, 1, 1).is_err());
+        // the largest training set holds out the smallest fold (4 rows)
+        assert_eq!(largest_training_rows(23, 5), 19);
+    }
+
+    fn campaign(rows: usize) -> Dataset {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+        crate::dataset::read_csv(path.as_ref())
+            .unwrap()
+            .select(&(0..rows).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn closed_form_model_on_a_subset_keeps_its_hyperparameters() {
+        use crate::kriging::KrigingOptions;
+        let data = campaign(40);
+        let opts = KrigingOptions::default().corr_auto(false).starts(2);
+        let params = ErrorModelParams::new().kriging(opts).check().unwrap();
+        let (full, none) = closed_form_model(&data, &params, None).unwrap();
+        assert!(none.is_none());
+        assert_eq!(full, params.fit(&data).unwrap());
+        let (model, subset) = closed_form_model(&data, &params, Some(25)).unwrap();
+        assert_eq!(subset.unwrap().rows, 25);
+        let sub = params
+            .fit(&data.select(&(0..25).collect::<Vec<_>>()))
+            .unwrap();
+        for (a, b) in model.outputs().iter().zip(sub.outputs()) {
+            assert_eq!(a.data().theta, b.data().theta);
+        }
+        // fitted on all rows, so the closed form runs on it
+        assert!(cross_validate_closed_form(&data, &model, 5, 1).is_ok());
+        assert!(closed_form_model(&data, &params, Some(40)).is_err());
+    }
+
+    #[test]
+    fn method_cv_refits_the_method_in_every_fold() {
+        let data = campaign(30);
+        let folds = std::sync::atomic::AtomicUsize::new(0);
+        let done = || {
+            folds.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        };
+        let cv = cross_validate_method(&data, Method::EjsHj, 3, 1, &done, &|_, _, _| {}).unwrap();
+        assert_eq!(folds.into_inner(), 3);
+        let params = Method::EjsHj.params(1, false).check().unwrap();
+        let by_hand = cross_validate_refit(&data, 3, 1, |t| params.fit(t)).unwrap();
+        assert_eq!(cv.residuals, by_hand.residuals);
     }
 }

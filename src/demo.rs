@@ -5,7 +5,7 @@
 //! campaign with an undeclared tracker bump. [`run_demo`] computes it all
 //! and returns a [`Demo`]; the CLI writes its files, plots and report.
 
-use crate::cv::{CvResult, cross_validate_closed_form, cross_validate_refit};
+use crate::cv::{CvResult, cross_validate_closed_form, cross_validate_method};
 use crate::dataset::Dataset;
 use crate::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use crate::kinematics::{self, Robot};
@@ -206,7 +206,7 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
             2,
             &format!("{k}-fold CV of {} (refit in every fold)", m.name()),
         );
-        let cv = cross_validate_refit(&lhs, k, SEED, |train| fit(m, train))?;
+        let cv = cross_validate_method(&lhs, m, k, SEED, &|| {}, &|_, _, _| {})?;
         methods.push(MethodCv { method: m, cv });
     }
     let mut ejs_ga = None;

@@ -105,6 +105,16 @@ pub struct HoldoutCv {
     pub hyper_seconds: f64,
 }
 
+impl HoldoutCv {
+    /// Max 3D error of each of the [`CV_MODELS`] over all folds, on the
+    /// held-out rows it does not flag ([`fold_max_covered_mm`](Self::fold_max_covered_mm)), mm.
+    pub fn max_covered_mm(&self) -> [f64; 5] {
+        self.fold_max_covered_mm
+            .iter()
+            .fold([0.0f64; 5], |a, b| std::array::from_fn(|i| a[i].max(b[i])))
+    }
+}
+
 /// K-fold CV (fold partition from `seed`) of the five models on all rows.
 /// The D-H calibration is refitted on every training fold. The Kriging
 /// models keep the hyperparameters (ξ, nugget) chosen with `base` (Kriging
@@ -353,4 +363,22 @@ fn fit_kinematic(
         .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
         .check()?
         .fit(data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn max_covered_is_the_worst_fold_per_model() {
+        let cv = HoldoutCv {
+            rows: Vec::new(),
+            fold_max_mm: Vec::new(),
+            fold_max_covered_mm: vec![[1.0, 0.5, 0.0, 2.0, 0.1], [0.5, 0.7, 0.0, 1.0, 0.3]],
+            flagged: vec![Vec::new(); 5],
+            hyper_rows: 10,
+            hyper_seconds: 0.0,
+        };
+        assert_eq!(cv.max_covered_mm(), [1.0, 0.7, 0.0, 2.0, 0.3]);
+    }
 }

@@ -111,6 +111,13 @@ impl Method {
         }
     }
 
+    /// Whether the method selects its trend (PCC + PCA or GA), so that the
+    /// rows of a robot's identification Jacobian can join its candidates
+    /// ([`Method::trend`]).
+    pub fn selects_trend(self) -> bool {
+        matches!(self, Method::EjsPca | Method::EjsGa)
+    }
+
     /// The method's trend: the PCC + PCA or GA selection with the papers'
     /// constants (the rows of `kinematic`'s identification Jacobian among
     /// the candidates when given), the options' trend for the others.

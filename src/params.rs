@@ -24,7 +24,7 @@ use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
 use crate::kinematics::Robot;
-use crate::kriging::{KrigingOptions, TrainingInputs, Trend};
+use crate::kriging::{KrigingOptions, OptimizerKind, TrainingInputs, Trend};
 use crate::model::{ErrorModel, fit_outputs};
 use crate::selection::{
     BasisSelector, Candidates, Ga, GaProgress, KINEMATIC_AXIS_TOL, PccPca, Selection,
@@ -172,6 +172,110 @@ impl ErrorModelParams {
         self
     }
 
+    /// The input space.
+    pub fn get_space(&self) -> Space {
+        self.space
+    }
+
+    /// The joints entered as `(sin θ, cos θ)`.
+    pub fn get_periodic(&self) -> &[usize] {
+        &self.periodic
+    }
+
+    /// The Kriging options.
+    pub fn get_kriging(&self) -> &KrigingOptions {
+        &self.kriging
+    }
+
+    /// How the trend is chosen.
+    pub fn get_trend(&self) -> &TrendSpec {
+        &self.trend
+    }
+
+    /// The robot recorded in the model, if any.
+    pub fn get_robot(&self) -> Option<&Robot> {
+        self.robot.as_ref()
+    }
+
+    /// The robot whose identification Jacobian enters the trend (the
+    /// kinematic trend, or the kinematic candidates of a selection), if any.
+    pub fn kinematic_robot(&self) -> Option<&Robot> {
+        match &self.trend {
+            TrendSpec::Kinematic(r) => Some(r),
+            TrendSpec::PccPca { kinematic, .. } | TrendSpec::Ga { kinematic, .. } => {
+                kinematic.as_deref()
+            }
+            TrendSpec::Options | TrendSpec::PerAxis(_) => None,
+        }
+    }
+
+    /// The settings for reports, as `(name, value)` pairs in the command
+    /// line's words: `space` (`ejs`), `trend` (the options' kind, `+
+    /// kinematic` when [`kinematic_robot`](Self::kinematic_robot) is set),
+    /// `corr` (`auto` or the family), `optimizer` (`bfgs`, `gps`, `hj`),
+    /// `nugget` (`estimated` or `none (interpolating)`), and `periodic`
+    /// (`q4,q6`) when there are periodic joints.
+    pub fn settings(&self) -> Vec<(&'static str, String)> {
+        let opts = &self.kriging;
+        let mut v = vec![
+            ("space", format!("{:?}", self.space).to_lowercase()),
+            (
+                "trend",
+                format!("{:?}", opts.get_trend()).to_lowercase()
+                    + if self.kinematic_robot().is_some() {
+                        " + kinematic"
+                    } else {
+                        ""
+                    },
+            ),
+            (
+                "corr",
+                if opts.get_corr_auto() {
+                    "auto".to_string()
+                } else {
+                    opts.get_corr().to_string()
+                },
+            ),
+            (
+                "optimizer",
+                match opts.get_optimizer() {
+                    OptimizerKind::Bfgs => "bfgs",
+                    OptimizerKind::Gps => "gps",
+                    OptimizerKind::HookeJeeves => "hj",
+                }
+                .to_string(),
+            ),
+            (
+                "nugget",
+                if opts.get_nugget() {
+                    "estimated"
+                } else {
+                    "none (interpolating)"
+                }
+                .to_string(),
+            ),
+        ];
+        if !self.periodic.is_empty() {
+            let p: Vec<String> = self
+                .periodic
+                .iter()
+                .map(|j| format!("q{}", j + 1))
+                .collect();
+            v.push(("periodic", p.join(",")));
+        }
+        v
+    }
+
+    /// [`settings`](Self::settings) as one line: `space ejs, trend
+    /// constant, …`.
+    pub fn settings_line(&self) -> String {
+        self.settings()
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// Check the combination and every value.
     pub fn check(self) -> Result<ValidErrorModelParams> {
         self.kriging.validate()?;
@@ -309,5 +413,43 @@ impl ValidErrorModelParams {
                 kinematic,
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kriging::{Correlation, TrendKind};
+
+    #[test]
+    fn settings_name_every_choice_in_the_command_lines_words() {
+        let p = ErrorModelParams::new();
+        assert_eq!(
+            p.settings_line(),
+            "space ejs, trend constant, corr auto, optimizer bfgs, nugget estimated"
+        );
+        let opts = KrigingOptions::default()
+            .trend(TrendKind::Linear)
+            .corr(Correlation::Matern52)
+            .corr_auto(false)
+            .optimizer(OptimizerKind::HookeJeeves)
+            .nugget(false);
+        let robot = crate::kinematics::load_robot("comau-nj220").unwrap();
+        let p = ErrorModelParams::new()
+            .space(Space::Js)
+            .periodic(vec![3, 5])
+            .kriging(opts)
+            .trend(TrendSpec::Ga {
+                folds: 10,
+                kinematic: Some(Box::new(robot.clone())),
+            });
+        assert_eq!(p.kinematic_robot(), Some(&robot));
+        let s = p.settings();
+        assert_eq!(s[1], ("trend", "linear + kinematic".to_string()));
+        assert_eq!(s[2].1, Correlation::Matern52.to_string());
+        assert_eq!(s[3], ("optimizer", "hj".to_string()));
+        assert_eq!(s[4], ("nugget", "none (interpolating)".to_string()));
+        assert_eq!(s[5], ("periodic", "q4,q6".to_string()));
+        assert_eq!(p.get_robot(), None);
     }
 }

@@ -4,8 +4,10 @@ use super::fit::ModelArgs;
 use super::progress::bar;
 use clap::Args;
 use clap::ValueEnum;
-use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
-use robokrige::params::ErrorModelParams;
+use robokrige::cv::{
+    closed_form_model, cross_validate_closed_form, cross_validate_method, cross_validate_refit,
+    largest_training_rows,
+};
 use robokrige::plot::box_plot;
 use robokrige::vec3::norms;
 use robokrige::{Error, Result};
@@ -73,9 +75,8 @@ pub fn run(a: CvArgs) -> Result<()> {
         return run_methods(&a, list);
     }
     let data = super::read_data(&a.data)?;
-    let choice = a.model.resolve(&data)?;
-    let (space, opts) = (choice.space, &choice.opts);
-    super::plan_fit("cv", data.len(), opts.get_optimizer(), None)?;
+    let params = a.model.resolve(&data)?;
+    super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
     if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
         return Err(Error::InvalidParameter(
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),
@@ -87,12 +88,13 @@ pub fn run(a: CvArgs) -> Result<()> {
             data.len()
         )));
     }
+    let params = params.check()?;
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
         Mode::Refit => {
             let pb = bar(a.folds as u64, "folds");
             let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-                let m = choice.fit(train);
+                let m = params.fit(train);
                 pb.inc(1);
                 m
             });
@@ -100,32 +102,24 @@ pub fn run(a: CvArgs) -> Result<()> {
             res?
         }
         Mode::ClosedForm => {
-            let model = match a.hyper_rows {
-                Some(n) if n < data.len() => {
-                    let sub = data.select(&(0..n).collect::<Vec<_>>());
-                    let t = std::time::Instant::now();
-                    let m = choice.fit(&sub)?;
-                    eprintln!(
-                        "hyperparameters chosen on the first {n} rows in {:.1} s",
-                        t.elapsed().as_secs_f64()
-                    );
-                    let t = std::time::Instant::now();
-                    let m = ErrorModelParams::fixed_from(m).check()?.fit(&data)?;
-                    eprintln!(
-                        "refit on all {} rows at those values in {:.1} s",
-                        data.len(),
-                        t.elapsed().as_secs_f64()
-                    );
-                    m
-                }
-                _ => choice.fit(&data)?,
-            };
+            let (model, subset) = closed_form_model(&data, &params, a.hyper_rows)?;
+            if let Some(h) = subset {
+                eprintln!(
+                    "hyperparameters chosen on the first {} rows in {:.1} s",
+                    h.rows, h.seconds
+                );
+                eprintln!(
+                    "refit on all {} rows at those values in {:.1} s",
+                    data.len(),
+                    h.refit_seconds
+                );
+            }
             cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
         }
     };
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
-    let words = super::fit::settings_line(space, &choice.periodic, opts, choice.kinematic);
+    let words = params.params().settings_line();
     say!(
         "{}-fold CV ({}) of {} on {} rows ({words}), {:.1} s",
         a.folds,
@@ -152,11 +146,12 @@ pub fn run(a: CvArgs) -> Result<()> {
             .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
         if let Some(o) = v.as_object_mut() {
             o.insert("data".into(), serde_json::json!(a.data));
-            let s: serde_json::Map<String, serde_json::Value> =
-                super::fit::settings(space, &choice.periodic, opts, choice.kinematic)
-                    .into_iter()
-                    .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
-                    .collect();
+            let s: serde_json::Map<String, serde_json::Value> = params
+                .params()
+                .settings()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+                .collect();
             o.insert("settings".into(), serde_json::Value::Object(s));
         }
         super::write_json(path, &v, "cv result")?;
@@ -171,7 +166,9 @@ pub fn run(a: CvArgs) -> Result<()> {
         ];
         let title = format!(
             "{}-fold CV ({}) out-of-fold errors, {:?}",
-            a.folds, res.mode, space
+            a.folds,
+            res.mode,
+            params.params().get_space()
         );
         box_plot(path, &title, "error (mm)", &groups)?;
         say!("plot: {}", path.display());
@@ -184,10 +181,9 @@ pub fn run(a: CvArgs) -> Result<()> {
 fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     let methods = robokrige::methods::parse_methods(list)?;
     let data = super::read_data(&a.data)?;
-    let train_rows = data.len() - data.len() / a.folds.max(1);
     super::plan_fit(
         "cv",
-        train_rows,
+        largest_training_rows(data.len(), a.folds),
         robokrige::kriging::OptimizerKind::Gps,
         None,
     )?;
@@ -216,14 +212,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
                 ["ex", "ey", "ez"][axis]
             ))
         };
-        let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
-            let model = m
-                .params(a.cv_seed, false)
-                .check()
-                .and_then(|p| p.fit_with_progress(train, &ga_progress));
-            pb.inc(1);
-            model
-        });
+        let res = cross_validate_method(&data, m, a.folds, a.cv_seed, &|| pb.inc(1), &ga_progress);
         pb.finish_and_clear();
         let res = res?;
         groups.push((m.name().to_string(), norms(&res.residuals)));

@@ -81,117 +81,11 @@ pub struct ModelArgs {
     kinematic: bool,
 }
 
-/// The model settings in the CLI's own words (`--space ejs`, `--trend
-/// constant`, …), for reports: `(name, value)` pairs.
-pub fn settings(
-    space: Space,
-    periodic: &[usize],
-    opts: &KrigingOptions,
-    kinematic: bool,
-) -> Vec<(&'static str, String)> {
-    let mut v = vec![
-        ("space", format!("{space:?}").to_lowercase()),
-        (
-            "trend",
-            format!("{:?}", opts.get_trend()).to_lowercase()
-                + if kinematic { " + kinematic" } else { "" },
-        ),
-        (
-            "corr",
-            if opts.get_corr_auto() {
-                "auto".to_string()
-            } else {
-                opts.get_corr().to_string()
-            },
-        ),
-        (
-            "optimizer",
-            match opts.get_optimizer() {
-                OptimizerKind::Bfgs => "bfgs",
-                OptimizerKind::Gps => "gps",
-                OptimizerKind::HookeJeeves => "hj",
-            }
-            .to_string(),
-        ),
-        (
-            "nugget",
-            if opts.get_nugget() {
-                "estimated"
-            } else {
-                "none (interpolating)"
-            }
-            .to_string(),
-        ),
-    ];
-    if !periodic.is_empty() {
-        let p: Vec<String> = periodic.iter().map(|j| format!("q{}", j + 1)).collect();
-        v.push(("periodic", p.join(",")));
-    }
-    v
-}
-
-/// [`settings`] as one line: `space ejs, trend constant, …`.
-pub fn settings_line(
-    space: Space,
-    periodic: &[usize],
-    opts: &KrigingOptions,
-    kinematic: bool,
-) -> String {
-    settings(space, periodic, opts, kinematic)
-        .iter()
-        .map(|(k, v)| format!("{k} {v}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// What [`ModelArgs::resolve`] gives: space, periodic joints, options, the
-/// measured robot (recorded in the model) and whether it forms the
-/// kinematic trend.
-pub struct ModelChoice {
-    pub space: Space,
-    pub periodic: Vec<usize>,
-    pub opts: KrigingOptions,
-    pub robot: Option<robokrige::kinematics::Robot>,
-    pub kinematic: bool,
-}
-
-impl ModelChoice {
-    /// The robot of the kinematic trend, if there is one.
-    pub fn kinematic_robot(&self) -> Option<&robokrige::kinematics::Robot> {
-        self.robot.as_ref().filter(|_| self.kinematic)
-    }
-
-    /// The fit parameters of this choice.
-    pub fn params(&self) -> ErrorModelParams {
-        let p = self.with_robot(
-            ErrorModelParams::new()
-                .space(self.space)
-                .periodic(self.periodic.clone())
-                .kriging(self.opts.clone()),
-        );
-        match self.kinematic_robot() {
-            Some(r) => p.trend(TrendSpec::Kinematic(Box::new(r.clone()))),
-            None => p,
-        }
-    }
-
-    /// `params` recording the measured robot, if one was given.
-    pub fn with_robot(&self, params: ErrorModelParams) -> ErrorModelParams {
-        match &self.robot {
-            Some(r) => params.robot(r.clone()),
-            None => params,
-        }
-    }
-
-    /// Fit on `data` with this choice.
-    pub fn fit(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModel> {
-        self.params().check()?.fit(data)
-    }
-}
-
 impl ModelArgs {
-    /// The full choice for `data` (periodic joints resolved on its rows).
-    pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ModelChoice> {
+    /// The fit parameters for `data` (periodic joints resolved on its
+    /// rows): space, periodic joints, options, the measured robot (recorded
+    /// in the model) and, with `--kinematic`, its kinematic trend.
+    pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModelParams> {
         if self.starts.is_some() && self.optimizer == OptimizerKind::HookeJeeves {
             return Err(Error::InvalidParameter(
                 "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
@@ -204,23 +98,19 @@ impl ModelArgs {
                 "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
             ));
         }
-        let robot = match &self.robot {
-            Some(r) => Some(robokrige::kinematics::load_robot_with_tool(
-                r,
-                self.tool.as_deref(),
-            )?),
-            None => None,
-        };
-        if let Some(r) = &robot {
-            r.check_dataset(data)?;
+        let mut params = ErrorModelParams::new()
+            .space(space)
+            .periodic(periodic)
+            .kriging(opts);
+        if let Some(r) = &self.robot {
+            let robot = robokrige::kinematics::load_robot_with_tool(r, self.tool.as_deref())?;
+            robot.check_dataset(data)?;
+            if self.kinematic {
+                params = params.trend(TrendSpec::Kinematic(Box::new(robot.clone())));
+            }
+            params = params.robot(robot);
         }
-        Ok(ModelChoice {
-            space,
-            periodic,
-            opts,
-            robot,
-            kinematic: self.kinematic,
-        })
+        Ok(params)
     }
 
     /// The space and fitting options these arguments select (no periodic
@@ -271,13 +161,37 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = super::read_data(&a.data)?;
-    let choice = a.model.resolve(&data)?;
-    let opts = &choice.opts;
-    super::plan_fit("fit", data.len(), opts.get_optimizer(), None)?;
+    let params = a.model.resolve(&data)?;
+    super::plan_fit(
+        "fit",
+        data.len(),
+        params.get_kriging().get_optimizer(),
+        None,
+    )?;
     let t0 = std::time::Instant::now();
-    let model = match &a.method {
+    let (model, settings) = match &a.method {
         Some(name) => {
-            let method = robokrige::methods::Method::parse(name)?;
+            use robokrige::methods::Method;
+            let method = Method::parse(name)?;
+            let params = match params.kinematic_robot() {
+                // the method's selection among the kinematic candidates, on
+                // the command line's options
+                Some(robot) if method.selects_trend() => {
+                    let trend = method.trend(Some(robot));
+                    params.trend(trend)
+                }
+                Some(_) => return Err(Error::InvalidParameter(
+                    "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
+                )),
+                None => {
+                    let p = method.params(params.get_kriging().get_seed(), false);
+                    match params.get_robot() {
+                        Some(r) => p.robot(r.clone()),
+                        None => p,
+                    }
+                }
+            }
+            .check()?;
             let pb = super::progress::spinner(method.name());
             let progress = |axis: usize, generation: usize, best: f64| {
                 pb.set_message(format!(
@@ -285,23 +199,14 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                     AXES[axis]
                 ));
             };
-            use robokrige::methods::Method;
-            let params = match (choice.kinematic_robot(), method) {
-                (Some(robot), Method::EjsGa | Method::EjsPca) => {
-                    Ok(choice.params().trend(method.trend(Some(robot))))
-                }
-                (Some(_), _) => Err(Error::InvalidParameter(
-                    "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
-                )),
-                (None, _) => Ok(choice.with_robot(method.params(opts.get_seed(), false))),
-            };
-            let model = params
-                .and_then(ErrorModelParams::check)
-                .and_then(|p| p.fit_with_progress(&data, &progress));
+            let model = params.fit_with_progress(&data, &progress);
             pb.finish_and_clear();
-            model?
+            (model?, params.params().settings())
         }
-        None => choice.fit(&data)?,
+        None => {
+            let params = params.check()?;
+            (params.fit(&data)?, params.params().settings())
+        }
     };
     let space = model.space();
     let secs = t0.elapsed().as_secs_f64();
@@ -310,15 +215,10 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     }
     model.save(&a.output)?;
     if let Some(path) = &a.json {
-        let settings: serde_json::Map<String, serde_json::Value> = settings(
-            model.space(),
-            model.periodic(),
-            model.options(),
-            choice.kinematic,
-        )
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v.into()))
-        .collect();
+        let settings: serde_json::Map<String, serde_json::Value> = settings
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v.into()))
+            .collect();
         let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
             "settings": settings, "method": a.method, "robot": model.robot(),
             "seconds": secs, "outputs": model.reports(), "selection": model.selection()});

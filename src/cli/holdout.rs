@@ -53,8 +53,8 @@ pub struct HoldoutArgs {
     seed: u64,
     /// Kriging hyperparameter search: bfgs (analytic gradient, 8 starts),
     /// hj (Hooke–Jeeves) or gps (4 starts).
-    #[arg(long, default_value = "bfgs")]
-    optimizer: String,
+    #[arg(long, value_enum, default_value = "bfgs")]
+    optimizer: OptimizerKind,
     /// Correlation family of the Kriging fits: gaussian, matern52, matern32,
     /// exponential, or auto (each output's family by closed-form 10-fold CV,
     /// the default).
@@ -89,35 +89,19 @@ pub struct HoldoutArgs {
     json: Option<PathBuf>,
 }
 
-/// The Kriging options of `a` and the periodic joints it gives for training
-/// rows `q`.
-fn kriging_opts(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<(KrigingOptions, Vec<usize>)> {
-    let optimizer = match a.optimizer.as_str() {
-        "bfgs" => OptimizerKind::Bfgs,
-        "hj" => OptimizerKind::HookeJeeves,
-        "gps" => OptimizerKind::Gps,
-        o => {
-            return Err(Error::InvalidParameter(format!(
-                "--optimizer '{o}': expected bfgs, hj or gps"
-            )));
-        }
-    };
+/// The base parameters of the Kriging fits of `a` (options and the
+/// periodic joints it gives for training rows `q`).
+fn base_params(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<ErrorModelParams> {
     let (corr, corr_auto) = a.corr.resolve();
     let opts = KrigingOptions::default()
-        .optimizer(optimizer)
+        .optimizer(a.optimizer)
         .corr(corr)
         .corr_auto(corr_auto)
-        .starts(optimizer.default_starts())
+        .starts(a.optimizer.default_starts())
         .seed(a.seed)
         .nugget(!a.no_nugget);
-    Ok((opts, robokrige::space::parse_periodic(&a.periodic, q)?))
-}
-
-/// The base parameters of the Kriging fits: `opts` and `periodic`.
-fn base_params(opts: &KrigingOptions, periodic: &[usize]) -> ErrorModelParams {
-    ErrorModelParams::new()
-        .periodic(periodic.to_vec())
-        .kriging(opts.clone())
+    let periodic = robokrige::space::parse_periodic(&a.periodic, q)?;
+    Ok(ErrorModelParams::new().periodic(periodic).kriging(opts))
 }
 
 /// `q1, q4` (or `none`).
@@ -135,11 +119,10 @@ fn joint_list(periodic: &[usize]) -> String {
 
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
-    let (opts, periodic) = kriging_opts(a, &data.q)?;
-    super::plan_fit("holdout", data.len(), opts.get_optimizer(), None)?;
+    let base = base_params(a, &data.q)?;
+    super::plan_fit("holdout", data.len(), a.optimizer, None)?;
     let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
-    let base = base_params(&opts, &periodic);
     let cv = holdout_cv(data, robot, &base, k, a.seed, hyper_rows, &|done, msg| {
         pb.set_position(done as u64);
         pb.set_message(msg.to_string());
@@ -153,18 +136,12 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         if a.no_nugget { "" } else { " and nugget" },
         cv.hyper_rows,
         cv.hyper_seconds,
-        joint_list(&periodic)
+        joint_list(base.get_periodic())
     );
     print_rows(&cv.rows);
     for (name, (rows, worst)) in robokrige::holdout::CV_MODELS
         .iter()
-        .zip(
-            cv.flagged.iter().zip(
-                cv.fold_max_covered_mm
-                    .iter()
-                    .fold([0.0f64; 5], |a, b| std::array::from_fn(|i| a[i].max(b[i]))),
-            ),
-        )
+        .zip(cv.flagged.iter().zip(cv.max_covered_mm()))
         .skip(1)
     {
         if !rows.is_empty() {
@@ -223,19 +200,13 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     }
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
     let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
-    let (opts, periodic) = kriging_opts(&a, &train.q)?;
-    super::plan_fit(
-        "holdout",
-        train.len(),
-        opts.get_optimizer(),
-        Some("--train"),
-    )?;
+    let base = base_params(&a, &train.q)?;
+    super::plan_fit("holdout", train.len(), a.optimizer, Some("--train"))?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,
         ga: a.ga,
     };
-    let base = base_params(&opts, &periodic);
     let split = holdout_split(&train, &test, &robot, &base, extras, &|what| {
         pb.inc(1);
         pb.set_message(what.to_string());
@@ -248,17 +219,17 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         n_train,
         n_train + 1,
         n_train + n_test,
-        match a.optimizer.as_str() {
-            "gps" => "GPS",
-            "hj" => "Hooke–Jeeves",
-            _ => "BFGS (analytic gradient)",
+        match a.optimizer {
+            OptimizerKind::Gps => "GPS",
+            OptimizerKind::HookeJeeves => "Hooke–Jeeves",
+            OptimizerKind::Bfgs => "BFGS (analytic gradient)",
         },
         if a.no_nugget {
             ""
         } else {
             ", nugget estimated"
         },
-        joint_list(&periodic)
+        joint_list(base.get_periodic())
     );
     say!(
         "D-H calibration: {} parameters fitted ({} frozen as unidentifiable), rms {:.4} → {:.4} mm on the training rows",
