@@ -429,33 +429,13 @@ fn run_all(
         .filter(|r| !r.done)
         .map(|r| {
             let o = stage(r);
-            let mut obj = ln_psi_grad_objective(problem, unpack);
+            let obj = ln_psi_grad_objective(problem, unpack);
             // a run that has stopped once resumes from its known ln ψ and
             // gradient instead of evaluating its point again
-            let known = match &r.result {
-                Some(last) if r.grad.len() == r.x.len() => {
-                    Some((last.f, std::mem::take(&mut r.grad)))
-                }
-                _ => None,
-            };
-            // the gradient at the best point (the one the run returns)
-            let (mut best_f, mut best_g) = known.clone().unwrap_or((f64::INFINITY, Vec::new()));
-            let tracked = |z: &[f64], g: &mut [f64]| {
-                let f = obj(z, g);
-                if f < best_f {
-                    best_f = f;
-                    best_g = g.to_vec();
-                }
-                f
-            };
+            let known = r.result.as_ref().map(|last| (last.f, r.grad.as_slice()));
             let warm = (!r.hinv.is_empty()).then(|| std::mem::take(&mut r.hinv));
-            let (res, h) = match &known {
-                Some((f0, g0)) => {
-                    optim::quasi_newton_resume(tracked, &r.x, *f0, g0, warm, bounds, &o)
-                }
-                None => optim::quasi_newton_warm(tracked, &r.x, warm, bounds, &o),
-            };
-            r.grad = best_g;
+            let (res, h, g) = optim::quasi_newton_resume(obj, &r.x, known, warm, bounds, &o);
+            r.grad = g;
             let spent = res.evals;
             r.x.clone_from(&res.x);
             r.iterations += res.iterations;
@@ -505,17 +485,16 @@ fn converge_finalists(
         ..optim::QuasiNewtonOptions::default()
     };
     let mut evals = 0;
-    for r in pool.iter_mut() {
-        let o = stage(r);
-        // a run that converged while screening stays done
-        r.done |= o.max_iter == 0 || o.max_evals == 0;
-    }
-    while pool.iter().any(|r| !r.done) {
-        evals += run_all(pool, problem, bounds, unpack, &stage);
+    loop {
+        // out of budget; a run that converged while screening stays done
         for r in pool.iter_mut() {
             let o = stage(r);
             r.done |= o.max_iter == 0 || o.max_evals == 0;
         }
+        if pool.iter().all(|r| r.done) {
+            break;
+        }
+        evals += run_all(pool, problem, bounds, unpack, &stage);
         let points: Vec<(usize, f64, Vec<f64>)> =
             pool.iter().map(|r| (r.start, r.f(), r.x.clone())).collect();
         for r in pool.iter_mut().filter(|r| !r.done) {

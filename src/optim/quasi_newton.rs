@@ -82,27 +82,30 @@ pub fn quasi_newton_warm<F>(
 where
     F: FnMut(&[f64], &mut [f64]) -> f64,
 {
-    minimise(fg, x0, None, hinv0, bounds, opts)
+    let (r, h, _) = minimise(fg, x0, None, hinv0, bounds, opts);
+    (r, h)
 }
 
-/// [`quasi_newton_warm`] resuming a run that stopped at `x0` (inside the
-/// box) where `f(x0) = f0` and `∇f(x0) = g0` are known: the same
-/// iterations without evaluating `x0` again (the result's `evals` counts
-/// only new evaluations).
+/// [`quasi_newton_warm`] that can resume a run: when `known` gives
+/// `f(x0)` and `∇f(x0)` (`x0` inside the box) they are not evaluated again,
+/// so the iterations are those of a restart from `x0`, one evaluation fewer
+/// (the result's `evals` counts only new evaluations). Returns the
+/// gradient at the result's point too, for the next resumption.
 pub fn quasi_newton_resume<F>(
     fg: F,
     x0: &[f64],
-    f0: f64,
-    g0: &[f64],
+    known: Option<(f64, &[f64])>,
     hinv0: Option<Vec<Vec<f64>>>,
     bounds: &Bounds,
     opts: &QuasiNewtonOptions,
-) -> (OptimResult, Vec<Vec<f64>>)
+) -> (OptimResult, Vec<Vec<f64>>, Vec<f64>)
 where
     F: FnMut(&[f64], &mut [f64]) -> f64,
 {
-    assert_eq!(g0.len(), x0.len(), "gradient length");
-    minimise(fg, x0, Some((f0, g0)), hinv0, bounds, opts)
+    if let Some((_, g0)) = known {
+        assert_eq!(g0.len(), x0.len(), "gradient length");
+    }
+    minimise(fg, x0, known, hinv0, bounds, opts)
 }
 
 fn minimise<F>(
@@ -112,7 +115,7 @@ fn minimise<F>(
     hinv0: Option<Vec<Vec<f64>>>,
     bounds: &Bounds,
     opts: &QuasiNewtonOptions,
-) -> (OptimResult, Vec<Vec<f64>>)
+) -> (OptimResult, Vec<Vec<f64>>, Vec<f64>)
 where
     F: FnMut(&[f64], &mut [f64]) -> f64,
 {
@@ -224,6 +227,7 @@ where
             stop,
         },
         hinv,
+        g,
     )
 }
 
@@ -251,7 +255,10 @@ mod tests {
         let f0 = fg(&first.x, &mut g0);
         let o = QuasiNewtonOptions::default();
         let (warm, hw) = quasi_newton_warm(fg, &first.x, Some(h.clone()), &b, &o);
-        let (resumed, hr) = quasi_newton_resume(fg, &first.x, f0, &g0, Some(h), &b, &o);
+        let (resumed, hr, gr) = quasi_newton_resume(fg, &first.x, Some((f0, &g0)), Some(h), &b, &o);
+        let mut g_end = [0.0; 2];
+        fg(&resumed.x, &mut g_end);
+        assert_eq!(gr, g_end, "the gradient returned is the one at the result");
         assert_eq!(warm.x, resumed.x);
         assert_eq!(warm.f, resumed.f);
         assert_eq!(hw, hr);
