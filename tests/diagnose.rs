@@ -690,3 +690,85 @@ fn the_diagnosis_memory_plan_names_a_row_count_that_fits() {
     let fits = DiagnosePlan::new(&data.select(&(0..n).collect::<Vec<_>>()), &o);
     assert!(fits.bytes() <= limit, "{fits} over {limit} bytes");
 }
+
+/// Above `scan_rows` the candidates are scanned on an evenly spread subset
+/// of the rows (issue 16: a diagnosis of a whole campaign of thousands of
+/// rows): a step is still found, placed to within the spacing of the
+/// scanned rows, and the models compared are fitted and cross-validated on
+/// every row.
+#[test]
+fn a_campaign_above_scan_rows_is_scanned_on_a_subset_and_compared_on_all_rows() {
+    let data = campaign(400, 4, Some("tracker-step:row=201,dx=0.2,dy=-0.15,dz=0.15"));
+    let o = quick()
+        .kriging(KrigingOptions::default())
+        .refit_rows(100)
+        .max_effects(1)
+        .scan_rows(200);
+    let d = diagnose(&data, &o, &|_| {}).unwrap();
+    assert_eq!(d.scanned_rows, 200);
+    assert_eq!(d.before.residuals.len(), 400);
+    assert_eq!(d.after.residuals.len(), 400);
+    let top = &d.effects[0];
+    assert_eq!(top.label, "step in the measurement order", "{top:?}");
+    // every second row is scanned: the step shows from the first scanned
+    // row at or after it
+    let row = top.params["row"];
+    assert!((201.0..=203.0).contains(&row), "step found at row {row}");
+    assert!(top.accepted);
+    assert_eq!(d.extras, [Feature::Step { row: row as usize }]);
+    assert!(
+        d.after.pooled_rmse_mm < 0.7 * d.before.pooled_rmse_mm,
+        "{:?} → {:?}",
+        d.before.cv_rmse_mm,
+        d.after.cv_rmse_mm
+    );
+    // too few rows to scan is an error
+    let few = diagnose(&data, &o.clone().scan_rows(100), &|_| {});
+    assert!(matches!(few, Err(Error::InvalidParameter(_))), "{few:?}");
+}
+
+/// The scanned rows keep the history of the whole campaign: a joint's moves
+/// into a pose are those from the pose measured before it, not from the
+/// scanned row before it; the order families scan the scanned rows and
+/// name campaign rows.
+#[test]
+fn scanned_rows_keep_the_history_of_the_whole_campaign() {
+    use robokrige::diagnose::ScanRows;
+    use robokrige::diagnose::scan::{Family, families, families_on, step_rows};
+    let data = campaign(300, 3, None);
+    let rows = ScanRows::spread(300, 100);
+    let find = |f: &[Family], label: &str| f.iter().find(|x| x.label == label).unwrap().clone();
+    let label = "moves of q1 into the pose (lag)";
+    let full = find(&families(&data, &[], None), label);
+    let scanned = find(&families_on(&data, &[], None, &rows), label);
+    let alone = find(&families(&data.select(rows.indices()), &[], None), label);
+    let zscore = |v: &[f64]| {
+        let n = v.len() as f64;
+        let mu = v.iter().sum::<f64>() / n;
+        let sd = (v.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / n).sqrt();
+        v.iter().map(|x| (x - mu) / sd).collect::<Vec<f64>>()
+    };
+    let gap = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    for ((f, s), a) in full.grid.iter().zip(&scanned.grid).zip(&alone.grid) {
+        assert_eq!(s.columns[0].len(), 100);
+        let picked = zscore(&rows.pick(&f.columns[0]));
+        assert!(gap(&picked, &s.columns[0]) < 1e-9, "{:?}", f.params);
+        // computed on the scanned rows alone, the moves would be others
+        assert!(gap(&picked, &a.columns[0]) > 0.1, "{:?}", f.params);
+    }
+    let step = find(
+        &families_on(&data, &[], None, &rows),
+        "step in the measurement order",
+    );
+    assert_eq!(step.grid.len(), step_rows(100).len());
+    for g in &step.grid {
+        let row = g.params["row"] as usize;
+        assert!(rows.indices().contains(&row));
+        assert_eq!(g.add, [Feature::Step { row }]);
+    }
+}

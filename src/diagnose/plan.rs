@@ -10,6 +10,10 @@
 //! over rows × values was 320 B at 300 rows (comau_harmonic, 2 083 values),
 //! 322 B at 1 495 (UR10 series B, 4 887) and 259–268 B at 2 773 (series C
 //! and series C with a bump planted, 6 018), 2026-11-25.
+//!
+//! Above [`DiagnoseOptions::scan_rows`] the candidate test runs on that many
+//! rows ([`super::ScanRows`]), so its term stops growing with the campaign;
+//! the fits and closed-form CVs on all rows are the fit's plan.
 
 use super::DiagnoseOptions;
 use crate::dataset::Dataset;
@@ -66,9 +70,14 @@ impl DiagnosePlan {
         plan
     }
 
+    /// Rows the candidate test scans in a campaign of `n` rows.
+    fn scanned_at(&self, n: usize) -> usize {
+        n.min(self.options.scan_rows)
+    }
+
     /// Scanned values at `n` rows.
     fn values_at(&self, n: usize) -> usize {
-        self.fixed_values + super::scan::step_rows(n).len()
+        self.fixed_values + super::scan::step_rows(self.scanned_at(n)).len()
     }
 
     /// The fit's plan at `n` rows, as [`super::diagnose`] fits them.
@@ -81,9 +90,16 @@ impl DiagnosePlan {
         )
     }
 
-    /// Estimated peak at `n` rows: the fit's plan, and the candidate test.
+    /// Estimated peak at `n` rows, scanning `scanned` of them: the fit's
+    /// plan, and the candidate test.
+    fn bytes_scanning(&self, n: usize, scanned: usize) -> u64 {
+        let values = self.fixed_values + super::scan::step_rows(scanned).len();
+        self.fit_at(n).bytes + BYTES_PER_ROW_VALUE * (scanned * values) as u64
+    }
+
+    /// Estimated peak at `n` rows.
     fn bytes_at(&self, n: usize) -> u64 {
-        self.fit_at(n).bytes + BYTES_PER_ROW_VALUE * (n * self.values_at(n)) as u64
+        self.bytes_scanning(n, self.scanned_at(n))
     }
 
     /// Estimated peak memory, bytes.
@@ -96,36 +112,54 @@ impl DiagnosePlan {
         self.values_at(self.rows)
     }
 
+    /// Rows scanned in this campaign.
+    pub fn scanned_rows(&self) -> usize {
+        self.scanned_at(self.rows)
+    }
+
     /// The most rows of this campaign whose diagnosis fits in `limit`
     /// bytes (0 when none does).
     pub fn max_rows(&self, limit: u64) -> usize {
-        let (mut lo, mut hi) = (0, self.rows);
-        while lo < hi {
-            let mid = (lo + hi).div_ceil(2);
-            if self.bytes_at(mid) <= limit {
-                lo = mid;
-            } else {
-                hi = mid - 1;
-            }
-        }
-        lo
+        largest(self.rows, |n| self.bytes_at(n) <= limit)
+    }
+
+    /// The most rows the candidate test may scan for a diagnosis of all
+    /// rows to fit in `limit` bytes (0 when none does).
+    pub fn max_scanned_rows(&self, limit: u64) -> usize {
+        largest(self.scanned_rows(), |s| {
+            self.bytes_scanning(self.rows, s) <= limit
+        })
     }
 
     /// Refuse when the plan needs more than the memory limit
-    /// ([`crate::memory::limit`]); `hint(n)` says how to run on `n` rows.
-    pub fn check(&self, hint: impl Fn(usize) -> String) -> Result<()> {
+    /// ([`crate::memory::limit`]); `rows_hint(n)` says how to diagnose `n`
+    /// rows, `scan_hint(s)` how to scan `s` rows of all of them (offered
+    /// first when it fits: every row stays in the models compared).
+    pub fn check(
+        &self,
+        rows_hint: impl Fn(usize) -> String,
+        scan_hint: impl Fn(usize) -> String,
+    ) -> Result<()> {
         match crate::memory::limit() {
             Some((limit, source)) if self.bytes > limit => {
                 let n = self.max_rows(limit);
+                let s = self.max_scanned_rows(limit);
                 let smallest = 2 * self.options.folds.max(10);
                 Err(Error::Memory {
                     what: format!("a diagnosis of {} rows", self.rows),
                     needed: crate::memory::human(self.bytes),
                     limit: format!("{} ({source})", crate::memory::human(limit)),
-                    hint: if n >= smallest {
+                    hint: if s >= super::MIN_SCAN_ROWS {
+                        format!(
+                            "scan the candidates on at most {s} of the rows ({}), diagnose at most {n} rows ({}), or raise {}",
+                            scan_hint(s),
+                            rows_hint(n),
+                            crate::memory::LIMIT_ENV
+                        )
+                    } else if n >= smallest {
                         format!(
                             "diagnose at most {n} rows ({}), or raise {}",
-                            hint(n),
+                            rows_hint(n),
                             crate::memory::LIMIT_ENV
                         )
                     } else {
@@ -141,15 +175,41 @@ impl DiagnosePlan {
     }
 }
 
+/// The largest `n ≤ upper` with `fits(n)` (0 when none does), `fits`
+/// monotone.
+fn largest(upper: usize, fits: impl Fn(usize) -> bool) -> usize {
+    let (mut lo, mut hi) = (0, upper);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    lo
+}
+
 impl std::fmt::Display for DiagnosePlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let fit = self.fit_at(self.rows);
-        write!(
-            f,
-            "{} rows, {} scanned candidate values, about {} of memory (the fit: {fit})",
-            self.rows,
-            self.values(),
-            crate::memory::human(self.bytes),
-        )
+        let scanned = self.scanned_rows();
+        if scanned < self.rows {
+            write!(
+                f,
+                "{} rows, candidates scanned on {scanned} of them, {} scanned candidate values, about {} of memory (the fit: {fit})",
+                self.rows,
+                self.values(),
+                crate::memory::human(self.bytes),
+            )
+        } else {
+            write!(
+                f,
+                "{} rows, {} scanned candidate values, about {} of memory (the fit: {fit})",
+                self.rows,
+                self.values(),
+                crate::memory::human(self.bytes),
+            )
+        }
     }
 }

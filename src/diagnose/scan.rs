@@ -14,6 +14,7 @@
 //! of the best grid point.
 
 use super::gls::{self, AxisSystem, FamilyTest};
+use super::rows::ScanRows;
 use crate::dataset::{Covariate, Dataset};
 use crate::features::{Clock, Feature};
 use crate::kinematics::Robot;
@@ -99,8 +100,8 @@ pub struct Family {
     pub zoom: Option<Zoom>,
 }
 
-/// The finer grid points around `point` of a campaign of `m` rows.
-pub type Zoom = fn(point: &GridPoint, m: usize) -> Vec<GridPoint>;
+/// The finer grid points around `point`, on the scanned rows `rows`.
+pub type Zoom = fn(point: &GridPoint, rows: &ScanRows) -> Vec<GridPoint>;
 
 /// Edges of the block lattice: its grid has about `BLOCK_EDGES²/2` points
 /// (one column each), as many as the step family's at 1 000 rows.
@@ -125,41 +126,86 @@ fn block_spacing(m: usize) -> usize {
     span.div_ceil(BLOCK_EDGES).max(1)
 }
 
-/// Grid point of the block `[from, to)`: one indicator column (a bump of one
-/// height, back at its end), added to the model as two steps (each edge its
-/// own height: a second step need not return to the first level).
-fn block_point(m: usize, from: usize, to: usize) -> GridPoint {
+/// Grid point of the block of scanned positions `[from, to)`: one indicator
+/// column (a bump of one height, back at its end), added to the model as
+/// two steps at the campaign rows of its edges (each edge its own height: a
+/// second step need not return to the first level).
+fn block_point(rows: &ScanRows, from: usize, to: usize) -> GridPoint {
+    let (a, b) = (rows.row(from), rows.row(to));
     GridPoint {
-        params: params(&[("from_row", from as f64), ("to_row", to as f64)]),
+        params: params(&[("from_row", a as f64), ("to_row", b as f64)]),
         columns: vec![
-            (0..m)
+            (0..rows.len())
                 .map(|i| if (from..to).contains(&i) { 1.0 } else { 0.0 })
                 .collect(),
         ],
-        add: vec![Feature::Step { row: from }, Feature::Step { row: to }],
+        add: vec![Feature::Step { row: a }, Feature::Step { row: b }],
     }
 }
 
-/// [`Zoom`] of a block: each edge moved row by row within one lattice
-/// spacing, the other held.
-fn zoom_block(point: &GridPoint, m: usize) -> Vec<GridPoint> {
+/// Grid point of a step at scanned position `t` (the campaign row there).
+fn step_point(rows: &ScanRows, t: usize) -> GridPoint {
+    let row = rows.row(t);
+    GridPoint {
+        params: params(&[("row", row as f64)]),
+        columns: vec![
+            (0..rows.len())
+                .map(|i| if i >= t { 1.0 } else { 0.0 })
+                .collect(),
+        ],
+        add: vec![Feature::Step { row }],
+    }
+}
+
+/// [`Zoom`] of a block: each edge moved a scanned row at a time within one
+/// lattice spacing, the other held.
+fn zoom_block(point: &GridPoint, rows: &ScanRows) -> Vec<GridPoint> {
     let (from, to) = (
-        point.params["from_row"] as usize,
-        point.params["to_row"] as usize,
+        rows.position(point.params["from_row"] as usize),
+        rows.position(point.params["to_row"] as usize),
     );
+    let m = rows.len();
     let margin = order_margin(m);
     let s = block_spacing(m);
-    let rows = |c: usize| c.saturating_sub(s).max(margin)..(c + s + 1).min(m - margin);
-    let mut out: Vec<GridPoint> = rows(from)
+    let near = |c: usize| c.saturating_sub(s).max(margin)..(c + s + 1).min(m - margin);
+    let mut out: Vec<GridPoint> = near(from)
         .filter(|&a| to >= a + margin)
-        .map(|a| block_point(m, a, to))
+        .map(|a| block_point(rows, a, to))
         .collect();
     out.extend(
-        rows(to)
+        near(to)
             .filter(|&b| b >= from + margin && b != to)
-            .map(|b| block_point(m, from, b)),
+            .map(|b| block_point(rows, from, b)),
     );
     out
+}
+
+/// Where [`families`] puts its families: each grid point's columns,
+/// computed on the whole campaign, are taken at the scanned rows (and
+/// standardised again there); the order families are built on the scanned
+/// rows directly ([`Sink::push_scanned`]).
+struct Sink<'a> {
+    rows: &'a ScanRows,
+    out: Vec<Family>,
+}
+
+impl Sink<'_> {
+    /// A family whose columns have a value on every row of the campaign.
+    fn push(&mut self, mut family: Family) {
+        if !self.rows.is_all() {
+            for g in &mut family.grid {
+                for c in &mut g.columns {
+                    *c = zscore(&self.rows.pick(c));
+                }
+            }
+        }
+        self.out.push(family);
+    }
+
+    /// A family built on the scanned rows.
+    fn push_scanned(&mut self, family: Family) {
+        self.out.push(family);
+    }
 }
 
 fn zscore(v: &[f64]) -> Vec<f64> {
@@ -246,6 +292,20 @@ pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCova
 /// cycle at the ends). With a robot preset (`robot`), joint cross-talk
 /// candidates mapped through its Jacobian are added.
 pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Vec<Family> {
+    families_on(data, exclude, robot, &ScanRows::all(data.len()))
+}
+
+/// [`families`] on the scanned rows `rows` of `data` ([`ScanRows`]): every
+/// column is computed on the whole campaign (a joint's moves into a pose
+/// need the pose before it) and taken at those rows; a step or a block
+/// edge is scanned at each of them and reported, and added, at its
+/// campaign row.
+pub fn families_on(
+    data: &Dataset,
+    exclude: &[String],
+    robot: Option<&Robot>,
+    rows: &ScanRows,
+) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
     let u: Vec<Vec<f64>> = (0..n)
@@ -256,7 +316,10 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
         columns: vec![col],
         add: vec![add],
     };
-    let mut out = Vec::new();
+    let mut out = Sink {
+        rows,
+        out: Vec::new(),
+    };
     // a constant column z-scores to round-off (or to ±1 everywhere): "c ×
     // joint angles" would then be a joint-angle trend in c's name
     for c in usable_covariates(data, exclude).filter(|c| constant_covariate(c).is_none()) {
@@ -305,17 +368,15 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
         }],
         zoom: None,
     });
-    if !step_rows(m).is_empty() {
-        out.push(Family {
+    // the order families on the scanned rows: a step, a block's edges at
+    // each of them
+    let ms = rows.len();
+    if !step_rows(ms).is_empty() {
+        out.push_scanned(Family {
             kind: EffectKind::Order,
             source: vec!["row".into()],
             label: "step in the measurement order".into(),
-            grid: step_rows(m)
-                .map(|t| {
-                    let col = (0..m).map(|i| if i >= t { 1.0 } else { 0.0 }).collect();
-                    single(params(&[("row", t as f64)]), col, Feature::Step { row: t })
-                })
-                .collect(),
+            grid: step_rows(ms).map(|t| step_point(rows, t)).collect(),
             zoom: None,
         });
     }
@@ -323,9 +384,9 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
     // a warm-up that settles), both edges scanned on a lattice, the reported
     // ones then row by row ([`zoom_block`]); one column, so a bump is not
     // split into two steps that each explain half of it
-    let margin = order_margin(m);
-    if m > 3 * margin {
-        let edges: Vec<usize> = (margin..m - margin).step_by(block_spacing(m)).collect();
+    let margin = order_margin(ms);
+    if ms > 3 * margin {
+        let edges: Vec<usize> = (margin..ms - margin).step_by(block_spacing(ms)).collect();
         let grid: Vec<GridPoint> = edges
             .iter()
             .enumerate()
@@ -333,11 +394,11 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
                 edges[i + 1..]
                     .iter()
                     .filter(move |&&b| b >= a + margin)
-                    .map(move |&b| block_point(m, a, b))
+                    .map(move |&b| block_point(rows, a, b))
             })
             .collect();
         if !grid.is_empty() {
-            out.push(Family {
+            out.push_scanned(Family {
                 kind: EffectKind::Order,
                 source: vec!["row".into()],
                 label: "block of rows (a bump, back at its end)".into(),
@@ -493,7 +554,7 @@ pub fn families(data: &Dataset, exclude: &[String], robot: Option<&Robot>) -> Ve
         });
     }
     motion_families(data, exclude, robot, &u, &mut out);
-    out
+    out.out
 }
 
 /// Memories τ (poses) scanned for a joint's decaying sum of moves.
@@ -540,7 +601,7 @@ fn motion_families(
     exclude: &[String],
     robot: Option<&Robot>,
     u: &[Vec<f64>],
-    out: &mut Vec<Family>,
+    out: &mut Sink,
 ) {
     let n = data.n_joints();
     let from_poses = |f: &Feature| f.columns_from_poses(&data.q, &data.dir).ok();
@@ -875,7 +936,8 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 }
 
 /// Test every family inside the current model (`systems`, one per output,
-/// [`super::gls`]): statistic, the pooled leave-one-out gain of the best
+/// [`super::gls`], on the scanned rows `rows` the families were built on):
+/// statistic, the pooled leave-one-out gain of the best
 /// grid point at the model's ξ. Its null distribution is that of the same
 /// statistic in pseudo-campaigns (sign-flipped whitened residuals, seeded,
 /// the same for every family, sequential: a family stops once `SETTLED`
@@ -903,6 +965,7 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 #[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
+    rows: &ScanRows,
     systems: Vec<AxisSystem>,
     permutations: usize,
     seed: u64,
@@ -1072,7 +1135,14 @@ pub fn test_families(
                     Vec::new()
                 },
                 refined: families[k].zoom.filter(|_| finite).and_then(|zoom| {
-                    resolve(zoom, &families[k].grid[t.best], m, &systems, &data, within)
+                    resolve(
+                        zoom,
+                        &families[k].grid[t.best],
+                        rows,
+                        &systems,
+                        &data,
+                        within,
+                    )
                 }),
             }
         })
@@ -1087,7 +1157,7 @@ pub fn test_families(
 fn resolve(
     zoom: Zoom,
     start: &GridPoint,
-    m: usize,
+    rows: &ScanRows,
     systems: &[AxisSystem],
     data: &[gls::Response],
     within: f64,
@@ -1095,7 +1165,7 @@ fn resolve(
     let mut found: Option<Refined> = None;
     for _ in 0..ZOOM_PASSES {
         let centre = found.as_ref().map_or(start, |r| &r.point);
-        let local = zoom(centre, m);
+        let local = zoom(centre, rows);
         if local.is_empty() {
             break;
         }

@@ -320,6 +320,25 @@ impl KrigingModel {
         }
     }
 
+    /// `f` of the factors `(C, F̃, G)` for one computation: the kept ones;
+    /// else, up to [`KEEP_FACTOR_MAX_M`] rows, computed and kept; above it
+    /// computed for `f` alone and dropped afterwards, so that a closed-form
+    /// CV of a campaign of thousands of rows does not leave m² numbers per
+    /// output behind (three outputs of 12 000 rows: 3.5 GB).
+    fn with_factors<R>(
+        &self,
+        f: impl FnOnce(&Mat<f64>, &Mat<f64>, &Mat<f64>) -> Result<R>,
+    ) -> Result<R> {
+        if self.factors.get().is_some() || self.data.x_train.len() <= KEEP_FACTOR_MAX_M {
+            let (c, ft, g) = self.factors()?;
+            return f(c, ft, g);
+        }
+        let d = &self.data;
+        let c = super::problem::factor_at(&d.corr, &self.xt, &d.theta, d.nugget, d.jitter)?;
+        let ft = ftilde(&c, &d.trend, &d.x_train);
+        f(&c, &ft, &self.g)
+    }
+
     /// Whether the factors are in memory (kept from the fit, or computed by
     /// an earlier [`KrigingModel::factors`] call).
     pub fn has_factors(&self) -> bool {
@@ -473,10 +492,20 @@ impl KrigingModel {
     /// `B_II = Z_Iᵀ Z_I − (Qᵀ Z_I)ᵀ (Qᵀ Z_I)`: one triangular solve per block
     /// instead of a refit. Residuals in original units, training-row order.
     pub fn held_out_residuals(&self, blocks: &[Vec<usize>]) -> Result<Vec<f64>> {
+        self.with_factors(|c, ftilde, g| self.held_out_with(blocks, c, ftilde, g))
+    }
+
+    /// [`KrigingModel::held_out_residuals`] with the factors `(C, F̃, G)`.
+    fn held_out_with(
+        &self,
+        blocks: &[Vec<usize>],
+        c: &Mat<f64>,
+        ftilde: &Mat<f64>,
+        g: &Mat<f64>,
+    ) -> Result<Vec<f64>> {
         let d = &self.data;
         let m = d.x_train.len();
         let p = d.trend.len();
-        let (c, ftilde, g) = self.factors()?;
         let mut out = vec![f64::NAN; m];
         for block in blocks {
             let k = block.len();

@@ -255,4 +255,94 @@ impl ErrorModel {
             ..self.clone()
         })
     }
+
+    /// This model at its hyperparameters (ξ, ν, the trend's terms) on the
+    /// training rows `rows` only, `errors` being the responses of every
+    /// training row (mm): β, σ² and γ are those of the GLS on those rows, the
+    /// input normalisation stays that of all rows, no search. What
+    /// [`crate::diagnose`] scans candidates on when a campaign has more rows
+    /// than it scans ([`crate::diagnose::ScanRows`]); unlike
+    /// [`ErrorModel::refit_at_hyperparameters`] it keeps the model's extra
+    /// inputs, whose values on those rows are already in the training
+    /// inputs. The fit reports are kept (the search's figures).
+    pub(crate) fn restricted(&self, rows: &[usize], errors: &[[f64; 3]]) -> Result<Self> {
+        let corr = self.correlation_dims();
+        let fits: Vec<Result<KrigingModel>> = (0..3)
+            .into_par_iter()
+            .map(|a| {
+                let km = &self.outputs[a];
+                let x: Vec<Vec<f64>> = rows.iter().map(|&i| km.data.x_train[i].clone()).collect();
+                let inputs =
+                    TrainingInputs::new(&x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>());
+                let y: Vec<f64> = rows.iter().map(|&i| errors[i][a]).collect();
+                let at = crate::kriging::Hyperparameters {
+                    corr: km.corr(),
+                    theta: &km.data.theta[..corr],
+                    nugget: km.data.nugget,
+                    min_jitter: self.options.min_jitter,
+                };
+                crate::kriging::fit_output_with(&x, &inputs, &y, &km.data.trend, &at)
+            })
+            .collect();
+        let mut outputs = Vec::with_capacity(3);
+        for (a, f) in fits.into_iter().enumerate() {
+            outputs.push(f.map_err(|e| Error::Axis {
+                axis: AXES[a],
+                source: Box::new(e),
+            })?);
+        }
+        Ok(ErrorModel {
+            format: self.format.clone(),
+            version: self.version,
+            inputs: self.inputs.clone(),
+            options: self.options.clone(),
+            outputs,
+            reports: self.reports.clone(),
+            selection: self.selection.clone(),
+            joint_range: self.joint_range.clone(),
+            robot: self.robot.clone(),
+            software: self.software.clone(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::kriging::KrigingOptions;
+    use crate::params::ErrorModelParams;
+
+    #[test]
+    fn a_model_restricted_to_rows_keeps_its_hyperparameters_and_solves_there() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+        let data = crate::dataset::read_csv(path.as_ref())
+            .unwrap()
+            .select(&(0..60).collect::<Vec<_>>());
+        let opts = KrigingOptions::default().corr_auto(false).starts(2);
+        let params = ErrorModelParams::new().kriging(opts).check().unwrap();
+        let model = params.fit(&data).unwrap();
+        let errors = data.errors_or_err().unwrap();
+        // on all rows: the model's own GLS (β, γ) at its ξ
+        let all: Vec<usize> = (0..60).collect();
+        let same = model.restricted(&all, errors).unwrap();
+        for (a, b) in same.outputs.iter().zip(&model.outputs) {
+            let close = |u: &[f64], v: &[f64]| {
+                u.len() == v.len() && u.iter().zip(v).all(|(x, y)| (x - y).abs() < 1e-8)
+            };
+            assert!(close(&a.data.gamma, &b.data.gamma));
+            assert!(close(&a.data.beta, &b.data.beta));
+            assert!((a.data.sigma2 - b.data.sigma2).abs() < 1e-10);
+        }
+        // on every other row: the same ξ, ν and input normalisation, the
+        // GLS of those rows
+        let half: Vec<usize> = (0..60).step_by(2).collect();
+        let r = model.restricted(&half, errors).unwrap();
+        assert_eq!(r.input_map(), model.input_map());
+        for (a, b) in r.outputs.iter().zip(&model.outputs) {
+            assert_eq!(a.data.theta, b.data.theta);
+            assert_eq!(a.data.nugget, b.data.nugget);
+            assert_eq!(a.data.gamma.len(), 30);
+            let rows: Vec<&Vec<f64>> = half.iter().map(|&i| &b.data.x_train[i]).collect();
+            assert!(a.data.x_train.iter().eq(rows));
+        }
+    }
 }

@@ -1,0 +1,119 @@
+//! The rows the candidate test scans (issue 16: a diagnosis of a whole
+//! campaign of thousands of rows).
+//!
+//! The candidate test keeps, for every scanned parameter value, whitened
+//! columns of every row ([`super::plan`]), and the step family scans one
+//! value a row: its cost grows as m² in memory and m³ in time. Above
+//! [`super::DiagnoseOptions::scan_rows`] rows the families are therefore
+//! scanned on that many rows spread evenly over the campaign, in measurement
+//! order, at the current model's hyperparameters refactorised on them
+//! ([`crate::model::ErrorModel::restricted`]); a history feature (a joint's
+//! moves, its travel since a reversal) is computed on the whole campaign
+//! first, so each scanned row keeps its own history. A subset of the rows is
+//! a valid sample for the test (the p-values stay calibrated, only the
+//! power is that of a campaign of the subset's size), and the model with
+//! and without the chosen effect is still fitted and cross-validated on
+//! every row. A step or block edge is then placed to within the spacing of
+//! the scanned rows.
+
+/// The rows of a campaign a candidate scan runs on: all of them, or an
+/// evenly spread subset in measurement order (the first and the last row
+/// included).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScanRows {
+    rows: Vec<usize>,
+    total: usize,
+}
+
+impl ScanRows {
+    /// Every row of a campaign of `m` rows.
+    pub fn all(m: usize) -> Self {
+        ScanRows {
+            rows: (0..m).collect(),
+            total: m,
+        }
+    }
+
+    /// At most `n` rows of a campaign of `m`, evenly spread: row
+    /// `round(i·(m − 1)/(n − 1))` for `i = 0 … n − 1` (all rows when
+    /// `n ≥ m`).
+    pub fn spread(m: usize, n: usize) -> Self {
+        if n >= m || n < 2 {
+            return ScanRows::all(m);
+        }
+        ScanRows {
+            rows: (0..n)
+                .map(|i| (i * (m - 1) + (n - 1) / 2) / (n - 1))
+                .collect(),
+            total: m,
+        }
+    }
+
+    /// Number of scanned rows.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether no row is scanned.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// Whether every row of the campaign is scanned.
+    pub fn is_all(&self) -> bool {
+        self.rows.len() == self.total
+    }
+
+    /// Rows of the whole campaign.
+    pub fn total(&self) -> usize {
+        self.total
+    }
+
+    /// The scanned rows (campaign row numbers, increasing).
+    pub fn indices(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// The campaign row of scanned position `pos`.
+    pub fn row(&self, pos: usize) -> usize {
+        self.rows[pos]
+    }
+
+    /// The first scanned position at or after campaign row `row` (a step at
+    /// `row` changes the scanned rows from there on).
+    pub fn position(&self, row: usize) -> usize {
+        self.rows.partition_point(|&r| r < row)
+    }
+
+    /// The values of `v` (one per campaign row) at the scanned rows.
+    pub fn pick<T: Copy>(&self, v: &[T]) -> Vec<T> {
+        self.rows.iter().map(|&i| v[i]).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_rows_are_even_ordered_and_keep_both_ends() {
+        let s = ScanRows::spread(12_000, 3_000);
+        assert_eq!(s.len(), 3_000);
+        assert!(!s.is_all());
+        assert_eq!(s.row(0), 0);
+        assert_eq!(s.row(2_999), 11_999);
+        assert!(
+            s.indices()
+                .windows(2)
+                .all(|w| (4..=5).contains(&(w[1] - w[0])))
+        );
+        // a step between two scanned rows shows from the next one on
+        let p = s.position(s.row(10) + 1);
+        assert_eq!(p, 11);
+        assert_eq!(s.position(s.row(10)), 10);
+        assert_eq!(s.pick(&(0..12_000).collect::<Vec<usize>>()), s.indices());
+        // as many or more rows than the campaign: all of them
+        assert!(ScanRows::spread(500, 500).is_all());
+        assert_eq!(ScanRows::spread(500, 900), ScanRows::all(500));
+    }
+}
