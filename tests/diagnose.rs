@@ -689,6 +689,17 @@ fn the_diagnosis_memory_plan_names_a_row_count_that_fits() {
     assert!(n > 10 && n < 240, "{n} rows");
     let fits = DiagnosePlan::new(&data.select(&(0..n).collect::<Vec<_>>()), &o);
     assert!(fits.bytes() <= limit, "{fits} over {limit} bytes");
+    // scanning a subset: the candidate test's share stops growing with the
+    // rows, and the plan names how many rows to scan for a smaller limit
+    let scan = o.clone().scan_rows(200);
+    let plan = DiagnosePlan::new(&data, &scan);
+    assert_eq!(plan.scanned_rows(), 200);
+    assert!(plan.bytes() < DiagnosePlan::new(&data, &o).bytes());
+    assert_eq!(plan.max_scanned_rows(plan.bytes()), 200);
+    let s = plan.max_scanned_rows(plan.bytes() * 9 / 10);
+    assert!((1..200).contains(&s), "{s} rows scanned");
+    let fits = DiagnosePlan::new(&data, &scan.clone().scan_rows(s));
+    assert!(fits.bytes() <= plan.bytes() * 9 / 10, "{fits}");
 }
 
 /// Above `scan_rows` the candidates are scanned on an evenly spread subset

@@ -326,7 +326,9 @@ fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
 /// the final model (with the effects added, refitted on all rows).
 #[pyfunction]
 #[pyo3(signature = (data, method="ejs", nugget=true, folds=10, seed=1, permutations=1999,
-    fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None))]
+    fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None,
+    refit_rows=robokrige::diagnose::DEFAULT_REFIT_ROWS,
+    scan_rows=robokrige::diagnose::DEFAULT_SCAN_ROWS))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     py: Python<'_>,
@@ -341,6 +343,8 @@ pub fn diagnose(
     periodic: &str,
     robot: Option<String>,
     progress: Option<Py<PyAny>>,
+    refit_rows: usize,
+    scan_rows: usize,
 ) -> PyResult<(String, Model)> {
     let d = &data.inner;
     let p = Progress::new(progress);
@@ -357,6 +361,8 @@ pub fn diagnose(
                 .permutations(permutations)
                 .fdr(fdr)
                 .max_effects(max_effects)
+                .refit_rows(refit_rows)
+                .scan_rows(scan_rows)
                 .robot(
                     robot
                         .as_deref()

@@ -201,3 +201,14 @@ def test_diagnose_finds_the_tracker_step(datasets):
     assert lines and "cross-validating" in lines[0]
     # the improved model predicts the campaign (its effect columns from the frame)
     assert improved.predict(df).shape == (len(df), 3)
+
+
+def test_diagnose_scans_a_subset_of_a_large_campaign(datasets):
+    df = rk.read_campaign(datasets / "comau_tracker_step.csv")
+    effects, improved, report = rk.diagnose(df, permutations=199, scan_rows=200, as_frame=False)
+    assert report["scanned_rows"] == 200
+    assert report["before_residuals"].shape == (len(df), 3)
+    top = next(e for e in effects if e["accepted"])
+    assert "step" in top["label"] and abs(top["params"]["row"] - 150) <= 2
+    with pytest.raises(ValueError, match="scan_rows"):
+        rk.diagnose(df, scan_rows=10)
