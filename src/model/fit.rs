@@ -14,6 +14,20 @@ use crate::space::Space;
 use crate::{Error, Result};
 use rayon::prelude::*;
 
+/// The three outputs' results in [`AXES`] order, the first failure named
+/// by its axis.
+fn by_axis<T>(fits: Vec<Result<T>>) -> Result<Vec<T>> {
+    fits.into_iter()
+        .enumerate()
+        .map(|(a, f)| {
+            f.map_err(|e| Error::Axis {
+                axis: AXES[a],
+                source: Box::new(e),
+            })
+        })
+        .collect()
+}
+
 /// Per joint `(min, max)` of the rows.
 fn joint_range(q: &[Vec<f64>]) -> Vec<(f64, f64)> {
     let n = q.first().map_or(0, Vec::len);
@@ -125,16 +139,8 @@ pub(crate) fn fit_outputs(
     } else {
         (0..3).into_par_iter().map(fit_axis).collect()
     };
-    let mut outputs = Vec::with_capacity(3);
-    let mut reports = Vec::with_capacity(3);
-    for (a, f) in fits.into_iter().enumerate() {
-        let (m, r) = f.map_err(|e| Error::Axis {
-            axis: AXES[a],
-            source: Box::new(e),
-        })?;
-        outputs.push(m);
-        reports.push(r);
-    }
+    let (outputs, reports): (Vec<KrigingModel>, Vec<FitReport>) =
+        by_axis(fits)?.into_iter().unzip();
     Ok(ErrorModel {
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION,
@@ -231,13 +237,7 @@ impl ErrorModel {
                 crate::kriging::fit_output_with(&x, &inputs, &y, &trends[a], &at)
             })
             .collect();
-        let mut outputs = Vec::with_capacity(3);
-        for (a, f) in fits.into_iter().enumerate() {
-            outputs.push(f.map_err(|e| Error::Axis {
-                axis: AXES[a],
-                source: Box::new(e),
-            })?);
-        }
+        let outputs = by_axis(fits)?;
         let secs = t0.elapsed().as_secs_f64();
         let reports = self
             .reports
@@ -284,13 +284,7 @@ impl ErrorModel {
                 crate::kriging::fit_output_with(&x, &inputs, &y, &km.data.trend, &at)
             })
             .collect();
-        let mut outputs = Vec::with_capacity(3);
-        for (a, f) in fits.into_iter().enumerate() {
-            outputs.push(f.map_err(|e| Error::Axis {
-                axis: AXES[a],
-                source: Box::new(e),
-            })?);
-        }
+        let outputs = by_axis(fits)?;
         Ok(ErrorModel {
             format: self.format.clone(),
             version: self.version,
