@@ -961,7 +961,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         (fold.clone(), errors.to_vec())
     } else {
         progress(&format!(
-            "scanning the candidates on {} of the {} rows (every {:.1}th)",
+            "scanning the candidates on {} of the {} rows, evenly spread (one in {:.1})",
             rows.len(),
             data.len(),
             data.len() as f64 / rows.len() as f64
