@@ -43,6 +43,10 @@ pub struct CvResult {
     pub summary: ErrorSummary,
     /// Wall-clock time of the whole cross-validation, seconds.
     pub seconds: f64,
+    /// Closed form only: the model's own expectation of its leave-one-out
+    /// RMSE per axis, mm ([`crate::kriging::HeldOut::expected_loo_rmse`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expected_loo_rmse_mm: Option<[f64; 3]>,
 }
 
 /// K-fold CV refitting the model on every training fold with `fit`.
@@ -85,6 +89,7 @@ where
         fold,
         residuals,
         seconds: t0.elapsed().as_secs_f64(),
+        expected_loo_rmse_mm: None,
     })
 }
 
@@ -108,11 +113,13 @@ pub fn cross_validate_closed_form(
     let fold = kfold_partition(m, k, seed)?;
     let blocks = crate::stats::fold_blocks(&fold);
     let mut residuals = vec![[0.0; 3]; m];
+    let mut expected = [0.0; 3];
     for (a, out) in model.outputs.iter().enumerate() {
-        let e = out.held_out_residuals(&blocks)?;
-        for (r, v) in residuals.iter_mut().zip(e) {
+        let h = out.held_out(&blocks)?;
+        for (r, v) in residuals.iter_mut().zip(h.residuals) {
             r[a] = v;
         }
+        expected[a] = h.expected_loo_rmse;
     }
     Ok(CvResult {
         folds: k,
@@ -122,6 +129,7 @@ pub fn cross_validate_closed_form(
         fold,
         residuals,
         seconds: t0.elapsed().as_secs_f64(),
+        expected_loo_rmse_mm: Some(expected),
     })
 }
 

@@ -765,6 +765,9 @@ fn scanned_rows_keep_the_history_of_the_whole_campaign() {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max)
     };
+    assert!(!full.grid.is_empty());
+    assert_eq!(full.grid.len(), scanned.grid.len());
+    assert_eq!(full.grid.len(), alone.grid.len());
     for ((f, s), a) in full.grid.iter().zip(&scanned.grid).zip(&alone.grid) {
         assert_eq!(s.columns[0].len(), 100);
         let picked = zscore(&rows.pick(&f.columns[0]));

@@ -127,6 +127,6 @@ def diagnose(
     periodic: str = "none",
     robot: Optional[str] = None,
     progress: _Progress = None,
-    refit_rows: int = 1200,
-    scan_rows: int = 3000,
+    refit_rows: Optional[int] = None,
+    scan_rows: Optional[int] = None,
 ) -> Tuple[str, Model]: ...

@@ -231,8 +231,8 @@ def diagnose(
     max_effects: int = 3,
     periodic: Union[str, Sequence[int]] = "none",
     robot: Optional[str] = None,
-    refit_rows: int = 1200,
-    scan_rows: int = 3000,
+    refit_rows: Optional[int] = None,
+    scan_rows: Optional[int] = None,
     as_frame: Optional[bool] = None,
     progress: ProgressArg = None,
 ) -> Diagnosis:
@@ -243,10 +243,11 @@ def diagnose(
     measured errors; every numeric covariate column is a candidate.
     ``method`` is the base model: "ejs", "js", "js-hj", "ejs-hj" or
     "ejs-gps". ``robot`` adds joint cross-talk candidates. Above
-    ``refit_rows`` rows every CV is closed-form and every fit converges ξ
-    on a subset of that many rows; above ``scan_rows`` the candidates are
-    scanned on that many rows spread evenly over the campaign (the models
-    compared still use all rows; ``report["scanned_rows"]``).
+    ``refit_rows`` rows (None: the library's default, 1 200) every CV is
+    closed-form and every fit converges ξ on a subset of that many rows;
+    above ``scan_rows`` (None: 3 000) the candidates are scanned on that
+    many rows spread evenly over the campaign (the models compared still
+    use all rows; ``report["scanned_rows"]`` of ``report["rows"]``).
 
     Returns ``Diagnosis(effects, model, report)``: the effects table (a
     DataFrame when pandas is installed and ``as_frame`` is not False), the
@@ -271,8 +272,8 @@ def diagnose(
             pspec,
             None if robot is None else os.fspath(robot),
             cb,
-            int(refit_rows),
-            int(scan_rows),
+            None if refit_rows is None else int(refit_rows),
+            None if scan_rows is None else int(scan_rows),
         )
     report = json.loads(text)
     for key in ("before_residuals", "after_residuals"):

@@ -327,8 +327,7 @@ fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
 #[pyfunction]
 #[pyo3(signature = (data, method="ejs", nugget=true, folds=10, seed=1, permutations=1999,
     fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None,
-    refit_rows=robokrige::diagnose::DEFAULT_REFIT_ROWS,
-    scan_rows=robokrige::diagnose::DEFAULT_SCAN_ROWS))]
+    refit_rows=None, scan_rows=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     py: Python<'_>,
@@ -343,8 +342,8 @@ pub fn diagnose(
     periodic: &str,
     robot: Option<String>,
     progress: Option<Py<PyAny>>,
-    refit_rows: usize,
-    scan_rows: usize,
+    refit_rows: Option<usize>,
+    scan_rows: Option<usize>,
 ) -> PyResult<(String, Model)> {
     let d = &data.inner;
     let p = Progress::new(progress);
@@ -361,8 +360,8 @@ pub fn diagnose(
                 .permutations(permutations)
                 .fdr(fdr)
                 .max_effects(max_effects)
-                .refit_rows(refit_rows)
-                .scan_rows(scan_rows)
+                .refit_rows(refit_rows.unwrap_or(robokrige::diagnose::DEFAULT_REFIT_ROWS))
+                .scan_rows(scan_rows.unwrap_or(robokrige::diagnose::DEFAULT_SCAN_ROWS))
                 .robot(
                     robot
                         .as_deref()

@@ -262,7 +262,7 @@ fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
         "{} ({} rows{}): {}-fold {} CV ({}), {} candidates scanning {} parameter values, up to {} resamples, FDR {}, {:.1} s",
         a.data.display(),
         d.before.residuals.len(),
-        if d.scanned_rows > 0 && d.scanned_rows < d.before.residuals.len() {
+        if d.scanned_rows > 0 && d.scanned_rows < d.rows {
             format!(
                 ", candidates scanned on {} of them, evenly spread",
                 d.scanned_rows
@@ -452,6 +452,13 @@ fn report(
         d.fdr,
         d.seconds
     );
+    if d.scanned_rows > 0 && d.scanned_rows < d.rows {
+        let _ = writeln!(
+            s,
+            "Candidates scanned on {} of the {} rows, evenly spread in measurement order (their statistics, p-values, scores and evidence are of those rows; a step or block edge is placed to within their spacing); every model compared was fitted and cross-validated on all rows.\n",
+            d.scanned_rows, d.rows
+        );
+    }
     for c in &d.dropped_covariates {
         let _ = writeln!(
             s,

@@ -747,6 +747,16 @@ mod tests {
             "{gain}"
         );
         assert!((loo_sse_before(&sys) - loo_before).abs() < 1e-9 * loo_before);
+        // the model's own leave-one-out expectation: from M = PZ here, from
+        // the held-out blocks' diagonals in the closed-form CV
+        let own = sys[0].expected_loo_rmse();
+        for blocks in [&singles, &folds] {
+            let h = model.held_out(blocks).unwrap();
+            assert!(
+                (h.expected_loo_rmse - own).abs() < 1e-9 * own,
+                "{h:?} {own}"
+            );
+        }
         let kf_before = sse(model.held_out_residuals(&folds).unwrap());
         let kf_after = sse(aug.held_out_residuals(&folds).unwrap());
         assert!((kfold_sse_before(&sys) - kf_before).abs() < 1e-8 * kf_before);

@@ -265,7 +265,8 @@ impl DiagnoseOptions {
     /// campaign (in measurement order; each row keeps the history features
     /// of the whole campaign), at the current model's hyperparameters
     /// refactorised on them — the test's memory grows as rows × scanned
-    /// values and its time as rows³, and a step is scanned at every row.
+    /// values and its time as rows³, and a step is scanned at every scanned
+    /// row.
     /// The models with and without a candidate are still fitted and
     /// cross-validated on all rows, so the effects added and the CV figures
     /// are those of the whole campaign; a step or block edge is placed to
@@ -414,20 +415,22 @@ pub struct CvStats {
     /// `"refit"`, or `"closed-form"` above [`DiagnoseOptions::refit_rows`].
     #[serde(default = "refit_mode")]
     pub mode: String,
+    /// Closed-form CV only: the model's own expectation of its
+    /// leave-one-out RMSE per axis on all rows, mm
+    /// ([`crate::cv::CvResult::expected_loo_rmse_mm`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expected_loo_rmse_mm: Option<[f64; 3]>,
     /// Out-of-fold residuals δ − δ̂ (mm), measurement order; not serialised.
     #[serde(skip)]
     pub residuals: Vec<[f64; 3]>,
 }
 
-fn cv_stats(
-    residuals: Vec<[f64; 3]>,
-    mode: String,
-    extras: &[Feature],
-    model: &ErrorModel,
-) -> CvStats {
+fn cv_stats(res: crate::cv::CvResult, extras: &[Feature], model: &ErrorModel) -> CvStats {
+    let residuals = res.residuals;
     let s = summarize(&residuals);
     CvStats {
-        mode,
+        mode: res.mode,
+        expected_loo_rmse_mm: res.expected_loo_rmse_mm,
         noise_mm: model.noise_std(),
         cv_rmse_mm: s.rms_mm,
         pooled_rmse_mm: (s.rms_mm.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt(),
@@ -610,9 +613,15 @@ pub struct Diagnosis {
     pub effects: Vec<EffectReport>,
     /// Extra inputs of the final model.
     pub extras: Vec<Feature>,
+    /// Rows of the campaign (every model compared was fitted and
+    /// cross-validated on all of them; 0 in reports written before it was
+    /// recorded).
+    #[serde(default)]
+    pub rows: usize,
     /// Rows the candidate test scanned ([`DiagnoseOptions::scan_rows`]):
-    /// all of the campaign's, or an evenly spread subset (0 in reports
-    /// written before it was recorded: all).
+    /// all `rows`, or an evenly spread subset of them, on which every
+    /// candidate's statistic, p-value, score and evidence were computed
+    /// (0 in reports written before it was recorded: all).
     #[serde(default)]
     pub scanned_rows: usize,
     /// Covariates left out of the candidates because they do not vary over
@@ -687,7 +696,7 @@ fn cross_validated(
             ErrorModel::fit_with_extras(train, o.space, &o.periodic, &warm, extras)
         })?
     };
-    Ok((cv_stats(res.residuals, res.mode, extras, &model), model))
+    Ok((cv_stats(res, extras, &model), model))
 }
 
 /// Warm starts for the model of `extras` from `from`, whose extras they
@@ -1002,18 +1011,30 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             fams.len(),
         ));
         // the model on the scanned rows (at its hyperparameters)
-        let restricted = if rows.is_all() {
+        let mut restricted = if rows.is_all() {
             None
         } else {
             Some(model.restricted(rows.indices(), errors)?)
         };
-        let scanned = restricted.as_ref().unwrap_or(&model);
-        let systems: Vec<gls::AxisSystem> = scanned
+        let systems: Vec<gls::AxisSystem> = restricted
+            .as_ref()
+            .unwrap_or(&model)
             .outputs
             .iter()
             .map(|km| gls::AxisSystem::new(km, &scan_fold))
             .collect::<Result<_>>()?;
-        let level: [f64; 3] = std::array::from_fn(|a| systems[a].expected_loo_rmse());
+        // the systems hold what the test needs of the subset's factors
+        if let Some(r) = restricted.as_mut() {
+            r.release_factors();
+        }
+        let scanned = restricted.as_ref().unwrap_or(&model);
+        // the level of the after check: the model's own leave-one-out
+        // expectation on all rows (from the closed-form CV) when only some
+        // are scanned — on every fourth row its interpolation error is larger
+        let level: [f64; 3] = match current.expected_loo_rmse_mm {
+            Some(all) if !rows.is_all() => all,
+            _ => std::array::from_fn(|a| systems[a].expected_loo_rmse()),
+        };
         let refit = |cols: &[Vec<f64>]| {
             gls::refit_systems(scanned, &scan_errors, &o.kriging, cols, &scan_fold).ok()
         };
@@ -1195,8 +1216,9 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         steps,
         effects,
         extras,
+        rows: data.len(),
         scanned_rows: rows.len(),
-        dropped_covariates: scan::dropped_covariates(data, &[]),
+        dropped_covariates: scan::dropped_covariates_on(data, &[], &rows),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

@@ -47,11 +47,7 @@ impl DiagnosePlan {
     pub fn new(data: &Dataset, o: &DiagnoseOptions) -> Self {
         let rows = data.len();
         let sample = if rows > COUNT_ROWS {
-            data.select(
-                &(0..COUNT_ROWS)
-                    .map(|i| i * rows / COUNT_ROWS)
-                    .collect::<Vec<_>>(),
-            )
+            data.select(super::ScanRows::spread(rows, COUNT_ROWS).indices())
         } else {
             data.clone()
         };

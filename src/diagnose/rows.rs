@@ -10,11 +10,13 @@
 //! ([`crate::model::ErrorModel::restricted`]); a history feature (a joint's
 //! moves, its travel since a reversal) is computed on the whole campaign
 //! first, so each scanned row keeps its own history. A subset of the rows is
-//! a valid sample for the test (the p-values stay calibrated, only the
-//! power is that of a campaign of the subset's size), and the model with
-//! and without the chosen effect is still fitted and cross-validated on
-//! every row. A step or block edge is then placed to within the spacing of
-//! the scanned rows.
+//! a valid sample for the test (its p-values stay calibrated; its power is
+//! that of a campaign of the subset's size), and the model with and
+//! without the chosen effect is still fitted and cross-validated on every
+//! row. A candidate's statistic, score and evidence are of the scanned
+//! rows; the CV figures, the "after" check and the sizes of what is added
+//! are of all rows. A step or block edge is placed to within the spacing of
+//! the scanned rows (reported at the first scanned row after it).
 
 /// The rows of a campaign a candidate scan runs on: all of them, or an
 /// evenly spread subset in measurement order (the first and the last row
@@ -34,9 +36,9 @@ impl ScanRows {
         }
     }
 
-    /// At most `n` rows of a campaign of `m`, evenly spread: row
-    /// `round(i·(m − 1)/(n − 1))` for `i = 0 … n − 1` (all rows when
-    /// `n ≥ m`).
+    /// `n` rows of a campaign of `m`, evenly spread: row
+    /// `round(i·(m − 1)/(n − 1))` for `i = 0 … n − 1`; all rows when
+    /// `n ≥ m`, or when `n < 2` (no spread to speak of).
     pub fn spread(m: usize, n: usize) -> Self {
         if n >= m || n < 2 {
             return ScanRows::all(m);

@@ -275,9 +275,26 @@ fn usable_covariates<'a>(
 
 /// The covariates [`families`] leaves out as constant, with the reason.
 pub fn dropped_covariates(data: &Dataset, exclude: &[String]) -> Vec<DroppedCovariate> {
+    dropped_covariates_on(data, exclude, &ScanRows::all(data.len()))
+}
+
+/// The covariates [`families_on`] leaves out as constant on the scanned
+/// rows `rows`, with the reason: a column that varies in a few rows of the
+/// campaign may vary in fewer still of the scanned ones, where it would be
+/// an indicator of those rows under its name.
+pub fn dropped_covariates_on(
+    data: &Dataset,
+    exclude: &[String],
+    rows: &ScanRows,
+) -> Vec<DroppedCovariate> {
     usable_covariates(data, exclude)
         .filter_map(|c| {
-            constant_covariate(c).map(|reason| DroppedCovariate {
+            let scanned = Covariate {
+                name: c.name.clone(),
+                values: rows.pick(&c.values),
+                missing: c.missing,
+            };
+            constant_covariate(&scanned).map(|reason| DroppedCovariate {
                 name: c.name.clone(),
                 reason,
             })
@@ -308,6 +325,14 @@ pub fn families_on(
 ) -> Vec<Family> {
     let m = data.len();
     let n = data.n_joints();
+    // covariates constant on the scanned rows are left out like constant ones
+    let mut exclude = exclude.to_vec();
+    exclude.extend(
+        dropped_covariates_on(data, &exclude, rows)
+            .into_iter()
+            .map(|d| d.name),
+    );
+    let exclude = &exclude[..];
     let u: Vec<Vec<f64>> = (0..n)
         .map(|j| zscore(&data.q.iter().map(|r| r[j]).collect::<Vec<_>>()))
         .collect();

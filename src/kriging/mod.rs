@@ -25,7 +25,7 @@ pub mod trend;
 pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
 pub use family::{FAMILY_FOLDS, FamilyScore, fit_output_auto};
 pub use fused::FusedBasis;
-pub use model::{KrigingModel, KrigingModelData, Pred};
+pub use model::{HeldOut, KrigingModel, KrigingModelData, Pred};
 pub use options::{
     FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind, WarmStart,
 };

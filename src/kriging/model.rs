@@ -339,6 +339,12 @@ impl KrigingModel {
         f(&c, &ft, &self.g)
     }
 
+    /// Drop the factors kept in memory (m² numbers; recomputed when next
+    /// needed).
+    pub(crate) fn release_factors(&mut self) {
+        self.factors = std::sync::OnceLock::new();
+    }
+
     /// Whether the factors are in memory (kept from the fit, or computed by
     /// an earlier [`KrigingModel::factors`] call).
     pub fn has_factors(&self) -> bool {
@@ -492,21 +498,30 @@ impl KrigingModel {
     /// `B_II = Z_Iᵀ Z_I − (Qᵀ Z_I)ᵀ (Qᵀ Z_I)`: one triangular solve per block
     /// instead of a refit. Residuals in original units, training-row order.
     pub fn held_out_residuals(&self, blocks: &[Vec<usize>]) -> Result<Vec<f64>> {
+        self.held_out(blocks).map(|h| h.residuals)
+    }
+
+    /// [`KrigingModel::held_out_residuals`] and, from the same blocks
+    /// `B_II` (their diagonals are `B_ii`), the model's own expectation of
+    /// its leave-one-out RMSE ([`HeldOut::expected_loo_rmse`]).
+    pub fn held_out(&self, blocks: &[Vec<usize>]) -> Result<HeldOut> {
         self.with_factors(|c, ftilde, g| self.held_out_with(blocks, c, ftilde, g))
     }
 
-    /// [`KrigingModel::held_out_residuals`] with the factors `(C, F̃, G)`.
+    /// [`KrigingModel::held_out`] with the factors `(C, F̃, G)`.
     fn held_out_with(
         &self,
         blocks: &[Vec<usize>],
         c: &Mat<f64>,
         ftilde: &Mat<f64>,
         g: &Mat<f64>,
-    ) -> Result<Vec<f64>> {
+    ) -> Result<HeldOut> {
         let d = &self.data;
         let m = d.x_train.len();
         let p = d.trend.len();
         let mut out = vec![f64::NAN; m];
+        // Σ 1/B_ii over the held-out rows, and their number
+        let (mut inv_b, mut rows) = (0.0, 0usize);
         for block in blocks {
             let k = block.len();
             if k == 0 {
@@ -554,6 +569,8 @@ impl KrigingModel {
                 -1.0,
                 Par::Seq,
             );
+            inv_b += (0..k).map(|j| 1.0 / b[(j, j)]).sum::<f64>();
+            rows += k;
             let rhs = Mat::<f64>::from_fn(k, 1, |j, _| d.gamma[block[j]]);
             let e = faer::linalg::solvers::Solve::solve(&b.partial_piv_lu(), &rhs);
             for (j, &i) in block.iter().enumerate() {
@@ -565,8 +582,25 @@ impl KrigingModel {
                 "closed-form CV produced non-finite residuals".into(),
             ));
         }
-        Ok(out)
+        Ok(HeldOut {
+            residuals: out,
+            expected_loo_rmse: d.y_std * (d.sigma2 * inv_b / rows.max(1) as f64).sqrt(),
+        })
     }
+}
+
+/// Closed-form held-out residuals of a model ([`KrigingModel::held_out`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOut {
+    /// Residuals `y_I − ŷ_I`, original units, training-row order (NaN for a
+    /// row in no block).
+    pub residuals: Vec<f64>,
+    /// The model's own expectation of its leave-one-out RMSE over the rows
+    /// of the blocks, original units: with `Var(y) = σ²R`, `Var(γ) = σ²B`,
+    /// so a held-out residual `γ_i / B_ii` has variance `σ² / B_ii` — the
+    /// nugget's noise plus the interpolation error at that row —, and this
+    /// is `y_std·√(σ² · mean 1/B_ii)`.
+    pub expected_loo_rmse: f64,
 }
 
 /// Solve `Gᵀ v = u` in place (forward substitution, G upper) and return `vᵀv`.

@@ -256,6 +256,14 @@ impl ErrorModel {
         })
     }
 
+    /// Drop every output's factors kept in memory (recomputed when next
+    /// needed).
+    pub(crate) fn release_factors(&mut self) {
+        self.outputs
+            .iter_mut()
+            .for_each(KrigingModel::release_factors);
+    }
+
     /// This model at its hyperparameters (ξ, ν, the trend's terms) on the
     /// training rows `rows` only, `errors` being the responses of every
     /// training row (mm): β, σ² and γ are those of the GLS on those rows, the
@@ -266,6 +274,8 @@ impl ErrorModel {
     /// inputs, whose values on those rows are already in the training
     /// inputs. The fit reports are kept (the search's figures).
     pub(crate) fn restricted(&self, rows: &[usize], errors: &[[f64; 3]]) -> Result<Self> {
+        // (the fits keep their factors up to KEEP_FACTOR_MAX_M rows:
+        // `release_factors` when they are no longer needed)
         let corr = self.correlation_dims();
         let fits: Vec<Result<KrigingModel>> = (0..3)
             .into_par_iter()
