@@ -838,6 +838,65 @@ fn prefer_simpler(
     Some((first, over))
 }
 
+/// A step or block edge found on scanned rows ([`ScanRows`]) is at its
+/// scanned row or at one of the campaign rows just before it
+/// ([`ScanRows::gap`]): each is placed at the row of its gap that best
+/// splits the CV residuals of all rows — least squares, the levels on either
+/// side the mean residual of the [`PLACE_WINDOW`] spacings of rows before
+/// and after the gap — and the support interval is widened to the gaps.
+fn place_steps(report: &mut EffectReport, rows: &ScanRows, residuals: &[[f64; 3]]) {
+    let window = PLACE_WINDOW * rows.total().div_ceil(rows.len().max(1));
+    let mut moved = Vec::new();
+    for f in report.add.iter_mut() {
+        let Feature::Step { row } = f else { continue };
+        let gap = rows.gap(*row);
+        let (a, b) = (*gap.start(), *gap.end());
+        let before = a.saturating_sub(window)..a;
+        let after = b..(b + window).min(residuals.len());
+        if a == b || before.is_empty() || after.is_empty() {
+            continue;
+        }
+        let mean = |r: std::ops::Range<usize>| -> [f64; 3] {
+            let n = r.len() as f64;
+            std::array::from_fn(|x| r.clone().map(|i| residuals[i][x]).sum::<f64>() / n)
+        };
+        let (lo, hi) = (mean(before), mean(after));
+        let d2 = |e: &[f64; 3], l: &[f64; 3]| (0..3).map(|x| (e[x] - l[x]).powi(2)).sum::<f64>();
+        // rows a..b are ambiguous: before the step at lo, from it on at hi
+        let cost = |c: usize| -> f64 {
+            (a..b)
+                .map(|i| d2(&residuals[i], if i < c { &lo } else { &hi }))
+                .sum()
+        };
+        let best = (a..=b)
+            .min_by(|&x, &y| cost(x).total_cmp(&cost(y)))
+            .unwrap_or(b);
+        for v in report.params.values_mut() {
+            if *v == *row as f64 {
+                *v = best as f64;
+            }
+        }
+        moved.push(format!("{} → {best} (rows {a}–{b})", *row));
+        *row = best;
+    }
+    for (key, ci) in report.params_ci.iter_mut() {
+        if key.ends_with("row") {
+            ci[0] = *rows.gap(ci[0] as usize).start() as f64;
+        }
+    }
+    if !moved.is_empty() {
+        report.add_note(format!(
+            "found on {} scanned rows, placed between them by the CV residuals of all rows: {}",
+            rows.len(),
+            moved.join(", ")
+        ));
+    }
+}
+
+/// Rows on either side of a gap that set the levels [`place_steps`] splits
+/// it between, in spacings of the scanned rows.
+const PLACE_WINDOW: usize = 8;
+
 /// Cosine similarity of fitted components above which two candidates
 /// explain the same.
 const SAME_FIT: f64 = 0.9;
@@ -1150,6 +1209,9 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             if round > o.max_effects {
                 reports[k].add_note(format!("not added: the cap of {} effects", o.max_effects));
                 break;
+            }
+            if !rows.is_all() {
+                place_steps(&mut reports[k], &rows, &current.residuals);
             }
             let mut trial = extras.clone();
             for f in &reports[k].add {

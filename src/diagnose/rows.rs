@@ -87,6 +87,14 @@ impl ScanRows {
         self.rows.partition_point(|&r| r < row)
     }
 
+    /// The campaign rows a step shown first at scanned row `row` may be at:
+    /// from the row after the scanned row before it, to `row`.
+    pub fn gap(&self, row: usize) -> std::ops::RangeInclusive<usize> {
+        let p = self.position(row);
+        let start = if p == 0 { 0 } else { self.rows[p - 1] + 1 };
+        start..=row
+    }
+
     /// The values of `v` (one per campaign row) at the scanned rows.
     pub fn pick<T: Copy>(&self, v: &[T]) -> Vec<T> {
         self.rows.iter().map(|&i| v[i]).collect()
@@ -114,6 +122,9 @@ mod tests {
         assert_eq!(p, 11);
         assert_eq!(s.position(s.row(10)), 10);
         assert_eq!(s.pick(&(0..12_000).collect::<Vec<usize>>()), s.indices());
+        assert_eq!(s.gap(s.row(10)), s.row(9) + 1..=s.row(10));
+        assert_eq!(s.gap(0), 0..=0);
+        assert_eq!(ScanRows::all(9).gap(4), 4..=4);
         // as many or more rows than the campaign: all of them
         assert!(ScanRows::spread(500, 500).is_all());
         assert_eq!(ScanRows::spread(500, 900), ScanRows::all(500));
