@@ -268,8 +268,8 @@ impl ErrorModel {
     /// training rows `rows` only, `errors` being the responses of every
     /// training row (mm): β, σ² and γ are those of the GLS on those rows, the
     /// input normalisation stays that of all rows, no search. What
-    /// [`crate::diagnose`] scans candidates on when a campaign has more rows
-    /// than it scans ([`crate::diagnose::ScanRows`]); unlike
+    /// `diagnose` scans candidates on when a campaign has more rows than it
+    /// scans (its `ScanRows`); unlike
     /// [`ErrorModel::refit_at_hyperparameters`] it keeps the model's extra
     /// inputs, whose values on those rows are already in the training
     /// inputs. The fit reports are kept (the search's figures).
