@@ -455,7 +455,7 @@ fn report(
     if d.scanned_rows > 0 && d.scanned_rows < d.rows {
         let _ = writeln!(
             s,
-            "Candidates scanned on {} of the {} rows, evenly spread in measurement order (their statistics, p-values, scores and evidence are of those rows; a step or block edge is placed to within their spacing); every model compared was fitted and cross-validated on all rows.\n",
+            "Candidates scanned on {} of the {} rows, evenly spread in measurement order (their statistics, p-values, scores and evidence are of those rows; a step or block edge found on them is placed among the rows before it by the CV residuals of all rows); every model compared was fitted and cross-validated on all rows.\n",
             d.scanned_rows, d.rows
         );
     }

@@ -269,8 +269,9 @@ impl DiagnoseOptions {
     /// row.
     /// The models with and without a candidate are still fitted and
     /// cross-validated on all rows, so the effects added and the CV figures
-    /// are those of the whole campaign; a step or block edge is placed to
-    /// within the spacing of the scanned rows. The report gives the rows
+    /// are those of the whole campaign; a step or block edge found on the
+    /// scanned rows is placed among the campaign rows since the scanned row
+    /// before it by the CV residuals of all rows. The report gives the rows
     /// scanned ([`Diagnosis::scanned_rows`]).
     pub fn scan_rows(mut self, rows: usize) -> Self {
         self.scan_rows = rows;

@@ -15,8 +15,9 @@
 //! without the chosen effect is still fitted and cross-validated on every
 //! row. A candidate's statistic, score and evidence are of the scanned
 //! rows; the CV figures, the "after" check and the sizes of what is added
-//! are of all rows. A step or block edge is placed to within the spacing of
-//! the scanned rows (reported at the first scanned row after it).
+//! are of all rows. A step or block edge shows first at the scanned row after
+//! it and is then placed among the campaign rows since the scanned row
+//! before ([`ScanRows::gap`]) by the CV residuals of all rows.
 
 /// The rows of a campaign a candidate scan runs on: all of them, or an
 /// evenly spread subset in measurement order (the first and the last row
