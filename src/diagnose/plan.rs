@@ -190,22 +190,17 @@ impl std::fmt::Display for DiagnosePlan {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let fit = self.fit_at(self.rows);
         let scanned = self.scanned_rows();
-        if scanned < self.rows {
-            write!(
-                f,
-                "{} rows, candidates scanned on {scanned} of them, {} scanned candidate values, about {} of memory (the fit: {fit})",
-                self.rows,
-                self.values(),
-                crate::memory::human(self.bytes),
-            )
+        let subset = if scanned < self.rows {
+            format!("candidates scanned on {scanned} of them, ")
         } else {
-            write!(
-                f,
-                "{} rows, {} scanned candidate values, about {} of memory (the fit: {fit})",
-                self.rows,
-                self.values(),
-                crate::memory::human(self.bytes),
-            )
-        }
+            String::new()
+        };
+        write!(
+            f,
+            "{} rows, {subset}{} scanned candidate values, about {} of memory (the fit: {fit})",
+            self.rows,
+            self.values(),
+            crate::memory::human(self.bytes),
+        )
     }
 }
