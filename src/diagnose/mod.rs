@@ -1017,17 +1017,18 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     o.validate()?;
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;
-    let fold = kfold_partition(data.len(), o.folds, o.seed)?;
+    // the rows the candidates are scanned on (all, up to `scan_rows`), and
+    // their fold partition
+    let rows = ScanRows::spread(data.len(), o.scan_rows);
+    let scan_fold = kfold_partition(rows.len(), o.folds, o.seed)?;
     DiagnosePlan::new(data, o).check(
         |n| format!("a subset, e.g. `Dataset::select` of {n} rows"),
         |n| format!("`DiagnoseOptions::scan_rows({n})`"),
     )?;
     // a whole campaign: every fit converges ξ on the same seeded subset
     let o = &o.for_rows(data.len());
-    // the rows the candidates are scanned on, and their partition
-    let rows = ScanRows::spread(data.len(), o.scan_rows);
-    let (scan_fold, scan_errors) = if rows.is_all() {
-        (fold.clone(), errors.to_vec())
+    let scan_errors: std::borrow::Cow<[[f64; 3]]> = if rows.is_all() {
+        errors.into()
     } else {
         progress(&format!(
             "scanning the candidates on {} of the {} rows, evenly spread (one in {:.1})",
@@ -1035,10 +1036,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
             data.len(),
             data.len() as f64 / rows.len() as f64
         ));
-        (
-            kfold_partition(rows.len(), o.folds, o.seed)?,
-            rows.pick(errors),
-        )
+        rows.pick(errors).into()
     };
     progress("cross-validating the current model");
     let (before, mut model) = cross_validated(data, &[], o, None)?;

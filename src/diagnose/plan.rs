@@ -71,9 +71,9 @@ impl DiagnosePlan {
         n.min(self.options.scan_rows)
     }
 
-    /// Scanned values at `n` rows.
-    fn values_at(&self, n: usize) -> usize {
-        self.fixed_values + super::scan::step_rows(self.scanned_at(n)).len()
+    /// Parameter values the families scan on `scanned` rows.
+    fn values_scanning(&self, scanned: usize) -> usize {
+        self.fixed_values + super::scan::step_rows(scanned).len()
     }
 
     /// The fit's plan at `n` rows, as [`super::diagnose`] fits them.
@@ -89,8 +89,8 @@ impl DiagnosePlan {
     /// Estimated peak at `n` rows, scanning `scanned` of them: the fit's
     /// plan, and the candidate test.
     fn bytes_scanning(&self, n: usize, scanned: usize) -> u64 {
-        let values = self.fixed_values + super::scan::step_rows(scanned).len();
-        self.fit_at(n).bytes + BYTES_PER_ROW_VALUE * (scanned * values) as u64
+        self.fit_at(n).bytes
+            + BYTES_PER_ROW_VALUE * (scanned * self.values_scanning(scanned)) as u64
     }
 
     /// Estimated peak at `n` rows.
@@ -105,7 +105,7 @@ impl DiagnosePlan {
 
     /// Parameter values the candidate families scan.
     pub fn values(&self) -> usize {
-        self.values_at(self.rows)
+        self.values_scanning(self.scanned_rows())
     }
 
     /// Rows scanned in this campaign.

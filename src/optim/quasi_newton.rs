@@ -82,7 +82,7 @@ pub fn quasi_newton_warm<F>(
 where
     F: FnMut(&[f64], &mut [f64]) -> f64,
 {
-    let (r, h, _) = minimise(fg, x0, None, hinv0, bounds, opts);
+    let (r, h, _) = quasi_newton_resume(fg, x0, None, hinv0, bounds, opts);
     (r, h)
 }
 
@@ -92,7 +92,7 @@ where
 /// (the result's `evals` counts only new evaluations). Returns the
 /// gradient at the result's point too, for the next resumption.
 pub fn quasi_newton_resume<F>(
-    fg: F,
+    mut fg: F,
     x0: &[f64],
     known: Option<(f64, &[f64])>,
     hinv0: Option<Vec<Vec<f64>>>,
@@ -105,20 +105,6 @@ where
     if let Some((_, g0)) = known {
         assert_eq!(g0.len(), x0.len(), "gradient length");
     }
-    minimise(fg, x0, known, hinv0, bounds, opts)
-}
-
-fn minimise<F>(
-    mut fg: F,
-    x0: &[f64],
-    known: Option<(f64, &[f64])>,
-    hinv0: Option<Vec<Vec<f64>>>,
-    bounds: &Bounds,
-    opts: &QuasiNewtonOptions,
-) -> (OptimResult, Vec<Vec<f64>>, Vec<f64>)
-where
-    F: FnMut(&[f64], &mut [f64]) -> f64,
-{
     let d = x0.len();
     let warm = hinv0
         .as_ref()
