@@ -2,9 +2,11 @@
 //! (space, periodic joints, extras, names, normalisation) as one field,
 //! `inputs`. A version-2 file written by the code before that
 //! (`tests/fixtures/model_v2.json`: periodic joints, two extras) loads and
-//! predicts bit for bit what it predicted then, and so does its version-1
-//! form (with the Cholesky factors); a refit with today's code writes the
-//! same model in the version-3 layout.
+//! predicts what it predicted then, and so does its version-1 form (with the
+//! Cholesky factors); a refit with today's code writes the same model in the
+//! version-3 layout. "The same" is to [`REL`] relative: the correlation fill
+//! uses fused multiply-adds since 2026-11-25 (issue 16), which moves the last
+//! bits; everything else (structure, names, integers, strings) is exact.
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::features::Feature;
@@ -27,15 +29,48 @@ fn verify() -> Dataset {
     read_csv(&repo("datasets/comau_verify.csv")).unwrap()
 }
 
-/// Every mean and standard deviation of `p`, bit for bit as `expected`
+/// Relative agreement of numbers across code versions (a few ulp of
+/// rounding, amplified by the solves).
+const REL: f64 = 1e-11;
+
+fn close(w: f64, g: f64) -> bool {
+    (w - g).abs() <= REL * w.abs().max(g.abs()).max(1e-300)
+}
+
+/// Every mean and standard deviation of `p` as `expected` to [`REL`]
 /// (`{"mean": [[x, y, z], …], "std": …}`).
-fn assert_same_bits(p: &Prediction, expected: &Value) {
+fn assert_close_predictions(p: &Prediction, expected: &Value) {
     for (key, got) in [("mean", &p.mean), ("std", &p.std)] {
         let want: Vec<[f64; 3]> = serde_json::from_value(expected[key].clone()).unwrap();
         assert_eq!(want.len(), got.len(), "{key}");
         for (w, g) in want.iter().flatten().zip(got.iter().flatten()) {
-            assert_eq!(w.to_bits(), g.to_bits(), "{key}: {w} vs {g}");
+            assert!(close(*w, *g), "{key}: {w} vs {g}");
         }
+    }
+}
+
+/// Two JSON documents equal in structure and every non-number, numbers to
+/// [`REL`] (integers exactly).
+fn assert_same_json(a: &Value, b: &Value, at: &str) {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) if x.is_f64() || y.is_f64() => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!(close(x, y), "{at}: {x} vs {y}");
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}: length");
+            for (i, (u, v)) in x.iter().zip(y).enumerate() {
+                assert_same_json(u, v, &format!("{at}[{i}]"));
+            }
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            let keys = |o: &serde_json::Map<String, Value>| o.keys().cloned().collect::<Vec<_>>();
+            assert_eq!(keys(x), keys(y), "{at}: keys");
+            for (k, u) in x {
+                assert_same_json(u, &y[k], &format!("{at}.{k}"));
+            }
+        }
+        _ => assert_eq!(a, b, "{at}"),
     }
 }
 
@@ -60,7 +95,7 @@ fn a_version_2_file_loads_and_predicts_as_it_did() {
     assert_eq!(model.input_norm().mean.len(), names.len());
     let v = verify();
     let p = model.predict(&v.q, &v.dir).unwrap();
-    assert_same_bits(&p, &expected_predictions());
+    assert_close_predictions(&p, &expected_predictions());
 
     // saved again: version 3, the map as one field, no periodic joints in
     // the options
@@ -77,7 +112,7 @@ fn a_version_2_file_loads_and_predicts_as_it_did() {
     }
     let back = ErrorModel::from_json(&v3_text, "model_v3.json").unwrap();
     assert_eq!(back, model);
-    assert_same_bits(
+    assert_close_predictions(
         &back.predict(&v.q, &v.dir).unwrap(),
         &expected_predictions(),
     );
@@ -105,7 +140,7 @@ fn a_version_1_file_loads_and_predicts_as_it_did() {
     let old = ErrorModel::from_json(&v1_text, "model_v1.json").unwrap();
     assert_eq!(old.version(), MODEL_VERSION);
     assert_eq!(old.periodic(), &[0, 5]);
-    assert_same_bits(&old.predict(&v.q, &v.dir).unwrap(), &expected_predictions());
+    assert_close_predictions(&old.predict(&v.q, &v.dir).unwrap(), &expected_predictions());
 }
 
 #[test]
@@ -133,10 +168,11 @@ fn a_refit_with_todays_code_writes_the_same_model() {
         .and_then(|p| p.fit(&data))
         .unwrap();
     let loaded = ErrorModel::from_json(&fixture("model_v2.json"), "model_v2.json").unwrap();
-    // the same file, byte for byte: only the version and the layout changed
-    assert_eq!(refit.to_json().unwrap(), loaded.to_json().unwrap());
+    // the same file: only the version and the layout changed (numbers to REL)
+    let as_value = |m: &ErrorModel| serde_json::from_str::<Value>(&m.to_json().unwrap()).unwrap();
+    assert_same_json(&as_value(&refit), &as_value(&loaded), "model");
     let v = verify();
-    assert_same_bits(
+    assert_close_predictions(
         &refit.predict(&v.q, &v.dir).unwrap(),
         &expected_predictions(),
     );
