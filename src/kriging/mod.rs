@@ -13,6 +13,7 @@
 //! multistart GPS, then solve at the optimum.
 
 pub mod corr;
+mod dense;
 mod family;
 mod fastexp;
 mod fused;

@@ -23,15 +23,13 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::{
     LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
 };
-use faer::linalg::matmul::triangular::{BlockStructure, matmul as tri_matmul};
 use faer::linalg::qr::no_pivoting::factor::{
     qr_in_place, qr_in_place_scratch, recommended_block_size,
 };
-use faer::linalg::triangular_inverse::invert_lower_triangular;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::{Accum, Mat, Par};
+use faer::{Mat, Par};
 
 /// Largest jitter tried before a Cholesky failure is reported.
 pub const MAX_JITTER: f64 = 1e-6;
@@ -62,6 +60,9 @@ pub struct Workspace {
     mem: MemBuffer,
     /// C⁻¹ for the gradient; allocated by the first [`KrigingProblem::psi_grad`].
     cinv: Mat<f64>,
+    /// Products of the blocked inverse (below [`PAR_MIN_ROWS`] rows, at
+    /// most m²/4 values); allocated by the first [`KrigingProblem::psi_grad`].
+    scratch: Mat<f64>,
     /// Parallelism of the m × m work ([`par_for`]): from [`PAR_MIN_ROWS`]
     /// rows every evaluation uses all threads, so that three outputs on
     /// two cores never leave one idle.
@@ -85,6 +86,7 @@ impl Workspace {
             qcoef: Mat::zeros(bs, (p + 1).min(m)),
             mem: MemBuffer::new(req),
             cinv: Mat::zeros(0, 0),
+            scratch: Mat::zeros(0, 0),
             par,
         }
     }
@@ -284,21 +286,7 @@ impl KrigingProblem<'_> {
         let (_, beta) = gls_beta(&ws.aug, p);
         let e = self.residual(&beta);
         // R⁻¹ (lower) = C⁻ᵀ C⁻¹, written over the factor in ws.r
-        if ws.cinv.nrows() != m {
-            ws.cinv = Mat::zeros(m, m);
-        }
-        invert_lower_triangular(ws.cinv.as_mut(), ws.r.as_ref(), ws.par);
-        tri_matmul(
-            ws.r.as_mut(),
-            BlockStructure::TriangularLower,
-            Accum::Replace,
-            ws.cinv.transpose(),
-            BlockStructure::TriangularUpper,
-            ws.cinv.as_ref(),
-            BlockStructure::TriangularLower,
-            1.0,
-            ws.par,
-        );
+        super::dense::inverse_from_cholesky(&mut ws.r, &mut ws.cinv, &mut ws.scratch, ws.par);
         let rinv = &ws.r;
         // γ = R⁻¹ e from the lower triangle
         let mut gamma = vec![0.0; m];
