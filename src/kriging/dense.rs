@@ -19,7 +19,7 @@
 //! | 1 000 | 7.7 → 6.5 ms | 7.9 → 6.5 ms |
 //! | 2 000 | | 56 → 55 ms |
 //!
-//! With several threads (`Par::Rayon`, from [`super::PAR_MIN_ROWS`] rows)
+//! With several threads (`Par::Rayon`, from [`super::problem::PAR_MIN_ROWS`] rows)
 //! faer's parallel recursions are used as they are.
 
 use faer::linalg::matmul::matmul;
@@ -33,10 +33,20 @@ const BLOCK: usize = 8;
 /// Below this order the inverse is faer's (its recursion is short there).
 const LEAF: usize = 16;
 
+/// Order of the square scratch [`inverse_from_cholesky`] needs for m rows
+/// evaluated sequentially (below [`super::problem::PAR_MIN_ROWS`]; none above).
+pub(super) fn scratch_order(m: usize) -> usize {
+    if m < super::problem::PAR_MIN_ROWS {
+        m.div_ceil(2) + BLOCK
+    } else {
+        0
+    }
+}
+
 /// `r ← R⁻¹` (lower triangle; the strict upper triangle is left undefined)
 /// from the lower Cholesky factor C held in `r`'s lower triangle, with `w`
-/// (m × m) receiving `C⁻¹` and `scratch` grown as needed (sequential only,
-/// at most m²/4 values).
+/// (m × m) receiving `C⁻¹` and `scratch` grown to [`scratch_order`] as
+/// needed (sequential only).
 pub(super) fn inverse_from_cholesky(
     r: &mut Mat<f64>,
     w: &mut Mat<f64>,
@@ -62,7 +72,7 @@ pub(super) fn inverse_from_cholesky(
         );
         return;
     }
-    let half = m.div_ceil(2) + BLOCK;
+    let half = scratch_order(m);
     if scratch.nrows() < half || scratch.ncols() < half {
         *scratch = Mat::zeros(half, half);
     }

@@ -86,7 +86,8 @@ impl FitPlan {
     /// The plan for `outputs` outputs of `rows` rows with `opts`' optimiser
     /// and `converge_rows`, on
     /// `threads` threads: the largest of the search's workspaces (three
-    /// m × m matrices per running start with the gradient), the final
+    /// m × m matrices per running start with the gradient, and below
+    /// [`super::problem::PAR_MIN_ROWS`] rows a quarter more), the final
     /// solve's factor per output running at once, plus the factors a fitted
     /// model keeps (up to m = 4096).
     pub fn new(rows: usize, outputs: usize, opts: &KrigingOptions, threads: usize) -> Self {
@@ -100,7 +101,17 @@ impl FitPlan {
         };
         let sequential_outputs = rows > REFINE_ROWS;
         let running = threads.max(1) as u64;
-        let search = running * per_ws * sq(search_rows).max(sq(refine_rows));
+        // with the gradient, a sequential workspace holds the scratch of the
+        // blocked inverse too
+        let ws = |m: usize| {
+            per_ws * sq(m)
+                + if per_ws == 3 {
+                    sq(super::dense::scratch_order(m))
+                } else {
+                    0
+                }
+        };
+        let search = running * ws(search_rows).max(ws(refine_rows));
         let at_once = if sequential_outputs {
             1
         } else {
