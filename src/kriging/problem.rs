@@ -70,6 +70,12 @@ pub struct Workspace {
 }
 
 impl Workspace {
+    /// Start the next evaluation's jitter ladder from the bottom, as a new
+    /// workspace would (its buffers are overwritten before they are read).
+    pub(super) fn forget_rung(&mut self) {
+        self.rung = 0;
+    }
+
     /// Buffers for `m` rows and `p` trend terms.
     pub fn new(m: usize, p: usize) -> Self {
         let bs = recommended_block_size::<f64>(m, p + 1);

@@ -32,11 +32,62 @@ fn ln_psi_grad_objective<'a>(
     unpack: &'a Unpack<'_>,
 ) -> impl FnMut(&[f64], &mut [f64]) -> f64 + 'a {
     let mut ws = Workspace::new(problem.m(), problem.f.ncols());
-    move |z: &[f64], g: &mut [f64]| {
-        let (theta, nugget) = unpack(z);
-        problem
-            .psi_grad(&theta, nugget, &mut ws, g)
-            .map_or(f64::INFINITY, |v| v.ln_psi)
+    move |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, &mut ws, z, g)
+}
+
+/// `ln ψ(z)` with its gradient in `g`, in `ws`; +∞ where R cannot be
+/// factorised or the likelihood is degenerate.
+fn ln_psi_grad(
+    problem: &KrigingProblem,
+    unpack: &Unpack<'_>,
+    ws: &mut Workspace,
+    z: &[f64],
+    g: &mut [f64],
+) -> f64 {
+    let (theta, nugget) = unpack(z);
+    problem
+        .psi_grad(&theta, nugget, ws, g)
+        .map_or(f64::INFINITY, |v| v.ln_psi)
+}
+
+/// The workspaces of one multistart, passed from run to run and stage to
+/// stage: as many as ran at once (at most the threads). A fresh m × m
+/// workspace per run and stage (every 2 iterations in the final stage) went
+/// through the allocator each time, and whether it came back as memory
+/// already mapped depended on the allocator's state: `likelihood_core 300`
+/// took 37 000 to 614 000 page faults from one run to the next, and its
+/// mean 3-output fit 0.29 to 0.36 s with it.
+struct WorkspacePool {
+    rows: usize,
+    terms: usize,
+    free: std::sync::Mutex<Vec<Workspace>>,
+}
+
+impl WorkspacePool {
+    fn new(problem: &KrigingProblem) -> Self {
+        WorkspacePool {
+            rows: problem.m(),
+            terms: problem.f.ncols(),
+            free: std::sync::Mutex::new(Vec::new()),
+        }
+    }
+
+    /// A workspace as a new one would start (no jitter rung remembered).
+    fn take(&self) -> Workspace {
+        let pooled = self.free.lock().map(|mut v| v.pop()).unwrap_or(None);
+        match pooled {
+            Some(mut ws) => {
+                ws.forget_rung();
+                ws
+            }
+            None => Workspace::new(self.rows, self.terms),
+        }
+    }
+
+    fn put(&self, ws: Workspace) {
+        if let Ok(mut v) = self.free.lock() {
+            v.push(ws);
+        }
     }
 }
 
@@ -87,7 +138,9 @@ impl FitPlan {
     /// and `converge_rows`, on
     /// `threads` threads: the largest of the search's workspaces (three
     /// m × m matrices per running start with the gradient, and below
-    /// [`super::problem::PAR_MIN_ROWS`] rows a quarter more), the final
+    /// [`super::problem::PAR_MIN_ROWS`] rows a quarter more; the
+    /// multistart's are pooled per output, so up to `threads` per output
+    /// fitted at once), the final
     /// solve's factor per output running at once, plus the factors a fitted
     /// model keeps (up to m = 4096).
     pub fn new(rows: usize, outputs: usize, opts: &KrigingOptions, threads: usize) -> Self {
@@ -111,7 +164,14 @@ impl FitPlan {
                     0
                 }
         };
-        let search = running * ws(search_rows).max(ws(refine_rows));
+        // the multistart's workspaces are pooled per output (WorkspacePool):
+        // up to one per thread for every output fitted at once
+        let pooled = if sequential_outputs {
+            running
+        } else {
+            running * outputs.max(1) as u64
+        };
+        let search = (pooled * ws(search_rows)).max(running * ws(refine_rows));
         let at_once = if sequential_outputs {
             1
         } else {
@@ -368,17 +428,28 @@ fn multistart_bfgs(
         .enumerate()
         .map(|(i, x)| Run::new(i, x.clone()))
         .collect();
+    let workspaces = WorkspacePool::new(problem);
     let mut iters = SCREEN_ITER;
     let mut evals = 0;
     while pool.len() > FINALISTS {
         // successive halving: every run continues for `iters` iterations,
         // the better half (start order breaks ties) goes on for twice as many
-        evals += run_all(&mut pool, problem, bounds, unpack, &|_| screen(iters));
+        evals += run_all(&mut pool, problem, &workspaces, bounds, unpack, &|_| {
+            screen(iters)
+        });
         pool.sort_by(Run::order);
         pool.truncate(pool.len().div_ceil(2));
         iters *= 2;
     }
-    evals += converge_finalists(&mut pool, problem, bounds, unpack, opts, full_iter);
+    evals += converge_finalists(
+        &mut pool,
+        problem,
+        &workspaces,
+        bounds,
+        unpack,
+        opts,
+        full_iter,
+    );
     pool.sort_by(Run::order);
     let best = pool.into_iter().next().expect("at least one start");
     let (mut result, hinv) = (best.result.expect("every run ran"), best.hinv);
@@ -435,6 +506,7 @@ impl Run {
 fn run_all(
     pool: &mut [Run],
     problem: &KrigingProblem,
+    workspaces: &WorkspacePool,
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     stage: &(dyn Fn(&Run) -> optim::QuasiNewtonOptions + Sync),
@@ -443,12 +515,14 @@ fn run_all(
         .filter(|r| !r.done)
         .map(|r| {
             let o = stage(r);
-            let obj = ln_psi_grad_objective(problem, unpack);
+            let mut ws = workspaces.take();
+            let obj = |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, &mut ws, z, g);
             // a run that has stopped once resumes from its known ln ψ and
             // gradient instead of evaluating its point again
             let known = r.result.as_ref().map(|last| (last.f, r.grad.as_slice()));
             let warm = (!r.hinv.is_empty()).then(|| std::mem::take(&mut r.hinv));
             let (res, h, g) = optim::quasi_newton_resume(obj, &r.x, known, warm, bounds, &o);
+            workspaces.put(ws);
             r.grad = g;
             let spent = res.evals;
             r.x.clone_from(&res.x);
@@ -493,6 +567,7 @@ const INERT_LOG10_THETA: f64 = -3.0;
 fn converge_finalists(
     pool: &mut [Run],
     problem: &KrigingProblem,
+    workspaces: &WorkspacePool,
     bounds: &Bounds,
     unpack: &Unpack<'_>,
     opts: &KrigingOptions,
@@ -514,7 +589,7 @@ fn converge_finalists(
         if pool.iter().all(|r| r.done) {
             break;
         }
-        evals += run_all(pool, problem, bounds, unpack, &stage);
+        evals += run_all(pool, problem, workspaces, bounds, unpack, &stage);
         let points: Vec<(usize, f64, Vec<f64>)> =
             pool.iter().map(|r| (r.start, r.f(), r.x.clone())).collect();
         for r in pool.iter_mut().filter(|r| !r.done) {
