@@ -33,19 +33,19 @@ pub trait CorrelationModel: Send + Sync {
         }
     }
 
-    /// Gradient hook of the likelihood: for column `i` of R's strict lower
-    /// triangle, `grad[k] += Σ_j w[j] · ∂R(s_i, s_{i+1+j}) / ∂ln ξ_k`, where
-    /// `r[j] = R(s_i, s_{i+1+j})` are the values [`Self::fill_column`] wrote
-    /// (models whose derivative is a multiple of R use them). `w` is scratch:
-    /// an implementation may overwrite it.
-    fn accumulate_gradient(
+    /// Gradient hook of the likelihood. Every family here has
+    /// `∂R/∂ln ξ_k = q · ξ_k (s_k − s'_k)²` (module doc); for column `i` of
+    /// R's strict lower triangle this scales `w[j] ← −q(s_i, s_{i+1+j}) · w[j]`,
+    /// where `r[j] = R(s_i, s_{i+1+j})` are the values [`Self::fill_column`]
+    /// wrote (the Gaussian's `−q` is R itself). The likelihood then contracts
+    /// the weights with the squared differences of every input at once.
+    fn gradient_weights(
         &self,
         theta: &[f64],
         x: &TrainingInputs,
         i: usize,
         r: &[f64],
         w: &mut [f64],
-        grad: &mut [f64],
     );
 
     /// `out[j] = R(s, s_j)` for every training row j: the correlation vector
@@ -197,44 +197,6 @@ fn scaled_sq_dist<'x>(
     }
 }
 
-/// `grad[k] −= ξ_k Σ_j w_j (x_ik − x_{i+1+j,k})²`.
-fn weighted_sq_diffs(theta: &[f64], x: &TrainingInputs, i: usize, w: &[f64], grad: &mut [f64]) {
-    for (k, (t, g)) in theta.iter().zip(grad.iter_mut()).enumerate() {
-        let col = x.dim_values(k);
-        *g -= t * weighted_sq_sum(w, &col[i + 1..], col[i]);
-    }
-}
-
-/// Independent partial sums of [`weighted_sq_sum`]: enough to hide the
-/// latency of a floating-point add, one SIMD register or two wide.
-const LANES: usize = 8;
-
-/// `Σ_j w_j (b_j − a)²` over `w.len()` entries of `b`, summed in
-/// [`LANES`] interleaved partial sums. A single running sum is one long
-/// dependency chain the compiler may not reorder (floating-point addition
-/// is not associative), so it runs at one add per add-latency; the partial
-/// sums vectorise. The hot loop of the likelihood gradient.
-#[inline]
-fn weighted_sq_sum(w: &[f64], b: &[f64], a: f64) -> f64 {
-    use super::fastexp::mul_add;
-    let b = &b[..w.len()];
-    let mut acc = [0.0; LANES];
-    let (wc, wr) = w.split_at(w.len() - w.len() % LANES);
-    let (bc, br) = b.split_at(wc.len());
-    for (wl, bl) in wc.chunks_exact(LANES).zip(bc.chunks_exact(LANES)) {
-        for l in 0..LANES {
-            let diff = bl[l] - a;
-            acc[l] = mul_add(wl[l] * diff, diff, acc[l]);
-        }
-    }
-    let mut s = 0.0;
-    for (v, c) in wr.iter().zip(br) {
-        let diff = c - a;
-        s = mul_add(v * diff, diff, s);
-    }
-    acc.iter().sum::<f64>() + s
-}
-
 impl CorrelationModel for Correlation {
     fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
         let s: f64 = theta
@@ -255,25 +217,22 @@ impl CorrelationModel for Correlation {
         }
     }
 
-    fn accumulate_gradient(
+    fn gradient_weights(
         &self,
         theta: &[f64],
         x: &TrainingInputs,
         i: usize,
         r: &[f64],
         w: &mut [f64],
-        grad: &mut [f64],
     ) {
         if *self == Correlation::Gaussian {
-            return Gaussian.accumulate_gradient(theta, x, i, r, w, grad);
+            return Gaussian.gradient_weights(theta, x, i, r, w);
         }
         let mut s = vec![0.0; w.len()];
         sq_dist_column(theta, x, i, 1.0, &mut s);
-        // −q ≥ 0 takes the place of R in the Gaussian's pass
         for (v, sj) in w.iter_mut().zip(&s) {
             *v *= -self.slope(*sj);
         }
-        weighted_sq_diffs(theta, x, i, w, grad);
     }
 
     fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
@@ -309,21 +268,18 @@ impl CorrelationModel for Gaussian {
         super::fastexp::exp_in_place(out);
     }
 
-    /// `∂R/∂ln ξ_k = −ξ_k (s_k − s'_k)² R`: with `v_j = w_j R_j` precomputed,
-    /// one vectorised pass per dimension.
-    fn accumulate_gradient(
+    /// `∂R/∂ln ξ_k = −ξ_k (s_k − s'_k)² R`: `−q = R`.
+    fn gradient_weights(
         &self,
-        theta: &[f64],
-        x: &TrainingInputs,
-        i: usize,
+        _theta: &[f64],
+        _x: &TrainingInputs,
+        _i: usize,
         r: &[f64],
         w: &mut [f64],
-        grad: &mut [f64],
     ) {
         for (v, b) in w.iter_mut().zip(r) {
             *v *= b;
         }
-        weighted_sq_diffs(theta, x, i, w, grad);
     }
 
     /// `−Σ_k ξ_k (s_k − x_jk)²` over contiguous rows, then one vectorised `exp`.
@@ -408,23 +364,6 @@ impl TrainingInputs {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The lane-summed reduction equals the plain sum (to rounding) at
-    /// every length around the lane width, remainders included.
-    #[test]
-    fn weighted_sq_sum_matches_the_plain_sum() {
-        for n in 0..40 {
-            let w: Vec<f64> = (0..n).map(|j| (j as f64 * 0.7).sin()).collect();
-            let b: Vec<f64> = (0..n + 3).map(|j| (j as f64 * 1.9).cos()).collect();
-            let a = 0.31;
-            let plain: f64 = w.iter().zip(&b).map(|(v, c)| v * (c - a) * (c - a)).sum();
-            let got = weighted_sq_sum(&w, &b, a);
-            assert!(
-                (got - plain).abs() <= 1e-14 * (1.0 + plain.abs()),
-                "n = {n}"
-            );
-        }
-    }
 
     #[test]
     fn vectorised_fill_matches_scalar_definition() {

@@ -155,6 +155,84 @@ fn lower_gram(mut out: MatMut<'_, f64>, w: MatRef<'_, f64>) {
     }
 }
 
+/// `Σ_j a_j b_j` in [`BLOCK`] interleaved partial sums (one running sum is
+/// a chain of dependent adds), fused multiply-adds.
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    use super::fastexp::mul_add;
+    let n = a.len().min(b.len());
+    let full = n - n % BLOCK;
+    let mut acc = [0.0; BLOCK];
+    for (x, y) in a[..full]
+        .chunks_exact(BLOCK)
+        .zip(b[..full].chunks_exact(BLOCK))
+    {
+        for l in 0..BLOCK {
+            acc[l] = mul_add(x[l], y[l], acc[l]);
+        }
+    }
+    let tail = a[full..n]
+        .iter()
+        .zip(&b[full..n])
+        .fold(0.0, |s, (x, y)| mul_add(*x, *y, s));
+    acc.iter().sum::<f64>() + tail
+}
+
+/// `out[k] = Σ_{i>j} P_ij (x_ik − x_jk)²` for every input k, from `P`'s
+/// strict lower triangle (its diagonal and upper triangle are overwritten
+/// with zeros inside the diagonal [`BLOCK`]s). With the inputs centred
+/// (`x̃`), `Σ_{i>j} P_ij (x̃_ik − x̃_jk)² = Σ_j (Y_jk − 2 x̃_jk Y_j,d+k +
+/// x̃_jk² Y_j,2d)`, `Y = Pᵀ [X̃², X̃, 1]`: one product of m²/2 · (2d + 1)
+/// multiply-adds in row panels of `Pᵀ`, instead of d passes over every
+/// column (the same multiply-adds, but two loads each).
+pub(super) fn pair_sq_diff_sums(
+    mut p: MatMut<'_, f64>,
+    x: &super::corr::TrainingInputs,
+    out: &mut [f64],
+) {
+    let (m, d) = (x.m, x.d);
+    let mean: Vec<f64> = (0..d)
+        .map(|k| x.dim_values(k).iter().sum::<f64>() / m.max(1) as f64)
+        .collect();
+    let z = Mat::from_fn(m, 2 * d + 1, |i, c| {
+        if c == 2 * d {
+            return 1.0;
+        }
+        let k = c % d;
+        let v = x.dim_values(k)[i] - mean[k];
+        if c < d { v * v } else { v }
+    });
+    for start in (0..m).step_by(BLOCK) {
+        let end = (start + BLOCK).min(m);
+        for j in start..end {
+            for i in start..=j {
+                p[(i, j)] = 0.0;
+            }
+        }
+    }
+    let mut y = Mat::<f64>::zeros(m, 2 * d + 1);
+    for start in (0..m).step_by(BLOCK) {
+        let end = (start + BLOCK).min(m);
+        matmul(
+            y.as_mut().subrows_mut(start, end - start),
+            Accum::Replace,
+            p.rb()
+                .submatrix(start, start, m - start, end - start)
+                .transpose(),
+            z.as_ref().subrows(start, m - start),
+            1.0,
+            Par::Seq,
+        );
+    }
+    for (k, o) in out.iter_mut().enumerate().take(d) {
+        *o = (0..m)
+            .map(|j| {
+                let v = z[(j, d + k)];
+                y[(j, k)] - 2.0 * v * y[(j, d + k)] + v * v * y[(j, 2 * d)]
+            })
+            .sum();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

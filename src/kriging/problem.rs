@@ -18,6 +18,7 @@
 //! common case instead of up to nine, and ε still a function of ξ alone.
 
 use super::corr::{CorrelationModel, TrainingInputs};
+use super::fastexp::mul_add;
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::{
@@ -273,10 +274,14 @@ impl KrigingProblem<'_> {
     /// with `γ = R⁻¹(y − Fβ)`. The trace needs R⁻¹ itself (no solve gives
     /// it), formed from the Cholesky factor as `C⁻ᵀC⁻¹` (lower triangle, one
     /// extra m × m buffer, m³/3 + m³/3 flops next to the factorisation's
-    /// m³/3). The d derivative matrices are never formed: the correlation
-    /// model accumulates `Σ_ij W_ij ∂R_ij` column by column
-    /// ([`CorrelationModel::accumulate_gradient`]). For the nugget,
-    /// `∂R/∂ln ν = νI`. The jitter ε is held constant. Allocates O(m).
+    /// m³/3). The d derivative matrices are never formed: with
+    /// `∂R/∂ln ξ_k = q ∘ ξ_k D_k` (`D_k` the squared differences of input k;
+    /// the correlation model gives `−q`,
+    /// [`CorrelationModel::gradient_weights`]), `P = W ∘ (−q)` is written
+    /// over R⁻¹'s strict lower triangle and `Σ_{i>j} P_ij D_k,ij` for every
+    /// k comes from one product `Pᵀ[X², X, 1]` (`super::dense::pair_sq_diff_sums`).
+    /// For the nugget, `∂R/∂ln ν = νI`. The jitter ε is held constant.
+    /// Allocates O(m·d).
     pub fn psi_grad(
         &self,
         theta: &[f64],
@@ -297,49 +302,47 @@ impl KrigingProblem<'_> {
         // γ = R⁻¹ e from the lower triangle
         let mut gamma = vec![0.0; m];
         for j in 0..m {
-            gamma[j] += rinv[(j, j)] * e[j];
             let col = &rinv
                 .col(j)
                 .try_as_col_major()
                 .expect("contiguous")
                 .as_slice()[j + 1..];
-            let mut acc = 0.0;
-            for (k, r) in col.iter().enumerate() {
-                gamma[j + 1 + k] += r * e[j];
-                acc += r * e[j + 1 + k];
+            let ej = e[j];
+            for (g, r) in gamma[j + 1..].iter_mut().zip(col) {
+                *g = mul_add(*r, ej, *g);
             }
-            gamma[j] += acc;
+            gamma[j] += rinv[(j, j)] * ej + super::dense::dot(col, &e[j + 1..]);
         }
         let inv_s2 = 1.0 / v.sigma2;
-        grad.fill(0.0);
-        let mut w = vec![0.0; m];
+        let tr: f64 = (0..m).map(|i| rinv[(i, i)]).sum();
+        // P = (R⁻¹ − γγᵀ/σ²) ∘ (−q) over R⁻¹'s strict lower triangle
         for j in 0..m {
-            let rin = &rinv
-                .col(j)
-                .try_as_col_major()
-                .expect("contiguous")
-                .as_slice()[j + 1..];
             let rc = &ws
                 .base
                 .col(j)
                 .try_as_col_major()
                 .expect("contiguous")
                 .as_slice()[j + 1..];
-            let wj = &mut w[..rin.len()];
-            let gj = gamma[j] * inv_s2;
-            for ((o, a), g) in wj.iter_mut().zip(rin).zip(&gamma[j + 1..]) {
-                *o = a - gj * g;
+            let p = &mut ws
+                .r
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous")
+                .as_slice_mut()[j + 1..];
+            let gj = -gamma[j] * inv_s2;
+            for (o, g) in p.iter_mut().zip(&gamma[j + 1..]) {
+                *o = mul_add(gj, *g, *o);
             }
-            self.corr
-                .accumulate_gradient(theta, self.inputs, j, rc, wj, &mut grad[..d]);
+            self.corr.gradient_weights(theta, self.inputs, j, rc, p);
         }
-        // symmetric: Σ_ij = 2 Σ_{i>j}; d/dlog10 = ln 10 · d/dln
-        let scale = 2.0 * std::f64::consts::LN_10 / m as f64;
-        for g in &mut grad[..d] {
-            *g *= scale;
+        super::dense::pair_sq_diff_sums(ws.r.as_mut(), self.inputs, &mut grad[..d]);
+        // ∂/∂ln ξ_k = −ξ_k Σ_{i>j} P D_k; symmetric: Σ_ij = 2 Σ_{i>j};
+        // d/dlog10 = ln 10 · d/dln
+        let scale = -2.0 * std::f64::consts::LN_10 / m as f64;
+        for (g, t) in grad[..d].iter_mut().zip(theta) {
+            *g *= scale * t;
         }
         if grad.len() == d + 1 {
-            let tr: f64 = (0..m).map(|i| rinv[(i, i)]).sum();
             let gg: f64 = gamma.iter().map(|g| g * g).sum();
             grad[d] = std::f64::consts::LN_10 * nugget * (tr - gg * inv_s2) / m as f64;
         }
