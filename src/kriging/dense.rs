@@ -1,7 +1,9 @@
-//! `R⁻¹` from its Cholesky factor, for the likelihood gradient
-//! ([`super::KrigingProblem::psi_grad`]): `W = C⁻¹`, then `R⁻¹ = WᵀW`
-//! (lower triangles; LAPACK's `potri` = `trtri` + `lauum`), m³/6 + m³/6
-//! multiply-adds.
+//! The dense kernels of a likelihood evaluation: the Cholesky factor C of
+//! R ([`cholesky_lower`], m³/6 multiply-adds), and for the gradient
+//! ([`super::KrigingProblem::psi_grad`]) `R⁻¹` from it — `W = C⁻¹`, then
+//! `R⁻¹ = WᵀW` (lower triangles; LAPACK's `potri` = `trtri` + `lauum`),
+//! m³/6 + m³/6 — and the contraction of the gradient's weights with the
+//! inputs' squared differences ([`pair_sq_diff_sums`]).
 //!
 //! faer's triangular inverse and triangular product recurse down to 2 × 2
 //! blocks, and at the sizes of a hyperparameter search (m of a few hundred
@@ -19,9 +21,14 @@
 //! | 1 000 | 7.7 → 6.5 ms | 7.9 → 6.5 ms |
 //! | 2 000 | | 56 → 55 ms |
 //!
+//! The Cholesky factorisation itself is done the same way
+//! ([`cholesky_lower`]).
+//!
 //! With several threads (`Par::Rayon`, from [`super::problem::PAR_MIN_ROWS`] rows)
 //! faer's parallel recursions are used as they are.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::{LltRegularization, cholesky_in_place};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as tri_matmul};
 use faer::linalg::triangular_inverse::invert_lower_triangular;
@@ -155,6 +162,81 @@ fn lower_gram(mut out: MatMut<'_, f64>, w: MatRef<'_, f64>) {
     }
 }
 
+/// The lower Cholesky factor of the SPD matrix in `a`'s lower triangle,
+/// in place (`A = CCᵀ`; the strict upper triangle is left undefined);
+/// `false` when a pivot is not positive (or not a number): A is not
+/// positive definite. Sequentially it runs left-looking by [`BLOCK`]-column
+/// panels: each panel first takes `A[J_start.., J] −= C[J_start.., ..J_start]
+/// C[J, ..J_start]ᵀ` as one rectangular product, then is factorised column
+/// by column (m = 300: 0.27 → 0.22 ms, m = 1 000: 8.0 → 7.0 ms against
+/// faer's recursive factorisation on one thread). In parallel, faer's,
+/// with `mem` its scratch.
+pub(super) fn cholesky_lower(mut a: MatMut<'_, f64>, par: Par, mem: &mut MemBuffer) -> bool {
+    use super::fastexp::mul_add;
+    if par != Par::Seq {
+        return cholesky_in_place(
+            a,
+            LltRegularization::default(),
+            par,
+            MemStack::new(mem),
+            Default::default(),
+        )
+        .is_ok();
+    }
+    let m = a.nrows();
+    for start in (0..m).step_by(BLOCK) {
+        let end = (start + BLOCK).min(m);
+        if start > 0 {
+            let (done, mut panel) = a.rb_mut().split_at_col_mut(start);
+            matmul(
+                panel
+                    .rb_mut()
+                    .submatrix_mut(start, 0, m - start, end - start),
+                Accum::Add,
+                done.rb().subrows(start, m - start),
+                done.rb()
+                    .submatrix(start, 0, end - start, start)
+                    .transpose(),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        for j in start..end {
+            let (mut left, mut right) = a.rb_mut().split_at_col_mut(j + 1);
+            let cj = left
+                .rb_mut()
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("contiguous column")
+                .as_slice_mut();
+            let pivot = cj[j];
+            if !(pivot > 0.0) {
+                return false;
+            }
+            let d = pivot.sqrt();
+            cj[j] = d;
+            let inv = 1.0 / d;
+            for v in &mut cj[j + 1..] {
+                *v *= inv;
+            }
+            let cj = &cj[..];
+            for c in j + 1..end {
+                let f = -cj[c];
+                let cc = right
+                    .rb_mut()
+                    .col_mut(c - j - 1)
+                    .try_as_col_major_mut()
+                    .expect("contiguous column")
+                    .as_slice_mut();
+                for (o, v) in cc[c..].iter_mut().zip(&cj[c..]) {
+                    *o = mul_add(*v, f, *o);
+                }
+            }
+        }
+    }
+    true
+}
+
 /// `Σ_j a_j b_j` in [`BLOCK`] interleaved partial sums (one running sum is
 /// a chain of dependent adds), fused multiply-adds.
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -248,6 +330,33 @@ mod tests {
         });
         let c = a.llt(faer::Side::Lower).expect("SPD");
         c.L().to_owned()
+    }
+
+    /// The panel Cholesky gives faer's factor to rounding at orders around
+    /// the panel size, and refuses a matrix that is not positive definite.
+    #[test]
+    fn cholesky_matches_faer_and_refuses_an_indefinite_matrix() {
+        let mut mem = MemBuffer::new(faer::dyn_stack::StackReq::EMPTY);
+        for m in [1, 7, 8, 9, 17, 64, 130] {
+            let c = factor(m);
+            let a = &c * c.transpose();
+            let mut got = Mat::from_fn(m, m, |i, j| if i >= j { a[(i, j)] } else { 5.0 });
+            assert!(cholesky_lower(got.as_mut(), Par::Seq, &mut mem), "m = {m}");
+            for j in 0..m {
+                for i in j..m {
+                    assert!(
+                        (got[(i, j)] - c[(i, j)]).abs() < 1e-12,
+                        "m = {m} ({i}, {j})"
+                    );
+                }
+            }
+            let mut bad = a.clone();
+            bad[(m / 2, m / 2)] = -1.0;
+            assert!(!cholesky_lower(bad.as_mut(), Par::Seq, &mut mem), "m = {m}");
+        }
+        let mut nan = Mat::<f64>::identity(9, 9);
+        nan[(5, 2)] = f64::NAN;
+        assert!(!cholesky_lower(nan.as_mut(), Par::Seq, &mut mem));
     }
 
     /// The blocked inverse and product give R⁻¹ to rounding, at orders

@@ -21,9 +21,7 @@ use super::corr::{CorrelationModel, TrainingInputs};
 use super::fastexp::mul_add;
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::{
-    LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
-};
+use faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch;
 use faer::linalg::qr::no_pivoting::factor::{
     qr_in_place, qr_in_place_scratch, recommended_block_size,
 };
@@ -142,19 +140,12 @@ impl KrigingProblem<'_> {
         self.inputs
             .fill_lower(self.corr, theta, nugget, ws.base.as_mut());
         let try_rung = |ws: &mut Workspace, k: usize| {
-            ws.r.copy_from(&ws.base);
+            // the lower triangle is all the factorisation reads
+            ws.r.as_mut().copy_from_triangular_lower(ws.base.as_ref());
             for i in 0..m {
                 ws.r[(i, i)] += jitter(k);
             }
-            let stack = MemStack::new(&mut ws.mem);
-            cholesky_in_place(
-                ws.r.as_mut(),
-                LltRegularization::default(),
-                ws.par,
-                stack,
-                Default::default(),
-            )
-            .is_ok()
+            super::dense::cholesky_lower(ws.r.as_mut(), ws.par, &mut ws.mem)
         };
         let mut k = ws.rung.saturating_sub(1);
         if try_rung(ws, k) {
@@ -451,18 +442,11 @@ pub fn factor_at(
         c[(i, i)] += jitter;
     }
     let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(m, par, Default::default()));
-    cholesky_in_place(
-        c.as_mut(),
-        LltRegularization::default(),
-        par,
-        MemStack::new(&mut mem),
-        Default::default(),
-    )
-    .map_err(|_| {
-        Error::Numerical(format!(
+    if !super::dense::cholesky_lower(c.as_mut(), par, &mut mem) {
+        return Err(Error::Numerical(format!(
             "correlation matrix not positive definite at the saved ξ, ν = {nugget:e} and jitter {jitter:e}"
-        ))
-    })?;
+        )));
+    }
     for j in 0..m {
         for i in 0..j {
             c[(i, j)] = 0.0;
