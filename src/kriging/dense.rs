@@ -210,7 +210,8 @@ pub(super) fn cholesky_lower(mut a: MatMut<'_, f64>, par: Par, mem: &mut MemBuff
                 .expect("contiguous column")
                 .as_slice_mut();
             let pivot = cj[j];
-            if !(pivot > 0.0) {
+            // NaN is not positive either
+            if pivot.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return false;
             }
             let d = pivot.sqrt();
