@@ -18,7 +18,6 @@
 //! common case instead of up to nine, and ε still a function of ξ alone.
 
 use super::corr::{CorrelationModel, TrainingInputs};
-use super::fastexp::mul_add;
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch;
@@ -299,9 +298,7 @@ impl KrigingProblem<'_> {
                 .expect("contiguous")
                 .as_slice()[j + 1..];
             let ej = e[j];
-            for (g, r) in gamma[j + 1..].iter_mut().zip(col) {
-                *g = mul_add(*r, ej, *g);
-            }
+            super::dense::axpy(&mut gamma[j + 1..], ej, col);
             gamma[j] += rinv[(j, j)] * ej + super::dense::dot(col, &e[j + 1..]);
         }
         let inv_s2 = 1.0 / v.sigma2;
@@ -320,10 +317,7 @@ impl KrigingProblem<'_> {
                 .try_as_col_major_mut()
                 .expect("contiguous")
                 .as_slice_mut()[j + 1..];
-            let gj = -gamma[j] * inv_s2;
-            for (o, g) in p.iter_mut().zip(&gamma[j + 1..]) {
-                *o = mul_add(gj, *g, *o);
-            }
+            super::dense::axpy(p, -gamma[j] * inv_s2, &gamma[j + 1..]);
             self.corr.gradient_weights(theta, self.inputs, j, rc, p);
         }
         super::dense::pair_sq_diff_sums(ws.r.as_mut(), self.inputs, &mut grad[..d]);
