@@ -154,11 +154,12 @@ impl FitPlan {
         };
         let sequential_outputs = rows > REFINE_ROWS;
         let running = threads.max(1) as u64;
+        let gradient = opts.optimizer == OptimizerKind::Bfgs;
         // with the gradient, a sequential workspace holds the scratch of the
         // blocked inverse too
         let ws = |m: usize| {
             per_ws * sq(m)
-                + if per_ws == 3 {
+                + if gradient {
                     sq(super::dense::scratch_order(m))
                 } else {
                     0
@@ -166,10 +167,10 @@ impl FitPlan {
         };
         // the multistart's workspaces are pooled per output (WorkspacePool):
         // up to one per thread for every output fitted at once
-        let pooled = if sequential_outputs {
-            running
-        } else {
+        let pooled = if gradient && !sequential_outputs {
             running * outputs.max(1) as u64
+        } else {
+            running
         };
         let search = (pooled * ws(search_rows)).max(running * ws(refine_rows));
         let at_once = if sequential_outputs {
