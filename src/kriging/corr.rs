@@ -414,4 +414,37 @@ mod tests {
             }
         }
     }
+
+    /// The unfused distances (a CPU without FMA, where the dispatcher runs
+    /// them) agree with the dispatched ones to rounding, remainders
+    /// included.
+    #[test]
+    fn unfused_distances_match_the_dispatched_ones() {
+        let rows: Vec<Vec<f64>> = (0..29)
+            .map(|i| {
+                vec![
+                    (i as f64 * 0.37).sin(),
+                    (i as f64 * 1.3).cos(),
+                    0.1 * i as f64,
+                ]
+            })
+            .collect();
+        let x = TrainingInputs::new(&rows);
+        let theta = [0.7, 0.05, 2.0];
+        for i in 0..29 {
+            let n = 28 - i;
+            let (mut got, mut plain) = (vec![0.0; n], vec![0.0; n]);
+            sq_dist_column(&theta, &x, i, -1.0, &mut got);
+            scaled_sq_dist_with::<false, _, _>(
+                &theta,
+                |k| x.dim_values(k)[i],
+                |k| &x.dim_values(k)[i + 1..],
+                -1.0,
+                &mut plain,
+            );
+            for (a, b) in got.iter().zip(&plain) {
+                assert!((a - b).abs() <= 1e-15 * a.abs().max(1.0), "row {i}");
+            }
+        }
+    }
 }

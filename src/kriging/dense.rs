@@ -416,6 +416,34 @@ mod tests {
         assert!(!cholesky_lower(nan.as_mut(), Par::Seq, &mut mem));
     }
 
+    /// The unfused kernels (a CPU without FMA, where the dispatchers run
+    /// them) agree with the dispatched ones to rounding.
+    #[test]
+    fn unfused_kernels_match_the_dispatched_ones() {
+        let mut mem = MemBuffer::new(faer::dyn_stack::StackReq::EMPTY);
+        for m in [9, 40, 130] {
+            let c = factor(m);
+            let a = &c * c.transpose();
+            let (mut fused, mut plain) = (a.clone(), a.clone());
+            assert!(cholesky_lower(fused.as_mut(), Par::Seq, &mut mem));
+            assert!(cholesky_panels::<false>(plain.as_mut()));
+            for j in 0..m {
+                for i in j..m {
+                    assert!((fused[(i, j)] - plain[(i, j)]).abs() < 1e-13, "m = {m}");
+                }
+            }
+        }
+        let x: Vec<f64> = (0..37).map(|i| (i as f64 * 0.61).sin()).collect();
+        let y: Vec<f64> = (0..37).map(|i| (i as f64 * 1.7).cos()).collect();
+        assert!((dot(&x, &y) - dot_with::<false>(&x, &y)).abs() < 1e-14);
+        let (mut u, mut v) = (y.clone(), y.clone());
+        axpy(&mut u, -0.3, &x);
+        axpy_with::<false>(&mut v, -0.3, &x);
+        for (p, q) in u.iter().zip(&v) {
+            assert!((p - q).abs() < 1e-15);
+        }
+    }
+
     /// The blocked inverse and product give R⁻¹ to rounding, at orders
     /// around the panel, leaf and split sizes, with garbage in R's upper
     /// triangle and in a reused W.
