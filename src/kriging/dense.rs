@@ -28,7 +28,9 @@
 //! faer's parallel recursions are used as they are.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::{LltRegularization, cholesky_in_place};
+use faer::linalg::cholesky::llt::factor::{
+    LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as tri_matmul};
 use faer::linalg::triangular_inverse::invert_lower_triangular;
@@ -169,25 +171,26 @@ fn lower_gram(mut out: MatMut<'_, f64>, w: MatRef<'_, f64>) {
 /// panels: each panel first takes `A[J_start.., J] −= C[J_start.., ..J_start]
 /// C[J, ..J_start]ᵀ` as one rectangular product, then is factorised column
 /// by column (m = 300: 0.27 → 0.22 ms, m = 1 000: 8.0 → 7.0 ms against
-/// faer's recursive factorisation on one thread). In parallel, faer's,
-/// with `mem` its scratch.
-pub(super) fn cholesky_lower(a: MatMut<'_, f64>, par: Par, mem: &mut MemBuffer) -> bool {
+/// faer's recursive factorisation on one thread). In parallel (from
+/// [`super::problem::PAR_MIN_ROWS`] rows, where an allocation is nothing
+/// next to the m³/6 multiply-adds), faer's, with its scratch allocated here.
+pub(super) fn cholesky_lower(a: MatMut<'_, f64>, par: Par) -> bool {
     if par != Par::Seq {
+        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
+            a.nrows(),
+            par,
+            Default::default(),
+        ));
         return cholesky_in_place(
             a,
             LltRegularization::default(),
             par,
-            MemStack::new(mem),
+            MemStack::new(&mut mem),
             Default::default(),
         )
         .is_ok();
     }
-    #[cfg(target_arch = "x86_64")]
-    if super::fastexp::fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above)
-        return unsafe { cholesky_panels_fused(a) };
-    }
-    cholesky_panels::<false>(a)
+    super::fma::dispatch!(cholesky_panels_fused(a), cholesky_panels::<false>(a))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -199,7 +202,7 @@ fn cholesky_panels_fused(a: MatMut<'_, f64>) -> bool {
 /// [`cholesky_lower`] on one thread, fused multiply-adds when `F`.
 #[inline(always)]
 fn cholesky_panels<const F: bool>(mut a: MatMut<'_, f64>) -> bool {
-    use super::fastexp::mul_add;
+    use super::fma::mul_add;
     let m = a.nrows();
     for start in (0..m).step_by(BLOCK) {
         let end = (start + BLOCK).min(m);
@@ -258,12 +261,7 @@ fn cholesky_panels<const F: bool>(mut a: MatMut<'_, f64>) -> bool {
 /// `Σ_j a_j b_j` in [`BLOCK`] interleaved partial sums (one running sum is
 /// a chain of dependent adds), fused multiply-adds where the CPU has them.
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    #[cfg(target_arch = "x86_64")]
-    if super::fastexp::fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above)
-        return unsafe { dot_fused(a, b) };
-    }
-    dot_with::<false>(a, b)
+    super::fma::dispatch!(dot_fused(a, b), dot_with::<false>(a, b))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -274,8 +272,9 @@ fn dot_fused(a: &[f64], b: &[f64]) -> f64 {
 
 #[inline(always)]
 fn dot_with<const F: bool>(a: &[f64], b: &[f64]) -> f64 {
-    use super::fastexp::mul_add;
-    let n = a.len().min(b.len());
+    use super::fma::mul_add;
+    debug_assert_eq!(a.len(), b.len(), "dot of unequal lengths");
+    let n = a.len();
     let full = n - n % BLOCK;
     let mut acc = [0.0; BLOCK];
     for (x, y) in a[..full]
@@ -295,12 +294,7 @@ fn dot_with<const F: bool>(a: &[f64], b: &[f64]) -> f64 {
 
 /// `y ← y + α x`, fused multiply-adds where the CPU has them.
 pub(super) fn axpy(y: &mut [f64], alpha: f64, x: &[f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if super::fastexp::fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above)
-        return unsafe { axpy_fused(y, alpha, x) };
-    }
-    axpy_with::<false>(y, alpha, x);
+    super::fma::dispatch!(axpy_fused(y, alpha, x), axpy_with::<false>(y, alpha, x))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -311,8 +305,9 @@ fn axpy_fused(y: &mut [f64], alpha: f64, x: &[f64]) {
 
 #[inline(always)]
 fn axpy_with<const F: bool>(y: &mut [f64], alpha: f64, x: &[f64]) {
+    debug_assert_eq!(y.len(), x.len(), "axpy of unequal lengths");
     for (o, v) in y.iter_mut().zip(x) {
-        *o = super::fastexp::mul_add::<F>(*v, alpha, *o);
+        *o = super::fma::mul_add::<F>(*v, alpha, *o);
     }
 }
 
@@ -393,12 +388,11 @@ mod tests {
     /// the panel size, and refuses a matrix that is not positive definite.
     #[test]
     fn cholesky_matches_faer_and_refuses_an_indefinite_matrix() {
-        let mut mem = MemBuffer::new(faer::dyn_stack::StackReq::EMPTY);
         for m in [1, 7, 8, 9, 17, 64, 130] {
             let c = factor(m);
             let a = &c * c.transpose();
             let mut got = Mat::from_fn(m, m, |i, j| if i >= j { a[(i, j)] } else { 5.0 });
-            assert!(cholesky_lower(got.as_mut(), Par::Seq, &mut mem), "m = {m}");
+            assert!(cholesky_lower(got.as_mut(), Par::Seq), "m = {m}");
             for j in 0..m {
                 for i in j..m {
                     assert!(
@@ -409,23 +403,22 @@ mod tests {
             }
             let mut bad = a.clone();
             bad[(m / 2, m / 2)] = -1.0;
-            assert!(!cholesky_lower(bad.as_mut(), Par::Seq, &mut mem), "m = {m}");
+            assert!(!cholesky_lower(bad.as_mut(), Par::Seq), "m = {m}");
         }
         let mut nan = Mat::<f64>::identity(9, 9);
         nan[(5, 2)] = f64::NAN;
-        assert!(!cholesky_lower(nan.as_mut(), Par::Seq, &mut mem));
+        assert!(!cholesky_lower(nan.as_mut(), Par::Seq));
     }
 
     /// The unfused kernels (a CPU without FMA, where the dispatchers run
     /// them) agree with the dispatched ones to rounding.
     #[test]
     fn unfused_kernels_match_the_dispatched_ones() {
-        let mut mem = MemBuffer::new(faer::dyn_stack::StackReq::EMPTY);
         for m in [9, 40, 130] {
             let c = factor(m);
             let a = &c * c.transpose();
             let (mut fused, mut plain) = (a.clone(), a.clone());
-            assert!(cholesky_lower(fused.as_mut(), Par::Seq, &mut mem));
+            assert!(cholesky_lower(fused.as_mut(), Par::Seq));
             assert!(cholesky_panels::<false>(plain.as_mut()));
             for j in 0..m {
                 for i in j..m {

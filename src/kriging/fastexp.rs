@@ -8,18 +8,11 @@
 //! correlation matrix fill runs about 4× faster than with `f64::exp`.
 //!
 //! Where the CPU has AVX2 and FMA the Horner steps are fused multiply-adds
-//! ([`mul_add`]): Rust never fuses `a * b + c` itself, and the 13 dependent
-//! multiply-then-add steps were the loop's critical path (45 000 values,
-//! one 300-row fill: 0.104 ms → 0.060 ms, the same worst error).
-//!
-//! The fused kernels of the likelihood (here, the correlation fill, the
-//! Cholesky panels and the gradient's sums) are chosen at **run time**
-//! ([`fma`]), not by the build's target CPU: the Python wheel is built for
-//! baseline x86-64 and must compute the same bits as the command line's
-//! `x86-64-v3` build on the same machine (`python/tests/test_same_numbers.py`
-//! compares their model files byte for byte). Each kernel is generic over
-//! `F` (fused or not) and has a `#[target_feature(enable = "avx2,fma")]`
-//! instance that a dispatcher calls when [`fma`] holds.
+//! (`super::fma`, chosen at run time): the 13 dependent multiply-then-add
+//! steps were the loop's critical path (45 000 values, one 300-row fill:
+//! 0.104 ms → 0.060 ms, the same worst error).
+
+use super::fma::{dispatch, mul_add};
 
 const LN2_HI: f64 = 0.693_147_180_369_123_8;
 const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
@@ -29,12 +22,7 @@ const ROUND: f64 = 6_755_399_441_055_744.0;
 
 /// `v ← exp(v)` for every element (intended for `v ≤ 0`; `v > 0` is clamped to 0).
 pub fn exp_in_place(v: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above)
-        return unsafe { exp_in_place_fused(v) };
-    }
-    exp_in_place_with::<false>(v);
+    dispatch!(exp_in_place_fused(v), exp_in_place_with::<false>(v))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -48,30 +36,6 @@ fn exp_in_place_with<const F: bool>(v: &mut [f64]) {
     for x in v.iter_mut() {
         *x = exp_nonpos::<F>(*x);
     }
-}
-
-/// Whether this CPU runs the fused kernels: x86-64 with AVX2 and FMA
-/// (`is_x86_feature_detected!` caches its answer; in an `x86-64-v3` build
-/// it is known at compile time).
-#[inline]
-pub(crate) fn fma() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// `a·b + c`: one fused multiply-add when `F` (use it only inside a kernel
-/// compiled for FMA, where it is one instruction; elsewhere `f64::mul_add`
-/// is a slow library call), else a multiply and an add. Fused, it rounds
-/// once, so the two differ in the last bits.
-#[inline(always)]
-pub(crate) fn mul_add<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
-    if F { a.mul_add(b, c) } else { a * b + c }
 }
 
 /// Taylor coefficients of `exp(r)` above degree 0, highest first: 1/13! … 1.

@@ -16,6 +16,7 @@ pub mod corr;
 mod dense;
 mod family;
 mod fastexp;
+mod fma;
 mod fused;
 pub mod model;
 mod options;

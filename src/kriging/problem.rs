@@ -19,8 +19,7 @@
 
 use super::corr::{CorrelationModel, TrainingInputs};
 use crate::{Error, Result};
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch;
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor::{
     qr_in_place, qr_in_place_scratch, recommended_block_size,
 };
@@ -78,10 +77,7 @@ impl Workspace {
     pub fn new(m: usize, p: usize) -> Self {
         let bs = recommended_block_size::<f64>(m, p + 1);
         let par = par_for(m);
-        let req = StackReq::any_of(&[
-            cholesky_in_place_scratch::<f64>(m, par, Default::default()),
-            qr_in_place_scratch::<f64>(m, p + 1, bs, Par::Seq, Default::default()),
-        ]);
+        let req = qr_in_place_scratch::<f64>(m, p + 1, bs, Par::Seq, Default::default());
         Workspace {
             base: Mat::zeros(m, m),
             r: Mat::zeros(m, m),
@@ -144,7 +140,7 @@ impl KrigingProblem<'_> {
             for i in 0..m {
                 ws.r[(i, i)] += jitter(k);
             }
-            super::dense::cholesky_lower(ws.r.as_mut(), ws.par, &mut ws.mem)
+            super::dense::cholesky_lower(ws.r.as_mut(), ws.par)
         };
         let mut k = ws.rung.saturating_sub(1);
         if try_rung(ws, k) {
@@ -435,8 +431,7 @@ pub fn factor_at(
     for i in 0..m {
         c[(i, i)] += jitter;
     }
-    let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(m, par, Default::default()));
-    if !super::dense::cholesky_lower(c.as_mut(), par, &mut mem) {
+    if !super::dense::cholesky_lower(c.as_mut(), par) {
         return Err(Error::Numerical(format!(
             "correlation matrix not positive definite at the saved ξ, ν = {nugget:e} and jitter {jitter:e}"
         )));
