@@ -389,17 +389,16 @@ impl TrainingInputs {
 mod tests {
     use super::*;
 
+    /// n rows of three inputs: two smooth ones and `third(i)`.
+    fn sample_rows(n: usize, third: impl Fn(usize) -> f64) -> Vec<Vec<f64>> {
+        (0..n)
+            .map(|i| vec![(i as f64 * 0.37).sin(), (i as f64 * 1.3).cos(), third(i)])
+            .collect()
+    }
+
     #[test]
     fn vectorised_fill_matches_scalar_definition() {
-        let rows: Vec<Vec<f64>> = (0..37)
-            .map(|i| {
-                vec![
-                    (i as f64 * 0.37).sin(),
-                    (i as f64 * 1.3).cos(),
-                    if i % 2 == 0 { 1.0 } else { -1.0 },
-                ]
-            })
-            .collect();
+        let rows = sample_rows(37, |i| if i % 2 == 0 { 1.0 } else { -1.0 });
         let x = TrainingInputs::new(&rows);
         let theta = [0.7, 0.05, 2.0];
         let mut r = faer::Mat::<f64>::zeros(37, 37);
@@ -418,15 +417,7 @@ mod tests {
     /// included.
     #[test]
     fn unfused_distances_match_the_dispatched_ones() {
-        let rows: Vec<Vec<f64>> = (0..29)
-            .map(|i| {
-                vec![
-                    (i as f64 * 0.37).sin(),
-                    (i as f64 * 1.3).cos(),
-                    0.1 * i as f64,
-                ]
-            })
-            .collect();
+        let rows = sample_rows(29, |i| 0.1 * i as f64);
         let x = TrainingInputs::new(&rows);
         let theta = [0.7, 0.05, 2.0];
         for i in 0..29 {
