@@ -46,6 +46,7 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod calibration;
 pub mod compensate;
 pub mod cv;
 pub mod dataset;

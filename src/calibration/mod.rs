@@ -1,0 +1,477 @@
+//! Kinematic calibration: the MD-H, tool and base errors a campaign can
+//! identify, by Levenberg–Marquardt on the directions it sees.
+//!
+//! The measured TCP of pose `k` is `P_k = P_nom(q_k) + e_k`. The model is the
+//! nominal robot with parameter errors `p` (per link `Δθ_off, Δd, Δa, Δα,
+//! Δβ`, the tool offset, the base pose; [`crate::kinematics::apply_errors`]),
+//! fitted by
+//!
+//! ```text
+//! min_u ‖ P − FK(p = T u; q) ‖²,       T = D V_k,
+//! ```
+//!
+//! where `D V_k` spans the `k` directions of the scaled identification
+//! Jacobian at nominal that the campaign sees above its residual noise
+//! ([`identifiability`]): every other direction stays at its nominal value.
+//! The noise `s` is the residual standard deviation of a first fit on every
+//! numerically identifiable direction (or the caller's
+//! [`CalibrationOptions::noise_mm`]); when it hides some directions, the
+//! fit is repeated on the directions it leaves.
+//!
+//! A [`Calibration`] predicts the kinematic part of the error,
+//! `δ̂_cal(q) = P_cal(q) − P_nom(q)`, and gives the residual `e − δ̂_cal` that a
+//! Kriging model learns next (the calibrated model of [`crate::model`]).
+
+mod identifiability;
+
+pub use identifiability::{Identifiability, ParameterReport};
+
+use crate::dataset::Dataset;
+use crate::kinematics::{Robot, apply_errors, calib_names, identification_jacobian};
+use crate::optim::{LmOptions, levenberg_marquardt, numerical_jacobian};
+use crate::vec3::residuals;
+use crate::{Error, Result};
+use identifiability::{ScaledJacobian, rms};
+use nalgebra::{DMatrix, DVector, Vector3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Options of [`calibrate`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationOptions {
+    /// Residual standard deviation per coordinate (mm) that decides which
+    /// directions the campaign sees; `None`: estimated from a first fit.
+    #[serde(default)]
+    pub noise_mm: Option<f64>,
+    /// Levenberg–Marquardt trial steps per fit.
+    #[serde(default = "default_max_iter")]
+    pub max_iter: usize,
+}
+
+fn default_max_iter() -> usize {
+    100
+}
+
+impl Default for CalibrationOptions {
+    fn default() -> Self {
+        CalibrationOptions {
+            noise_mm: None,
+            max_iter: default_max_iter(),
+        }
+    }
+}
+
+impl CalibrationOptions {
+    /// Error unless the noise is finite and positive and the iterations
+    /// at least one.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(s) = self.noise_mm
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(Error::InvalidParameter(format!(
+                "the calibration's noise must be a positive number of mm, not {s}"
+            )));
+        }
+        if self.max_iter == 0 {
+            return Err(Error::InvalidParameter(
+                "the calibration needs at least one Levenberg–Marquardt step".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// An identified kinematic calibration of one robot on one campaign.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    nominal: Robot,
+    identified: Robot,
+    parameters: Vec<f64>,
+    identifiability: Identifiability,
+    options: CalibrationOptions,
+    rows: usize,
+    rms_before_mm: f64,
+    rms_after_mm: f64,
+    iterations: usize,
+    stop: String,
+}
+
+/// Identify the kinematic errors of `nominal` on the measured campaign
+/// `data` (joints as commanded): see the module documentation.
+pub fn calibrate(
+    data: &Dataset,
+    nominal: &Robot,
+    opts: &CalibrationOptions,
+) -> Result<Calibration> {
+    opts.validate()?;
+    nominal.check_dataset(data)?;
+    let errors = data.errors_or_err()?;
+    if data.len() < 3 {
+        return Err(Error::Input {
+            source_name: data.source.clone(),
+            message: format!(
+                "a calibration needs at least 3 measured poses, not {}",
+                data.len()
+            ),
+        });
+    }
+    let targets: Vec<Vector3<f64>> = data
+        .q
+        .iter()
+        .zip(errors)
+        .map(|(q, e)| nominal.fk_unchecked(q).translation.vector + Vector3::from(*e))
+        .collect();
+    calibrate_joints(&data.q, &targets, nominal, opts)
+}
+
+/// [`calibrate`] on joint values `joints` (e.g. corrected by lookup tables)
+/// and measured TCP positions `targets`, both in campaign order.
+pub fn calibrate_joints(
+    joints: &[Vec<f64>],
+    targets: &[Vector3<f64>],
+    nominal: &Robot,
+    opts: &CalibrationOptions,
+) -> Result<Calibration> {
+    opts.validate()?;
+    let m = joints.len();
+    let names = calib_names(nominal.dof());
+    let r0 = position_residual(nominal, joints, targets);
+    let rho0 = rms(&r0);
+    if !(rho0.is_finite() && rho0 > 0.0) {
+        return Err(Error::InvalidParameter(format!(
+            "the calibration needs measured errors that are finite and not all zero (RMS {rho0})"
+        )));
+    }
+    let jac = stacked_jacobian(nominal, joints);
+    let sj = ScaledJacobian::new(&jac, rho0);
+    let rank = sj.numerical_rank();
+    let first = fit_subspace(nominal, joints, targets, &sj, &vec![0.0; rank], opts)?;
+    let dof_left = (3 * m).saturating_sub(rank).max(1) as f64;
+    let s = opts
+        .noise_mm
+        .unwrap_or_else(|| first.r.norm() / dof_left.sqrt());
+    let k = sj.seen_above(s);
+    let fit = if k == rank {
+        first
+    } else {
+        // the directions are orthogonal in the scaled parameters, so the
+        // first fit's coordinates along the kept ones are where the truncated
+        // fit ends up to first order: start there
+        fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
+    };
+    let identifiability = sj.report(k, s, &fit.p, &names, m);
+    Ok(Calibration {
+        nominal: nominal.clone(),
+        identified: apply_errors(nominal, &fit.p),
+        parameters: fit.p,
+        identifiability,
+        options: opts.clone(),
+        rows: m,
+        rms_before_mm: rho0,
+        rms_after_mm: rms(&fit.r),
+        iterations: fit.iterations,
+        stop: fit.stop,
+    })
+}
+
+struct SubspaceFit {
+    u: Vec<f64>,
+    p: Vec<f64>,
+    r: DVector<f64>,
+    iterations: usize,
+    stop: String,
+}
+
+/// Levenberg–Marquardt on the coordinates of the first `u0.len()`
+/// directions, from `u0`.
+fn fit_subspace(
+    nominal: &Robot,
+    joints: &[Vec<f64>],
+    targets: &[Vector3<f64>],
+    sj: &ScaledJacobian,
+    u0: &[f64],
+    opts: &CalibrationOptions,
+) -> Result<SubspaceFit> {
+    let k = u0.len();
+    let t = sj.basis(k);
+    let params = |u: &[f64]| -> Vec<f64> { (&t * DVector::from_column_slice(u)).data.into() };
+    if k == 0 {
+        let p = vec![0.0; t.nrows()];
+        return Ok(SubspaceFit {
+            u: Vec::new(),
+            r: position_residual(nominal, joints, targets),
+            p,
+            iterations: 0,
+            stop: "nothing identifiable".into(),
+        });
+    }
+    let residual = |u: &[f64]| -> Result<DVector<f64>> {
+        Ok(position_residual(
+            &apply_errors(nominal, &params(u)),
+            joints,
+            targets,
+        ))
+    };
+    // u is in units of the prior scale: a step of 1e-5 of it is far above
+    // rounding and far below any curvature of the chain
+    let h = vec![1e-5; k];
+    let res = levenberg_marquardt(
+        |u| Ok((residual(u)?, numerical_jacobian(residual, u, &h)?)),
+        u0,
+        &LmOptions {
+            max_iter: opts.max_iter,
+            // the directions are orthogonal at nominal: nothing to freeze
+            rank_tol: 1e-12,
+            ..LmOptions::default()
+        },
+    )?;
+    let p = params(&res.x);
+    Ok(SubspaceFit {
+        r: position_residual(&apply_errors(nominal, &p), joints, targets),
+        u: res.x,
+        p,
+        iterations: res.iterations,
+        stop: format!("{:?}", res.stop),
+    })
+}
+
+/// `targets − FK(robot; joints)`, stacked x, y, z per pose.
+fn position_residual(robot: &Robot, joints: &[Vec<f64>], targets: &[Vector3<f64>]) -> DVector<f64> {
+    let per_pose: Vec<Vector3<f64>> = joints
+        .par_iter()
+        .zip(targets)
+        .map(|(q, p)| p - robot.fk_unchecked(q).translation.vector)
+        .collect();
+    DVector::from_iterator(
+        3 * per_pose.len(),
+        per_pose.iter().flat_map(|d| [d.x, d.y, d.z]),
+    )
+}
+
+/// The identification Jacobian of every pose, stacked (3m × P).
+fn stacked_jacobian(robot: &Robot, joints: &[Vec<f64>]) -> DMatrix<f64> {
+    let rows: Vec<[Vec<f64>; 3]> = joints
+        .par_iter()
+        .map(|q| identification_jacobian(robot, q))
+        .collect();
+    let np = rows.first().map_or(0, |r| r[0].len());
+    DMatrix::from_fn(3 * rows.len(), np, |i, j| rows[i / 3][i % 3][j])
+}
+
+impl Calibration {
+    /// The robot as the controller knows it.
+    pub fn nominal(&self) -> &Robot {
+        &self.nominal
+    }
+
+    /// The robot with its identified errors applied: what
+    /// `robot calibrated` writes as a robot file.
+    pub fn identified(&self) -> &Robot {
+        &self.identified
+    }
+
+    /// The identified parameter errors (degrees and mm), in the order of
+    /// [`crate::kinematics::calib_names`].
+    pub fn parameters(&self) -> &[f64] {
+        &self.parameters
+    }
+
+    /// What the campaign could identify: directions seen, observability
+    /// indices, per-parameter standard errors.
+    pub fn identifiability(&self) -> &Identifiability {
+        &self.identifiability
+    }
+
+    /// The options it was identified with.
+    pub fn options(&self) -> &CalibrationOptions {
+        &self.options
+    }
+
+    /// Measured poses it was identified on.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// RMS per coordinate of the measured error before (nominal) and after
+    /// the calibration, mm.
+    pub fn rms_mm(&self) -> (f64, f64) {
+        (self.rms_before_mm, self.rms_after_mm)
+    }
+
+    /// Levenberg–Marquardt steps of the final fit, and why it stopped.
+    pub fn solver(&self) -> (usize, &str) {
+        (self.iterations, &self.stop)
+    }
+
+    /// The kinematic part of the error at joints `q`:
+    /// `δ̂_cal = P_cal(q) − P_nom(q)`, mm.
+    pub fn predict(&self, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        Ok(q.par_iter()
+            .map(|qk| {
+                (self.identified.fk_unchecked(qk).translation.vector
+                    - self.nominal.fk_unchecked(qk).translation.vector)
+                    .into()
+            })
+            .collect())
+    }
+
+    /// `data` with its errors replaced by what the calibration leaves,
+    /// `e − δ̂_cal(q)`.
+    pub fn residual(&self, data: &Dataset) -> Result<Dataset> {
+        let pred = self.predict(&data.q)?;
+        let mut r = data.clone();
+        r.errors = Some(residuals(data.errors_or_err()?, &pred));
+        Ok(r)
+    }
+
+    /// The same calibration identified anew on `data` (same nominal robot
+    /// and options): what a refit on other rows does.
+    pub fn reidentify(&self, data: &Dataset) -> Result<Calibration> {
+        calibrate(data, &self.nominal, &self.options)
+    }
+
+    /// Checks after loading: the identified robot is the nominal one with
+    /// the stored parameter errors applied.
+    pub fn validate(&self, source_name: &str) -> Result<()> {
+        let n = self.nominal.dof();
+        let bad = |m: String| Error::Input {
+            source_name: source_name.into(),
+            message: m,
+        };
+        if self.parameters.len() != crate::kinematics::calib_len(n) {
+            return Err(bad(format!(
+                "the calibration has {} parameters, a {n}-joint robot needs {}",
+                self.parameters.len(),
+                crate::kinematics::calib_len(n)
+            )));
+        }
+        if self.parameters.iter().any(|v| !v.is_finite()) {
+            return Err(bad(
+                "the calibration has a parameter that is not finite".into()
+            ));
+        }
+        let again = apply_errors(&self.nominal, &self.parameters);
+        let q = &self.nominal.home;
+        let d = (again.fk_unchecked(q).translation.vector
+            - self.identified.fk_unchecked(q).translation.vector)
+            .norm();
+        if d > 1e-6 {
+            return Err(bad(format!(
+                "the calibration's identified robot is not its nominal robot with its parameters ({d:.3e} mm apart at home)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// One line: "27 of 39 directions seen (noise 0.21 mm, cond 41, O1 …)".
+    pub fn summary_line(&self) -> String {
+        let id = &self.identifiability;
+        format!(
+            "{} of {} directions seen above the residual noise {:.3} mm (condition number {:.3e}, O1 {:.3e}, O3 {:.3e}); RMS per coordinate {:.4} → {:.4} mm on {} poses",
+            id.directions_seen,
+            id.parameters_total,
+            id.noise_mm,
+            id.condition_number,
+            id.o1,
+            id.o3,
+            self.rms_before_mm,
+            self.rms_after_mm,
+            self.rows
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::load_robot;
+
+    fn campaign(robot: &Robot, truth: &Robot, m: usize, noise: f64) -> Dataset {
+        let mut rng = crate::stats::rng_for(5, "calibration test");
+        let ranges = robot.work_ranges.clone();
+        let q: Vec<Vec<f64>> = (0..m)
+            .map(|_| {
+                ranges
+                    .iter()
+                    .map(|(lo, hi)| lo + (hi - lo) * rand::RngExt::random::<f64>(&mut rng))
+                    .collect()
+            })
+            .collect();
+        let mut data = Dataset::from_poses("<calibration test>", q, None).unwrap();
+        data.errors = Some(
+            data.q
+                .iter()
+                .map(|q| {
+                    let d = truth.fk_unchecked(q).translation.vector
+                        - robot.fk_unchecked(q).translation.vector;
+                    std::array::from_fn(|a| {
+                        d[a] + noise
+                            * rand_distr::Distribution::<f64>::sample(
+                                &rand_distr::StandardNormal,
+                                &mut rng,
+                            )
+                    })
+                })
+                .collect(),
+        );
+        data
+    }
+
+    #[test]
+    fn recovers_the_errors_it_can_see_and_fixes_the_rest() {
+        let robot = load_robot("comau-nj220").unwrap();
+        let n = robot.dof();
+        let mut p = vec![0.0; crate::kinematics::calib_len(n)];
+        p[2] = 0.4; // a1
+        p[5 + 1] = -0.3; // d2
+        p[5 * 2 + 3] = 0.02; // alpha3
+        let truth = apply_errors(&robot, &p);
+        let data = campaign(&robot, &truth, 120, 0.01);
+        let cal = calibrate(&data, &robot, &CalibrationOptions::default()).unwrap();
+        let (before, after) = cal.rms_mm();
+        assert!(after < 0.02 && before > 0.1, "{before} → {after}");
+        let id = cal.identifiability();
+        assert!(
+            id.directions_seen < id.parameters_total,
+            "{}",
+            cal.summary_line()
+        );
+        assert!((id.noise_mm - 0.01).abs() < 0.003, "{}", id.noise_mm);
+        // the calibration predicts the true kinematic error at new poses
+        let check = campaign(&robot, &truth, 40, 0.0);
+        let pred = cal.predict(&check.q).unwrap();
+        let worst = residuals(check.errors.as_ref().unwrap(), &pred)
+            .iter()
+            .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt())
+            .fold(0.0, f64::max);
+        assert!(worst < 0.02, "worst {worst}");
+        cal.validate("<test>").unwrap();
+        // more noise hides more directions
+        let noisy = calibrate(
+            &data,
+            &robot,
+            &CalibrationOptions {
+                noise_mm: Some(5.0),
+                ..CalibrationOptions::default()
+            },
+        )
+        .unwrap();
+        assert!(noisy.identifiability().directions_seen < id.directions_seen);
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let robot = load_robot("comau-nj220").unwrap();
+        let data = campaign(&robot, &robot, 10, 0.0);
+        // all-zero errors: nothing to calibrate
+        assert!(calibrate(&data, &robot, &CalibrationOptions::default()).is_err());
+        let bad = CalibrationOptions {
+            noise_mm: Some(-1.0),
+            ..CalibrationOptions::default()
+        };
+        assert!(bad.validate().is_err());
+    }
+}
