@@ -15,15 +15,15 @@
 
 use crate::dataset::Dataset;
 use crate::methods::Method;
-use crate::model::ErrorModel;
+use crate::model::{ErrorModel, GROSS_FACTOR};
 use crate::params::{ErrorModelParams, ValidErrorModelParams};
 use crate::selection::GaProgress;
-use crate::stats::{ErrorSummary, summarize};
+use crate::stats::{ErrorSummary, PredictiveScores, predictive_scores, summarize};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-pub use crate::stats::kfold_partition;
+pub use crate::stats::{group_partition, kfold_partition};
 
 /// Result of a cross-validation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -47,6 +47,11 @@ pub struct CvResult {
     /// RMSE per axis, mm ([`crate::kriging::HeldOut::expected_loo_rmse`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub expected_loo_rmse_mm: Option<[f64; 3]>,
+    /// Refit mode: how honest the held-out predictive intervals and the
+    /// coverage flags were ([`PredictiveScores`]); `None` in closed form and
+    /// for models with extra inputs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scores: Option<PredictiveScores>,
 }
 
 /// K-fold CV refitting the model on every training fold with `fit`.
@@ -66,30 +71,74 @@ pub fn cross_validate_refit<F>(data: &Dataset, k: usize, seed: u64, fit: F) -> R
 where
     F: Fn(&Dataset) -> Result<ErrorModel>,
 {
+    let fold = kfold_partition(data.len(), k, seed)?;
+    let mut res = cross_validate_folds(data, &fold, fit)?;
+    res.seed = seed;
+    Ok(res)
+}
+
+/// Cross-validation refitting the model with `fit` on every training
+/// fold, `fold[i]` being the fold of row `i` (0..k, every fold non-empty):
+/// a random partition ([`kfold_partition`]) or one fold per group
+/// ([`group_partition`], leave-one-group-out). The result's `seed` is 0.
+pub fn cross_validate_folds<F>(data: &Dataset, fold: &[usize], fit: F) -> Result<CvResult>
+where
+    F: Fn(&Dataset) -> Result<ErrorModel>,
+{
     let t0 = Instant::now();
     let errors = data.errors_or_err()?;
-    let fold = kfold_partition(data.len(), k, seed)?;
-    let mut residuals = vec![[0.0; 3]; data.len()];
+    let m = data.len();
+    if fold.len() != m {
+        return Err(Error::InvalidParameter(format!(
+            "{} fold labels for {m} rows",
+            fold.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |f| f + 1);
+    if k < 2 || (0..k).any(|f| !fold.contains(&f)) {
+        return Err(Error::InvalidParameter(format!(
+            "cross-validation needs at least 2 non-empty folds (got {k})"
+        )));
+    }
+    let mut residuals = vec![[0.0; 3]; m];
+    let mut mean = vec![[0.0; 3]; m];
+    let mut std = vec![[0.0; 3]; m];
+    let mut flagged = vec![false; m];
+    let mut scored = true;
     for f in 0..k {
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| fold[i] == f);
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
         let model = fit(&data.select(&train))?;
         let held = data.select(&test);
         let pred = model.predict_dataset(&held)?;
+        // flags need the poses alone: a model with extra inputs is not scored
+        scored &= model.extras().is_empty();
+        let flags = if scored {
+            model.coverage(&held.q, &held.dir, &pred.mean, Some(&pred.std))?
+        } else {
+            Vec::new()
+        };
+        let noise = model.noise_std();
+        for w in flags {
+            flagged[test[w.index]] = true;
+        }
         for (j, &i) in test.iter().enumerate() {
+            mean[i] = pred.mean[j];
             for a in 0..3 {
                 residuals[i][a] = errors[i][a] - pred.mean[j][a];
+                std[i][a] = pred.std[j][a].hypot(noise[a]);
             }
         }
     }
     Ok(CvResult {
         folds: k,
-        seed,
+        seed: 0,
         mode: "refit".into(),
         summary: summarize(&residuals),
-        fold,
+        fold: fold.to_vec(),
         residuals,
         seconds: t0.elapsed().as_secs_f64(),
         expected_loo_rmse_mm: None,
+        scores: scored.then(|| predictive_scores(errors, &mean, &std, &flagged, GROSS_FACTOR)),
     })
 }
 
@@ -130,6 +179,7 @@ pub fn cross_validate_closed_form(
         residuals,
         seconds: t0.elapsed().as_secs_f64(),
         expected_loo_rmse_mm: Some(expected),
+        scores: None,
     })
 }
 

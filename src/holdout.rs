@@ -1,26 +1,25 @@
 //! Kriging beside the D-H calibration on held-out rows of a measured
-//! campaign (issue 10's real-data table; issue 16's no-blow-up check).
+//! campaign.
 //!
 //! Five models are scored on rows they were not trained on: the D-H
-//! calibration (Levenberg–Marquardt on the MD-H, tool and base errors), the
-//! two-stage hybrid (D-H calibration, then Kriging JS or EJS on its residual)
-//! and universal Kriging with the kinematic trend (the GLS does the
-//! calibration), JS and EJS. [`holdout_cv`] is the K-fold version on all
-//! rows; the CLI's `holdout` prints its table.
+//! calibration ([`crate::calibration`]: Levenberg–Marquardt on the MD-H,
+//! tool and base directions the campaign sees), the calibrated model (that
+//! calibration, then Kriging JS or EJS on its residual, one model file) and
+//! universal Kriging with the kinematic trend (the GLS does the
+//! calibration), JS and EJS. [`holdout_cv`] is the K-fold (or grouped)
+//! version on all rows; the CLI's `holdout` prints its table.
 //!
 //! Every Kriging fit starts from the caller's [`ErrorModelParams`] (Kriging
-//! options and periodic joints); each model then sets its own space and
-//! trend.
+//! options and periodic joints); each model then sets its own space, trend
+//! and calibration.
 
-use crate::cv::kfold_partition;
+use crate::calibration::{Calibration, CalibrationOptions, calibrate};
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
-use crate::model::ErrorModel;
+use crate::model::{ErrorModel, GROSS_FACTOR};
 use crate::params::{ErrorModelParams, TrendSpec};
-use crate::physics::{Geometry, HybridModel, LmSummary, PhysicsModel, identify_mdh};
-use crate::predictor::ErrorPredictor;
 use crate::space::Space;
-use crate::stats::spread;
+use crate::stats::{PredictiveScores, predictive_scores, spread};
 use crate::vec3::{Vec3, norms, residuals};
 use crate::{Error, Result};
 use serde::Serialize;
@@ -56,32 +55,11 @@ pub fn score(name: &str, truth: &[[f64; 3]], pred: &[[f64; 3]], seconds: f64) ->
     }
 }
 
-/// D-H calibration (Levenberg–Marquardt, every parameter free; redundant
-/// ones frozen) of `robot` on `data`, as a model.
-pub fn calibrate(data: &Dataset, robot: &Robot) -> Result<(PhysicsModel, LmSummary)> {
-    let (cal, lm) = identify_mdh(data, robot, &vec![None; robot.dof()])?;
-    let model = PhysicsModel::new(
-        "D-H calibration",
-        robot.clone(),
-        Geometry::Mdh { robot: cal },
-    );
-    Ok((model, lm))
-}
-
-/// `data` with its errors replaced by `errors − dh(q)`: what a hybrid's
-/// Kriging stage learns.
-pub fn residual(data: &Dataset, dh: &PhysicsModel) -> Result<Dataset> {
-    let pred = dh.predict(&data.q, &data.dir)?;
-    let mut r = data.clone();
-    r.errors = Some(residuals(data.errors_or_err()?, &pred));
-    Ok(r)
-}
-
 /// The models of [`holdout_cv`], in the order of its rows (after "nominal").
 pub const CV_MODELS: [&str; 5] = [
     "D-H calibration (LM, refit per fold)",
-    "hybrid: D-H calibration + Kriging JS",
-    "hybrid: D-H calibration + Kriging EJS",
+    "calibrated model: D-H calibration + Kriging JS",
+    "calibrated model: D-H calibration + Kriging EJS",
     "universal Kriging JS, kinematic trend",
     "universal Kriging EJS, kinematic trend",
 ];
@@ -91,6 +69,10 @@ pub const CV_MODELS: [&str; 5] = [
 pub struct HoldoutCv {
     /// "nominal" (no correction), then the [`CV_MODELS`].
     pub rows: Vec<HoldoutRow>,
+    /// Per model of [`CV_MODELS`]: interval coverage, NLPD, flag rate and
+    /// recall on the held-out rows. The D-H calibration's interval is
+    /// `±1.96 s` with `s` its residual noise per coordinate; it flags none.
+    pub scores: Vec<PredictiveScores>,
     /// Max 3D error of each of the [`CV_MODELS`] in each fold, mm.
     pub fold_max_mm: Vec<[f64; 5]>,
     /// The same over the held-out rows the model does not flag as outside
@@ -99,6 +81,8 @@ pub struct HoldoutCv {
     pub fold_max_covered_mm: Vec<[f64; 5]>,
     /// Rows each of the [`CV_MODELS`] flagged when they were held out.
     pub flagged: Vec<Vec<usize>>,
+    /// Folds (random or one per group).
+    pub folds: usize,
     /// Rows the Kriging hyperparameters were chosen on (the first ones).
     pub hyper_rows: usize,
     /// Wall time of choosing the hyperparameters, s.
@@ -115,26 +99,46 @@ impl HoldoutCv {
     }
 }
 
-/// K-fold CV (fold partition from `seed`) of the five models on all rows.
-/// The D-H calibration is refitted on every training fold. The Kriging
-/// models keep the hyperparameters (ξ, nugget) chosen with `base` (Kriging
-/// options and periodic joints; space and trend set per model) on the
-/// first `hyper_rows` rows and are refitted on every training fold at those
-/// values: the hybrid on the fold's own calibration residual, the
-/// kinematic-trend model on the fold. `progress(done, message)` is called
-/// before each of the `k + 1` steps.
+/// Predictions of one model on the held-out rows, gathered over the folds.
+struct Gathered {
+    mean: Vec<[f64; 3]>,
+    std: Vec<[f64; 3]>,
+    flagged: Vec<bool>,
+}
+
+/// Cross-validation of the five models on all rows, `fold[i]` being the
+/// fold of row `i` (0..k: a seeded random partition,
+/// [`crate::stats::kfold_partition`], or one fold per group,
+/// [`crate::stats::group_partition`]). The D-H calibration is identified
+/// on every training fold. The Kriging models keep the hyperparameters (ξ,
+/// nugget) chosen with `base` (Kriging options and periodic joints; space,
+/// trend and calibration set per model) on the first `hyper_rows` rows and
+/// are refitted on every training fold at those values: the calibrated
+/// model on top of the fold's own calibration, the kinematic-trend model on
+/// the fold. `progress(done, message)` is called before each of the `k + 1`
+/// steps.
 pub fn holdout_cv(
     data: &Dataset,
     robot: &Robot,
     base: &ErrorModelParams,
-    k: usize,
-    seed: u64,
+    fold: &[usize],
     hyper_rows: usize,
     progress: &dyn Fn(usize, &str),
 ) -> Result<HoldoutCv> {
-    let fold = kfold_partition(data.len(), k, seed)?;
     let errors = data.errors_or_err()?;
     let m = data.len();
+    if fold.len() != m {
+        return Err(Error::InvalidParameter(format!(
+            "{} fold labels for {m} rows",
+            fold.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |f| f + 1);
+    if k < 2 || (0..k).any(|f| !fold.contains(&f)) {
+        return Err(Error::InvalidParameter(format!(
+            "cross-validation needs at least 2 non-empty folds numbered 0..k (got {k})"
+        )));
+    }
     if hyper_rows < 10 {
         return Err(Error::InvalidParameter(format!(
             "the hyperparameters need at least 10 rows, not {hyper_rows}"
@@ -146,95 +150,125 @@ pub fn holdout_cv(
         &format!("hyperparameters on the first {} rows", first.len()),
     );
     let t_hyper = Instant::now();
-    let first_resid = residual(&first, &calibrate(&first, robot)?.0)?;
-    let spaces = [Space::Js, Space::Ejs];
-    let mut hybrid_t = Vec::new();
+    let mut calibrated_t = Vec::new();
     let mut kin_t = Vec::new();
-    for space in spaces {
-        hybrid_t.push(fit_plain(&first_resid, space, base)?);
+    for space in [Space::Js, Space::Ejs] {
+        calibrated_t.push(fit_calibrated(&first, space, base, robot)?);
         kin_t.push(fit_kinematic(&first, space, base, robot)?);
     }
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
-    let mut pred = vec![vec![[0.0; 3]; m]; 5];
+    let mut got: Vec<Gathered> = (0..5)
+        .map(|_| Gathered {
+            mean: vec![[0.0; 3]; m],
+            std: vec![[0.0; 3]; m],
+            flagged: vec![false; m],
+        })
+        .collect();
     let mut secs = [0.0; 5];
     let mut fold_max_mm = Vec::with_capacity(k);
     let mut fold_max_covered_mm = Vec::with_capacity(k);
-    let mut flagged = vec![Vec::new(); 5];
     for f in 0..k {
         progress(f + 1, &format!("fold {}", f + 1));
         let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
         let (tr, held) = (data.select(&train), data.select(&test));
         let t = Instant::now();
-        let (dh, _) = calibrate(&tr, robot)?;
+        let dh = calibrate(&tr, robot, &CalibrationOptions::default())?;
         let dh_secs = t.elapsed().as_secs_f64();
         secs[0] += dh_secs;
         let mut worst = [0.0f64; 5];
         let mut worst_covered = [0.0f64; 5];
-        // predictions of model `slot` on the held-out rows, and the rows it
-        // flags as outside its coverage
-        let mut put = |slot: usize, p: Vec<[f64; 3]>, flags: Vec<usize>| {
-            for (j, v) in p.into_iter().enumerate() {
-                let e = errors[test[j]];
-                let err = e.minus(&v).norm();
+        // a model's predictions on the held-out rows, with the std of a new
+        // measurement and the rows it flags as outside its coverage
+        let mut put = |slot: usize, p: Held| {
+            for (j, &i) in test.iter().enumerate() {
+                let err = errors[i].minus(&p.mean[j]).norm();
+                let flagged = p.flags.contains(&j);
                 worst[slot] = worst[slot].max(err);
-                if !flags.contains(&j) {
+                if !flagged {
                     worst_covered[slot] = worst_covered[slot].max(err);
                 }
-                pred[slot][test[j]] = v;
+                let g = &mut got[slot];
+                g.mean[i] = p.mean[j];
+                g.std[i] = p.std[j];
+                g.flagged[i] = flagged;
             }
-            flagged[slot].extend(flags.iter().map(|&j| test[j]));
         };
-        put(0, dh.predict(&held.q, &held.dir)?, Vec::new());
-        let resid = residual(&tr, &dh)?;
-        for s in 0..2 {
+        let s = dh.identifiability().noise_mm;
+        put(
+            0,
+            Held {
+                mean: dh.predict(&held.q)?,
+                std: vec![[s; 3]; test.len()],
+                flags: Vec::new(),
+            },
+        );
+        for sp in 0..2 {
             let t = Instant::now();
-            let h = HybridModel {
-                physics: dh.clone(),
-                residual: hybrid_t[s].refit_at_hyperparameters(&resid)?,
-            };
-            secs[1 + s] += dh_secs + t.elapsed().as_secs_f64();
-            let (_, flags) = predicted(&h.residual, &held)?;
-            put(1 + s, h.predict(&held.q, &held.dir)?, flags);
+            let c = calibrated_t[sp].refit_with_calibration(&tr, dh.clone())?;
+            secs[1 + sp] += dh_secs + t.elapsed().as_secs_f64();
+            put(1 + sp, predicted(&c, &held)?);
             let t = Instant::now();
-            let uk = kin_t[s].refit_at_hyperparameters(&tr)?;
-            secs[3 + s] += t.elapsed().as_secs_f64();
-            let (mean, flags) = predicted(&uk, &held)?;
-            put(3 + s, mean, flags);
+            let uk = kin_t[sp].refit_at_hyperparameters(&tr)?;
+            secs[3 + sp] += t.elapsed().as_secs_f64();
+            put(3 + sp, predicted(&uk, &held)?);
         }
         fold_max_mm.push(worst);
         fold_max_covered_mm.push(worst_covered);
     }
     let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
     for (i, n) in CV_MODELS.iter().enumerate() {
-        rows.push(score(n, errors, &pred[i], secs[i]));
+        rows.push(score(n, errors, &got[i].mean, secs[i]));
     }
+    let scores = got
+        .iter()
+        .map(|g| predictive_scores(errors, &g.mean, &g.std, &g.flagged, GROSS_FACTOR))
+        .collect();
     Ok(HoldoutCv {
         rows,
+        scores,
         fold_max_mm,
         fold_max_covered_mm,
-        flagged: flagged
-            .into_iter()
-            .map(|mut f| {
-                f.sort_unstable();
-                f
-            })
+        flagged: got
+            .iter()
+            .map(|g| (0..m).filter(|&i| g.flagged[i]).collect())
             .collect(),
+        folds: k,
         hyper_rows: first.len(),
         hyper_seconds,
     })
 }
 
-/// `model`'s predicted mean on `held`, and the rows it flags as outside its
-/// coverage (joint range, prediction std, or a correction far beyond its
-/// trend).
-fn predicted(model: &ErrorModel, held: &Dataset) -> Result<(Vec<[f64; 3]>, Vec<usize>)> {
+/// A model's predictions on held-out rows.
+struct Held {
+    /// Predicted errors, mm.
+    mean: Vec<[f64; 3]>,
+    /// Standard deviation of a new measurement per axis, mm.
+    std: Vec<[f64; 3]>,
+    /// Held-out rows (0-based among them) flagged as outside its coverage.
+    flags: Vec<usize>,
+}
+
+/// `model`'s predicted mean on `held`, the standard deviation of a new
+/// measurement (`√(MSE + noise²)`), and the rows it flags as outside its
+/// coverage ([`ErrorModel::coverage`]).
+fn predicted(model: &ErrorModel, held: &Dataset) -> Result<Held> {
     let p = model.predict(&held.q, &held.dir)?;
+    let noise = model.noise_std();
     let flags = model
         .coverage(&held.q, &held.dir, &p.mean, Some(&p.std))?
         .into_iter()
         .map(|w| w.index)
         .collect();
-    Ok((p.mean, flags))
+    let std = p
+        .std
+        .iter()
+        .map(|s| std::array::from_fn(|a| s[a].hypot(noise[a])))
+        .collect();
+    Ok(Held {
+        mean: p.mean,
+        std,
+        flags,
+    })
 }
 
 /// What [`holdout_split`] scores beyond the five models.
@@ -253,7 +287,7 @@ pub struct HoldoutSplit {
     /// "nominal", then the five models, then the extras asked for.
     pub rows: Vec<HoldoutRow>,
     /// The D-H calibration on the training rows.
-    pub calibration: LmSummary,
+    pub calibration: Calibration,
 }
 
 /// Train every model on `train`, score it on `test` (rows it never saw):
@@ -274,29 +308,24 @@ pub fn holdout_split(
     let mut rows = vec![score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0)];
     progress("D-H calibration");
     let t0 = Instant::now();
-    let (dh, calibration) = calibrate(train, robot)?;
+    let calibration = calibrate(train, robot, &CalibrationOptions::default())?;
     let dh_secs = t0.elapsed().as_secs_f64();
     rows.push(score(
         "D-H calibration (LM)",
         &truth,
-        &dh.predict_errors(&test.q, &test.dir)?,
+        &calibration.predict(&test.q)?,
         dh_secs,
     ));
-    let resid = residual(train, &dh)?;
     for space in [Space::Js, Space::Ejs] {
         let label = format!("{space:?}").to_uppercase();
-        progress(&format!("hybrid {label}"));
+        progress(&format!("calibrated model {label}"));
         let t0 = Instant::now();
-        let h = HybridModel {
-            physics: dh.clone(),
-            residual: fit_plain(&resid, space, base)?,
-        };
-        let secs = dh_secs + t0.elapsed().as_secs_f64();
+        let c = fit_calibrated(train, space, base, robot)?;
         rows.push(score(
-            &format!("hybrid: D-H calibration + Kriging {label}"),
+            &format!("calibrated model: D-H calibration + Kriging {label}"),
             &truth,
-            &h.predict(&test.q, &test.dir)?,
-            secs,
+            &c.predict_mean(&test.q, &test.dir)?,
+            t0.elapsed().as_secs_f64(),
         ));
         progress(&format!("UK kinematic trend {label}"));
         let t0 = Instant::now();
@@ -342,11 +371,19 @@ pub fn holdout_split(
     Ok(HoldoutSplit { rows, calibration })
 }
 
-/// Kriging in `space` with the options' trend, from `base`, on `data`.
-fn fit_plain(data: &Dataset, space: Space, base: &ErrorModelParams) -> Result<ErrorModel> {
+/// The calibrated model in `space`: calibration of `robot`, then Kriging
+/// with the options' trend on its residual, from `base`, on `data`.
+fn fit_calibrated(
+    data: &Dataset,
+    space: Space,
+    base: &ErrorModelParams,
+    robot: &Robot,
+) -> Result<ErrorModel> {
     base.clone()
         .space(space)
         .trend(TrendSpec::Options)
+        .robot(robot.clone())
+        .calibrate(Some(CalibrationOptions::default()))
         .check()?
         .fit(data)
 }
@@ -361,6 +398,7 @@ fn fit_kinematic(
     base.clone()
         .space(space)
         .trend(TrendSpec::Kinematic(Box::new(robot.clone())))
+        .calibrate(None)
         .check()?
         .fit(data)
 }
@@ -373,6 +411,8 @@ mod tests {
     fn max_covered_is_the_worst_fold_per_model() {
         let cv = HoldoutCv {
             rows: Vec::new(),
+            scores: Vec::new(),
+            folds: 2,
             fold_max_mm: Vec::new(),
             fold_max_covered_mm: vec![[1.0, 0.5, 0.0, 2.0, 0.1], [0.5, 0.7, 0.0, 1.0, 0.3]],
             flagged: vec![Vec::new(); 5],

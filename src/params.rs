@@ -20,6 +20,7 @@
 //! `methods::Method::params`, which holds their constants in one
 //! place.
 
+use crate::calibration::{CalibrationOptions, calibrate};
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
@@ -84,6 +85,7 @@ pub struct ErrorModelParams {
     hyper: HyperSpec,
     extras: Vec<Feature>,
     robot: Option<Robot>,
+    calibration: Option<CalibrationOptions>,
 }
 
 /// Parameters that passed [`ErrorModelParams::check`]: only these fit.
@@ -109,6 +111,7 @@ impl ErrorModelParams {
             hyper: HyperSpec::Search,
             extras: Vec::new(),
             robot: None,
+            calibration: None,
         }
     }
 
@@ -121,6 +124,21 @@ impl ErrorModelParams {
             .periodic(model.periodic().to_vec())
             .kriging(model.options().clone())
             .hyper(HyperSpec::FixedFrom(Box::new(model)))
+    }
+
+    /// Calibrate the robot ([`ErrorModelParams::robot`]) first: identify
+    /// its MD-H, tool and base errors on the campaign
+    /// ([`crate::calibration::calibrate`]), then fit the Kriging outputs to
+    /// what the calibration leaves. The model holds both and predicts their
+    /// sum. `None`: Kriging of the raw error (the default).
+    pub fn calibrate(mut self, calibration: Option<CalibrationOptions>) -> Self {
+        self.calibration = calibration;
+        self
+    }
+
+    /// The calibration options, when the fit calibrates first.
+    pub fn get_calibration(&self) -> Option<&CalibrationOptions> {
+        self.calibration.as_ref()
     }
 
     /// JS or EJS.
@@ -255,6 +273,13 @@ impl ErrorModelParams {
                 .to_string(),
             ),
         ];
+        if self.calibration.is_some() {
+            v.push((
+                "calibration",
+                "MD-H, tool and base by Levenberg–Marquardt on the directions the campaign sees"
+                    .to_string(),
+            ));
+        }
         if !self.periodic.is_empty() {
             let p: Vec<String> = self
                 .periodic
@@ -282,6 +307,22 @@ impl ErrorModelParams {
         let bad = |m: &str| Err(Error::InvalidParameter(m.into()));
         if !self.extras.is_empty() && self.trend != TrendSpec::Options {
             return bad("extra inputs take the options' trend (each adds a linear term to it)");
+        }
+        if let Some(c) = &self.calibration {
+            c.validate()?;
+            if self.robot.is_none() {
+                return bad("a calibration needs the robot the campaign was measured on");
+            }
+            if matches!(self.trend, TrendSpec::Kinematic(_)) {
+                return bad(
+                    "the kinematic trend calibrates inside the Kriging fit: fit it without a calibration",
+                );
+            }
+            if matches!(self.hyper, HyperSpec::FixedFrom(_)) {
+                return bad(
+                    "fixed hyperparameters keep the model's own calibration: give no calibration",
+                );
+            }
         }
         if let HyperSpec::FixedFrom(m) = &self.hyper {
             if !self.extras.is_empty() || self.trend != TrendSpec::Options {
@@ -330,6 +371,18 @@ impl ValidErrorModelParams {
     /// [`ValidErrorModelParams::fit`], reporting GA generations to `progress`.
     pub fn fit_with_progress(&self, data: &Dataset, progress: GaProgress) -> Result<ErrorModel> {
         let p = &self.0;
+        let calibration = match (&p.calibration, &p.robot) {
+            (Some(opts), Some(robot)) => Some(calibrate(data, robot, opts)?),
+            _ => None,
+        };
+        let residual;
+        let data = match &calibration {
+            Some(c) => {
+                residual = c.residual(data)?;
+                &residual
+            }
+            None => data,
+        };
         let (space, periodic, opts) = (p.space, &p.periodic, &p.kriging);
         let mut model = match &p.hyper {
             HyperSpec::FixedFrom(m) => m.refit_at_hyperparameters(data)?,
@@ -350,7 +403,10 @@ impl ValidErrorModelParams {
         }) {
             model.record_robot(r)?;
         }
-        Ok(model)
+        Ok(match calibration {
+            Some(c) => model.with_calibration(c),
+            None => model,
+        })
     }
 
     /// Each output's trend (and the selection's report) on `data`, whose

@@ -220,6 +220,31 @@ pub fn fold_blocks(fold: &[usize]) -> Vec<Vec<usize>> {
     blocks
 }
 
+/// Fold index of every row for leave-one-group-out CV (scikit-learn's
+/// `LeaveOneGroupOut`; `GroupKFold` with one fold per group): rows with the
+/// same label share a fold, folds numbered by first appearance. Errors
+/// with fewer than two groups.
+pub fn group_partition(labels: &[String]) -> crate::Result<Vec<usize>> {
+    let mut seen: Vec<&str> = Vec::new();
+    let fold: Vec<usize> = labels
+        .iter()
+        .map(|l| match seen.iter().position(|s| *s == l) {
+            Some(i) => i,
+            None => {
+                seen.push(l);
+                seen.len() - 1
+            }
+        })
+        .collect();
+    if seen.len() < 2 {
+        return Err(crate::Error::InvalidParameter(format!(
+            "leave-one-group-out needs at least 2 groups, the column has {}",
+            seen.len()
+        )));
+    }
+    Ok(fold)
+}
+
 /// Fold index (0..k) of every row: a seeded shuffle dealt round-robin, so fold
 /// sizes differ by at most one.
 pub fn kfold_partition(m: usize, k: usize, seed: u64) -> crate::Result<Vec<usize>> {
@@ -272,5 +297,120 @@ mod tests {
         assert_eq!((b.q1, b.median, b.q3), (2.25, 3.5, 4.75));
         assert_eq!((b.whisker_lo, b.whisker_hi, b.outliers), (1.0, 5.0, 1));
         assert_eq!(box_stats(&[7.0]).median, 7.0);
+    }
+}
+
+/// How honest a model's predictive distribution and its warnings were on
+/// held-out rows.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PredictiveScores {
+    /// Share of held-out rows inside the 95 % predictive interval
+    /// `μ ± 1.96 σ` of a new measurement, per axis (x, y, z).
+    pub coverage_95: [f64; 3],
+    /// Mean negative log predictive density of the held-out errors under
+    /// `N(μ, σ²)`, per row and axis (nats; lower is better).
+    pub nlpd: f64,
+    /// Share of held-out rows the model flagged as outside its coverage.
+    pub flag_rate: f64,
+    /// Share of the held-out rows with a gross error (3D error over
+    /// [`crate::model::GROSS_FACTOR`] × the model's held-out 3D RMS) that it
+    /// flagged; `None` when no row had one.
+    pub flag_recall: Option<f64>,
+    /// Held-out rows with a gross error.
+    pub gross_rows: usize,
+}
+
+/// [`PredictiveScores`] of predictions `mean ± std` (std of a new
+/// measurement, per axis) against the measured `truth`, with the rows the
+/// model flagged (`flagged[i]`). `gross_factor` × the 3D RMS of `truth −
+/// mean` is what counts as a gross error.
+pub fn predictive_scores(
+    truth: &[[f64; 3]],
+    mean: &[[f64; 3]],
+    std: &[[f64; 3]],
+    flagged: &[bool],
+    gross_factor: f64,
+) -> PredictiveScores {
+    let n = truth.len().max(1) as f64;
+    let z95 = 1.959_963_984_540_054;
+    let mut inside = [0usize; 3];
+    let mut nlpd = 0.0;
+    let mut sq = 0.0;
+    for ((t, m), s) in truth.iter().zip(mean).zip(std) {
+        for a in 0..3 {
+            let e = t[a] - m[a];
+            let v = (s[a] * s[a]).max(f64::MIN_POSITIVE);
+            if e.abs() <= z95 * s[a] {
+                inside[a] += 1;
+            }
+            nlpd += 0.5 * (2.0 * std::f64::consts::PI * v).ln() + e * e / (2.0 * v);
+            sq += e * e;
+        }
+    }
+    let rms3 = (sq / n).sqrt();
+    let gross: Vec<usize> = truth
+        .iter()
+        .zip(mean)
+        .enumerate()
+        .filter(|(_, (t, m))| {
+            let d: f64 = (0..3).map(|a| (t[a] - m[a]).powi(2)).sum();
+            d.sqrt() > gross_factor * rms3
+        })
+        .map(|(i, _)| i)
+        .collect();
+    let caught = gross.iter().filter(|&&i| flagged[i]).count();
+    PredictiveScores {
+        coverage_95: inside.map(|c| c as f64 / n),
+        nlpd: nlpd / (3.0 * n),
+        flag_rate: flagged.iter().filter(|f| **f).count() as f64 / n,
+        flag_recall: (!gross.is_empty()).then(|| caught as f64 / gross.len() as f64),
+        gross_rows: gross.len(),
+    }
+}
+
+#[cfg(test)]
+mod predictive_tests {
+    use super::*;
+
+    #[test]
+    fn a_calibrated_gaussian_covers_95_percent_and_flags_count() {
+        let mut rng = rng_for(3, "scores");
+        let m = 4000;
+        let truth: Vec<[f64; 3]> = (0..m)
+            .map(|_| {
+                std::array::from_fn(|_| {
+                    rand_distr::Distribution::<f64>::sample(&rand_distr::StandardNormal, &mut rng)
+                })
+            })
+            .collect();
+        let mean = vec![[0.0; 3]; m];
+        let std = vec![[1.0; 3]; m];
+        let none = vec![false; m];
+        let s = predictive_scores(&truth, &mean, &std, &none, 3.0);
+        for c in s.coverage_95 {
+            assert!((c - 0.95).abs() < 0.015, "{c}");
+        }
+        // E[-ln N(e; 0, 1)] = ½ ln 2π + ½
+        assert!((s.nlpd - (0.5 * (2.0 * std::f64::consts::PI).ln() + 0.5)).abs() < 0.03);
+        assert_eq!(s.flag_rate, 0.0);
+        // gross errors planted at seeded random rows, flagged by a rule on
+        // the error's size: recall counts the planted ones caught
+        let mut gross = truth.clone();
+        for _ in 0..40 {
+            let i = rand::RngExt::random_range(&mut rng, 0..m);
+            gross[i] = gross[i].map(|v| 10.0 * v + 10.0f64.copysign(v));
+        }
+        let flagged: Vec<bool> = gross
+            .iter()
+            .map(|t| t.iter().map(|v| v * v).sum::<f64>() > 100.0)
+            .collect();
+        let g = predictive_scores(&gross, &mean, &std, &flagged, 3.0);
+        assert!(g.gross_rows > 20, "{g:?}");
+        assert_eq!(g.flag_recall, Some(1.0));
+        assert!(g.flag_rate < 0.015, "{g:?}");
+        assert!(g.nlpd > s.nlpd);
+        // an over-confident model covers less
+        let narrow = vec![[0.5; 3]; m];
+        assert!(predictive_scores(&truth, &mean, &narrow, &flagged, 3.0).coverage_95[0] < 0.7);
     }
 }

@@ -10,6 +10,7 @@
 #[path = "common/tool_down.rs"]
 mod tool_down;
 
+use robokrige::cv::kfold_partition;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{CV_MODELS, holdout_cv};
 use robokrige::kriging::KrigingOptions;
@@ -44,7 +45,8 @@ fn no_fold_of_a_wide_range_campaign_blows_up() {
     let periodic = periodic_joints(&data.q);
     assert_eq!(periodic, vec![0, 1, 2, 3, 5]);
     let base = ErrorModelParams::new().periodic(periodic).kriging(opts);
-    let cv = holdout_cv(&data, &robot, &base, 10, 3, 300, &|_, _| {}).unwrap();
+    let fold = kfold_partition(data.len(), 10, 3).unwrap();
+    let cv = holdout_cv(&data, &robot, &base, &fold, 300, &|_, _| {}).unwrap();
     for (f, (worst, covered)) in cv
         .fold_max_mm
         .iter()

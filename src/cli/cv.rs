@@ -5,8 +5,8 @@ use super::progress::bar;
 use clap::Args;
 use clap::ValueEnum;
 use robokrige::cv::{
-    closed_form_model, cross_validate_closed_form, cross_validate_method, cross_validate_refit,
-    largest_training_rows,
+    closed_form_model, cross_validate_closed_form, cross_validate_folds, cross_validate_method,
+    group_partition, largest_training_rows,
 };
 use robokrige::plot::box_plot;
 use robokrige::vec3::norms;
@@ -51,12 +51,34 @@ pub struct CvArgs {
     /// Seed of the fold partition.
     #[arg(long = "cv-seed", default_value_t = 1)]
     cv_seed: u64,
+    /// Leave-one-group-out instead of random folds: one fold per value of
+    /// this column (a cube, a cell, a day; refit mode), as scikit-learn's
+    /// LeaveOneGroupOut. Does the model carry over to another group?
+    #[arg(long, value_name = "COLUMN", conflicts_with_all = ["methods", "mode", "folds", "cv_seed"])]
+    groups: Option<String>,
     /// Write the result (residuals, statistics) as JSON to FILE ("-": standard output).
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
     /// Draw box plots of the out-of-fold 3D errors (SVG).
     #[arg(long)]
     plot: Option<PathBuf>,
+}
+
+/// The calibration the CV's model makes on all rows, when it calibrates
+/// (a report line only: every fold identified its own).
+fn model_calibration(
+    params: &robokrige::params::ValidErrorModelParams,
+    data: &robokrige::dataset::Dataset,
+) -> Result<Option<robokrige::calibration::Calibration>> {
+    match (
+        params.params().get_calibration(),
+        params.params().get_robot(),
+    ) {
+        (Some(opts), Some(robot)) => {
+            Ok(Some(robokrige::calibration::calibrate(data, robot, opts)?))
+        }
+        _ => Ok(None),
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -92,14 +114,22 @@ pub fn run(a: CvArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let mut res = match a.mode {
         Mode::Refit => {
-            let pb = bar(a.folds as u64, "folds");
-            let res = cross_validate_refit(&data, a.folds, a.cv_seed, |train| {
+            data.errors_or_err()?;
+            let fold = match &a.groups {
+                Some(col) => group_partition(&data.group_labels(col)?)?,
+                None => robokrige::cv::kfold_partition(data.len(), a.folds, a.cv_seed)?,
+            };
+            let k = fold.iter().max().map_or(0, |f| f + 1);
+            let pb = bar(k as u64, "folds");
+            let res = cross_validate_folds(&data, &fold, |train| {
                 let m = params.fit(train);
                 pb.inc(1);
                 m
             });
             pb.finish_and_clear();
-            res?
+            let mut res = res?;
+            res.seed = if a.groups.is_some() { 0 } else { a.cv_seed };
+            res
         }
         Mode::ClosedForm => {
             let (model, subset) = closed_form_model(&data, &params, a.hyper_rows)?;
@@ -120,9 +150,15 @@ pub fn run(a: CvArgs) -> Result<()> {
     res.seconds = t0.elapsed().as_secs_f64();
     let s = &res.summary;
     let words = params.params().settings_line();
+    let how = match &a.groups {
+        Some(col) => format!(
+            "leave-one-group-out CV over the {} groups of '{col}'",
+            res.folds
+        ),
+        None => format!("{}-fold CV", res.folds),
+    };
     say!(
-        "{}-fold CV ({}) of {} on {} rows ({words}), {:.1} s",
-        a.folds,
+        "{how} ({}) of {} on {} rows ({words}), {:.1} s",
         res.mode,
         a.data.display(),
         data.len(),
@@ -141,6 +177,23 @@ pub fn run(a: CvArgs) -> Result<()> {
         s.min_3d_mm,
         s.max_3d_mm
     );
+    if let Some(sc) = &res.scores {
+        say!(
+            "  95 % interval coverage x / y / z: {:.3} / {:.3} / {:.3}  NLPD {:.3}  flagged {:.1} % of rows, {}",
+            sc.coverage_95[0],
+            sc.coverage_95[1],
+            sc.coverage_95[2],
+            sc.nlpd,
+            100.0 * sc.flag_rate,
+            match sc.flag_recall {
+                Some(r) => format!("{:.0} % of the {} gross errors", 100.0 * r, sc.gross_rows),
+                None => "no gross error".into(),
+            }
+        );
+    }
+    if let Some(c) = model_calibration(&params, &data)? {
+        super::fit::print_calibration(&c);
+    }
     if let Some(path) = &a.json {
         let mut v = serde_json::to_value(&res)
             .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
@@ -166,7 +219,7 @@ pub fn run(a: CvArgs) -> Result<()> {
         ];
         let title = format!(
             "{}-fold CV ({}) out-of-fold errors, {:?}",
-            a.folds,
+            res.folds,
             res.mode,
             params.params().get_space()
         );

@@ -116,8 +116,9 @@ pub struct DiagnoseArgs {
     /// (Levenberg–Marquardt, on all rows) first, then the diagnosis of its
     /// residual. On real data the calibrated base leaves a far smaller
     /// misfit than plain Kriging of the raw error, so smaller effects show.
-    /// The improved model is then a residual model: not with --model-out or --traj.
-    #[arg(long, requires = "robot", conflicts_with_all = ["model_out", "traj"])]
+    /// The models written (--model-out) and compared (--traj) then hold the
+    /// calibration and the Kriging of its residual, as `fit --robot` does.
+    #[arg(long, requires = "robot")]
     calibrate: bool,
     /// Trajectory to compensate with the model before and after the effects
     /// were added (TCP x,y,z CSV, or joints q1..qN), with --robot and --truth.
@@ -183,20 +184,23 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         data = data.select(&(0..n).collect::<Vec<_>>());
     }
     let opts = options(&a, &data)?;
+    let mut calibration = None;
     if a.calibrate {
         let robot = opts
             .get_robot()
             .expect("clap: --calibrate requires --robot");
-        let (dh, lm) = robokrige::holdout::calibrate(&data, robot)?;
-        data = robokrige::holdout::residual(&data, &dh)?;
+        let cal = robokrige::calibration::calibrate(&data, robot, &Default::default())?;
+        data = cal.residual(&data)?;
         say!(
-            "calibrated base: D-H calibration on {} rows, {} parameters, RMS {:.4} → {:.4} mm; diagnosing its residual",
-            data.len(),
-            lm.parameters,
-            lm.rms_before_mm,
-            lm.rms_after_mm
+            "calibrated base: {}; diagnosing its residual",
+            cal.summary_line()
         );
+        calibration = Some(cal);
     }
+    let on_calibration = |m: robokrige::model::ErrorModel| match &calibration {
+        Some(c) => m.with_calibration(c.clone()),
+        None => m,
+    };
     let plan = robokrige::diagnose::DiagnosePlan::new(&data, &opts);
     plan.check(
         |n| format!("`--rows {n}`"),
@@ -224,14 +228,14 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let need_models = a.model_out.is_some() || a.traj.is_some();
     let mut compensation = None;
     if need_models {
-        let after = fit_with_effects(&data, &opts, &d.extras)?;
+        let after = on_calibration(fit_with_effects(&data, &opts, &d.extras)?);
         if let Some(p) = &a.model_out {
             after.save(p)?;
             say!("model with the added effects: {}", p.display());
         }
         if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
             // (--traj and --truth without --robot are rejected by clap)
-            let before = fit_with_effects(&data, &opts, &[])?;
+            let before = on_calibration(fit_with_effects(&data, &opts, &[])?);
             compensation = Some(compare_compensation(
                 robot, traj, truth, &before, &after, a.seed,
             )?);

@@ -1,6 +1,7 @@
 //! `robokrige fit` and `robokrige predict`.
 
 use clap::{Args, ValueEnum};
+use robokrige::calibration::CalibrationOptions;
 use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::params::{ErrorModelParams, TrendSpec};
@@ -76,9 +77,25 @@ pub struct ModelArgs {
     #[arg(long, requires = "robot")]
     tool: Option<String>,
     /// Add the kinematic-error basis (rows of the robot's identification
-    /// Jacobian, seed 003 eq 4) to the trend: one fit calibrates and krigs.
+    /// Jacobian, seed 003 eq 4) to the trend: one fit calibrates and krigs
+    /// (no separate calibration then).
     #[arg(long)]
     kinematic: bool,
+    /// With --robot: Kriging of the raw error. By default a robot is
+    /// calibrated first (MD-H, tool and base errors by Levenberg–Marquardt
+    /// on the directions the campaign sees) and Kriging fits what the
+    /// calibration leaves; the model file holds both.
+    #[arg(long, requires = "robot")]
+    no_calibrate: bool,
+    /// Residual noise per coordinate (mm) that decides which calibration
+    /// directions the campaign sees [default: estimated from a first fit].
+    #[arg(
+        long,
+        value_name = "MM",
+        requires = "robot",
+        conflicts_with = "no_calibrate"
+    )]
+    calibration_noise: Option<f64>,
 }
 
 impl ModelArgs {
@@ -107,6 +124,11 @@ impl ModelArgs {
             robot.check_dataset(data)?;
             if self.kinematic {
                 params = params.trend(TrendSpec::Kinematic(Box::new(robot.clone())));
+            } else if !self.no_calibrate {
+                params = params.calibrate(Some(CalibrationOptions {
+                    noise_mm: self.calibration_noise,
+                    ..CalibrationOptions::default()
+                }));
             }
             params = params.robot(robot);
         }
@@ -186,7 +208,9 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
                 None => {
                     let p = method.params(params.get_kriging().get_seed(), false);
                     match params.get_robot() {
-                        Some(r) => p.robot(r.clone()),
+                        Some(r) => p
+                            .robot(r.clone())
+                            .calibrate(params.get_calibration().cloned()),
                         None => p,
                     }
                 }
@@ -221,7 +245,8 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             .collect();
         let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
             "settings": settings, "method": a.method, "robot": model.robot(),
-            "seconds": secs, "outputs": model.reports(), "selection": model.selection()});
+            "seconds": secs, "outputs": model.reports(), "selection": model.selection(),
+            "calibration": model.calibration().map(|c| c.identifiability())});
         super::write_json(path, &v, "fit report")?;
     }
     say!(
@@ -272,7 +297,23 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         );
     }
     print_selection(&model);
+    if let Some(c) = model.calibration() {
+        print_calibration(c);
+    }
     Ok(())
+}
+
+/// The calibration under a model: what the campaign identified.
+pub fn print_calibration(c: &robokrige::calibration::Calibration) {
+    say!("  calibration: {}", c.summary_line());
+    let id = c.identifiability();
+    let fixed = id.fixed_names();
+    if !fixed.is_empty() {
+        say!(
+            "  fixed at nominal (the campaign does not see them): {}",
+            fixed.join(" ")
+        );
+    }
 }
 
 /// One line per output of what PCC+PCA or the GA selected.

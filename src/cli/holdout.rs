@@ -1,6 +1,6 @@
 //! `robokrige holdout`: train on the first rows of a campaign, score on the
-//! next ones — nominal, D-H calibration, two-stage hybrid, universal Kriging
-//! with the kinematic trend, in JS and EJS (issue 10's real-data table).
+//! next ones (or cross-validate) — nominal, D-H calibration, the calibrated
+//! model, universal Kriging with the kinematic trend, in JS and EJS.
 
 use super::progress::bar;
 use super::read_data;
@@ -18,8 +18,9 @@ use std::path::PathBuf;
 #[command(after_help = "\
 Rows 1..TRAIN train every model; rows TRAIN+1..TRAIN+TEST are predicted.
 Models: nominal (no correction); D-H calibration (Levenberg–Marquardt on the
-5n + 9 MD-H, tool and base errors; redundant ones frozen); hybrid (D-H
-calibration, then Kriging JS or EJS on its residual); universal Kriging with
+5n + 9 MD-H, tool and base errors, on the directions the campaign sees);
+the calibrated model (that calibration, then Kriging JS or EJS on its
+residual: what `fit --robot` makes); universal Kriging with
 the kinematic trend (constant + identification-Jacobian rows; the GLS does the
 calibration), JS and EJS. Kriging hyperparameters by --optimizer (BFGS by
 default). With --cv, each model also reports the held-out rows it flags as
@@ -84,6 +85,11 @@ pub struct HoldoutArgs {
     /// Not with --test, --ga or --pca.
     #[arg(long, conflicts_with_all = ["test", "ga", "pca"])]
     cv: Option<usize>,
+    /// Leave-one-group-out instead of random folds: one fold per value of
+    /// this column (a cube, a cell, a day), as scikit-learn's
+    /// LeaveOneGroupOut.
+    #[arg(long, value_name = "COLUMN", conflicts_with_all = ["cv", "test", "ga", "pca"])]
+    groups: Option<String>,
     /// Write the table (and with --cv the per-fold figures) as JSON to FILE ("-": standard output).
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -118,20 +124,34 @@ fn joint_list(periodic: &[usize]) -> String {
 }
 
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
-fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()> {
+fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
     let base = base_params(a, &data.q)?;
     super::plan_fit("holdout", data.len(), a.optimizer, None)?;
+    let (fold, how) = match folds {
+        Folds::Random(k) => (
+            robokrige::cv::kfold_partition(data.len(), *k, a.seed)?,
+            format!("{k}-fold CV (fold seed {})", a.seed),
+        ),
+        Folds::Groups(col) => {
+            let f = robokrige::cv::group_partition(&data.group_labels(col)?)?;
+            let k = f.iter().max().map_or(0, |x| x + 1);
+            (
+                f,
+                format!("leave-one-group-out CV over the {k} groups of '{col}'"),
+            )
+        }
+    };
+    let k = fold.iter().max().map_or(0, |x| x + 1);
     let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
-    let cv = holdout_cv(data, robot, &base, k, a.seed, hyper_rows, &|done, msg| {
+    let cv = holdout_cv(data, robot, &base, &fold, hyper_rows, &|done, msg| {
         pb.set_position(done as u64);
         pb.set_message(msg.to_string());
     })?;
     pb.finish_and_clear();
     say!(
-        "{}: {k}-fold CV (fold seed {}) on all {} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}",
+        "{}: {how} on all {} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}",
         a.data.display(),
-        a.seed,
         data.len(),
         if a.no_nugget { "" } else { " and nugget" },
         cv.hyper_rows,
@@ -139,6 +159,21 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         joint_list(base.get_periodic())
     );
     print_rows(&cv.rows);
+    print_scores(&cv.scores);
+    let worst: Vec<String> = cv
+        .fold_max_mm
+        .iter()
+        .map(|f| {
+            format!(
+                "{:.2}",
+                f.iter().skip(1).fold(0.0f64, |a, b| a.max(*b)) / f[0]
+            )
+        })
+        .collect();
+    say!(
+        "worst Kriging model's max over the D-H calibration's max, per fold: {}",
+        worst.join(" ")
+    );
     for (name, (rows, worst)) in robokrige::holdout::CV_MODELS
         .iter()
         .zip(cv.flagged.iter().zip(cv.max_covered_mm()))
@@ -155,6 +190,25 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, k: usize) -> Result<()
         super::write_json(p, &cv, "cv table")?;
     }
     Ok(())
+}
+
+fn print_scores(scores: &[robokrige::stats::PredictiveScores]) {
+    say!("| model | 95 % coverage x / y / z | NLPD | flagged | gross errors flagged |");
+    say!("|---|---|---|---|---|");
+    for (name, s) in robokrige::holdout::CV_MODELS.iter().zip(scores) {
+        say!(
+            "| {name} | {:.3} / {:.3} / {:.3} | {:.3} | {:.1} % | {} |",
+            s.coverage_95[0],
+            s.coverage_95[1],
+            s.coverage_95[2],
+            s.nlpd,
+            100.0 * s.flag_rate,
+            match s.flag_recall {
+                Some(r) => format!("{:.0} % of {}", 100.0 * r, s.gross_rows),
+                None => "none gross".into(),
+            }
+        );
+    }
 }
 
 fn print_rows(rows: &[HoldoutRow]) {
@@ -175,6 +229,14 @@ fn print_rows(rows: &[HoldoutRow]) {
 }
 
 /// Training rows of a hold-out split when `--train` is not given.
+/// How `holdout` cross-validates.
+enum Folds {
+    /// A seeded random partition into K folds.
+    Random(usize),
+    /// One fold per value of a column.
+    Groups(String),
+}
+
 const DEFAULT_TRAIN: usize = 600;
 /// Held-out rows after the training ones.
 const DEFAULT_TEST: usize = 300;
@@ -186,7 +248,10 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
     if let Some(k) = a.cv {
-        return run_cv(&a, &data, &robot, k);
+        return run_cv(&a, &data, &robot, &Folds::Random(k));
+    }
+    if let Some(col) = &a.groups {
+        return run_cv(&a, &data, &robot, &Folds::Groups(col.clone()));
     }
     let n_train = a.train.unwrap_or(DEFAULT_TRAIN);
     let n_test = a.test.unwrap_or(DEFAULT_TEST);
@@ -211,7 +276,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         pb.inc(1);
         pb.set_message(what.to_string());
     })?;
-    let (rows, lm) = (split.rows, split.calibration);
+    let (rows, cal) = (split.rows, split.calibration);
     pb.finish_and_clear();
     say!(
         "{}: train rows 1–{}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}",
@@ -231,13 +296,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         },
         joint_list(base.get_periodic())
     );
-    say!(
-        "D-H calibration: {} parameters fitted ({} frozen as unidentifiable), rms {:.4} → {:.4} mm on the training rows",
-        lm.parameters,
-        lm.frozen.len(),
-        lm.rms_before_mm,
-        lm.rms_after_mm
-    );
+    super::fit::print_calibration(&cal);
     print_rows(&rows);
     if let Some(p) = &a.json {
         super::write_json(p, &rows, "hold-out table")?;

@@ -26,6 +26,28 @@ enum RobotCommand {
     /// Check a robot (preset name or file) and print it as a robot file,
     /// every default written out, with its kinematic-table digest.
     Show(ShowArgs),
+    /// Write the identified kinematics of a calibrated model (`fit --robot`)
+    /// as a robot file: load it into a controller, or use it as --robot for
+    /// nominal-only work.
+    Calibrated(CalibratedArgs),
+}
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Example:
+  robokrige fit campaign.csv --robot ur10 -o model.json
+  robokrige robot calibrated model.json -o ur10-calibrated.toml")]
+struct CalibratedArgs {
+    /// A model file fitted with a calibration (`fit --robot R`).
+    model: PathBuf,
+    /// The robot file to write (TOML).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the calibration's identifiability report (directions
+    /// seen, observability indices, per-parameter values and standard
+    /// errors) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -48,7 +70,41 @@ struct ShowArgs {
 pub fn run(a: RobotArgs) -> Result<()> {
     match a.command {
         RobotCommand::Show(s) => show(s),
+        RobotCommand::Calibrated(c) => calibrated(c),
     }
+}
+
+fn calibrated(a: CalibratedArgs) -> Result<()> {
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&[&a.model], &outputs)?;
+    let model = robokrige::model::ErrorModel::load(&a.model)?;
+    let cal = model.calibration().ok_or_else(|| robokrige::Error::Input {
+        source_name: a.model.display().to_string(),
+        message: "holds no calibration: fit it with --robot (and without --no-calibrate)".into(),
+    })?;
+    let mut robot = cal.identified().clone();
+    robot.name = format!("{}-calibrated", cal.nominal().name);
+    robot.convention = format!(
+        "{}; MD-H, tool and base errors identified on {} poses ({} of {} directions seen)",
+        cal.nominal().convention,
+        cal.rows(),
+        cal.identifiability().directions_seen,
+        cal.identifiability().parameters_total
+    );
+    let text = format!(
+        "# {} joints, kinematic-table digest {}\n{}",
+        robot.dof(),
+        kinematics::table_digest(&robot),
+        RobotFile::of(&robot).to_toml()?
+    );
+    robokrige::output::write_text(&a.output, &text)?;
+    if let Some(path) = &a.json {
+        super::write_json(path, cal.identifiability(), "identifiability report")?;
+    }
+    say!("{}: {}", robot.name, cal.summary_line());
+    say!("calibrated robot file -> {}", a.output.display());
+    Ok(())
 }
 
 fn show(a: ShowArgs) -> Result<()> {

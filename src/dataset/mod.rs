@@ -287,6 +287,45 @@ impl Dataset {
         self.covariates.iter().find(|c| c.name == name)
     }
 
+    /// The label of every row in column `name` (a text column or a numeric
+    /// covariate), for grouped cross-validation: an error naming the
+    /// columns there are when it has none of that name, or naming the first
+    /// row whose cell is empty.
+    pub fn group_labels(&self, name: &str) -> Result<Vec<String>> {
+        if let Some(t) = self.text.iter().find(|t| t.name == name) {
+            if let Some(i) = t.values.iter().position(String::is_empty) {
+                return Err(self.input_err(format!(
+                    "column '{name}' has no group at {}",
+                    self.row_label(i)
+                )));
+            }
+            return Ok(t.values.clone());
+        }
+        if let Some(c) = self.covariate(name) {
+            if let Some(i) = c.values.iter().position(|v| v.is_nan()) {
+                return Err(self.input_err(format!(
+                    "column '{name}' has no group at {}",
+                    self.row_label(i)
+                )));
+            }
+            return Ok(c.values.iter().map(|v| v.to_string()).collect());
+        }
+        let known: Vec<&str> = self
+            .covariates
+            .iter()
+            .map(|c| c.name.as_str())
+            .chain(self.text.iter().map(|t| t.name.as_str()))
+            .collect();
+        Err(self.input_err(format!(
+            "has no column '{name}' to group by (extra columns: {})",
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        )))
+    }
+
     /// The TCP errors, or an [`Error::Input`] if the data has no `ex,ey,ez` columns.
     pub fn errors_or_err(&self) -> Result<&[[f64; 3]]> {
         self.errors

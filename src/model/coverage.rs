@@ -1,5 +1,5 @@
-//! Where a prediction leaves what the training campaign covers (issue 16
-//! §3): joint ranges, prediction standard deviations, and Kriging
+//! Where a prediction leaves what the training campaign covers: joint
+//! ranges, predictive intervals that reach a gross error, and Kriging
 //! corrections far from the trend.
 
 use super::{AXES, ErrorModel};
@@ -21,15 +21,18 @@ pub enum CoverageIssue {
         /// Largest value of that joint in the training campaign.
         max_deg: f64,
     },
-    /// The prediction's standard deviation is a large share of the prior
-    /// (process) standard deviation: no training pose is near.
+    /// The 95 % predictive interval of a new measurement reaches a gross
+    /// error: `1.96 √(MSE + noise²)` exceeds [`GROSS_FACTOR`] times the
+    /// model's own leave-one-out RMS on that axis (no training pose is
+    /// near enough for the model to vouch for the point).
     Uncertain {
         /// Output axis (0 x, 1 y, 2 z).
         axis: usize,
-        /// The prediction's standard deviation √MSE, mm.
+        /// The predictive standard deviation of a new measurement,
+        /// `√(MSE + noise²)`, mm.
         std_mm: f64,
-        /// The process standard deviation σ of that output, mm.
-        process_std_mm: f64,
+        /// The model's expected leave-one-out RMS on that axis, mm.
+        loo_rmse_mm: f64,
     },
     /// The Kriging correction `r(s)ᵀγ` departs from the trend-only
     /// prediction by more than the process σ allows: a trend that
@@ -60,12 +63,12 @@ impl std::fmt::Display for CoverageIssue {
             CoverageIssue::Uncertain {
                 axis,
                 std_mm,
-                process_std_mm,
+                loo_rmse_mm,
             } => write!(
                 f,
-                "{} std {std_mm:.4} mm is {:.0} % of the prior {process_std_mm:.4} mm (far from every training pose)",
+                "{} predictive std {std_mm:.4} mm is {:.1}× the model's leave-one-out RMS {loo_rmse_mm:.4} mm (its 95 % interval reaches a gross error)",
                 AXES[*axis],
-                100.0 * std_mm / process_std_mm
+                std_mm / loo_rmse_mm
             ),
             CoverageIssue::TrendDisagrees {
                 axis,
@@ -90,17 +93,37 @@ pub struct CoverageWarning {
     pub issues: Vec<CoverageIssue>,
 }
 
-/// Share of the process standard deviation above which a prediction's
-/// standard deviation counts as "far from the data" (the Kriging std tends
-/// to the process std away from every training pose).
-pub const UNCERTAIN_SHARE: f64 = 0.7;
+/// A gross error: this many times the model's leave-one-out RMS.
+pub const GROSS_FACTOR: f64 = 3.0;
+/// The 97.5 % quantile of the standard normal: half-width of a 95 %
+/// interval in standard deviations.
+pub const Z95: f64 = 1.959_963_984_540_054;
+/// Training rows sampled (evenly over the campaign) to estimate the
+/// model's leave-one-out RMS for the [`CoverageIssue::Uncertain`] rule:
+/// the mean of `σ²/B_ii` over them is within a few per cent of the mean
+/// over all rows, at a cost of one m-sized triangular solve each.
+pub const LOO_SAMPLE: usize = 256;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;
 
 impl ErrorModel {
+    /// The model's expected leave-one-out RMS per axis (mm), from the
+    /// closed form on up to [`LOO_SAMPLE`] training rows spread over the
+    /// campaign ([`crate::kriging::HeldOut::expected_loo_rmse`]).
+    pub fn expected_loo_rmse(&self) -> Result<[f64; 3]> {
+        let m = self.n_train();
+        let n = m.min(LOO_SAMPLE);
+        let blocks: Vec<Vec<usize>> = (0..n).map(|i| vec![i * m / n]).collect();
+        let mut out = [0.0; 3];
+        for (o, k) in out.iter_mut().zip(&self.outputs) {
+            *o = k.held_out(&blocks)?.expected_loo_rmse;
+        }
+        Ok(out)
+    }
+
     /// The points of a prediction that leave what the training data
-    /// covers (issue 16 §3): a joint outside the campaign's range, a
-    /// standard deviation over [`UNCERTAIN_SHARE`] of the process std, or a
+    /// covers: a joint outside the campaign's range, a 95 % predictive
+    /// interval that reaches a gross error ([`CoverageIssue::Uncertain`]), or a
     /// Kriging correction more than [`TREND_SIGMAS`] process σ from the
     /// trend-only prediction. `mean` is this model's predicted mean at `q`,
     /// `dir`; `std` its standard deviations when they were computed (the
@@ -117,6 +140,16 @@ impl ErrorModel {
         self.check_rows(q, dir)?;
         let s = self.input_map().encode(q, dir)?;
         let trend: Vec<Vec<f64>> = self.outputs.iter().map(|o| o.predict_trend(&s)).collect();
+        // the Kriging outputs' part of `mean` (a calibration's is not theirs)
+        let kinematic = match self.calibration() {
+            Some(c) => c.predict(q)?,
+            None => vec![[0.0; 3]; q.len()],
+        };
+        let loo = match std {
+            Some(_) => self.expected_loo_rmse()?,
+            None => [f64::INFINITY; 3],
+        };
+        let noise = self.noise_std();
         let mut out = Vec::new();
         for (k, qk) in q.iter().enumerate() {
             let mut issues = Vec::new();
@@ -133,16 +166,16 @@ impl ErrorModel {
             for (a, o) in self.outputs.iter().enumerate() {
                 let process = o.process_std();
                 if let Some(s) = std
-                    .map(|s| s[k][a])
-                    .filter(|s| *s > UNCERTAIN_SHARE * process)
+                    .map(|s| s[k][a].hypot(noise[a]))
+                    .filter(|s| Z95 * s > GROSS_FACTOR * loo[a])
                 {
                     issues.push(CoverageIssue::Uncertain {
                         axis: a,
                         std_mm: s,
-                        process_std_mm: process,
+                        loo_rmse_mm: loo[a],
                     });
                 }
-                let correction = mean[k][a] - trend[a][k];
+                let correction = mean[k][a] - kinematic[k][a] - trend[a][k];
                 if correction.abs() > TREND_SIGMAS * process {
                     issues.push(CoverageIssue::TrendDisagrees {
                         axis: a,

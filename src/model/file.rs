@@ -1,5 +1,7 @@
 //! The model file: versioned JSON, written atomically, checked on load.
 //!
+//! - Version 4 may hold the kinematic calibration the Kriging outputs sit
+//!   on (`calibration`); a file without one is a version-3 model.
 //! - Version 3 stores the input map ([`crate::inputs::InputMap`]: space,
 //!   joints, periodic joints, extras, column names, normalisation) as one
 //!   object, `inputs`.
@@ -135,8 +137,18 @@ impl ErrorModel {
             source_name: source_name.into(),
             message: format!("model file holds an impossible value: {why}"),
         })?;
+        if let Some(c) = &model.calibration {
+            c.validate(source_name)?;
+            if c.nominal().dof() != model.n_joints() {
+                return Err(inconsistent(format!(
+                    "model file is inconsistent (a calibration of a {}-joint robot on a {}-joint model)",
+                    c.nominal().dof(),
+                    model.n_joints()
+                )));
+            }
+        }
         // held in memory (and saved again) in the current form
-        model.version = MODEL_VERSION;
+        model.version = model.file_version();
         Ok(model)
     }
 }

@@ -2,7 +2,8 @@
 //! one input map. `params::ValidErrorModelParams::fit` drives it; the
 //! selections choose the trends it is given.
 
-use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION, SOFTWARE};
+use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION_UNCALIBRATED, SOFTWARE};
+use crate::calibration::Calibration;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
@@ -143,7 +144,7 @@ pub(crate) fn fit_outputs(
         by_axis(fits)?.into_iter().unzip();
     Ok(ErrorModel {
         format: MODEL_FORMAT.into(),
-        version: MODEL_VERSION,
+        version: MODEL_VERSION_UNCALIBRATED,
         inputs: map.clone(),
         // a warm start is how this fit began, not what the model is
         options: KrigingOptions {
@@ -156,6 +157,7 @@ pub(crate) fn fit_outputs(
         joint_range: joint_range(&data.q),
         robot: None,
         software: SOFTWARE.into(),
+        calibration: None,
     })
 }
 
@@ -202,6 +204,11 @@ impl ErrorModel {
     /// normalisation are re-derived), a polynomial one reused. The reports
     /// keep the subset's search figures (ln ψ, evaluations).
     pub(crate) fn refit_at_hyperparameters(&self, data: &Dataset) -> Result<Self> {
+        // a calibrated model is identified anew on the rows, and its Kriging
+        // outputs refitted on what that calibration leaves
+        if let Some(c) = &self.calibration {
+            return self.refit_with_calibration(data, c.reidentify(data)?);
+        }
         if !self.extras().is_empty() {
             return Err(Error::InvalidParameter(
                 "refit at fixed hyperparameters does not support extra inputs".into(),
@@ -256,6 +263,19 @@ impl ErrorModel {
         })
     }
 
+    /// [`ErrorModel::refit_at_hyperparameters`] on top of the calibration
+    /// `cal` (identified on `data` by the caller): the Kriging outputs are
+    /// refitted to what `cal` leaves, and the model holds `cal`.
+    pub(crate) fn refit_with_calibration(&self, data: &Dataset, cal: Calibration) -> Result<Self> {
+        let plain = ErrorModel {
+            calibration: None,
+            ..self.clone()
+        };
+        Ok(plain
+            .refit_at_hyperparameters(&cal.residual(data)?)?
+            .with_calibration(cal))
+    }
+
     /// Drop every output's factors kept in memory (recomputed when next
     /// needed).
     pub(crate) fn release_factors(&mut self) {
@@ -306,6 +326,7 @@ impl ErrorModel {
             joint_range: self.joint_range.clone(),
             robot: self.robot.clone(),
             software: self.software.clone(),
+            calibration: self.calibration.clone(),
         })
     }
 }

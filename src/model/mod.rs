@@ -10,11 +10,12 @@ mod file;
 mod fit;
 mod record;
 
-pub use coverage::{CoverageIssue, CoverageWarning, TREND_SIGMAS, UNCERTAIN_SHARE};
+pub use coverage::{CoverageIssue, CoverageWarning, GROSS_FACTOR, LOO_SAMPLE, TREND_SIGMAS, Z95};
 pub use fit::check_fit_memory;
 pub(crate) use fit::fit_outputs;
 pub use record::RobotRecord;
 
+use crate::calibration::Calibration;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
@@ -27,12 +28,16 @@ use serde::{Deserialize, Serialize};
 
 /// Format tag and version of saved models.
 pub const MODEL_FORMAT: &str = "robokrige-error-model";
-/// Version 3 stores the input map (space, periodic joints, extras, names,
+/// Version 4 may hold a kinematic calibration (`calibration`): the model is
+/// then the calibration plus Kriging of what it leaves. Version 3 stores the input map (space, periodic joints, extras, names,
 /// normalisation) as one field, `inputs`; versions 1 and 2 kept those parts
 /// at the top level and the periodic joints in the options, and still load.
 /// Version 2 stopped storing the Cholesky factor (O(m·d) files; it is
 /// recomputed when first needed).
-pub const MODEL_VERSION: u32 = 3;
+pub const MODEL_VERSION: u32 = 4;
+/// The version a model without a calibration is written as: such a file
+/// is a version-3 model, readable by the builds before calibration.
+pub const MODEL_VERSION_UNCALIBRATED: u32 = 3;
 /// Oldest model-file version that loads.
 pub const MODEL_VERSION_MIN: u32 = 1;
 
@@ -69,6 +74,11 @@ pub struct ErrorModel {
     /// The robokrige version that fitted the model (empty in older files).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub(crate) software: String,
+    /// The kinematic calibration the Kriging outputs sit on, if any: the
+    /// model predicts `δ̂_cal(q) + δ̂_UK(s)`, the Kriging outputs having been
+    /// fitted to `e − δ̂_cal(q)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) calibration: Option<Box<Calibration>>,
 }
 
 /// This crate's version, recorded in every model it fits.
@@ -260,7 +270,45 @@ impl ErrorModel {
     /// ([`Feature::columns_from_poses`]).
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
-        self.predict_inputs(&self.inputs.encode(q, dir)?)
+        let mut p = self.predict_inputs(&self.inputs.encode(q, dir)?)?;
+        self.add_calibration(q, &mut p.mean)?;
+        Ok(p)
+    }
+
+    /// The kinematic calibration under the Kriging outputs, if the model
+    /// was fitted with one ([`crate::params::ErrorModelParams::calibrate`]).
+    pub fn calibration(&self) -> Option<&Calibration> {
+        self.calibration.as_deref()
+    }
+
+    /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
+    /// Kriging outputs' predictions `mean`.
+    fn file_version(&self) -> u32 {
+        if self.calibration.is_some() {
+            MODEL_VERSION
+        } else {
+            MODEL_VERSION_UNCALIBRATED
+        }
+    }
+
+    /// This model with `calibration` under its Kriging outputs, which must
+    /// have been fitted to what it leaves ([`Calibration::residual`]): the
+    /// model then predicts `δ̂_cal + δ̂_UK`. What `diagnose --calibrate`
+    /// does with the model it improved on the calibration's residual.
+    /// Replaces a calibration the model already had.
+    pub fn with_calibration(mut self, calibration: Calibration) -> Self {
+        self.calibration = Some(Box::new(calibration));
+        self.version = self.file_version();
+        self
+    }
+
+    fn add_calibration(&self, q: &[Vec<f64>], mean: &mut [[f64; 3]]) -> Result<()> {
+        if let Some(c) = &self.calibration {
+            for (m, d) in mean.iter_mut().zip(c.predict(q)?) {
+                *m = [m[0] + d[0], m[1] + d[1], m[2] + d[2]];
+            }
+        }
+        Ok(())
     }
 
     /// The map from poses to this model's normalised inputs: space,
@@ -347,9 +395,11 @@ impl ErrorModel {
             .par_iter()
             .map(|m| m.predict_mean(&s))
             .collect();
-        Ok((0..q.len())
+        let mut mean: Vec<[f64; 3]> = (0..q.len())
             .map(|k| [per_axis[0][k], per_axis[1][k], per_axis[2][k]])
-            .collect())
+            .collect();
+        self.add_calibration(q, &mut mean)?;
+        Ok(mean)
     }
 
     fn check_rows(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<()> {
@@ -372,7 +422,9 @@ impl ErrorModel {
     /// Predict for every row of a dataset (extra inputs from its columns).
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
-        self.predict_inputs(&self.inputs.encode_dataset(data)?)
+        let mut p = self.predict_inputs(&self.inputs.encode_dataset(data)?)?;
+        self.add_calibration(&data.q, &mut p.mean)?;
+        Ok(p)
     }
 }
 

@@ -1,0 +1,209 @@
+//! The calibrated model: a kinematic calibration plus Kriging of what it
+//! leaves, in one model file that every consumer reads — fitted, saved,
+//! loaded, predicted, compensated (measured on the simulator's truth),
+//! refitted per fold, diagnosed and written back as a robot file.
+
+mod common;
+
+use common::rk;
+use robokrige::calibration::CalibrationOptions;
+use robokrige::dataset::read_csv;
+use robokrige::kinematics::preset;
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::ErrorModel;
+use robokrige::params::ErrorModelParams;
+use robokrige::space::Space;
+
+fn ds(f: &str) -> String {
+    format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn quick() -> KrigingOptions {
+    KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(400)
+        .corr_auto(false)
+        .starts(2)
+}
+
+#[test]
+fn one_file_holds_the_calibration_and_predicts_their_sum() {
+    let data = read_csv(ds("comau_lhs.csv").as_ref()).unwrap();
+    let robot = preset("comau-nj220").unwrap();
+    let params = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .kriging(quick())
+        .robot(robot.clone())
+        .calibrate(Some(CalibrationOptions::default()));
+    let model = params.clone().check().unwrap().fit(&data).unwrap();
+    let cal = model.calibration().expect("a calibration");
+    assert_eq!(model.version(), 4);
+    // the calibration explains most of the simulated robot's geometric error
+    let (before, after) = cal.rms_mm();
+    assert!(after < 0.6 * before, "{}", cal.summary_line());
+    let id = cal.identifiability();
+    assert!(id.directions_seen > 10 && id.directions_seen < id.parameters_total);
+    // the model predicts calibration + Kriging of its residual
+    let q = &data.q[..5];
+    let dir = &data.dir[..5];
+    let sum = model.predict_mean(q, dir).unwrap();
+    let kin = cal.predict(q).unwrap();
+    let plain = ErrorModel::from_json(
+        &{
+            let mut v: serde_json::Value = serde_json::from_str(&model.to_json().unwrap()).unwrap();
+            v.as_object_mut().unwrap().remove("calibration");
+            v["version"] = 3.into();
+            v.to_string()
+        },
+        "<no calibration>",
+    )
+    .unwrap();
+    let krig = plain.predict_mean(q, dir).unwrap();
+    for k in 0..5 {
+        for a in 0..3 {
+            assert!((sum[k][a] - kin[k][a] - krig[k][a]).abs() < 1e-12);
+        }
+    }
+    // the file round-trips, and loads back to the same predictions
+    let text = model.to_json().unwrap();
+    let back = ErrorModel::from_json(&text, "<memory>").unwrap();
+    assert_eq!(back.predict_mean(q, dir).unwrap(), sum);
+    assert_eq!(back.to_json().unwrap(), text);
+    // a model without a calibration is still a version-3 file
+    assert_eq!(plain.version(), 3);
+    // a calibration whose parameters do not give its robot is refused
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["calibration"]["parameters"][2] = 3.0.into();
+    let err = ErrorModel::from_json(&v.to_string(), "bad.json").unwrap_err();
+    assert!(err.to_string().contains("identified robot"), "{err}");
+    // a refit at fixed hyperparameters identifies the calibration anew
+    let half = data.select(&(0..150).collect::<Vec<_>>());
+    let refit = ErrorModelParams::fixed_from(model.clone())
+        .check()
+        .unwrap()
+        .fit(&half)
+        .unwrap();
+    let c2 = refit.calibration().unwrap();
+    assert_eq!(c2.rows(), 150);
+    assert_ne!(c2.parameters(), cal.parameters());
+    // rules: a calibration needs the robot, and not with the kinematic trend
+    let no_robot = ErrorModelParams::new().calibrate(Some(CalibrationOptions::default()));
+    assert!(no_robot.check().unwrap_err().to_string().contains("robot"));
+    let kin = params.trend(robokrige::params::TrendSpec::Kinematic(Box::new(robot)));
+    assert!(kin.check().is_err());
+}
+
+/// `fit --robot` (calibrated by default) → `predict` → `compensate` on the
+/// simulated robot's truth → `diagnose --calibrate --model-out` →
+/// `robot calibrated`, through the binary.
+#[test]
+fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
+    let dir = std::env::temp_dir().join(format!("robokrige-calibrated-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let ds_lhs = ds("comau_lhs.csv");
+    let fit = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "fit",
+            &ds_lhs,
+            "--robot",
+            "comau-nj220",
+            "--optimizer",
+            "hj",
+            "--corr",
+            "gaussian",
+            "-o",
+        ];
+        let o = p(out);
+        args.push(&o);
+        args.extend_from_slice(extra);
+        rk(&args)
+    };
+    let (c, out, err) = fit("cal.json", &[]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("calibration:"), "{out}");
+    let (c, _, err) = fit("raw.json", &["--no-calibrate"]);
+    assert_eq!(c, 0, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cal.json")).unwrap()).unwrap();
+    assert_eq!(v["version"], 4);
+    let raw: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("raw.json")).unwrap()).unwrap();
+    assert!(raw.get("calibration").is_none());
+    // predict reads it
+    let (c, _, err) = rk(&[
+        "predict",
+        &p("cal.json"),
+        &ds("comau_verify.csv"),
+        "-o",
+        &p("pred.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    // compensation of the circle, measured on the simulated robot
+    let compensate = |model: &str| {
+        let json = format!("{model}.comp.json");
+        let (c, _, err) = rk(&[
+            "compensate",
+            "--model",
+            &p(model),
+            "--robot",
+            "comau-nj220",
+            &ds("comau_circle.csv"),
+            "-o",
+            &p(&format!("{model}.csv")),
+            "--iterative",
+            "--truth",
+            &ds("comau_circle.truth.json"),
+            "--json",
+            &p(&json),
+        ]);
+        assert_eq!(c, 0, "{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        let (b, a) = (
+            v["before"]["mean_abs_mm"].as_f64().unwrap(),
+            v["after"]["mean_abs_mm"].as_f64().unwrap(),
+        );
+        1.0 - a / b
+    };
+    let (cal, raw) = (compensate("cal.json"), compensate("raw.json"));
+    eprintln!("circle mean reduction: calibrated {cal:.3}, raw Kriging {raw:.3}");
+    assert!(cal >= 0.85, "calibrated model: reduction {cal:.3}");
+    assert!(cal >= raw - 0.02, "calibrated {cal:.3} vs raw {raw:.3}");
+    // diagnose on the calibration's residual writes a calibrated model
+    let (c, _, err) = rk(&[
+        "diagnose",
+        &ds("comau_lhs.csv"),
+        "--robot",
+        "comau-nj220",
+        "--calibrate",
+        "--method",
+        "js-hj",
+        "--max-effects",
+        "1",
+        "--model-out",
+        &p("diag.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let d: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("diag.json")).unwrap()).unwrap();
+    assert!(d["calibration"]["parameters"].is_array(), "no calibration");
+    // the identified kinematics as a robot file, usable as --robot
+    let (c, out, err) = rk(&[
+        "robot",
+        "calibrated",
+        &p("cal.json"),
+        "-o",
+        &p("calibrated.toml"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("directions seen"), "{out}");
+    let (c, out, err) = rk(&["robot", "show", &p("calibrated.toml")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("comau-nj220-calibrated"), "{out}");
+    // a model without a calibration has no robot file to give
+    let (c, _, err) = rk(&["robot", "calibrated", &p("raw.json"), "-o", &p("x.toml")]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("no calibration"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}
