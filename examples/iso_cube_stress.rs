@@ -121,6 +121,8 @@ struct Report {
     diag: bool,
     /// Prior σ (mm, degrees) of the Bayesian prototype, if run.
     prior: Option<(f64, f64)>,
+    /// Diagnose a fold whose kinematic model exceeds this × the D-H max.
+    ratio: f64,
 }
 
 /// Folds `fold` (label per row): per fold the max 3D error of the five
@@ -132,7 +134,7 @@ fn run_folds(
     robot: &Robot,
     fold: &[usize],
     (hyb, kin): (&[ErrorModel], &[ErrorModel]),
-    Report { diag, prior }: Report,
+    Report { diag, prior, ratio }: Report,
 ) -> Res<Vec<[f64; 5]>> {
     let errors = data.errors_or_err()?;
     let k = fold.iter().max().map_or(0, |v| v + 1);
@@ -178,10 +180,18 @@ fn run_folds(
             prior_worst[1] = prior_worst[1].max(ejs);
         }
         println!("{line}");
-        if diag && (worst[3] > 3.0 * worst[0] || worst[4] > 3.0 * worst[0]) {
+        if diag && (worst[3] > ratio * worst[0] || worst[4] > ratio * worst[0]) {
             for s in 0..2 {
                 let j = arg_worst[3 + s];
+                println!(
+                    "  worst pose of UK-kin {}: row {}",
+                    ["JS", "EJS"][s],
+                    test[j]
+                );
                 diagnose(&fits.uk[s], &held, j, &errors[test[j]], &preds[0][j])?;
+                if s == 0 {
+                    stacked_vs_axis(&fits.uk[0], robot, &tr, &held.q[j])?;
+                }
             }
         }
         out.push(worst);
@@ -196,6 +206,15 @@ fn run_folds(
             .map(|v| format!("{:.1}", v / overall[0]))
             .join(" / ")
     );
+    if prior.is_some() {
+        println!(
+            "{label}: prior max JS {:.3} EJS {:.3} (ratio to D-H {:.1} / {:.1})",
+            prior_worst[0],
+            prior_worst[1],
+            prior_worst[0] / overall[0],
+            prior_worst[1] / overall[0]
+        );
+    }
     Ok(out)
 }
 
@@ -294,6 +313,86 @@ fn prior_max(
     }
     let t = held.errors_or_err()?;
     Ok(p.iter().zip(t).map(|(x, y)| dist(x, y)).fold(0.0, f64::max))
+}
+
+/// Leverage `x*ᵀ(AᵀA)⁺x*` of the rows `xs` in the least-squares problem of
+/// design `a` (columns scaled to unit norm, pseudo-inverse by SVD, relative
+/// cut 1e-12), and the largest leverage of `a`'s own rows.
+fn ols_leverage(a: &nalgebra::DMatrix<f64>, xs: &[Vec<f64>]) -> (Vec<f64>, f64) {
+    let p = a.ncols();
+    let norms: Vec<f64> = (0..p).map(|j| a.column(j).norm().max(1e-300)).collect();
+    let mut b = a.clone();
+    for (j, nj) in norms.iter().enumerate() {
+        b.column_mut(j).scale_mut(1.0 / nj);
+    }
+    let svd = b.svd(false, true);
+    let Some(vt) = svd.v_t.as_ref() else {
+        return (vec![f64::NAN; xs.len()], f64::NAN);
+    };
+    let cut = svd.singular_values.max() * 1e-12;
+    let lev = |x: &[f64]| -> f64 {
+        (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > cut)
+            .map(|k| {
+                let u: f64 = (0..p).map(|j| vt[(k, j)] * x[j] / norms[j]).sum();
+                (u / svd.singular_values[k]).powi(2)
+            })
+            .sum()
+    };
+    let train = (0..a.nrows())
+        .map(|i| lev(&a.row(i).iter().copied().collect::<Vec<_>>()))
+        .fold(0.0, f64::max);
+    (xs.iter().map(|x| lev(x)).collect(), train)
+}
+
+/// The held-out pose `q` in the stacked least squares of the D-H
+/// calibration (one parameter vector for x, y, z: the identifiable columns
+/// of the 3m-row Jacobian plus a constant per axis) and in the per-axis
+/// least squares of the kinematic trend (each axis its own columns): the
+/// pose's leverage against the training rows' largest (OLS, R ignored).
+fn stacked_vs_axis(uk: &ErrorModel, robot: &Robot, tr: &Dataset, q: &[f64]) -> Res<()> {
+    use robokrige::kinematics::{calib_len, identification_jacobian};
+    use robokrige::kriging::{Trend, independent_columns};
+    let np = calib_len(robot.dof());
+    let m = tr.len();
+    let rows: Vec<[Vec<f64>; 3]> =
+        tr.q.iter()
+            .map(|q| identification_jacobian(robot, q))
+            .collect();
+    let stacked = faer::Mat::from_fn(3 * m, np, |i, k| rows[i / 3][i % 3][k]);
+    let (kept, _) = independent_columns(&stacked, 1e-7);
+    let p = kept.len() + 3;
+    let design = |r: &[Vec<f64>; 3], a: usize| -> Vec<f64> {
+        let mut x: Vec<f64> = kept.iter().map(|&k| r[a][k]).collect();
+        x.extend((0..3).map(|b| if a == b { 1.0 } else { 0.0 }));
+        x
+    };
+    let a = nalgebra::DMatrix::from_fn(3 * m, p, |i, c| design(&rows[i / 3], i % 3)[c]);
+    let here = identification_jacobian(robot, q);
+    let (lev, train) = ols_leverage(&a, &(0..3).map(|ax| design(&here, ax)).collect::<Vec<_>>());
+    println!(
+        "    stacked (D-H) LS: {} columns; held-out pose leverage x/y/z {:.3e} / {:.3e} / {:.3e}, training max {train:.3e}",
+        p, lev[0], lev[1], lev[2]
+    );
+    for (ax, o) in uk.outputs().iter().enumerate() {
+        let Trend::Kinematic(k) = &o.data().trend else {
+            continue;
+        };
+        let cols: Vec<usize> = k.params.clone();
+        let row = |r: &[Vec<f64>; 3]| -> Vec<f64> {
+            let mut x = vec![1.0];
+            x.extend(cols.iter().map(|&c| r[ax][c]));
+            x
+        };
+        let a = nalgebra::DMatrix::from_fn(m, cols.len() + 1, |i, c| row(&rows[i])[c]);
+        let (lev, train) = ols_leverage(&a, &[row(&here)]);
+        println!(
+            "    per-axis LS, axis {ax}: {} columns; held-out pose leverage {:.3e}, training max {train:.3e}",
+            cols.len() + 1,
+            lev[0]
+        );
+    }
+    Ok(())
 }
 
 /// Singular values of `a` with its columns scaled to unit norm.
@@ -464,7 +563,15 @@ fn main() -> Res<()> {
     // prior σ of the parameter errors (mm, degrees) for the Bayesian prototype
     let prior = (arg(&a, "prior", 0.0) > 0.0)
         .then(|| (arg(&a, "prior_mm", 1.0), arg(&a, "prior_deg", 0.1)));
-    let report = Report { diag, prior };
+    let report = Report {
+        diag,
+        prior,
+        ratio: arg(&a, "diag_ratio", 3.0),
+    };
+    let out_rows: Vec<usize> = (0..camp.len())
+        .filter(|&i| camp.cube[i] == spec.cubes)
+        .collect();
+    println!("rows out of the cubes (home, checks): {out_rows:?}");
     if arg(&a, "holdout", 0.0) > 0.0 {
         let t = std::time::Instant::now();
         let cv = holdout_cv(&data, &robot, &base, 10, seed, data.len(), &|_, _| {})?;
