@@ -170,6 +170,31 @@ fn run_folds(
             test.len(),
             worst.map(|v| format!("{v:8.3}")).join(" | ")
         );
+        // what `holdout_cv` calls covered: the rows the kinematic models
+        // do not flag (ErrorModel::coverage with the predicted std)
+        for s in 0..2 {
+            let uk = &fits.uk[s];
+            let p = uk.predict(&held.q, &held.dir)?;
+            let flags: Vec<usize> = uk
+                .coverage(&held.q, &held.dir, &p.mean, Some(&p.std))?
+                .into_iter()
+                .map(|w| w.index)
+                .collect();
+            let covered = (0..test.len())
+                .filter(|j| !flags.contains(j))
+                .map(|j| dist(&errors[test[j]], &p.mean[j]))
+                .fold(0.0, f64::max);
+            line += &format!(
+                " | {} covered {covered:.3} ({} flagged{})",
+                ["JS", "EJS"][s],
+                flags.len(),
+                if flags.contains(&arg_worst[3 + s]) {
+                    ", worst among them"
+                } else {
+                    ""
+                }
+            );
+        }
         if let Some(sig) = prior {
             // the Bayesian prototype (and the GLS it must reproduce)
             let check = prior_max(&fits.uk[0], &tr, &held, None)?;
