@@ -10,6 +10,9 @@
 //! - [`campaign`]: Latin-hypercube, verification, axis-indexing (seed 000 §2.3)
 //!   and circle-trajectory (seed 004 §IV.B.3) designs, and their measurement.
 //!
+//! - [`iso_cubes`]: ISO 9283 cube campaigns (poses clustered in a few cubes,
+//!   the branch varied from cube to cube) and their measurement.
+//!
 //! Everything is reproducible from a seed; the simulator's truth goes to a
 //! sidecar JSON ([`Truth`]), never into the measurement CSV. The truth may be
 //! used to *check* the engine, never inside it.
@@ -17,6 +20,7 @@
 pub mod campaign;
 mod effects;
 pub mod execute;
+pub mod iso_cubes;
 mod scara_truth;
 mod true_robot;
 
