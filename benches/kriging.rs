@@ -38,6 +38,7 @@ fn psi_eval(c: &mut Criterion) {
             inputs: &inputs,
             f: &f,
             y: &y,
+            prior: &[],
         };
         let mut ws = Workspace::new(x.len(), f.ncols());
         g.bench_function(format!("{kind:?}").to_lowercase(), |b| {

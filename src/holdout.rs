@@ -71,7 +71,8 @@ pub struct HoldoutCv {
     pub rows: Vec<HoldoutRow>,
     /// Per model of [`CV_MODELS`]: interval coverage, NLPD, flag rate and
     /// recall on the held-out rows. The D-H calibration's interval is
-    /// `±1.96 s` with `s` its residual noise per coordinate; it flags none.
+    /// `±1.96 √(s² + Var δ̂_cal)` with `s` its residual noise per coordinate
+    /// ([`Calibration::predict_variance`]); it flags none.
     pub scores: Vec<PredictiveScores>,
     /// Max 3D error of each of the [`CV_MODELS`] in each fold, mm.
     pub fold_max_mm: Vec<[f64; 5]>,
@@ -198,7 +199,11 @@ pub fn holdout_cv(
             0,
             Held {
                 mean: dh.predict(&held.q)?,
-                std: vec![[s; 3]; test.len()],
+                std: dh
+                    .predict_variance(&held.q)?
+                    .iter()
+                    .map(|v| v.map(|x| (x + s * s).sqrt()))
+                    .collect(),
                 flags: Vec::new(),
             },
         );

@@ -48,6 +48,7 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
         inputs: &inputs,
         f: &f,
         y: &yn,
+        prior: &[],
     };
     let mut ws = Workspace::new(x.len(), f.ncols());
     let mut ws_fd = Workspace::new(x.len(), f.ncols());

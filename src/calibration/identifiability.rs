@@ -119,6 +119,23 @@ impl ScaledJacobian {
         t
     }
 
+    /// The posterior variance of each direction's coordinate `c_i` (in
+    /// prior units) with the first `k` fitted and the rest at nominal:
+    /// `1 / (1 + σ_i²/s²)` — about `s²/σ_i²` for a direction the campaign
+    /// sees, about 1 (the prior) for one it does not.
+    pub fn posterior_variances(&self, s: f64) -> Vec<f64> {
+        self.sigma
+            .iter()
+            .map(|x| {
+                if s > 0.0 {
+                    1.0 / (1.0 + (x / s).powi(2))
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// The report for the first `k` directions kept, residual std `s`,
     /// parameter values `p` named `names`, on `m` poses.
     pub fn report(

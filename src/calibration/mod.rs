@@ -88,6 +88,15 @@ pub struct Calibration {
     identified: Robot,
     parameters: Vec<f64>,
     identifiability: Identifiability,
+    /// The parameter directions `D v_i` (one per singular value, P values
+    /// each) and the posterior variance of each one's coordinate: what
+    /// [`Calibration::predict_variance`] needs.
+    #[serde(default)]
+    uncertainty: Vec<(Vec<f64>, f64)>,
+    /// Mean of [`Calibration::predict_variance`] over the campaign's poses,
+    /// mm² per axis: the calibration's uncertainty where it was measured.
+    #[serde(default)]
+    campaign_variance: [f64; 3],
     options: CalibrationOptions,
     rows: usize,
     rms_before_mm: f64,
@@ -160,7 +169,16 @@ pub fn calibrate_joints(
         fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
     };
     let identifiability = sj.report(k, s, &fit.p, &names, m);
-    Ok(Calibration {
+    let basis = sj.basis(sj.sigma.len());
+    let uncertainty = sj
+        .posterior_variances(s)
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| (basis.column(i).iter().copied().collect(), v))
+        .collect();
+    let mut cal = Calibration {
+        uncertainty,
+        campaign_variance: [0.0; 3],
         nominal: nominal.clone(),
         identified: apply_errors(nominal, &fit.p),
         parameters: fit.p,
@@ -171,7 +189,11 @@ pub fn calibrate_joints(
         rms_after_mm: rms(&fit.r),
         iterations: fit.iterations,
         stop: fit.stop,
-    })
+    };
+    let var = cal.predict_variance(joints)?;
+    cal.campaign_variance =
+        std::array::from_fn(|a| var.iter().map(|v| v[a]).sum::<f64>() / m.max(1) as f64);
+    Ok(cal)
 }
 
 struct SubspaceFit {
@@ -318,6 +340,48 @@ impl Calibration {
             .collect())
     }
 
+    /// The variance (mm², per axis) of the calibration's prediction at
+    /// joints `q` from what the campaign left uncertain: with the
+    /// identification Jacobian `J(q)` and the parameter directions `D v_i`
+    /// of the scaled Jacobian ([`identifiability`]),
+    ///
+    /// ```text
+    /// Var δ̂_cal,a(q) = Σ_i var_i · (J_a(q) D v_i)²,   var_i = 1 / (1 + σ_i²/s²),
+    /// ```
+    ///
+    /// the posterior variance of each direction's coordinate: small for a
+    /// direction the campaign sees, the prior's for one fixed at nominal.
+    /// Near the campaign's poses the unseen directions move the TCP by
+    /// less than the noise; far from them they may not, and the variance
+    /// says so. `J` is taken at the nominal parameters, as the directions
+    /// were. 2(5n + 9) forward kinematics per pose.
+    pub fn predict_variance(&self, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        Ok(q.par_iter()
+            .map(|qk| {
+                // at the nominal parameters, where the directions were found
+                let j = identification_jacobian(&self.nominal, qk);
+                let mut v = [0.0; 3];
+                for (dir, var) in &self.uncertainty {
+                    for (a, va) in v.iter_mut().enumerate() {
+                        let along: f64 = j[a].iter().zip(dir).map(|(x, y)| x * y).sum();
+                        *va += var * along * along;
+                    }
+                }
+                v
+            })
+            .collect())
+    }
+
+    /// Mean of [`Calibration::predict_variance`] over the poses it was
+    /// identified on, mm² per axis: what a prediction's calibration
+    /// variance is compared with to tell an extrapolation.
+    pub fn campaign_variance(&self) -> [f64; 3] {
+        self.campaign_variance
+    }
+
     /// `data` with its errors replaced by what the calibration leaves,
     /// `e − δ̂_cal(q)`.
     pub fn residual(&self, data: &Dataset) -> Result<Dataset> {
@@ -347,6 +411,14 @@ impl Calibration {
                 self.parameters.len(),
                 crate::kinematics::calib_len(n)
             )));
+        }
+        let np = self.parameters.len();
+        if self.uncertainty.iter().any(|(d, v)| {
+            d.len() != np || !(v.is_finite() && *v >= 0.0) || d.iter().any(|x| !x.is_finite())
+        }) {
+            return Err(bad(
+                "the calibration's uncertainty directions are inconsistent".into(),
+            ));
         }
         if self.parameters.iter().any(|v| !v.is_finite()) {
             return Err(bad(

@@ -48,6 +48,8 @@ use std::time::Instant;
 /// response z-scored.
 struct Prepared {
     trend: Trend,
+    /// Which kept trend columns get the Bayesian prior ([`TrendModel::has_prior`]).
+    prior: Vec<bool>,
     f: faer::Mat<f64>,
     y_norm: Vec<f64>,
     y_mean: f64,
@@ -86,6 +88,9 @@ fn prepare(x: &[Vec<f64>], y: &[f64], trend: &Trend, names: &[String]) -> Result
         (yn.mean[0], yn.std[0])
     };
     Ok(Prepared {
+        prior: (0..trend_kept.len())
+            .map(|j| trend_kept.has_prior(j))
+            .collect(),
         f: trend_matrix(&trend_kept, x),
         y_norm: y.iter().map(|v| (v - y_mean) / y_std).collect(),
         y_mean,
@@ -165,6 +170,7 @@ pub fn fit_output_with(
         inputs,
         f: &p.f,
         y: &p.y_norm,
+        prior: &p.prior,
     };
     let sol = problem.solve(theta, nugget)?;
     let mut theta = theta.to_vec();
@@ -215,6 +221,7 @@ pub fn fit_output_from(
         inputs,
         f: &p.f,
         y: &p.y_norm,
+        prior: &p.prior,
     };
     let mut bounds = Bounds::uniform(d, opts.log10_theta.0, opts.log10_theta.1);
     if opts.nugget {

@@ -43,6 +43,12 @@ pub struct KrigingProblem<'a> {
     pub f: &'a Mat<f64>,
     /// Normalised response, length m.
     pub y: &'a [f64],
+    /// Which trend coefficients get the Gaussian prior of Bayesian
+    /// universal Kriging (one flag per column of `f`, or empty for none):
+    /// `β_j ~ N(0, τ_j²)` with `τ_j = ‖y‖ / ‖F_j‖` — no single term may
+    /// explain more than the whole response a priori. See
+    /// [`KrigingProblem::solve`].
+    pub prior: &'a [bool],
 }
 
 /// Reusable buffers for ψ evaluations (one per thread).
@@ -374,7 +380,11 @@ impl KrigingProblem<'_> {
             ln_det_r,
             jitter,
         };
-        let (g, beta) = gls_beta(&aug, p);
+        let (g, beta) = if self.prior.iter().any(|b| *b) {
+            self.posterior_beta(&aug, sigma2)
+        } else {
+            gls_beta(&aug, p)
+        };
         // γ = C⁻ᵀ C⁻¹ (y − Fβ)
         let e = self.residual(&beta);
         let mut resid = faer::Col::from_fn(m, |i| e[i]);
@@ -387,6 +397,68 @@ impl KrigingProblem<'_> {
             beta,
             gamma: resid.iter().copied().collect(),
         })
+    }
+}
+
+impl KrigingProblem<'_> {
+    /// Bayesian universal Kriging's trend at this ξ: with the prior
+    /// `β_j ~ N(0, τ_j²)` on the flagged columns (`τ_j = ‖y‖/‖F_j‖`,
+    /// precision `Λ = diag(1/τ_j²)`, 0 elsewhere), the posterior mean and
+    /// covariance of β are
+    ///
+    /// ```text
+    /// β = (F̃ᵀF̃ + σ²Λ)⁻¹ F̃ᵀỹ,     Cov(β | y) = σ² (F̃ᵀF̃ + σ²Λ)⁻¹,
+    /// ```
+    ///
+    /// i.e. the GLS (seed 003 eq 11) of `[F̃; σΛ^{1/2}] β ≈ [ỹ; 0]`, and the
+    /// same as adding `F Σβ Fᵀ` to the covariance of y (O'Hagan 1978;
+    /// Helbert, Dupuy & Carraro 2009, "Assessment of uncertainty in computer
+    /// experiments from Universal to Bayesian Kriging"). Since `[F̃ ỹ]` is
+    /// already `Q [G b; 0 ρ]`, the augmented QR is that of the small
+    /// `[G b; σΛ^{1/2} 0]`. Returns the augmented G (so that the MSE, eq 12,
+    /// the closed-form CV and the β standard errors use the posterior
+    /// covariance) and β. σ² is the GLS one (ψ and the search are those of
+    /// universal Kriging; the prior acts on the solution at the chosen ξ).
+    /// Unflagged columns (the constant) keep a flat prior: no direction of
+    /// the kinematic coefficients is unbounded, the mean is free.
+    fn posterior_beta(&self, aug: &Mat<f64>, sigma2: f64) -> (Mat<f64>, Vec<f64>) {
+        let p = self.f.ncols();
+        let y_norm = self.y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let sigma = sigma2.sqrt();
+        let rows: Vec<(usize, f64)> = (0..p)
+            .filter(|&j| self.prior.get(j).copied().unwrap_or(false))
+            .filter_map(|j| {
+                let fj = self.f.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
+                (fj > 0.0 && y_norm > 0.0).then(|| (j, sigma * fj / y_norm))
+            })
+            .collect();
+        let n = p + rows.len();
+        let mut small = Mat::<f64>::zeros(n, p + 1);
+        for i in 0..p {
+            for j in i..=p {
+                small[(i, j)] = aug[(i, j)];
+            }
+        }
+        for (k, (j, w)) in rows.iter().enumerate() {
+            small[(p + k, *j)] = *w;
+        }
+        let bs = recommended_block_size::<f64>(n, p + 1);
+        let mut qcoef = Mat::zeros(bs, (p + 1).min(n));
+        let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(
+            n,
+            p + 1,
+            bs,
+            Par::Seq,
+            Default::default(),
+        ));
+        qr_in_place(
+            small.as_mut(),
+            qcoef.as_mut(),
+            Par::Seq,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        gls_beta(&small, p)
     }
 }
 

@@ -370,6 +370,7 @@ impl SubsetData {
             inputs: &self.inputs,
             f: &self.f,
             y: &self.y,
+            prior: like.prior,
         }
     }
 }

@@ -21,6 +21,13 @@ pub trait TrendModel: Send + Sync {
     fn eval_into(&self, s: &[f64], out: &mut [f64]);
     /// Human-readable name of basis function j given the input names.
     fn term_name(&self, j: usize, inputs: &[String]) -> String;
+    /// Whether coefficient `j` gets the Gaussian prior of Bayesian universal
+    /// Kriging ([`super::problem::KrigingProblem::prior`]): physical terms
+    /// whose coefficient is a parameter error, not a free mean. None by
+    /// default.
+    fn has_prior(&self, _j: usize) -> bool {
+        false
+    }
 }
 
 /// Monomials `Π_k s_k^{e_k}`, one exponent vector per basis function.
@@ -235,6 +242,12 @@ impl TrendModel for KinematicTrend {
         out[k..].copy_from_slice(&j[self.axis]);
     }
 
+    /// The Jacobian columns: each coefficient is a parameter error seen by
+    /// one axis, which no campaign identifies in every direction.
+    fn has_prior(&self, j: usize) -> bool {
+        j >= self.poly.len()
+    }
+
     fn term_name(&self, j: usize, inputs: &[String]) -> String {
         let k = self.poly.len();
         if j < k {
@@ -326,6 +339,10 @@ impl TrendModel for Trend {
 
     fn term_name(&self, j: usize, inputs: &[String]) -> String {
         self.inner().term_name(j, inputs)
+    }
+
+    fn has_prior(&self, j: usize) -> bool {
+        self.inner().has_prior(j)
     }
 }
 

@@ -271,7 +271,7 @@ impl ErrorModel {
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
         let mut p = self.predict_inputs(&self.inputs.encode(q, dir)?)?;
-        self.add_calibration(q, &mut p.mean)?;
+        self.add_calibration(q, &mut p)?;
         Ok(p)
     }
 
@@ -281,8 +281,8 @@ impl ErrorModel {
         self.calibration.as_deref()
     }
 
-    /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
-    /// Kriging outputs' predictions `mean`.
+    /// The file version this model is written as: 4 with a calibration, 3
+    /// without.
     fn file_version(&self) -> u32 {
         if self.calibration.is_some() {
             MODEL_VERSION
@@ -302,10 +302,14 @@ impl ErrorModel {
         self
     }
 
-    fn add_calibration(&self, q: &[Vec<f64>], mean: &mut [[f64; 3]]) -> Result<()> {
+    /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
+    /// Kriging outputs' predicted means, and its variance
+    /// ([`Calibration::predict_variance`]) to their MSE.
+    fn add_calibration(&self, q: &[Vec<f64>], p: &mut Prediction) -> Result<()> {
         if let Some(c) = &self.calibration {
-            for (m, d) in mean.iter_mut().zip(c.predict(q)?) {
-                *m = [m[0] + d[0], m[1] + d[1], m[2] + d[2]];
+            add_to(&mut p.mean, &c.predict(q)?);
+            for (s, v) in p.std.iter_mut().zip(c.predict_variance(q)?) {
+                *s = std::array::from_fn(|a| (s[a] * s[a] + v[a]).sqrt());
             }
         }
         Ok(())
@@ -398,7 +402,9 @@ impl ErrorModel {
         let mut mean: Vec<[f64; 3]> = (0..q.len())
             .map(|k| [per_axis[0][k], per_axis[1][k], per_axis[2][k]])
             .collect();
-        self.add_calibration(q, &mut mean)?;
+        if let Some(c) = &self.calibration {
+            add_to(&mut mean, &c.predict(q)?);
+        }
         Ok(mean)
     }
 
@@ -423,8 +429,15 @@ impl ErrorModel {
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
         let mut p = self.predict_inputs(&self.inputs.encode_dataset(data)?)?;
-        self.add_calibration(&data.q, &mut p.mean)?;
+        self.add_calibration(&data.q, &mut p)?;
         Ok(p)
+    }
+}
+
+/// `a += b`, row by row.
+fn add_to(a: &mut [[f64; 3]], b: &[[f64; 3]]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        *x = [x[0] + y[0], x[1] + y[1], x[2] + y[2]];
     }
 }
 

@@ -182,6 +182,33 @@ impl IsoCubeCampaign {
         self.q.is_empty()
     }
 
+    /// Add poses out of the cubes, as a real campaign has: the robot's home
+    /// pose first (with `home`), and `checks` poses drawn uniformly in the
+    /// work ranges, inserted at seeded random places of the sequence. They
+    /// form one more group (label `centres_mm.len()`) for
+    /// leave-one-cube-out.
+    pub fn add_out_of_cube_poses(&mut self, robot: &Robot, checks: usize, home: bool, seed: u64) {
+        use rand::RngExt;
+        let group = self.centres_mm.len();
+        let mut rng = crate::stats::rng_for(seed, "out-of-cube poses");
+        for _ in 0..checks {
+            let q: Vec<f64> = robot
+                .work_ranges
+                .iter()
+                .map(|(lo, hi)| lo + (hi - lo) * rng.random::<f64>())
+                .collect();
+            let at = rng.random_range(0..=self.q.len());
+            self.q.insert(at, q);
+            self.cube.insert(at, group);
+            self.iso_point.insert(at, None);
+        }
+        if home {
+            self.q.insert(0, robot.home.clone());
+            self.cube.insert(0, group);
+            self.iso_point.insert(0, None);
+        }
+    }
+
     /// The rows of cube `c`.
     pub fn rows_of(&self, c: usize) -> Vec<usize> {
         (0..self.len()).filter(|&i| self.cube[i] == c).collect()
