@@ -32,6 +32,7 @@ _DEFAULTS: Dict[str, Any] = dict(
     robot=None,
     tool=None,
     kinematic=False,
+    calibrate=True,
     method=None,
 )
 
@@ -89,7 +90,14 @@ class ErrorModel:
     tool : (x, y, z), optional
         TCP offset in the flange frame (mm), replacing the robot's tool.
     kinematic : bool
-        Add the robot's kinematic-error Jacobian to the trend (needs robot).
+        Add the robot's kinematic-error Jacobian to the trend (needs robot;
+        that fit calibrates inside the Kriging, so no separate calibration).
+    calibrate : bool
+        With a robot (and not ``kinematic``): calibrate it first (MD-H, tool
+        and base errors on the directions the campaign sees), then fit
+        Kriging to what the calibration leaves; the model holds both, as
+        ``robokrige fit --robot``. False: Kriging of the raw error
+        (``--no-calibrate``).
     method : str, optional
         A named method instead ("recommended", "js-hj", "ejs-hj", "ejs-gps",
         "ejs-pca", "ejs-ga"): it fixes space, trend, corr, optimizer,
@@ -114,6 +122,7 @@ class ErrorModel:
         robot: Optional[str] = None,
         tool: Optional[Tuple[float, float, float]] = None,
         kinematic: bool = False,
+        calibrate: bool = True,
         method: Optional[str] = None,
     ) -> None:
         self.space = space
@@ -127,6 +136,7 @@ class ErrorModel:
         self.robot = robot
         self.tool = tool
         self.kinematic = kinematic
+        self.calibrate = calibrate
         self.method = method
 
     # -- scikit-learn protocol -------------------------------------------
@@ -153,7 +163,7 @@ class ErrorModel:
                     f"method '{p['method']}' fixes its own settings: leave {', '.join(changed)} at the defaults"
                 )
         p["periodic"] = _periodic_spec(p["periodic"])
-        for key in ("nugget", "kinematic"):
+        for key in ("nugget", "kinematic", "calibrate"):
             if not isinstance(p[key], (bool, np.bool_)):
                 raise _bad(f"{key} must be True or False, not {p[key]!r}")
             p[key] = bool(p[key])
@@ -217,7 +227,9 @@ class ErrorModel:
     ) -> Union[np.ndarray, Tuple[np.ndarray, np.ndarray]]:
         """Predicted TCP errors (m × 3, mm) at poses ``q`` approached in
         directions ``dirs``, and with ``return_std`` their standard
-        deviations √MSE (m × 3).
+        deviations √MSE (m × 3): of the predicted error, a calibration's
+        uncertainty included, the measurement noise not (add
+        ``model_.noise_std()`` in quadrature for a new measurement's).
 
         ``q`` may also be a DataFrame / mapping with ``q1..qN`` (and
         ``dir1..dirN``, covariates) or a path to a CSV. Without directions

@@ -274,6 +274,23 @@ impl Model {
         json(&access::robot(&self.inner), "robot")
     }
 
+    /// The measurement-noise standard deviation per axis (mm) the nugget
+    /// attributes: add it in quadrature to a predicted std for a new
+    /// measurement's.
+    fn noise_std(&self) -> [f64; 3] {
+        self.inner.noise_std()
+    }
+
+    /// The calibration under the model (identifiability report: directions
+    /// seen, observability indices, parameters), as JSON text; "null"
+    /// without one.
+    fn calibration_json(&self) -> PyResult<String> {
+        json(
+            &self.inner.calibration().map(|c| c.identifiability()),
+            "calibration",
+        )
+    }
+
     /// Warnings about the conditioning of the fit.
     fn conditioning_warnings(&self) -> Vec<String> {
         self.inner.conditioning_warnings()

@@ -5,6 +5,7 @@
 
 use pyo3::prelude::*;
 use robokrige::dataset::Dataset;
+use robokrige::calibration::CalibrationOptions;
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::methods::Method;
@@ -37,6 +38,8 @@ pub struct FitParams {
     pub tool: Option<(f64, f64, f64)>,
     #[pyo3(item)]
     pub kinematic: bool,
+    #[pyo3(item)]
+    pub calibrate: bool,
     #[pyo3(item)]
     pub method: Option<String>,
 }
@@ -192,7 +195,14 @@ impl FitParams {
             }
         };
         match robot {
-            Some(r) => params.robot(r),
+            // as `robokrige fit --robot`: calibrated unless the kinematic
+            // trend does it or the caller said no
+            Some(r) => {
+                let calibrate = self.calibrate && !self.kinematic;
+                params
+                    .robot(r)
+                    .calibrate(calibrate.then(CalibrationOptions::default))
+            }
             None => params,
         }
         .check()

@@ -212,3 +212,22 @@ def test_diagnose_scans_a_subset_of_a_large_campaign(datasets):
     assert "step" in top["label"] and abs(top["params"]["row"] - 150) <= 2
     with pytest.raises(ValueError, match="scan_rows"):
         rk.diagnose(df, scan_rows=10)
+
+
+def test_a_robot_calibrates_by_default(datasets, lhs):
+    import json
+
+    q, d, e = arrays(lhs, 120)
+    opts = dict(robot="comau-nj220", corr="gaussian", optimizer="hj")
+    cal = rk.ErrorModel(**opts).fit(q, d, e)
+    raw = rk.ErrorModel(calibrate=False, **opts).fit(q, d, e)
+    report = json.loads(cal.model_.calibration_json())
+    assert 0 < report["directions_seen"] < report["parameters_total"]
+    assert json.loads(raw.model_.calibration_json()) is None
+    assert json.loads(cal.model_.to_json())["version"] == 4
+    # the std of a new measurement adds the nugget's noise
+    _, std = cal.predict(q[:5], d[:5], return_std=True)
+    noise = np.asarray(cal.model_.noise_std())
+    assert np.all(np.hypot(std, noise) >= std)
+    with pytest.raises(rk.RobokrigeError, match="calibrate must be True or False"):
+        rk.ErrorModel(calibrate="yes", **opts).fit(q, d, e)

@@ -360,7 +360,10 @@ pub struct PredictArgs {
     model: PathBuf,
     /// Poses CSV (q1..qN, optional dir1..dirN; errors, if present, are compared).
     poses: PathBuf,
-    /// Output CSV: id, q, dir, pred_ex.., std_ex.. (and the measured ex.. if given).
+    /// Output CSV: id, q, dir, pred_ex.., std_ex.. (√MSE of the predicted
+    /// error, the calibration's uncertainty included, measurement noise
+    /// not), std_new_ex.. (of a new measurement: with the nugget's noise),
+    /// and the measured ex.. if given.
     #[arg(short, long)]
     output: PathBuf,
     /// Write a summary (and, with measured errors, before/after statistics) as JSON to FILE ("-": standard output).
@@ -402,6 +405,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     }
     let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
+    let noise = model.noise_std();
     robokrige::output::write_atomic(&a.output, |out| {
         let mut w = csv::Writer::from_writer(out);
         let n = data.n_joints();
@@ -410,6 +414,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         header.extend((1..=n).map(|i| format!("dir{i}")));
         header.extend(AXES.iter().map(|a| format!("pred_{a}")));
         header.extend(AXES.iter().map(|a| format!("std_{a}")));
+        header.extend(AXES.iter().map(|a| format!("std_new_{a}")));
         if data.errors.is_some() {
             header.extend(AXES.iter().map(|a| a.to_string()));
         }
@@ -421,6 +426,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             row.extend(data.dir[k].iter().map(|d| format!("{d}")));
             row.extend(pred.mean[k].iter().map(f64::to_string));
             row.extend(pred.std[k].iter().map(f64::to_string));
+            row.extend((0..3).map(|a| pred.std[k][a].hypot(noise[a]).to_string()));
             if let Some(e) = &data.errors {
                 row.extend(e[k].iter().map(f64::to_string));
             }
