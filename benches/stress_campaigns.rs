@@ -134,7 +134,13 @@ fn print(label: &str, cv: &HoldoutCv) {
             .map(|f| f[k] / f[0])
             .fold(0.0f64, f64::max)
     };
-    println!("  {label} ({} folds):", cv.folds);
+    println!(
+        "  {label} ({} folds; hyperparameters {:.1} s, calibrated model fits {:.1} s, kinematic {:.1} s):",
+        cv.folds,
+        cv.hyper_seconds,
+        cv.rows[2].seconds + cv.rows[3].seconds,
+        cv.rows[4].seconds + cv.rows[5].seconds
+    );
     println!(
         "  | model | mean 3D | max 3D | worst fold max / D-H | coverage x / y / z | flagged | gross flagged |"
     );
@@ -193,8 +199,10 @@ fn main() -> robokrige::Result<()> {
             .periodic(periodic)
             .kriging(KrigingOptions::default().nugget(true));
         let random = kfold_partition(data.len(), 10, c.seed)?;
+        let t_cv = std::time::Instant::now();
         let cv = holdout_cv(&data, &c.robot, &base, &random, data.len(), &|_, _| {})?;
-        print("random 10-fold", &cv);
+        let label = format!("random 10-fold, {:.1} s", t_cv.elapsed().as_secs_f64());
+        print(&label, &cv);
         let cv = holdout_cv(&data, &c.robot, &base, &camp.cube, data.len(), &|_, _| {})?;
         print("leave one cube out", &cv);
         println!("  ({:.0} s)", t.elapsed().as_secs_f64());

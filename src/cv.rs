@@ -88,18 +88,7 @@ where
     let t0 = Instant::now();
     let errors = data.errors_or_err()?;
     let m = data.len();
-    if fold.len() != m {
-        return Err(Error::InvalidParameter(format!(
-            "{} fold labels for {m} rows",
-            fold.len()
-        )));
-    }
-    let k = fold.iter().max().map_or(0, |f| f + 1);
-    if k < 2 || (0..k).any(|f| !fold.contains(&f)) {
-        return Err(Error::InvalidParameter(format!(
-            "cross-validation needs at least 2 non-empty folds (got {k})"
-        )));
-    }
+    let k = crate::stats::fold_count(fold, m)?;
     let mut residuals = vec![[0.0; 3]; m];
     let mut mean = vec![[0.0; 3]; m];
     let mut std = vec![[0.0; 3]; m];

@@ -128,18 +128,7 @@ pub fn holdout_cv(
 ) -> Result<HoldoutCv> {
     let errors = data.errors_or_err()?;
     let m = data.len();
-    if fold.len() != m {
-        return Err(Error::InvalidParameter(format!(
-            "{} fold labels for {m} rows",
-            fold.len()
-        )));
-    }
-    let k = fold.iter().max().map_or(0, |f| f + 1);
-    if k < 2 || (0..k).any(|f| !fold.contains(&f)) {
-        return Err(Error::InvalidParameter(format!(
-            "cross-validation needs at least 2 non-empty folds numbered 0..k (got {k})"
-        )));
-    }
+    let k = crate::stats::fold_count(fold, m)?;
     if hyper_rows < 10 {
         return Err(Error::InvalidParameter(format!(
             "the hyperparameters need at least 10 rows, not {hyper_rows}"

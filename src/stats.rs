@@ -220,6 +220,27 @@ pub fn fold_blocks(fold: &[usize]) -> Vec<Vec<usize>> {
     blocks
 }
 
+/// The number of folds k of a partition of `m` rows (`fold[i]` in 0..k):
+/// an error unless there is one label per row and every fold of at least
+/// two is non-empty.
+pub fn fold_count(fold: &[usize], m: usize) -> crate::Result<usize> {
+    if fold.len() != m {
+        return Err(crate::Error::InvalidParameter(format!(
+            "{} fold labels for {m} rows",
+            fold.len()
+        )));
+    }
+    let k = fold.iter().max().map_or(0, |f| f + 1);
+    let mut seen = vec![false; k];
+    fold.iter().for_each(|&f| seen[f] = true);
+    if k < 2 || seen.contains(&false) {
+        return Err(crate::Error::InvalidParameter(format!(
+            "cross-validation needs at least 2 non-empty folds numbered 0..k (got {k})"
+        )));
+    }
+    Ok(k)
+}
+
 /// Fold index of every row for leave-one-group-out CV (scikit-learn's
 /// `LeaveOneGroupOut`; `GroupKFold` with one fold per group): rows with the
 /// same label share a fold, folds numbered by first appearance. Errors

@@ -20,7 +20,7 @@
 //!
 //! A [`Calibration`] predicts the kinematic part of the error,
 //! `δ̂_cal(q) = P_cal(q) − P_nom(q)`, and gives the residual `e − δ̂_cal` that a
-//! Kriging model learns next (the calibrated model of [`crate::model`]).
+//! Kriging model learns next (the calibrated error model).
 
 mod identifiability;
 

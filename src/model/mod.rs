@@ -276,7 +276,7 @@ impl ErrorModel {
     }
 
     /// The kinematic calibration under the Kriging outputs, if the model
-    /// was fitted with one ([`crate::params::ErrorModelParams::calibrate`]).
+    /// was fitted with one (`ErrorModelParams::calibrate`).
     pub fn calibration(&self) -> Option<&Calibration> {
         self.calibration.as_deref()
     }
