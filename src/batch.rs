@@ -7,9 +7,12 @@
 //! K-fold CV at the fitted hyperparameters (closed form, eq 21 of seed 003
 //! without the refit). Its robot is `NAME.robot.toml` (or `.json`) beside it
 //! when that exists, else the batch's robot, else none; a given robot is
-//! recorded in the model ([`ErrorModel::record_robot`]). A campaign that
+//! calibrated first (the calibrated model, unless
+//! [`BatchOptions::calibrate`] is off) and recorded in the model
+//! ([`ErrorModel::record_robot`]). A campaign that
 //! fails is reported with its error and does not stop the others.
 
+use crate::calibration::CalibrationOptions;
 use crate::cv::cross_validate_closed_form;
 use crate::dataset::read_csv;
 use crate::kinematics::{Robot, read_robot_file};
@@ -33,6 +36,9 @@ pub struct BatchOptions {
     pub seed: u64,
     /// Robot of campaigns without their own robot file.
     pub robot: Option<Robot>,
+    /// Calibrate a campaign's robot first (the calibrated model of
+    /// `fit --robot`); without a robot there is nothing to calibrate.
+    pub calibrate: bool,
 }
 
 impl Default for BatchOptions {
@@ -41,6 +47,7 @@ impl Default for BatchOptions {
             folds: 10,
             seed: 1,
             robot: None,
+            calibrate: true,
         }
     }
 }
@@ -109,12 +116,16 @@ pub fn run_campaign(campaign: &Path, opts: &BatchOptions) -> Result<CampaignRepo
         seed: opts.seed,
         ..KrigingOptions::recommended()
     };
-    let mut model = ErrorModelParams::new()
+    let mut params = ErrorModelParams::new()
         .space(Space::Ejs)
         .periodic(periodic_joints(&data.q))
-        .kriging(kriging)
-        .check()?
-        .fit(&data)?;
+        .kriging(kriging);
+    if let (Some(r), true) = (&robot, opts.calibrate) {
+        params = params
+            .robot(r.clone())
+            .calibrate(Some(CalibrationOptions::default()));
+    }
+    let mut model = params.check()?.fit(&data)?;
     if let Some(r) = &robot {
         model.record_robot(r)?;
     }

@@ -29,6 +29,11 @@ pub struct BatchArgs {
     /// Robot (preset name or robot file) of campaigns without NAME.robot.toml.
     #[arg(long)]
     robot: Option<String>,
+    /// Kriging of the raw error. By default a campaign with a robot is
+    /// calibrated first (as `fit --robot`) and Kriging fits what the
+    /// calibration leaves.
+    #[arg(long)]
+    no_calibrate: bool,
     /// CV folds.
     #[arg(long, default_value_t = 10)]
     folds: usize,
@@ -64,6 +69,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
             .as_deref()
             .map(robokrige::kinematics::load_robot)
             .transpose()?,
+        calibrate: !a.no_calibrate,
     };
     eprintln!(
         "batch: {} campaign(s) in {}, in parallel",

@@ -25,16 +25,14 @@ pub enum CoverageIssue {
     /// error: `1.96 √(MSE + noise²)` exceeds [`GROSS_FACTOR`] times the
     /// model's own leave-one-out RMS on that axis (no training pose is
     /// near enough for the model to vouch for the point). With a
-    /// calibration, its variance is in the MSE and its mean variance over
-    /// the campaign in the reference.
+    /// calibration, its variance beyond its campaign mean is in the MSE.
     Uncertain {
         /// Output axis (0 x, 1 y, 2 z).
         axis: usize,
         /// The predictive standard deviation of a new measurement,
         /// `√(MSE + noise²)`, mm.
         std_mm: f64,
-        /// The model's expected leave-one-out RMS on that axis (with a
-        /// calibration's campaign variance added), mm.
+        /// The model's expected leave-one-out RMS on that axis, mm.
         loo_rmse_mm: f64,
     },
     /// The Kriging correction `r(s)ᵀγ` departs from the trend-only
@@ -148,17 +146,9 @@ impl ErrorModel {
             Some(c) => c.predict(q)?,
             None => vec![[0.0; 3]; q.len()],
         };
-        // the reference: what the model's held-out error is where it was
-        // trained (Kriging's leave-one-out RMS, and the calibration's own
-        // uncertainty over its campaign, which `std` also holds)
-        let cal_var = self
-            .calibration()
-            .map_or([0.0; 3], |c| c.campaign_variance());
+        // the reference: the model's held-out error where it was trained
         let loo = match std {
-            Some(_) => {
-                let l = self.expected_loo_rmse()?;
-                std::array::from_fn(|a| (l[a] * l[a] + cal_var[a]).sqrt())
-            }
+            Some(_) => self.expected_loo_rmse()?,
             None => [f64::INFINITY; 3],
         };
         let noise = self.noise_std();

@@ -303,13 +303,19 @@ impl ErrorModel {
     }
 
     /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
-    /// Kriging outputs' predicted means, and its variance
-    /// ([`Calibration::predict_variance`]) to their MSE.
+    /// Kriging outputs' predicted means, and to their MSE the calibration's
+    /// variance beyond its mean over the campaign,
+    /// `max(0, Var δ̂_cal(q) − mean_campaign Var δ̂_cal)`
+    /// ([`Calibration::predict_variance`]): where it was measured, the
+    /// Kriging of the calibration's residual already carries the
+    /// calibration's error (it was fitted to it); away from there it
+    /// cannot, and the calibration's extra uncertainty is added.
     fn add_calibration(&self, q: &[Vec<f64>], p: &mut Prediction) -> Result<()> {
         if let Some(c) = &self.calibration {
             add_to(&mut p.mean, &c.predict(q)?);
+            let base = c.campaign_variance();
             for (s, v) in p.std.iter_mut().zip(c.predict_variance(q)?) {
-                *s = std::array::from_fn(|a| (s[a] * s[a] + v[a]).sqrt());
+                *s = std::array::from_fn(|a| (s[a] * s[a] + (v[a] - base[a]).max(0.0)).sqrt());
             }
         }
         Ok(())
