@@ -93,7 +93,7 @@ pub struct Calibration {
     /// [`Calibration::predict_variance`] needs.
     #[serde(default)]
     uncertainty: Vec<(Vec<f64>, f64)>,
-    /// Mean of [`Calibration::predict_variance`] over the campaign's poses,
+    /// Largest [`Calibration::predict_variance`] over the campaign's poses,
     /// mm² per axis: the calibration's uncertainty where it was measured.
     #[serde(default)]
     campaign_variance: [f64; 3],
@@ -191,8 +191,7 @@ pub fn calibrate_joints(
         stop: fit.stop,
     };
     let var = cal.predict_variance(joints)?;
-    cal.campaign_variance =
-        std::array::from_fn(|a| var.iter().map(|v| v[a]).sum::<f64>() / m.max(1) as f64);
+    cal.campaign_variance = std::array::from_fn(|a| var.iter().map(|v| v[a]).fold(0.0, f64::max));
     Ok(cal)
 }
 
@@ -375,7 +374,7 @@ impl Calibration {
             .collect())
     }
 
-    /// Mean of [`Calibration::predict_variance`] over the poses it was
+    /// Largest [`Calibration::predict_variance`] over the poses it was
     /// identified on, mm² per axis: what a prediction's calibration
     /// variance is compared with to tell an extrapolation.
     pub fn campaign_variance(&self) -> [f64; 3] {

@@ -25,7 +25,8 @@ pub enum CoverageIssue {
     /// error: `1.96 √(MSE + noise²)` exceeds [`GROSS_FACTOR`] times the
     /// model's own leave-one-out RMS on that axis (no training pose is
     /// near enough for the model to vouch for the point). With a
-    /// calibration, its variance beyond its campaign mean is in the MSE.
+    /// calibration, its variance beyond its largest at a measured pose is
+    /// in the MSE.
     Uncertain {
         /// Output axis (0 x, 1 y, 2 z).
         axis: usize,

@@ -304,8 +304,8 @@ impl ErrorModel {
 
     /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
     /// Kriging outputs' predicted means, and to their MSE the calibration's
-    /// variance beyond its mean over the campaign,
-    /// `max(0, Var δ̂_cal(q) − mean_campaign Var δ̂_cal)`
+    /// variance beyond its largest over the campaign,
+    /// `max(0, Var δ̂_cal(q) − max_campaign Var δ̂_cal)`
     /// ([`Calibration::predict_variance`]): where it was measured, the
     /// Kriging of the calibration's residual already carries the
     /// calibration's error (it was fitted to it); away from there it
