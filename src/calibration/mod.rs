@@ -226,18 +226,24 @@ fn fit_subspace(
             stop: "nothing identifiable".into(),
         });
     }
-    let residual = |u: &[f64]| -> Result<DVector<f64>> {
+    let residual_p = |p: &[f64]| -> Result<DVector<f64>> {
         Ok(position_residual(
-            &apply_errors(nominal, &params(u)),
+            &apply_errors(nominal, p),
             joints,
             targets,
         ))
     };
-    // u is in units of the prior scale: a step of 1e-5 of it is far above
-    // rounding and far below any curvature of the chain
-    let h = vec![1e-5; k];
+    // the Jacobian in the parameters' own units (steps of 1e-4 degree or
+    // mm, as the identification Jacobian), then onto the directions: a
+    // step in the directions' prior units could be large for a weakly
+    // seen parameter
+    let h = vec![1e-4; t.nrows()];
     let res = levenberg_marquardt(
-        |u| Ok((residual(u)?, numerical_jacobian(residual, u, &h)?)),
+        |u| {
+            let p = params(u);
+            let jp = numerical_jacobian(residual_p, &p, &h)?;
+            Ok((residual_p(&p)?, jp * &t))
+        },
         u0,
         &LmOptions {
             max_iter: opts.max_iter,
