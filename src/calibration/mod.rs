@@ -22,7 +22,7 @@
 //! `δ̂_cal(q) = P_cal(q) − P_nom(q)`, and gives the residual `e − δ̂_cal` that a
 //! Kriging model learns next (the calibrated error model).
 
-mod identifiability;
+pub mod identifiability;
 
 pub use identifiability::{Identifiability, ParameterReport};
 
