@@ -363,16 +363,8 @@ impl KrigingProblem<'_> {
                 "correlation matrix not positive definite even with jitter {MAX_JITTER:e} (duplicate poses? try a nugget)"
             )));
         };
-        let bs = recommended_block_size::<f64>(m, p + 1);
         let mut aug = Mat::zeros(m, p + 1);
-        let mut qcoef = Mat::zeros(bs, (p + 1).min(m));
-        let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(
-            m,
-            p + 1,
-            bs,
-            Par::Seq,
-            Default::default(),
-        ));
+        let (mut qcoef, mut mem) = qr_buffers(m, p + 1);
         let (ln_det_r, sigma2) = self.trend_qr(c.as_ref(), &mut aug, &mut qcoef, &mut mem, par);
         let value = PsiValue {
             ln_psi: ln_det_r / m as f64 + sigma2.ln(),
@@ -442,15 +434,7 @@ impl KrigingProblem<'_> {
         for (k, (j, w)) in rows.iter().enumerate() {
             small[(p + k, *j)] = *w;
         }
-        let bs = recommended_block_size::<f64>(n, p + 1);
-        let mut qcoef = Mat::zeros(bs, (p + 1).min(n));
-        let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(
-            n,
-            p + 1,
-            bs,
-            Par::Seq,
-            Default::default(),
-        ));
+        let (mut qcoef, mut mem) = qr_buffers(n, p + 1);
         qr_in_place(
             small.as_mut(),
             qcoef.as_mut(),
@@ -460,6 +444,21 @@ impl KrigingProblem<'_> {
         );
         gls_beta(&small, p)
     }
+}
+
+/// The Householder coefficients and the scratch of a sequential QR of a
+/// `rows × cols` matrix ([`qr_in_place`]).
+fn qr_buffers(rows: usize, cols: usize) -> (Mat<f64>, MemBuffer) {
+    let bs = recommended_block_size::<f64>(rows, cols);
+    let qcoef = Mat::zeros(bs, cols.min(rows));
+    let mem = MemBuffer::new(qr_in_place_scratch::<f64>(
+        rows,
+        cols,
+        bs,
+        Par::Seq,
+        Default::default(),
+    ));
+    (qcoef, mem)
 }
 
 /// G and `β = G⁻¹ b` (eq 11) from the QR of `[F̃ ỹ]` held in `aug`
