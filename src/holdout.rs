@@ -140,10 +140,11 @@ pub fn holdout_cv(
         &format!("hyperparameters on the first {} rows", first.len()),
     );
     let t_hyper = Instant::now();
+    let first_cal = calibrate(&first, robot, &CalibrationOptions::default())?;
     let mut calibrated_t = Vec::new();
     let mut kin_t = Vec::new();
     for space in [Space::Js, Space::Ejs] {
-        calibrated_t.push(fit_calibrated(&first, space, base, robot)?);
+        calibrated_t.push(fit_calibrated(&first, space, base, &first_cal)?);
         kin_t.push(fit_kinematic(&first, space, base, robot)?);
     }
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
@@ -314,7 +315,7 @@ pub fn holdout_split(
         let label = format!("{space:?}").to_uppercase();
         progress(&format!("calibrated model {label}"));
         let t0 = Instant::now();
-        let c = fit_calibrated(train, space, base, robot)?;
+        let c = fit_calibrated(train, space, base, &calibration)?;
         rows.push(score(
             &format!("calibrated model: D-H calibration + Kriging {label}"),
             &truth,
@@ -365,21 +366,25 @@ pub fn holdout_split(
     Ok(HoldoutSplit { rows, calibration })
 }
 
-/// The calibrated model in `space`: calibration of `robot`, then Kriging
-/// with the options' trend on its residual, from `base`, on `data`.
+/// The calibrated model in `space`: the calibration `cal` (identified on
+/// `data`, shared by the models of one training set), then Kriging with the
+/// options' trend on its residual, from `base` — what
+/// `ErrorModelParams::calibrate` fits, without identifying `cal` again.
 fn fit_calibrated(
     data: &Dataset,
     space: Space,
     base: &ErrorModelParams,
-    robot: &Robot,
+    cal: &Calibration,
 ) -> Result<ErrorModel> {
-    base.clone()
+    let model = base
+        .clone()
         .space(space)
         .trend(TrendSpec::Options)
-        .robot(robot.clone())
-        .calibrate(Some(CalibrationOptions::default()))
+        .robot(cal.nominal().clone())
+        .calibrate(None)
         .check()?
-        .fit(data)
+        .fit(&cal.residual(data)?)?;
+    Ok(model.with_calibration(cal.clone()))
 }
 
 /// Universal Kriging with the kinematic trend of `robot`, from `base`, on `data`.

@@ -64,23 +64,6 @@ pub struct CvArgs {
     plot: Option<PathBuf>,
 }
 
-/// The calibration the CV's model makes on all rows, when it calibrates
-/// (a report line only: every fold identified its own).
-fn model_calibration(
-    params: &robokrige::params::ValidErrorModelParams,
-    data: &robokrige::dataset::Dataset,
-) -> Result<Option<robokrige::calibration::Calibration>> {
-    match (
-        params.params().get_calibration(),
-        params.params().get_robot(),
-    ) {
-        (Some(opts), Some(robot)) => {
-            Ok(Some(robokrige::calibration::calibrate(data, robot, opts)?))
-        }
-        _ => Ok(None),
-    }
-}
-
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum Mode {
     Refit,
@@ -190,9 +173,6 @@ pub fn run(a: CvArgs) -> Result<()> {
                 None => "no gross error".into(),
             }
         );
-    }
-    if let Some(c) = model_calibration(&params, &data)? {
-        super::fit::print_calibration(&c);
     }
     if let Some(path) = &a.json {
         let mut v = serde_json::to_value(&res)
