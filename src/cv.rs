@@ -98,23 +98,18 @@ where
         let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
         let model = fit(&data.select(&train))?;
         let held = data.select(&test);
-        let pred = model.predict_dataset(&held)?;
+        let checked = model.predict_checked(&held)?;
         // flags need the poses alone: a model with extra inputs is not scored
-        scored &= model.extras().is_empty();
-        let flags = if scored {
-            model.coverage(&held.q, &held.dir, &pred.mean, Some(&pred.std))?
-        } else {
-            Vec::new()
-        };
-        let noise = model.noise_std();
-        for w in flags {
-            flagged[test[w.index]] = true;
+        match &checked.flagged {
+            Some(rows) => rows.iter().for_each(|&j| flagged[test[j]] = true),
+            None => scored = false,
         }
+        let pred = &checked.prediction;
         for (j, &i) in test.iter().enumerate() {
             mean[i] = pred.mean[j];
+            std[i] = checked.std_new[j];
             for a in 0..3 {
                 residuals[i][a] = errors[i][a] - pred.mean[j][a];
-                std[i][a] = pred.std[j][a].hypot(noise[a]);
             }
         }
     }

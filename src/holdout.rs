@@ -244,25 +244,13 @@ struct Held {
 }
 
 /// `model`'s predicted mean on `held`, the standard deviation of a new
-/// measurement (`√(MSE + noise²)`), and the rows it flags as outside its
-/// coverage ([`ErrorModel::coverage`]).
+/// measurement and the rows it flags ([`ErrorModel::predict_checked`]).
 fn predicted(model: &ErrorModel, held: &Dataset) -> Result<Held> {
-    let p = model.predict(&held.q, &held.dir)?;
-    let noise = model.noise_std();
-    let flags = model
-        .coverage(&held.q, &held.dir, &p.mean, Some(&p.std))?
-        .into_iter()
-        .map(|w| w.index)
-        .collect();
-    let std = p
-        .std
-        .iter()
-        .map(|s| std::array::from_fn(|a| s[a].hypot(noise[a])))
-        .collect();
+    let c = model.predict_checked(held)?;
     Ok(Held {
-        mean: p.mean,
-        std,
-        flags,
+        mean: c.prediction.mean,
+        std: c.std_new,
+        flags: c.flagged.unwrap_or_default(),
     })
 }
 

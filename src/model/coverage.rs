@@ -108,7 +108,45 @@ pub const LOO_SAMPLE: usize = 256;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;
 
+/// A prediction with what an honest report needs: the standard deviation
+/// of a new measurement and the points outside the model's coverage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckedPrediction {
+    /// Mean and √MSE ([`ErrorModel::predict_dataset`]).
+    pub prediction: super::Prediction,
+    /// Standard deviation of a new measurement, `√(MSE + noise²)`, per axis.
+    pub std_new: Vec<[f64; 3]>,
+    /// Indices of the points with a coverage warning
+    /// ([`ErrorModel::coverage`]); `None` for a model with extra inputs,
+    /// whose warnings would need more than the poses.
+    pub flagged: Option<Vec<usize>>,
+}
+
 impl ErrorModel {
+    /// Predict every row of `data` with the standard deviation of a new
+    /// measurement and the rows outside the model's coverage: what the
+    /// held-out scores of `cv` and `holdout` are computed from.
+    pub fn predict_checked(&self, data: &crate::dataset::Dataset) -> Result<CheckedPrediction> {
+        let prediction = self.predict_dataset(data)?;
+        let noise = self.noise_std();
+        let std_new = prediction
+            .std
+            .iter()
+            .map(|s| std::array::from_fn(|a| s[a].hypot(noise[a])))
+            .collect();
+        let flagged = if self.extras().is_empty() {
+            let w = self.coverage(&data.q, &data.dir, &prediction.mean, Some(&prediction.std))?;
+            Some(w.into_iter().map(|w| w.index).collect())
+        } else {
+            None
+        };
+        Ok(CheckedPrediction {
+            prediction,
+            std_new,
+            flagged,
+        })
+    }
+
     /// The model's expected leave-one-out RMS per axis (mm), from the
     /// closed form on up to [`LOO_SAMPLE`] training rows spread over the
     /// campaign ([`crate::kriging::HeldOut::expected_loo_rmse`]).
