@@ -236,8 +236,7 @@ fn families() {
         for nugget in [false, true] {
             for corr in &choices {
                 let opts = KrigingOptions::default()
-                    .corr(corr.unwrap_or_default())
-                    .corr_auto(corr.is_none())
+                    .corr(corr.map_or(KrigingOptions::recommended().get_corr(), Into::into))
                     .nugget(nugget);
                 let t0 = Instant::now();
                 let model = ErrorModel::fit(&case.train, Space::Ejs, &opts).expect("fit");

@@ -16,7 +16,7 @@
 use crate::dataset::Dataset;
 use crate::methods::Method;
 use crate::model::{ErrorModel, GROSS_FACTOR};
-use crate::params::{ErrorModelParams, ValidErrorModelParams};
+use crate::params::ValidErrorModelParams;
 use crate::selection::GaProgress;
 use crate::stats::{ErrorSummary, PredictiveScores, predictive_scores, summarize};
 use crate::{Error, Result};
@@ -208,7 +208,7 @@ pub struct HyperSubset {
 /// The model of a closed-form CV ([`cross_validate_closed_form`]) of
 /// `data`: `params` fitted on all rows or, with `hyper_rows = Some(n)`, ξ
 /// and the nugget chosen on the first `n < data.len()` rows and all rows
-/// then factorised once at those values ([`ErrorModelParams::fixed_from`]):
+/// then factorised once at those values ([`ErrorModel::refit`]):
 /// the way to CV thousands of rows. The subset's figures come with it.
 pub fn closed_form_model(
     data: &Dataset,
@@ -228,7 +228,7 @@ pub fn closed_form_model(
     let sub = params.fit(&data.select(&(0..n).collect::<Vec<_>>()))?;
     let seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let model = ErrorModelParams::fixed_from(sub).check()?.fit(data)?;
+    let model = sub.refit(data)?;
     let subset = HyperSubset {
         rows: n,
         seconds,
@@ -268,8 +268,11 @@ mod tests {
     fn closed_form_model_on_a_subset_keeps_its_hyperparameters() {
         use crate::kriging::KrigingOptions;
         let data = campaign(40);
-        let opts = KrigingOptions::default().corr_auto(false).starts(2);
-        let params = ErrorModelParams::new().kriging(opts).check().unwrap();
+        let opts = KrigingOptions::default().starts(2);
+        let params = crate::params::ErrorModelParams::new()
+            .kriging(opts)
+            .check()
+            .unwrap();
         let (full, none) = closed_form_model(&data, &params, None).unwrap();
         assert!(none.is_none());
         assert_eq!(full, params.fit(&data).unwrap());

@@ -25,7 +25,7 @@ use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
 use crate::kinematics::Robot;
-use crate::kriging::{KrigingOptions, OptimizerKind, TrainingInputs, Trend};
+use crate::kriging::{Hyperparameters, KrigingOptions, OptimizerKind, TrainingInputs, Trend};
 use crate::model::{ErrorModel, fit_outputs};
 use crate::selection::{
     BasisSelector, Candidates, Ga, GaProgress, KINEMATIC_AXIS_TOL, PccPca, Selection,
@@ -64,15 +64,18 @@ pub enum TrendSpec {
     },
 }
 
-/// Where the correlation hyperparameters come from.
+/// Where the correlation hyperparameters come from. (A refit at a fitted
+/// model's own hyperparameters, with no search, is [`ErrorModel::refit`].)
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum HyperSpec {
     /// Searched on the data with the options' optimiser.
     Search,
-    /// Those of a fitted model, kept (the trend re-derived for the new rows
-    /// when it is kinematic; the normalisation re-fitted on the new rows). The way to scale to
-    /// thousands of rows: ξ on a subset, then one factorisation on all rows.
-    FixedFrom(Box<ErrorModel>),
+    /// A local search per output from these, one per output in x, y, z
+    /// order ([`crate::kriging::Tuning::Warm`]; e.g.
+    /// [`ErrorModel::warm_starts`] of a model fitted on similar data: a CV
+    /// fold, one more trend term).
+    Warm(Vec<Hyperparameters>),
 }
 
 /// The parameters of an error-model fit, set by builder methods.
@@ -113,17 +116,6 @@ impl ErrorModelParams {
             robot: None,
             calibration: None,
         }
-    }
-
-    /// The parameters of a refit of `model` at its own hyperparameters (ξ,
-    /// nugget, trend kind, space, periodic joints, options, robot): one
-    /// factorisation on the new rows, no search ([`HyperSpec::FixedFrom`]).
-    pub fn fixed_from(model: ErrorModel) -> Self {
-        ErrorModelParams::new()
-            .space(model.space())
-            .periodic(model.periodic().to_vec())
-            .kriging(model.options().clone())
-            .hyper(HyperSpec::FixedFrom(Box::new(model)))
     }
 
     /// Calibrate the robot ([`ErrorModelParams::robot`]) first: identify
@@ -246,14 +238,7 @@ impl ErrorModelParams {
                         ""
                     },
             ),
-            (
-                "corr",
-                if opts.get_corr_auto() {
-                    "auto".to_string()
-                } else {
-                    opts.get_corr().to_string()
-                },
-            ),
+            ("corr", opts.get_corr().to_string()),
             (
                 "optimizer",
                 match opts.get_optimizer() {
@@ -318,23 +303,14 @@ impl ErrorModelParams {
                     "the kinematic trend calibrates inside the Kriging fit: fit it without a calibration",
                 );
             }
-            if matches!(self.hyper, HyperSpec::FixedFrom(_)) {
-                return bad(
-                    "fixed hyperparameters keep the model's own calibration: give no calibration",
-                );
-            }
         }
-        if let HyperSpec::FixedFrom(m) = &self.hyper {
-            if !self.extras.is_empty() || self.trend != TrendSpec::Options {
-                return bad(
-                    "fixed hyperparameters keep the model's own trend and inputs: give no trend or extras",
-                );
-            }
-            if m.space() != self.space || m.periodic() != self.periodic {
-                return bad(
-                    "fixed hyperparameters come from a model of another space or other periodic joints",
-                );
-            }
+        if let HyperSpec::Warm(starts) = &self.hyper
+            && starts.len() != 3
+        {
+            return Err(Error::InvalidParameter(format!(
+                "warm starts must be one per output (3), not {}",
+                starts.len()
+            )));
         }
         match &self.trend {
             TrendSpec::PccPca {
@@ -384,18 +360,18 @@ impl ValidErrorModelParams {
             None => data,
         };
         let (space, periodic, opts) = (p.space, &p.periodic, &p.kriging);
-        let mut model = match &p.hyper {
-            HyperSpec::FixedFrom(m) => m.refit_at_hyperparameters(data)?,
-            HyperSpec::Search if !p.extras.is_empty() => {
-                ErrorModel::fit_with_extras(data, space, periodic, opts, &p.extras)?
-            }
-            HyperSpec::Search => {
-                let (map, x) = InputMap::fit(data, space, periodic, &[])?;
-                let (trends, selection) = self.trends(data, &map, &x, progress)?;
-                let mut model = fit_outputs(data, &map, &x, opts, &trends)?;
-                model.selection = selection;
-                model
-            }
+        let starts = match &p.hyper {
+            HyperSpec::Search => None,
+            HyperSpec::Warm(s) => Some(&s[..]),
+        };
+        let mut model = if p.extras.is_empty() {
+            let (map, x) = InputMap::fit(data, space, periodic, &[])?;
+            let (trends, selection) = self.trends(data, &map, &x, progress)?;
+            let mut model = fit_outputs(data, &map, &x, opts, &trends, starts)?;
+            model.selection = selection;
+            model
+        } else {
+            ErrorModel::fit_with_extras(data, space, periodic, opts, &p.extras, starts)?
         };
         if let Some(r) = p.robot.as_ref().or(match &p.trend {
             TrendSpec::Kinematic(r) => Some(r),
@@ -487,7 +463,6 @@ mod tests {
         let opts = KrigingOptions::default()
             .trend(TrendKind::Linear)
             .corr(Correlation::Matern52)
-            .corr_auto(false)
             .optimizer(OptimizerKind::HookeJeeves)
             .nugget(false);
         let robot = crate::kinematics::load_robot("comau-nj220").unwrap();

@@ -530,7 +530,6 @@ fn a_per_axis_failure_keeps_its_cause() {
     use robokrige::Error;
     use robokrige::dataset::Dataset;
     use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
-    use robokrige::model::ErrorModel;
     use robokrige::space::Space;
     // a warm start of the wrong length fails in every output's fit
     let q: Vec<Vec<f64>> = (0..12)
@@ -540,12 +539,17 @@ fn a_per_axis_failure_keeps_its_cause() {
     d.errors = Some((0..12).map(|i| [i as f64 * 0.01, 0.0, 0.0]).collect());
     let opts = KrigingOptions::default()
         .optimizer(OptimizerKind::HookeJeeves)
-        .corr(Correlation::Gaussian)
-        .warm_start(vec![
-            robokrige::kriging::WarmStart::new(vec![1.0; 1], 0.0);
+        .corr(Correlation::Gaussian);
+    let e = robokrige::params::ErrorModelParams::new()
+        .space(Space::Ejs)
+        .kriging(opts)
+        .hyper(robokrige::params::HyperSpec::Warm(vec![
+            robokrige::kriging::Hyperparameters::new(vec![1.0; 1], 0.0);
             3
-        ]);
-    let e = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap_err();
+        ]))
+        .check()
+        .and_then(|p| p.fit(&d))
+        .unwrap_err();
     match &e {
         Error::Axis { axis, source } => {
             assert_eq!(*axis, "ex");

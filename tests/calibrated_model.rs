@@ -22,7 +22,6 @@ fn quick() -> KrigingOptions {
     KrigingOptions::default()
         .optimizer(OptimizerKind::HookeJeeves)
         .max_evals(400)
-        .corr_auto(false)
         .starts(2)
 }
 
@@ -78,11 +77,7 @@ fn one_file_holds_the_calibration_and_predicts_their_sum() {
     assert!(err.to_string().contains("identified robot"), "{err}");
     // a refit at fixed hyperparameters identifies the calibration anew
     let half = data.select(&(0..150).collect::<Vec<_>>());
-    let refit = ErrorModelParams::fixed_from(model.clone())
-        .check()
-        .unwrap()
-        .fit(&half)
-        .unwrap();
+    let refit = model.refit(&half).unwrap();
     let c2 = refit.calibration().unwrap();
     assert_eq!(c2.rows(), 150);
     assert_ne!(c2.parameters(), cal.parameters());

@@ -107,7 +107,7 @@ fn files_without_a_family_load_as_gaussian() {
 #[test]
 fn auto_keeps_the_family_with_the_lowest_cv_error() {
     let data = campaign(80);
-    let opts = KrigingOptions::default().corr_auto(true).nugget(true);
+    let opts = KrigingOptions::recommended().nugget(true);
     let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
     for (out, rep) in model.outputs().iter().zip(model.reports()) {
         // tried from the smoothest, stopping after the first rougher family
@@ -153,7 +153,7 @@ fn auto_keeps_the_family_with_the_lowest_cv_error() {
 #[test]
 fn auto_on_a_large_campaign_chooses_on_the_search_subset() {
     use rand::{RngExt, SeedableRng};
-    use robokrige::kriging::{Monomials, SEARCH_ROWS, Trend, fit_output_auto};
+    use robokrige::kriging::{KrigingParams, Monomials, SEARCH_ROWS, Trend};
     let m = SEARCH_ROWS + 100;
     let mut rng = rand::rngs::StdRng::seed_from_u64(7);
     let x: Vec<Vec<f64>> = (0..m)
@@ -164,12 +164,14 @@ fn auto_on_a_large_campaign_chooses_on_the_search_subset() {
         .iter()
         .map(|r: &Vec<f64>| (3.0 * r[0]).abs() + 0.5 * r[1] + 0.02 * rng.random_range(-1.0..1.0))
         .collect();
-    let inputs = TrainingInputs::new(&x);
-    let names = vec!["a".to_string(), "b".to_string()];
     // two starts keep the test fast; the path is the same
     let opts = KrigingOptions::recommended().starts(2);
     let trend = Trend::Monomials(Monomials::constant(2));
-    let (model, rep) = fit_output_auto(&x, &inputs, &y, &trend, &names, &opts, None).unwrap();
+    let (model, rep) = KrigingParams::new(trend)
+        .options(opts)
+        .check()
+        .and_then(|p| p.fit(&x, &y))
+        .unwrap();
     assert!(rep.families.len() >= 2);
     assert!(rep.families.iter().all(|f| f.rows == SEARCH_ROWS));
     let best = rep

@@ -210,19 +210,13 @@ fn refit_at_hyperparameters_reproduces_the_model() {
         } else {
             ErrorModel::fit(&sub, Space::Ejs, &hj()).unwrap()
         };
-        let again = ErrorModelParams::fixed_from(m.clone())
-            .check()
-            .and_then(|p| p.fit(&sub))
-            .unwrap();
+        let again = m.refit(&sub).unwrap();
         let (a, b) = (
             m.predict_mean(&q, &dir).unwrap(),
             again.predict_mean(&q, &dir).unwrap(),
         );
         assert!(rms3(&a, &b) < 1e-9, "kinematic {kin}: {a:?} vs {b:?}");
-        let all = ErrorModelParams::fixed_from(m.clone())
-            .check()
-            .and_then(|p| p.fit(&data))
-            .unwrap();
+        let all = m.refit(&data).unwrap();
         let truth = &data.errors.as_ref().unwrap()[200..210];
         // rows 200..210 are now training rows: interpolated
         assert!(rms3(truth, &all.predict_mean(&q, &dir).unwrap()) < 1e-6);

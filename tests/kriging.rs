@@ -2,10 +2,10 @@
 //! points, row-order independence, dependent trend terms dropped, save/load
 //! bit-identical, optimiser ≤ fixed starting points.
 
+mod common;
+
 use robokrige::dataset::{Dataset, read_csv};
-use robokrige::kriging::{
-    KrigingOptions, Monomials, OptimizerKind, TrainingInputs, Trend, TrendKind, fit_output_at,
-};
+use robokrige::kriging::{KrigingOptions, Monomials, OptimizerKind, Trend, TrendKind};
 use robokrige::model::ErrorModel;
 use robokrige::space::{Normalizer, Space};
 use std::path::Path;
@@ -40,14 +40,13 @@ const THETA: [f64; 12] = [0.3, 0.5, 0.4, 0.2, 0.3, 0.1, 0.5, 0.3, 0.2, 0.1, 0.1,
 fn interpolates_training_points_with_zero_mse_and_nonnegative_mse_elsewhere() {
     let d = campaign(120);
     let x = normalised(&d, Space::Ejs);
-    let inputs = TrainingInputs::new(&x);
     for trend in [
         Trend::from(Monomials::constant(12)),
         Trend::from(Monomials::linear(12)),
         Trend::from(Monomials::quadratic(12)),
     ] {
         let y = axis(&d, 1);
-        let m = fit_output_at(&x, &inputs, &y, &trend, &THETA, 0.0, None).unwrap();
+        let m = common::fit_at(&x, &y, &trend, &THETA, 0.0, None).unwrap();
         let p = m.predict(&x).unwrap();
         for (pi, yi) in p.iter().zip(&y) {
             assert!((pi.mean - yi).abs() < 1e-7, "{} vs {}", pi.mean, yi);
@@ -76,9 +75,8 @@ fn with_a_nugget_the_model_smooths_instead_of_interpolating() {
     let d = campaign(80);
     let x = normalised(&d, Space::Ejs);
     let y = axis(&d, 0);
-    let m = fit_output_at(
+    let m = common::fit_at(
         &x,
-        &TrainingInputs::new(&x),
         &y,
         &Trend::from(Monomials::constant(12)),
         &THETA,
@@ -108,17 +106,8 @@ fn row_order_does_not_change_predictions() {
     let xp: Vec<Vec<f64>> = perm.iter().map(|&i| x[i].clone()).collect();
     let yp: Vec<f64> = perm.iter().map(|&i| y[i]).collect();
     let trend = Trend::from(Monomials::linear(12));
-    let a = fit_output_at(&x, &TrainingInputs::new(&x), &y, &trend, &THETA, 0.0, None).unwrap();
-    let b = fit_output_at(
-        &xp,
-        &TrainingInputs::new(&xp),
-        &yp,
-        &trend,
-        &THETA,
-        0.0,
-        None,
-    )
-    .unwrap();
+    let a = common::fit_at(&x, &y, &trend, &THETA, 0.0, None).unwrap();
+    let b = common::fit_at(&xp, &yp, &trend, &THETA, 0.0, None).unwrap();
     let probe: Vec<Vec<f64>> = x
         .iter()
         .map(|r| r.iter().map(|v| v + 0.05).collect())
@@ -252,13 +241,11 @@ fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
     .unwrap();
     let gps = ErrorModel::fit(&d, Space::Ejs, &KrigingOptions::default().starts(3)).unwrap();
     let x = normalised(&d, Space::Ejs);
-    let inputs = TrainingInputs::new(&x);
     for a in 0..3 {
         // the box centre (HJ's start) is worse than what both methods found
         let centre = vec![10f64.powf(-2.0); 12];
-        let at_centre = fit_output_at(
+        let at_centre = common::fit_at(
             &x,
-            &inputs,
             &axis(&d, a),
             &Trend::from(Monomials::constant(12)),
             &centre,
@@ -313,27 +300,11 @@ fn estimated_nugget_is_positive_on_noisy_data_and_small_on_clean_data() {
         ((rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.35
     };
     let noisy: Vec<f64> = clean.iter().map(|v| v + noise()).collect();
-    let inputs = TrainingInputs::new(&x);
-    let names = Space::Js.names(6);
     let opts = KrigingOptions::default().nugget(true).starts(2);
-    let (_, r_noisy) = robokrige::kriging::fit_output(
-        &x,
-        &inputs,
-        &noisy,
-        &Trend::from(Monomials::constant(6)),
-        &names,
-        &opts,
-    )
-    .unwrap();
-    let (_, r_clean) = robokrige::kriging::fit_output(
-        &x,
-        &inputs,
-        &clean,
-        &Trend::from(Monomials::constant(6)),
-        &names,
-        &opts,
-    )
-    .unwrap();
+    let (_, r_noisy) =
+        common::fit_searched(&x, &noisy, &Trend::from(Monomials::constant(6)), &opts).unwrap();
+    let (_, r_clean) =
+        common::fit_searched(&x, &clean, &Trend::from(Monomials::constant(6)), &opts).unwrap();
     assert!(
         r_noisy.nugget > 1e-3,
         "noisy data: nugget {}",
@@ -380,31 +351,13 @@ fn closed_form_cv_equals_refit_at_fixed_theta() {
         (Trend::from(Monomials::linear(12)), 0.01, 2),
     ] {
         let y = axis(&d, a);
-        let full = fit_output_at(
-            &x,
-            &TrainingInputs::new(&x),
-            &y,
-            &trend,
-            &THETA,
-            nugget,
-            None,
-        )
-        .unwrap();
+        let full = common::fit_at(&x, &y, &trend, &THETA, nugget, None).unwrap();
         let closed = full.held_out_residuals(&blocks).unwrap();
         for block in &blocks {
             let train: Vec<usize> = (0..120).filter(|i| !block.contains(i)).collect();
             let xt: Vec<Vec<f64>> = train.iter().map(|&i| x[i].clone()).collect();
             let yt: Vec<f64> = train.iter().map(|&i| y[i]).collect();
-            let refit = fit_output_at(
-                &xt,
-                &TrainingInputs::new(&xt),
-                &yt,
-                &trend,
-                &THETA,
-                nugget,
-                None,
-            )
-            .unwrap();
+            let refit = common::fit_at(&xt, &yt, &trend, &THETA, nugget, None).unwrap();
             let xh: Vec<Vec<f64>> = block.iter().map(|&i| x[i].clone()).collect();
             for (p, &i) in refit.predict(&xh).unwrap().iter().zip(block) {
                 let e = y[i] - p.mean;
@@ -444,12 +397,9 @@ fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
     let d = campaign(240);
     let x = normalised(&d, Space::Js);
     let y = axis(&d, 0);
-    let inputs = TrainingInputs::new(&x);
-    let names = Space::Js.names(6);
     let trend = Trend::Monomials(Monomials::constant(6));
     let opts = KrigingOptions::default().starts(2).converge_rows(100);
-    let (model, rep) =
-        robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &opts).unwrap();
+    let (model, rep) = common::fit_searched(&x, &y, &trend, &opts).unwrap();
     assert_eq!(rep.search_rows, 100);
     assert_eq!(model.data().x_train.len(), 240);
     let rows = robokrige::kriging::converge_subset(240, &opts).unwrap();
@@ -469,21 +419,19 @@ fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
     assert!(rms < 0.5 * spread, "{rms} {spread}");
     // too few rows to converge on is refused
     let bad = opts.converge_rows(10);
-    assert!(robokrige::kriging::fit_output(&x, &inputs, &y, &trend, &names, &bad).is_err());
+    assert!(common::fit_searched(&x, &y, &trend, &bad).is_err());
 }
 
 /// `KrigingOptions`' fields are private: each builder setter sets what its
 /// getter reads, and the rest stays as it was.
 #[test]
 fn options_setters_set_what_the_getters_read() {
-    use robokrige::kriging::{Correlation, WarmStart};
+    use robokrige::kriging::{CorrChoice, Correlation, Hyperparameters};
     let d = KrigingOptions::default();
-    let start = WarmStart::new(vec![0.5; 2], 1e-3);
     let o = d
         .clone()
         .trend(TrendKind::Linear)
-        .corr(Correlation::Matern32)
-        .corr_auto(true)
+        .corr(CorrChoice::ByCv { folds: 5 })
         .optimizer(OptimizerKind::Gps)
         .nugget(false)
         .log10_theta((-4.0, 1.0))
@@ -494,11 +442,14 @@ fn options_setters_set_what_the_getters_read() {
         .tol(0.05)
         .min_jitter(Some(1e-9))
         .polish(false)
-        .converge_rows(200)
-        .warm_start(vec![start.clone(); 3]);
+        .converge_rows(200);
     assert_eq!(o.get_trend(), TrendKind::Linear);
-    assert_eq!(o.get_corr(), Correlation::Matern32);
-    assert!(o.get_corr_auto() && !o.get_nugget() && !o.get_polish());
+    assert_eq!(o.get_corr(), CorrChoice::ByCv { folds: 5 });
+    assert!(o.get_corr().is_by_cv() && !o.get_nugget() && !o.get_polish());
+    assert_eq!(
+        o.clone().corr(Correlation::Matern32).get_corr().fixed(),
+        Some(Correlation::Matern32)
+    );
     assert_eq!(o.get_optimizer(), OptimizerKind::Gps);
     assert_eq!(o.get_log10_theta(), (-4.0, 1.0));
     assert_eq!(o.get_log10_nugget(), (-7.0, -1.0));
@@ -509,18 +460,23 @@ fn options_setters_set_what_the_getters_read() {
     assert_eq!(o.get_tol(), 0.05);
     assert_eq!(o.get_min_jitter(), Some(1e-9));
     assert_eq!(o.get_converge_rows(), 200);
-    assert_eq!(o.get_warm_start(), &[start.clone(), start.clone(), start]);
     assert!(o.validate().is_ok());
     // the defaults: a nugget, BFGS from its 8 starts, the family not chosen
-    assert!(d.get_nugget() && !d.get_corr_auto());
+    assert!(d.get_nugget() && !d.get_corr().is_by_cv());
     assert_eq!(d.get_optimizer(), OptimizerKind::Bfgs);
     assert_eq!(d.get_starts(), OptimizerKind::Bfgs.default_starts());
-    assert!(KrigingOptions::recommended().get_corr_auto());
-    let w = WarmStart::new(vec![0.1, 0.2], 0.3);
+    assert!(KrigingOptions::recommended().get_corr().is_by_cv());
+    let w = Hyperparameters::new(vec![0.1, 0.2], 0.3);
     assert_eq!((w.theta(), w.nugget()), (&[0.1, 0.2][..], 0.3));
     assert!(w.inverse_hessian().is_none());
     // ranges are still checked by validate
     assert!(d.clone().log10_theta((1.0, -1.0)).validate().is_err());
     assert!(d.clone().converge_rows(10).validate().is_err());
+    assert!(
+        d.clone()
+            .corr(CorrChoice::ByCv { folds: 1 })
+            .validate()
+            .is_err()
+    );
     assert!(d.starts(0).validate().is_err());
 }

@@ -7,8 +7,10 @@
 //! 2. At SMT's optimum ξ our ψ equals SMT's, and our own optimiser finds a ψ
 //!    as good (to 2e-8 relative) or better for every output.
 
+mod common;
+
 use robokrige::dataset::{Dataset, read_csv};
-use robokrige::kriging::{KrigingOptions, TrainingInputs, TrendKind, fit_output, fit_output_at};
+use robokrige::kriging::{KrigingOptions, TrendKind};
 use robokrige::space::{Normalizer, Space};
 use serde_json::Value;
 use std::path::Path;
@@ -111,9 +113,8 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
         let theta = f64s(&c["theta"]);
         let d = space.dim(6);
         // the same R as the reference: its diagonal is 1 + SMT's nugget (100·eps)
-        let model = fit_output_at(
+        let model = common::fit_at(
             &s.x,
-            &TrainingInputs::new(&s.x),
             &y,
             &trend.trend(d),
             &theta,
@@ -197,19 +198,16 @@ fn id(c: &Value) -> String {
 #[test]
 fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
     let fx = fixture();
-    let names: Vec<String> = Space::Ejs.names(6);
     let mut worst = f64::NEG_INFINITY;
     for c in fx["optimum"]["cases"].as_array().unwrap() {
         let (space, trend, axis) = parse_case(c);
         let s = setup(space, &fx);
         let y = s.axis(axis);
-        let inputs = TrainingInputs::new(&s.x);
         let monos = trend.trend(space.dim(6));
         let psi_smt = c["psi"].as_f64().unwrap();
         // our ψ at SMT's ξ is SMT's ψ
-        let at_smt = fit_output_at(
+        let at_smt = common::fit_at(
             &s.x,
-            &inputs,
             &y,
             &monos,
             &f64s(&c["theta"]),
@@ -230,8 +228,7 @@ fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
             .trend(trend)
             .nugget(false)
             .min_jitter(Some(ref_nugget(&fx)));
-        let (_, report) =
-            fit_output(&s.x, &inputs, &y, &monos, &names[..space.dim(6)], &opts).unwrap();
+        let (_, report) = common::fit_searched(&s.x, &y, &monos, &opts).unwrap();
         let ours = report.ln_psi.exp();
         let gap = ours / psi_smt - 1.0;
         eprintln!(

@@ -30,7 +30,7 @@ fn the_recommended_method_comes_first_with_a_nugget_and_the_family_by_cv() {
     assert_eq!(ALL_METHODS[0], Method::Recommended);
     assert_eq!(Method::parse("recommended").unwrap(), Method::Recommended);
     let m = fit(Method::Recommended, &campaign(60), 1);
-    assert!(m.options().get_nugget() && m.options().get_corr_auto());
+    assert!(m.options().get_nugget() && m.options().get_corr().is_by_cv());
     for (out, rep) in m.outputs().iter().zip(m.reports()) {
         assert!(rep.families.len() >= 2);
         assert!(rep.nugget > 0.0);
@@ -38,7 +38,7 @@ fn the_recommended_method_comes_first_with_a_nugget_and_the_family_by_cv() {
     }
     // the papers' methods keep interpolating
     let paper = fit(Method::EjsHj, &campaign(60), 1);
-    assert!(!paper.options().get_nugget() && !paper.options().get_corr_auto());
+    assert!(!paper.options().get_nugget() && !paper.options().get_corr().is_by_cv());
 }
 
 #[test]

@@ -8,6 +8,8 @@
 //! uses fused multiply-adds since 2026-11-25 (issue 16), which moves the last
 //! bits; everything else (structure, names, integers, strings) is exact.
 
+mod common;
+
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::features::Feature;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
@@ -223,7 +225,7 @@ fn a_version_2_file_with_impossible_inputs_is_refused() {
 /// left in memory afterwards.
 #[test]
 fn a_large_model_does_not_keep_the_factors_of_a_closed_form_cv() {
-    use robokrige::kriging::{TrainingInputs, Trend, fit_output_at, model::KEEP_FACTOR_MAX_M};
+    use robokrige::kriging::{Trend, model::KEEP_FACTOR_MAX_M};
     let m = KEEP_FACTOR_MAX_M + 1;
     let x: Vec<Vec<f64>> = (0..m).map(|i| vec![i as f64 / m as f64]).collect();
     let y: Vec<f64> = x
@@ -231,9 +233,8 @@ fn a_large_model_does_not_keep_the_factors_of_a_closed_form_cv() {
         .enumerate()
         .map(|(i, r)| (6.0 * r[0]).sin() + 0.01 * ((i * 7919 % 101) as f64 / 101.0 - 0.5))
         .collect();
-    let inputs = TrainingInputs::new(&x);
     let trend = Trend::Monomials(robokrige::kriging::Monomials::constant(1));
-    let model = fit_output_at(&x, &inputs, &y, &trend, &[4.0], 1e-3, None).unwrap();
+    let model = common::fit_at(&x, &y, &trend, &[4.0], 1e-3, None).unwrap();
     assert!(!model.has_factors());
     let blocks = vec![vec![3, 1000, 4000], vec![17]];
     let transient = model.held_out(&blocks).unwrap();

@@ -63,11 +63,7 @@ fn the_params_path_gives_the_models_of_its_parts() {
         .unwrap();
     assert_same(&by_hand, &via);
     // fixed hyperparameters: a refit on the model's own rows reproduces it
-    let refit = ErrorModelParams::fixed_from(via.clone())
-        .check()
-        .unwrap()
-        .fit(&data)
-        .unwrap();
+    let refit = via.refit(&data).unwrap();
     for a in 0..3 {
         let (x, y) = (refit.outputs()[a].data(), via.outputs()[a].data());
         assert_eq!(
@@ -145,15 +141,17 @@ fn combinations_that_do_not_fit_together_are_refused_at_check() {
         "threshold",
     );
     let js = ErrorModel::fit(&campaign(30), Space::Js, &quick()).unwrap();
+    let mut two = js.warm_starts();
+    two.pop();
     refused(
-        ErrorModelParams::new().hyper(HyperSpec::FixedFrom(Box::new(js))),
-        "another space",
+        ErrorModelParams::new().hyper(HyperSpec::Warm(two)),
+        "one per output",
     );
 }
 
 /// Periodic joints are an input of the fit (the model's input map), not a
-/// Kriging option: the model keeps them, a refit at fixed hyperparameters
-/// keeps them, and a fixed-hyperparameter refit with others is refused.
+/// Kriging option: the model keeps them, and so does a refit at its fixed
+/// hyperparameters.
 #[test]
 fn periodic_joints_are_part_of_the_inputs() {
     let data = campaign(40);
@@ -166,18 +164,9 @@ fn periodic_joints_are_part_of_the_inputs() {
     assert_eq!(model.periodic(), &[0, 5]);
     assert_eq!(model.input_names()[..2], ["sin q1", "cos q1"]);
     assert_eq!(model.input_map().dim(), 12 + 2);
-    let refit = ErrorModelParams::fixed_from(model.clone())
-        .check()
-        .and_then(|p| p.fit(&data))
-        .unwrap();
+    let refit = model.refit(&data).unwrap();
     assert_eq!(refit.input_map(), model.input_map());
     assert_eq!(refit.outputs(), model.outputs());
-    let e = ErrorModelParams::fixed_from(model)
-        .periodic(vec![0])
-        .check()
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("periodic"), "{e}");
     // a joint the data does not have
     let e = ErrorModelParams::new()
         .periodic(vec![6])

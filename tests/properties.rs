@@ -1,10 +1,12 @@
 //! Property tests (proptest) of kinematics round trips and Kriging
 //! invariants, ill-conditioned inputs, and thread-count determinism.
 
+mod common;
+
 use proptest::prelude::*;
 use robokrige::dataset::read_csv;
 use robokrige::kinematics::{self, IkOptions, IkTarget};
-use robokrige::kriging::{KrigingOptions, OptimizerKind, TrainingInputs, TrendKind, fit_output_at};
+use robokrige::kriging::{KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::ErrorModel;
 use robokrige::space::Space;
 use std::path::Path;
@@ -23,9 +25,8 @@ fn points(flat: &[f64], d: usize) -> Vec<Vec<f64>> {
 
 fn fit(x: &[Vec<f64>], y: &[f64], theta: f64) -> robokrige::kriging::KrigingModel {
     let d = x[0].len();
-    fit_output_at(
+    common::fit_at(
         x,
-        &TrainingInputs::new(x),
         y,
         &TrendKind::Constant.trend(d),
         &vec![theta; d],
@@ -178,9 +179,8 @@ fn an_unfactorisable_correlation_matrix_escalates_the_jitter() {
     // 1e-30 jitter; the ladder climbs (×10 per rung) until it factorises.
     let x: Vec<Vec<f64>> = (0..40).map(|i| vec![i as f64 / 39.0]).collect();
     let y: Vec<f64> = x.iter().map(|r| (3.0 * r[0]).sin()).collect();
-    let m = fit_output_at(
+    let m = common::fit_at(
         &x,
-        &TrainingInputs::new(&x),
         &y,
         &TrendKind::Constant.trend(1),
         &[1e-3],

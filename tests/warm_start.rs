@@ -1,11 +1,12 @@
-//! Warm starts (`KrigingOptions::warm_start`): a refit on 90 % of the rows,
+//! Warm starts (`HyperSpec::Warm`): a refit on 90 % of the rows,
 //! started from the full fit's ξ, ν and curvature, reaches the ln ψ of a
 //! cold multistart at a fraction of the evaluations; and the support screen
 //! of the kinematic trend (`supported_columns`).
 
 use robokrige::dataset::read_csv;
-use robokrige::kriging::{KrigingOptions, WarmStart, support, supported_columns};
+use robokrige::kriging::{Hyperparameters, KrigingOptions, support, supported_columns};
 use robokrige::model::ErrorModel;
+use robokrige::params::{ErrorModelParams, HyperSpec};
 use robokrige::space::Space;
 
 #[test]
@@ -14,9 +15,13 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
     let data = data.select(&(0..200).collect::<Vec<_>>());
     let o = KrigingOptions::default().nugget(true);
     let full = ErrorModel::fit(&data, Space::Ejs, &o).unwrap();
-    let warm = o.clone().warm_start(full.warm_starts());
+    let warm = ErrorModelParams::new()
+        .kriging(o.clone())
+        .hyper(HyperSpec::Warm(full.warm_starts()))
+        .check()
+        .unwrap();
     let fold = data.select(&(0..200).filter(|i| i % 10 != 3).collect::<Vec<_>>());
-    let w = ErrorModel::fit(&fold, Space::Ejs, &warm).unwrap();
+    let w = warm.fit(&fold).unwrap();
     let c = ErrorModel::fit(&fold, Space::Ejs, &o).unwrap();
     for a in 0..3 {
         let (rw, rc) = (&w.reports()[a], &c.reports()[a]);
@@ -29,20 +34,26 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
         assert_eq!(rw.starts, 1);
     }
     // the start is how the fit began, not part of the model
-    assert!(w.options().get_warm_start().is_empty());
+    assert_eq!(w.options(), &o);
 }
 
 #[test]
 fn warm_starts_of_the_wrong_size_are_refused() {
     let data = read_csv(std::path::Path::new("datasets/comau_lhs.csv")).unwrap();
     let data = data.select(&(0..60).collect::<Vec<_>>());
-    let one = WarmStart::new(vec![0.1; 3], 0.0);
-    for starts in [vec![one.clone()], vec![one.clone(), one.clone(), one]] {
-        let o = KrigingOptions::default().warm_start(starts);
-        assert!(ErrorModel::fit(&data, Space::Ejs, &o).is_err());
-    }
-    let bad = KrigingOptions::default().warm_start(vec![WarmStart::new(vec![-1.0; 12], 0.0); 3]);
-    assert!(bad.validate().is_err());
+    let one = Hyperparameters::new(vec![0.1; 3], 0.0);
+    let fit = |starts: Vec<Hyperparameters>| {
+        ErrorModelParams::new()
+            .kriging(KrigingOptions::default())
+            .hyper(HyperSpec::Warm(starts))
+            .check()
+            .and_then(|p| p.fit(&data))
+    };
+    // one start, or three of the wrong length
+    assert!(fit(vec![one.clone()]).is_err());
+    assert!(fit(vec![one.clone(), one.clone(), one]).is_err());
+    // negative ξ
+    assert!(fit(vec![Hyperparameters::new(vec![-1.0; 12], 0.0); 3]).is_err());
 }
 
 #[test]

@@ -4,7 +4,7 @@
 //! names, options builder setters of the fields' names and `get_` getters.
 
 use robokrige::features::Feature;
-use robokrige::kriging::{Correlation, FitReport, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::kriging::{CorrChoice, FitReport, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{ErrorModel, RobotRecord};
 use robokrige::space::Space;
 
@@ -60,7 +60,7 @@ pub fn families(m: &ErrorModel) -> Vec<String> {
 
 /// Whether each output's family was chosen by CV.
 pub fn corr_auto(o: &KrigingOptions) -> bool {
-    o.get_corr_auto()
+    o.get_corr().is_by_cv()
 }
 
 /// Whether a nugget was estimated.
@@ -72,8 +72,7 @@ pub fn nugget(o: &KrigingOptions) -> bool {
 #[allow(clippy::too_many_arguments)]
 pub fn fit_options(
     trend: TrendKind,
-    corr: Correlation,
-    corr_auto: bool,
+    corr: CorrChoice,
     optimizer: OptimizerKind,
     nugget: bool,
     starts: usize,
@@ -82,7 +81,6 @@ pub fn fit_options(
     KrigingOptions::default()
         .trend(trend)
         .corr(corr)
-        .corr_auto(corr_auto)
         .optimizer(optimizer)
         .nugget(nugget)
         .starts(starts)

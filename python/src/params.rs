@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use robokrige::dataset::Dataset;
 use robokrige::calibration::CalibrationOptions;
 use robokrige::kinematics::Robot;
-use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::kriging::{CorrChoice, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::methods::Method;
 use robokrige::params::{ErrorModelParams, TrendSpec, ValidErrorModelParams};
 use robokrige::space::Space;
@@ -68,18 +68,13 @@ fn parse_trend(s: &str) -> Result<TrendKind> {
     }
 }
 
-/// `(corr, corr_auto)` of the options, as `--corr`.
-fn parse_corr(s: &str) -> Result<(Correlation, bool)> {
-    match s {
-        "auto" => Ok((Correlation::Gaussian, true)),
-        "gaussian" => Ok((Correlation::Gaussian, false)),
-        "matern52" => Ok((Correlation::Matern52, false)),
-        "matern32" => Ok((Correlation::Matern32, false)),
-        "exponential" => Ok((Correlation::Exponential, false)),
-        _ => Err(bad(format!(
+/// The options' correlation choice, as `--corr`.
+fn parse_corr(s: &str) -> Result<CorrChoice> {
+    CorrChoice::from_name(s).ok_or_else(|| {
+        bad(format!(
             "corr '{s}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
-        ))),
-    }
+        ))
+    })
 }
 
 /// `"bfgs"`, `"gps"` or `"hj"`.
@@ -127,11 +122,9 @@ impl FitParams {
                 "starts is for optimizer 'bfgs' or 'gps' (Hooke–Jeeves runs once, from the centre of the box)".into(),
             ));
         }
-        let (corr, corr_auto) = parse_corr(&self.corr)?;
         let opts = crate::access::fit_options(
             parse_trend(&self.trend)?,
-            corr,
-            corr_auto,
+            parse_corr(&self.corr)?,
             optimizer,
             self.nugget,
             self.starts.unwrap_or(optimizer.default_starts()),

@@ -2,7 +2,7 @@
 
 use clap::{Args, ValueEnum};
 use robokrige::calibration::CalibrationOptions;
-use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::kriging::{CorrChoice, Correlation, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::space::Space;
@@ -24,14 +24,14 @@ pub enum CorrArg {
 }
 
 impl CorrArg {
-    /// The options' `(corr, corr_auto)`.
-    pub fn resolve(self) -> (Correlation, bool) {
+    /// The options' correlation choice.
+    pub fn resolve(self) -> CorrChoice {
         match self {
-            CorrArg::Gaussian => (Correlation::Gaussian, false),
-            CorrArg::Matern52 => (Correlation::Matern52, false),
-            CorrArg::Matern32 => (Correlation::Matern32, false),
-            CorrArg::Exponential => (Correlation::Exponential, false),
-            CorrArg::Auto => (Correlation::Gaussian, true),
+            CorrArg::Gaussian => Correlation::Gaussian.into(),
+            CorrArg::Matern52 => Correlation::Matern52.into(),
+            CorrArg::Matern32 => Correlation::Matern32.into(),
+            CorrArg::Exponential => Correlation::Exponential.into(),
+            CorrArg::Auto => KrigingOptions::recommended().get_corr(),
         }
     }
 }
@@ -138,12 +138,10 @@ impl ModelArgs {
     /// The space and fitting options these arguments select (no periodic
     /// joints: see [`ModelArgs::resolve`]).
     pub fn options(&self) -> (Space, KrigingOptions) {
-        let (corr, corr_auto) = self.corr.resolve();
         let optimizer = self.optimizer;
         let opts = KrigingOptions::default()
             .trend(self.trend)
-            .corr(corr)
-            .corr_auto(corr_auto)
+            .corr(self.corr.resolve())
             .optimizer(optimizer)
             .nugget(!self.no_nugget)
             .starts(self.starts.unwrap_or(optimizer.default_starts()))
@@ -253,7 +251,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
         data.len(),
         space,
-        if model.options().get_corr_auto() {
+        if model.options().get_corr().is_by_cv() {
             let c: Vec<String> = model
                 .outputs()
                 .iter()

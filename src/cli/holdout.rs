@@ -98,11 +98,9 @@ pub struct HoldoutArgs {
 /// The base parameters of the Kriging fits of `a` (options and the
 /// periodic joints it gives for training rows `q`).
 fn base_params(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<ErrorModelParams> {
-    let (corr, corr_auto) = a.corr.resolve();
     let opts = KrigingOptions::default()
         .optimizer(a.optimizer)
-        .corr(corr)
-        .corr_auto(corr_auto)
+        .corr(a.corr.resolve())
         .starts(a.optimizer.default_starts())
         .seed(a.seed)
         .nugget(!a.no_nugget);

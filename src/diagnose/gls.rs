@@ -36,9 +36,7 @@
 //! row's size, a permutation does not (the wild bootstrap). Only `γ` and `r̃`
 //! change, so one resample costs one m × m product per axis.
 
-use crate::kriging::{
-    KrigingModel, KrigingOptions, TrainingInputs, Trend, WarmStart, fit_output_from,
-};
+use crate::kriging::{Hyperparameters, KrigingModel, KrigingOptions, KrigingParams, Trend, Tuning};
 use crate::model::ErrorModel;
 use crate::{Error, Result};
 use faer::linalg::triangular_solve::{
@@ -590,7 +588,19 @@ pub fn refit_systems(
 ) -> Result<Vec<AxisSystem>> {
     let corr = model.correlation_dims();
     let rows = crate::kriging::converge_subset(errors.len(), opts);
-    model
+    let x = &model.outputs[0].data.x_train;
+    // the rows the search sees, the columns appended as trend-only inputs
+    let search_rows: Vec<usize> = rows.unwrap_or_else(|| (0..errors.len()).collect());
+    let x_fit: Vec<Vec<f64>> = search_rows
+        .iter()
+        .map(|&i| {
+            x[i].iter()
+                .copied()
+                .chain(columns.iter().map(|c| c[i]))
+                .collect()
+        })
+        .collect();
+    let searched: Vec<Result<Hyperparameters>> = model
         .outputs
         .par_iter()
         .enumerate()
@@ -600,79 +610,42 @@ pub fn refit_systems(
                     "diagnose refits need a polynomial trend".into(),
                 ));
             };
-            let x = &km.data.x_train;
-            let d = base.dim;
-            let k = columns.len();
-            let x_aug: Vec<Vec<f64>> = x
-                .iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    r.iter()
-                        .copied()
-                        .chain(columns.iter().map(|c| c[i]))
-                        .collect()
-                })
-                .collect();
-            let mut terms = base.clone();
-            terms.dim = d + k;
-            terms.exponents.iter_mut().for_each(|e| e.resize(d + k, 0));
-            for j in 0..k {
-                let mut e = vec![0u8; d + k];
-                e[d + j] = 1;
-                terms.exponents.push(e);
-            }
-            let corr_rows: Vec<Vec<f64>> = x.iter().map(|r| r[..corr].to_vec()).collect();
-            let inputs = TrainingInputs::new(&corr_rows);
-            let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-            // the rows the search sees
-            let (x_fit, inputs_fit, y_fit) = match &rows {
-                Some(r) => (
-                    r.iter().map(|&i| x_aug[i].clone()).collect(),
-                    TrainingInputs::new(
-                        &r.iter().map(|&i| corr_rows[i].clone()).collect::<Vec<_>>(),
-                    ),
-                    r.iter().map(|&i| y[i]).collect(),
-                ),
-                None => (x_aug, inputs.clone(), y.clone()),
-            };
-            let names: Vec<String> = (1..=d + k).map(|j| format!("s{j}")).collect();
-            let start = WarmStart {
-                theta: km.data.theta[..corr].to_vec(),
-                nugget: km.data.nugget,
-                inverse_hessian: model.reports[a].inverse_hessian.clone(),
-            };
-            // the refit continues the model's own family (with
-            // `corr_auto` it may differ from `opts.corr`)
-            let same_family = KrigingOptions {
-                corr: km.corr(),
-                corr_auto: false,
-                ..opts.clone()
-            };
-            let (_, report) = fit_output_from(
-                &x_fit,
-                &inputs_fit,
-                &y_fit,
-                &Trend::Monomials(terms),
-                &names,
-                &same_family,
-                Some(&start),
-            )?;
-            let hyper = crate::kriging::Hyperparameters {
-                corr: km.corr(),
-                theta: &report.theta[..corr],
-                nugget: report.nugget,
-                min_jitter: opts.min_jitter,
-            };
-            let at = crate::kriging::fit_output_with(x, &inputs, &y, &km.data.trend, &hyper)?;
-            AxisSystem::new(&at, fold)
+            let terms = crate::model::with_linear_columns(base, columns.len());
+            let y_fit: Vec<f64> = search_rows.iter().map(|&i| errors[i][a]).collect();
+            let start = Hyperparameters::of(&model.reports[a], corr);
+            // the refit continues the model's own family (with the family
+            // chosen by CV it may differ from the options')
+            let (_, report) = KrigingParams::new(Trend::Monomials(terms))
+                .options(opts.clone())
+                .corr(km.corr())
+                .tuning(Tuning::Warm(start))
+                .correlation_inputs(corr)
+                .check()?
+                .fit(&x_fit, &y_fit)?;
+            Ok(Hyperparameters::new(
+                report.theta[..corr].to_vec(),
+                report.nugget,
+            ))
         })
-        .collect()
+        .collect();
+    let searched: Vec<Hyperparameters> = searched.into_iter().collect::<Result<_>>()?;
+    let o = &model.outputs;
+    let systems = crate::model::solve_outputs(
+        x,
+        corr,
+        |a| errors.iter().map(|e| e[a]).collect(),
+        &[&o[0].data.trend, &o[1].data.trend, &o[2].data.trend],
+        std::array::from_fn(|a| o[a].corr()),
+        std::array::from_fn(|a| searched[a].clone()),
+        opts,
+    )?;
+    systems.iter().map(|at| AxisSystem::new(at, fold)).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kriging::{Monomials, fit_output, fit_output_at};
+    use crate::kriging::Monomials;
 
     /// A small GP problem: 2 correlated inputs, one trend-only column.
     fn problem() -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
@@ -701,7 +674,6 @@ mod tests {
     #[test]
     fn closed_form_gain_equals_refactorising_with_the_column_in_the_trend() {
         let (x, extra, y) = problem();
-        let inputs = TrainingInputs::new(&x);
         let opts = KrigingOptions {
             nugget: true,
             optimizer: crate::kriging::OptimizerKind::HookeJeeves,
@@ -709,7 +681,12 @@ mod tests {
         };
         let names = vec!["a".to_string(), "b".to_string()];
         let base = Trend::Monomials(Monomials::constant(2));
-        let (model, rep) = fit_output(&x, &inputs, &y, &base, &names, &opts).unwrap();
+        let (model, rep) = KrigingParams::new(base)
+            .options(opts)
+            .names(names)
+            .check()
+            .and_then(|p| p.fit(&x, &y))
+            .unwrap();
         let m = x.len();
         let fold: Vec<usize> = (0..m).map(|i| (i * 7) % 6).collect();
         let sys = vec![AxisSystem::new(&model, &fold).unwrap()];
@@ -722,16 +699,13 @@ mod tests {
             .collect();
         let mut terms = Monomials::constant(3);
         terms.exponents.push(vec![0, 0, 1]);
-        let aug = fit_output_at(
-            &x_aug,
-            &inputs,
-            &y,
-            &Trend::Monomials(terms),
-            &rep.theta,
-            rep.nugget,
-            None,
-        )
-        .unwrap();
+        let aug = KrigingParams::new(Trend::Monomials(terms))
+            .tuning(Tuning::Fixed(Hyperparameters::of(&rep, 2)))
+            .correlation_inputs(2)
+            .check()
+            .and_then(|p| p.fit(&x_aug, &y))
+            .unwrap()
+            .0;
         assert_eq!(aug.data.theta, vec![rep.theta[0], rep.theta[1], 0.0]);
         let folds: Vec<Vec<usize>> = (0..6)
             .map(|f| (0..m).filter(|&i| fold[i] == f).collect())

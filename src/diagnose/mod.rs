@@ -46,7 +46,7 @@ pub mod scan;
 use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partition};
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
-use crate::kriging::{KrigingOptions, WarmStart};
+use crate::kriging::{Hyperparameters, KrigingOptions};
 use crate::model::ErrorModel;
 use crate::space::Space;
 use crate::stats::summarize;
@@ -665,7 +665,7 @@ pub fn with_columns(data: &Dataset, extras: &[Feature]) -> Result<Dataset> {
 
 /// The model with `extras` fitted on all of `data`, and its K-fold CV. Each
 /// fold is refitted with a local search warm-started at the full model's
-/// hyperparameters and curvature ([`KrigingOptions::warm_start`]): a fold
+/// hyperparameters and curvature ([`crate::kriging::Tuning::Warm`]): a fold
 /// holds 90 % of the rows, so its optimum lies in the same basin, and the
 /// multistart would find it again at several times the cost. With `from`
 /// (the current model) the full fit too is a local search from `from`, so
@@ -679,22 +679,28 @@ fn cross_validated(
     from: Option<&ErrorModel>,
 ) -> Result<(CvStats, ErrorModel)> {
     let work = with_columns(data, extras)?;
-    let start = KrigingOptions {
-        warm_start: from
-            .and_then(|m| extended_starts(m, extras))
-            .unwrap_or_default(),
-        ..o.kriging.clone()
-    };
-    let model = ErrorModel::fit_with_extras(&work, o.space, &o.periodic, &start, extras)?;
-    let warm = KrigingOptions {
-        warm_start: model.warm_starts(),
-        ..o.kriging.clone()
-    };
+    let start = from.and_then(|m| extended_starts(m, extras));
+    let model = ErrorModel::fit_with_extras(
+        &work,
+        o.space,
+        &o.periodic,
+        &o.kriging,
+        extras,
+        start.as_deref(),
+    )?;
+    let warm = model.warm_starts();
     let res = if data.len() > o.refit_rows {
         cross_validate_closed_form(&work, &model, o.folds, o.seed)?
     } else {
         cross_validate_refit(&work, o.folds, o.seed, |train| {
-            ErrorModel::fit_with_extras(train, o.space, &o.periodic, &warm, extras)
+            ErrorModel::fit_with_extras(
+                train,
+                o.space,
+                &o.periodic,
+                &o.kriging,
+                extras,
+                Some(&warm),
+            )
         })?
     };
     Ok((cv_stats(res, extras, &model), model))
@@ -712,7 +718,7 @@ fn cross_validated(
 /// whose CV then says more about the basin than about the effect (on all
 /// 2 773 rows of UR10 series C, a planted lag and a planted temperature
 /// drift were found but not confirmed that way).
-fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<WarmStart>> {
+fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<Hyperparameters>> {
     // a model's correlation inputs are its extras that are not trend-only,
     // in their order (`ErrorModel::extras` holds them first)
     let inputs =
@@ -735,11 +741,7 @@ fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<WarmStar
                 let weakest = w.theta.iter().copied().fold(f64::INFINITY, f64::min);
                 let mut theta = w.theta;
                 theta.extend(std::iter::repeat_n(weakest, new_dims));
-                WarmStart {
-                    theta,
-                    nugget: w.nugget,
-                    inverse_hessian: None,
-                }
+                Hyperparameters::new(theta, w.nugget)
             })
             .collect(),
     )

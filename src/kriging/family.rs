@@ -1,5 +1,5 @@
 //! Choosing the correlation family of one output by closed-form K-fold
-//! cross-validation (issue 17 §3).
+//! cross-validation ([`super::CorrChoice::ByCv`]).
 //!
 //! The families of [`Correlation::ALL`] are tried from the smoothest to the
 //! roughest (Gaussian, Matérn 5/2, Matérn 3/2, exponential). Each is fitted
@@ -17,7 +17,7 @@
 //! the family's smoothness, falls to the smoothness the data support and
 //! rises beyond it (one minimum): once a rougher family scores worse than
 //! the best so far, the rougher ones after it are not fitted. On the bench
-//! campaigns (issue 17's table) it chose the same families as trying all
+//! campaigns it chose the same families as trying all
 //! four. With a nugget this usually stops after Matérn
 //! 5/2 (the noise, not the roughness, is what the Gaussian lacked); without
 //! one, an interpolator on noisy data keeps improving down to Matérn 3/2 or
@@ -33,13 +33,14 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::fit::Job;
 use super::{
-    Correlation, FitReport, KrigingModel, KrigingOptions, OptimizerKind, SEARCH_ROWS,
-    TrainingInputs, Trend, WarmStart, fit_output_from, row_subset,
+    Correlation, FitReport, Hyperparameters, KrigingModel, OptimizerKind, SEARCH_ROWS, row_subset,
 };
 use crate::Result;
 
-/// Folds of the family choice (fewer when there are fewer rows).
+/// Folds of the family choice by default ([`super::CorrChoice::ByCv`];
+/// fewer when there are fewer rows).
 pub const FAMILY_FOLDS: usize = 10;
 
 /// One family's score in a choice.
@@ -59,32 +60,23 @@ pub struct FamilyScore {
 }
 
 /// Fit one output with the families in order of smoothness and keep the
-/// best by closed-form K-fold CV (see the module docs for the order, the
-/// early stop and large campaigns). The report lists the scores
+/// best by closed-form `folds`-fold CV (see the module docs for the order,
+/// the early stop and large campaigns). The report lists the scores
 /// ([`FitReport::families`]), and its evaluations and seconds are those of
-/// the whole choice. Arguments as [`fit_output_from`], whose `opts.corr` is
-/// ignored.
-pub fn fit_output_auto(
-    x: &[Vec<f64>],
-    inputs: &TrainingInputs,
-    y: &[f64],
-    trend: &Trend,
-    names: &[String],
-    opts: &KrigingOptions,
-    start: Option<&WarmStart>,
+/// the whole choice. `start`: the Gaussian's warm start.
+pub(super) fn choose_by_cv(
+    job: &Job,
+    folds: usize,
+    start: Option<&Hyperparameters>,
 ) -> Result<(KrigingModel, FitReport)> {
-    let m = y.len();
-    if m > SEARCH_ROWS && start.is_none() && opts.optimizer == OptimizerKind::Bfgs {
-        return choose_on_subset(x, inputs, y, trend, names, opts);
+    let m = job.y.len();
+    if m > SEARCH_ROWS && start.is_none() && job.opts.optimizer == OptimizerKind::Bfgs {
+        return choose_on_subset(job, folds);
     }
     let t0 = std::time::Instant::now();
-    let gaussian = KrigingOptions {
-        corr: Correlation::Gaussian,
-        ..opts.clone()
-    };
-    let first = fit_output_from(x, inputs, y, trend, names, &gaussian, start)?;
-    let k = FAMILY_FOLDS.min(m);
-    let blocks = crate::stats::fold_blocks(&crate::stats::kfold_partition(m, k, opts.seed)?);
+    let first = job.search(Correlation::Gaussian, start)?;
+    let k = folds.min(m);
+    let blocks = crate::stats::fold_blocks(&crate::stats::kfold_partition(m, k, job.opts.seed)?);
     let score = |model: &KrigingModel| -> f64 {
         model
             .held_out_residuals(&blocks)
@@ -93,7 +85,7 @@ pub fn fit_output_auto(
                 if s.is_finite() { s } else { f64::INFINITY }
             })
     };
-    let warm = WarmStart::of(&first.1, inputs.d);
+    let warm = Hyperparameters::of(&first.1, job.inputs.d);
     let mut table = vec![FamilyScore {
         corr: Correlation::Gaussian,
         ln_psi: first.1.ln_psi,
@@ -104,12 +96,8 @@ pub fn fit_output_auto(
     let mut best = first;
     let mut best_rmse = table[0].cv_rmse;
     for corr in Correlation::ALL.into_iter().skip(1) {
-        let o = KrigingOptions {
-            corr,
-            ..opts.clone()
-        };
         // a family whose fit fails scores ∞ (and stops the search)
-        let fit = fit_output_from(x, inputs, y, trend, names, &o, Some(&warm)).ok();
+        let fit = job.search(corr, Some(&warm)).ok();
         let (ln_psi, rmse) = fit
             .as_ref()
             .map_or((f64::NAN, f64::INFINITY), |f| (f.1.ln_psi, score(&f.0)));
@@ -139,31 +127,13 @@ pub fn fit_output_auto(
 
 /// The choice on the search subset of a large campaign, then the chosen
 /// family converged on all rows from its subset optimum.
-fn choose_on_subset(
-    x: &[Vec<f64>],
-    inputs: &TrainingInputs,
-    y: &[f64],
-    trend: &Trend,
-    names: &[String],
-    opts: &KrigingOptions,
-) -> Result<(KrigingModel, FitReport)> {
+fn choose_on_subset(job: &Job, folds: usize) -> Result<(KrigingModel, FitReport)> {
     let t0 = std::time::Instant::now();
-    let rows = row_subset(y.len(), SEARCH_ROWS, opts.seed);
-    let xs: Vec<Vec<f64>> = rows.iter().map(|&i| x[i].clone()).collect();
-    let ys: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
-    let (chosen, sub) = fit_output_auto(&xs, &inputs.select(&rows), &ys, trend, names, opts, None)?;
-    let o = KrigingOptions {
-        corr: chosen.corr(),
-        ..opts.clone()
-    };
-    let (model, mut report) = fit_output_from(
-        x,
-        inputs,
-        y,
-        trend,
-        names,
-        &o,
-        Some(&WarmStart::of(&sub, inputs.d)),
+    let rows = row_subset(job.y.len(), SEARCH_ROWS, job.opts.seed);
+    let (chosen, sub) = job.rows(&rows, |sub| choose_by_cv(sub, folds, None))?;
+    let (model, mut report) = job.search(
+        chosen.corr(),
+        Some(&Hyperparameters::of(&sub, job.inputs.d)),
     )?;
     report.families = sub.families;
     report.evals += sub.evals;

@@ -240,11 +240,13 @@ pub struct Pred {
 }
 
 impl KrigingModel {
-    /// Assemble from a solution at ξ.
+    /// Assemble from a solution at ξ of the family `corr` (the family the
+    /// solution was computed with).
     #[allow(clippy::too_many_arguments)]
     pub fn from_solution(
         sol: Solution,
         trend: Trend,
+        corr: Correlation,
         theta: Vec<f64>,
         nugget: f64,
         x_train: Vec<Vec<f64>>,
@@ -262,7 +264,7 @@ impl KrigingModel {
         KrigingModel::checked(
             KrigingModelData {
                 trend,
-                corr: Correlation::Gaussian,
+                corr,
                 theta,
                 nugget,
                 jitter: sol.value.jitter,
@@ -284,15 +286,6 @@ impl KrigingModel {
                 let _ = model.factors.set(Ok(Factors { c: sol.c, ftilde }));
             }
         })
-    }
-
-    /// The same model labelled with the correlation family its solution
-    /// was computed with (a [`Solution`] does not carry it; Gaussian
-    /// unless set).
-    #[must_use]
-    pub fn with_corr(mut self, corr: Correlation) -> Self {
-        self.data.corr = corr;
-        self
     }
 
     /// The correlation family.

@@ -1,8 +1,7 @@
-//! What a fit is asked to do (`KrigingOptions`: trend kind, correlation,
-//! optimiser, nugget, box, seed, warm starts) and what it reports
-//! (`FitReport`).
+//! What a fit is asked to do (`KrigingOptions`: trend kind, correlation
+//! choice, optimiser, nugget, box, seed) and what it reports (`FitReport`).
 
-use super::{Correlation, FamilyScore, Monomials, Trend};
+use super::{Correlation, FAMILY_FOLDS, FamilyScore, Monomials, Trend};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -105,16 +104,13 @@ impl OptimizerKind {
 /// core but of the inputs (`params::ErrorModelParams::periodic`,
 /// `inputs::InputMap`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "OptionsRecord", into = "OptionsRecord")]
 pub struct KrigingOptions {
     /// Trend `F β` in the normalised inputs (constant by default).
     pub(crate) trend: TrendKind,
-    /// Correlation family ([`Correlation`]; Gaussian, eq 8, by default).
-    #[serde(default)]
-    pub(crate) corr: Correlation,
-    /// Choose the family per output by closed-form K-fold CV
-    /// ([`super::fit_output_auto`]); `corr` is then ignored.
-    #[serde(default)]
-    pub(crate) corr_auto: bool,
+    /// The correlation family, or how it is chosen (Gaussian, eq 8, by
+    /// default).
+    pub(crate) corr: CorrChoice,
     /// How the hyperparameters are searched (BFGS by default).
     pub(crate) optimizer: OptimizerKind,
     /// Estimate a nugget ν (noise-to-signal variance ratio) with ξ.
@@ -147,65 +143,6 @@ pub struct KrigingOptions {
     /// search on all rows.
     #[serde(default = "default_converge_rows")]
     pub(crate) converge_rows: usize,
-    /// Warm starts, one per output (empty: none): each output's search is a
-    /// local one from its `(ξ, ν)` instead of the multistart (egobox's
-    /// `theta_init`). For refits on data close to a fitted model's — CV
-    /// folds, one more trend term — where the multistart would find the same
-    /// basin at several times the cost. Not saved with a model.
-    #[serde(skip)]
-    pub(crate) warm_start: Vec<WarmStart>,
-}
-
-/// A starting point of the hyperparameter search ([`KrigingOptions::warm_start`]):
-/// ξ (one per correlation input) and the nugget ν (ignored without one),
-/// with the curvature there when a fit left it ([`WarmStart::of`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct WarmStart {
-    /// ξ, one per correlation input (≥ 0).
-    pub(crate) theta: Vec<f64>,
-    /// Nugget ν (≥ 0; ignored when the nugget is not estimated).
-    pub(crate) nugget: f64,
-    /// The BFGS inverse Hessian there (in log10 ξ, log10 ν), if known: the
-    /// local search then starts with the curvature it ended with (used only
-    /// when its size matches the search).
-    pub(crate) inverse_hessian: Option<Vec<Vec<f64>>>,
-}
-
-impl WarmStart {
-    /// A start at ξ = `theta` (one per correlation input, ≥ 0) and nugget
-    /// ν = `nugget` (≥ 0), without curvature: the local search begins with
-    /// the identity as its inverse Hessian.
-    pub fn new(theta: Vec<f64>, nugget: f64) -> Self {
-        WarmStart {
-            theta,
-            nugget,
-            inverse_hessian: None,
-        }
-    }
-
-    /// ξ, one per correlation input.
-    pub fn theta(&self) -> &[f64] {
-        &self.theta
-    }
-
-    /// The nugget ν.
-    pub fn nugget(&self) -> f64 {
-        self.nugget
-    }
-
-    /// The BFGS inverse Hessian (log10 ξ, log10 ν) the search starts with, if known.
-    pub fn inverse_hessian(&self) -> Option<&[Vec<f64>]> {
-        self.inverse_hessian.as_deref()
-    }
-
-    /// The hyperparameters a fit ended at, and its curvature.
-    pub fn of(report: &FitReport, corr_dims: usize) -> Self {
-        WarmStart {
-            theta: report.theta[..corr_dims.min(report.theta.len())].to_vec(),
-            nugget: report.nugget,
-            inverse_hessian: report.inverse_hessian.clone(),
-        }
-    }
 }
 
 /// Smallest [`KrigingOptions::converge_rows`].
@@ -215,8 +152,7 @@ impl Default for KrigingOptions {
     fn default() -> Self {
         KrigingOptions {
             trend: TrendKind::Constant,
-            corr: Correlation::Gaussian,
-            corr_auto: false,
+            corr: CorrChoice::Fixed(Correlation::Gaussian),
             optimizer: OptimizerKind::Bfgs,
             nugget: true,
             log10_theta: (-6.0, 2.0),
@@ -228,7 +164,6 @@ impl Default for KrigingOptions {
             min_jitter: None,
             polish: true,
             converge_rows: super::REFINE_ROWS,
-            warm_start: Vec::new(),
         }
     }
 }
@@ -240,10 +175,12 @@ fn default_converge_rows() -> usize {
 impl KrigingOptions {
     /// The engine's best model for noisy tracker data: the defaults (a
     /// nugget, BFGS) with each output's correlation family chosen by
-    /// closed-form K-fold CV ([`super::fit_output_auto`]).
+    /// closed-form K-fold CV ([`CorrChoice::ByCv`]).
     pub fn recommended() -> Self {
         KrigingOptions {
-            corr_auto: true,
+            corr: CorrChoice::ByCv {
+                folds: FAMILY_FOLDS,
+            },
             ..KrigingOptions::default()
         }
     }
@@ -272,14 +209,12 @@ impl KrigingOptions {
                 self.converge_rows
             )));
         }
-        if self.warm_start.iter().any(|w| {
-            w.theta.iter().any(|t| !t.is_finite() || *t < 0.0)
-                || w.nugget.is_nan()
-                || w.nugget < 0.0
-        }) {
-            return Err(Error::InvalidParameter(
-                "warm starts need finite ξ ≥ 0 and a nugget ≥ 0".into(),
-            ));
+        if let CorrChoice::ByCv { folds } = self.corr
+            && folds < 2
+        {
+            return Err(Error::InvalidParameter(format!(
+                "choosing the correlation family by CV needs at least 2 folds, not {folds}"
+            )));
         }
         Ok(())
     }
@@ -294,18 +229,12 @@ impl KrigingOptions {
         self
     }
 
-    /// The correlation family `R_ij = k(h_ij)`, `h_ij² = Σ_k ξ_k (s_ik − s_jk)²`
-    /// (Gaussian `exp(−h²)`, seed 003 eq 8, by default; ignored with
-    /// [`KrigingOptions::corr_auto`]).
-    pub fn corr(mut self, family: Correlation) -> Self {
-        self.corr = family;
-        self
-    }
-
-    /// Choose each output's family by closed-form K-fold CV
-    /// ([`super::fit_output_auto`]) instead of [`KrigingOptions::corr`].
-    pub fn corr_auto(mut self, on: bool) -> Self {
-        self.corr_auto = on;
+    /// The correlation family `R_ij = k(h_ij)`, `h_ij² = Σ_k ξ_k (s_ik − s_jk)²`,
+    /// fixed (Gaussian `exp(−h²)`, seed 003 eq 8, by default) or chosen per
+    /// output by closed-form K-fold CV ([`CorrChoice::ByCv`]). A
+    /// [`Correlation`] converts into a fixed choice.
+    pub fn corr(mut self, choice: impl Into<CorrChoice>) -> Self {
+        self.corr = choice.into();
         self
     }
 
@@ -387,15 +316,6 @@ impl KrigingOptions {
         self.converge_rows = rows;
         self
     }
-
-    /// Warm starts, one per output (or none): each output's search is a
-    /// local one from its `(ξ, ν)` instead of the multistart. For refits on
-    /// data close to a fitted model's (`model::ErrorModel::warm_starts`).
-    /// Not saved with a model.
-    pub fn warm_start(mut self, starts: Vec<WarmStart>) -> Self {
-        self.warm_start = starts;
-        self
-    }
 }
 
 /// Getters, one per field: `get_` and its name.
@@ -406,13 +326,8 @@ impl KrigingOptions {
     }
 
     /// [`KrigingOptions::corr`]'s value.
-    pub fn get_corr(&self) -> Correlation {
+    pub fn get_corr(&self) -> CorrChoice {
         self.corr
-    }
-
-    /// [`KrigingOptions::corr_auto`]'s value.
-    pub fn get_corr_auto(&self) -> bool {
-        self.corr_auto
     }
 
     /// [`KrigingOptions::optimizer`]'s value.
@@ -469,11 +384,6 @@ impl KrigingOptions {
     pub fn get_converge_rows(&self) -> usize {
         self.converge_rows
     }
-
-    /// [`KrigingOptions::warm_start`]'s value.
-    pub fn get_warm_start(&self) -> &[WarmStart] {
-        &self.warm_start
-    }
 }
 
 /// How one output's fit went. Equality ignores the wall time.
@@ -510,11 +420,11 @@ pub struct FitReport {
     #[serde(skip)]
     pub seconds: f64,
     /// The BFGS inverse Hessian at the optimum (log10 units), for a warm
-    /// start ([`WarmStart::of`]); not saved.
+    /// start ([`super::Hyperparameters::of`]); not saved.
     #[serde(skip)]
     pub inverse_hessian: Option<Vec<Vec<f64>>>,
-    /// With [`KrigingOptions::corr_auto`]: every family's closed-form
-    /// K-fold score, the chosen one lowest ([`super::fit_output_auto`]).
+    /// With [`CorrChoice::ByCv`]: every family's closed-form K-fold score,
+    /// the chosen one lowest.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub families: Vec<FamilyScore>,
 }
@@ -533,5 +443,144 @@ impl PartialEq for FitReport {
             && self.evals == o.evals
             && self.search_rows == o.search_rows
             && self.families == o.families
+    }
+}
+
+/// The correlation family of a fit, or how it is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum CorrChoice {
+    /// This family on every output.
+    Fixed(Correlation),
+    /// Each output's family chosen by closed-form `folds`-fold
+    /// cross-validation among [`Correlation::ALL`] (smoothest first; the
+    /// `family` module docs give the rule and its early stop).
+    ByCv {
+        /// CV folds of the choice (fewer when there are fewer rows).
+        folds: usize,
+    },
+}
+
+impl CorrChoice {
+    /// The family when it is fixed.
+    pub fn fixed(self) -> Option<Correlation> {
+        match self {
+            CorrChoice::Fixed(c) => Some(c),
+            CorrChoice::ByCv { .. } => None,
+        }
+    }
+
+    /// Whether the family is chosen by CV.
+    pub fn is_by_cv(self) -> bool {
+        matches!(self, CorrChoice::ByCv { .. })
+    }
+
+    /// `auto` (the choice by CV with [`FAMILY_FOLDS`] folds) or a family's
+    /// name ([`Correlation::name`]), as on the command line.
+    pub fn from_name(name: &str) -> Option<CorrChoice> {
+        match name {
+            "auto" => Some(CorrChoice::ByCv {
+                folds: FAMILY_FOLDS,
+            }),
+            _ => Correlation::parse(name).map(CorrChoice::Fixed),
+        }
+    }
+}
+
+impl From<Correlation> for CorrChoice {
+    fn from(c: Correlation) -> Self {
+        CorrChoice::Fixed(c)
+    }
+}
+
+impl std::fmt::Display for CorrChoice {
+    /// `auto` or the family's name.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CorrChoice::Fixed(c) => c.fmt(f),
+            CorrChoice::ByCv { .. } => f.write_str("auto"),
+        }
+    }
+}
+
+/// [`KrigingOptions`] as model files store them (the layout of every
+/// version): the family choice as `corr` + `corr_auto` (+ `corr_folds`
+/// when not [`FAMILY_FOLDS`]).
+#[derive(Serialize, Deserialize)]
+struct OptionsRecord {
+    trend: TrendKind,
+    #[serde(default)]
+    corr: Correlation,
+    #[serde(default)]
+    corr_auto: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    corr_folds: Option<usize>,
+    optimizer: OptimizerKind,
+    nugget: bool,
+    log10_theta: (f64, f64),
+    log10_nugget: (f64, f64),
+    starts: usize,
+    seed: u64,
+    max_evals: usize,
+    tol: f64,
+    min_jitter: Option<f64>,
+    polish: bool,
+    #[serde(default = "default_converge_rows")]
+    converge_rows: usize,
+}
+
+impl From<OptionsRecord> for KrigingOptions {
+    fn from(r: OptionsRecord) -> Self {
+        KrigingOptions {
+            trend: r.trend,
+            corr: if r.corr_auto {
+                CorrChoice::ByCv {
+                    folds: r.corr_folds.unwrap_or(FAMILY_FOLDS),
+                }
+            } else {
+                CorrChoice::Fixed(r.corr)
+            },
+            optimizer: r.optimizer,
+            nugget: r.nugget,
+            log10_theta: r.log10_theta,
+            log10_nugget: r.log10_nugget,
+            starts: r.starts,
+            seed: r.seed,
+            max_evals: r.max_evals,
+            tol: r.tol,
+            min_jitter: r.min_jitter,
+            polish: r.polish,
+            converge_rows: r.converge_rows,
+        }
+    }
+}
+
+impl From<KrigingOptions> for OptionsRecord {
+    fn from(o: KrigingOptions) -> Self {
+        let (corr, corr_auto, corr_folds) = match o.corr {
+            CorrChoice::Fixed(c) => (c, false, None),
+            CorrChoice::ByCv { folds } => (
+                Correlation::Gaussian,
+                true,
+                (folds != FAMILY_FOLDS).then_some(folds),
+            ),
+        };
+        OptionsRecord {
+            trend: o.trend,
+            corr,
+            corr_auto,
+            corr_folds,
+            optimizer: o.optimizer,
+            nugget: o.nugget,
+            log10_theta: o.log10_theta,
+            log10_nugget: o.log10_nugget,
+            starts: o.starts,
+            seed: o.seed,
+            max_evals: o.max_evals,
+            tol: o.tol,
+            min_jitter: o.min_jitter,
+            polish: o.polish,
+            converge_rows: o.converge_rows,
+        }
     }
 }

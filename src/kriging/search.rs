@@ -8,7 +8,7 @@ use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
 use rayon::prelude::*;
 
 /// Maps an optimiser point (log10 ξ, and log10 ν with a nugget) to (ξ, ν).
-type Unpack<'a> = dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync + 'a;
+pub(super) type Unpack<'a> = dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync + 'a;
 
 /// `z ↦ ln ψ(unpack(z))` with its own workspace; +∞ where R cannot be
 /// factorised or the likelihood is degenerate.

@@ -8,7 +8,8 @@ use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
 use crate::kriging::{
-    FitReport, KrigingModel, KrigingOptions, TrainingInputs, Trend, fit_output_from,
+    FitReport, Hyperparameters, KrigingModel, KrigingOptions, KrigingParams, Monomials, Trend,
+    Tuning,
 };
 use crate::selection::{KINEMATIC_AXIS_TOL, kinematic_trend_set_in};
 use crate::space::Space;
@@ -83,15 +84,18 @@ fn check_fit_memory_with(
 }
 
 /// Fit the three outputs of `data` on the input map `map` (fitted on
-/// `data`, whose normalised inputs are `x`), output `a` with `trends[a]`.
-/// Outputs (and the optimiser's starts) run in parallel, unless the
-/// memory plan says one output at a time.
+/// `data`, whose normalised inputs are `x`), output `a` with `trends[a]`,
+/// its hyperparameters searched or, with `starts` (one per output), by a
+/// local search from there ([`Tuning::Warm`]). Outputs (and the optimiser's
+/// starts) run in parallel, unless the memory plan says one output at a
+/// time.
 pub(crate) fn fit_outputs(
     data: &Dataset,
     map: &InputMap,
     x: &[Vec<f64>],
     opts: &KrigingOptions,
     trends: &[Trend; 3],
+    starts: Option<&[Hyperparameters]>,
 ) -> Result<ErrorModel> {
     opts.validate()?;
     let errors = data.errors_or_err()?;
@@ -104,35 +108,22 @@ pub(crate) fn fit_outputs(
             ),
         });
     }
-    let corr_dims = map.corr_dims();
-    let inputs = TrainingInputs::new(
-        &x.iter()
-            .map(|r| r[..corr_dims].to_vec())
-            .collect::<Vec<_>>(),
-    );
-    if !matches!(opts.warm_start.len(), 0 | 3) {
+    if let Some(s) = starts.filter(|s| s.len() != 3) {
         return Err(Error::InvalidParameter(format!(
             "warm starts must be one per output (3), not {}",
-            opts.warm_start.len()
+            s.len()
         )));
     }
     let plan = check_fit_memory_with(data.len(), opts, |n| format!("a subset of {n} rows"))?;
     let fit_axis = |a: usize| {
         let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-        let fit = if opts.corr_auto {
-            crate::kriging::fit_output_auto
-        } else {
-            fit_output_from
-        };
-        fit(
-            x,
-            &inputs,
-            &y,
-            &trends[a],
-            map.names(),
-            opts,
-            opts.warm_start.get(a),
-        )
+        KrigingParams::new(trends[a].clone())
+            .options(opts.clone())
+            .tuning(starts.map_or(Tuning::Search, |s| Tuning::Warm(s[a].clone())))
+            .correlation_inputs(map.corr_dims())
+            .names(map.names().to_vec())
+            .check()?
+            .fit(x, &y)
     };
     // large campaigns: one output at a time, one m × m factor in memory
     let fits: Vec<Result<(KrigingModel, FitReport)>> = if plan.sequential_outputs {
@@ -146,11 +137,7 @@ pub(crate) fn fit_outputs(
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION_UNCALIBRATED,
         inputs: map.clone(),
-        // a warm start is how this fit began, not what the model is
-        options: KrigingOptions {
-            warm_start: Vec::new(),
-            ..opts.clone()
-        },
+        options: opts.clone(),
         outputs,
         reports,
         selection: None,
@@ -159,6 +146,52 @@ pub(crate) fn fit_outputs(
         software: SOFTWARE.into(),
         calibration: None,
     })
+}
+
+/// The three outputs solved at given hyperparameters, no search: output
+/// `a` on the normalised inputs `x` (the first `corr_dims` columns
+/// correlation inputs), response `y(a)`, trend `trends[a]`, family of
+/// `families[a]`, ξ and ν `at[a]`. The one refit every fixed-hyperparameter
+/// path shares ([`ErrorModel::refit`], [`ErrorModel::restricted`],
+/// `diagnose`'s candidate systems).
+pub(crate) fn solve_outputs(
+    x: &[Vec<f64>],
+    corr_dims: usize,
+    y: impl Fn(usize) -> Vec<f64> + Sync,
+    trends: &[&Trend; 3],
+    families: [crate::kriging::Correlation; 3],
+    at: [Hyperparameters; 3],
+    opts: &KrigingOptions,
+) -> Result<Vec<KrigingModel>> {
+    let fits: Vec<Result<KrigingModel>> = (0..3)
+        .into_par_iter()
+        .map(|a| {
+            KrigingParams::new(trends[a].clone())
+                .options(opts.clone())
+                .corr(families[a])
+                .tuning(Tuning::Fixed(at[a].clone()))
+                .correlation_inputs(corr_dims)
+                .check()?
+                .fit(x, &y(a))
+                .map(|(model, _)| model)
+        })
+        .collect();
+    by_axis(fits)
+}
+
+/// `base` with one linear trend term per extra input column: `k` columns
+/// appended after its `base.dim` inputs, each entering as `s_{dim+j}`.
+pub(crate) fn with_linear_columns(base: &Monomials, k: usize) -> Monomials {
+    let d = base.dim;
+    let mut terms = base.clone();
+    terms.dim = d + k;
+    terms.exponents.iter_mut().for_each(|e| e.resize(d + k, 0));
+    for j in 0..k {
+        let mut e = vec![0u8; d + k];
+        e[d + j] = 1;
+        terms.exponents.push(e);
+    }
+    terms
 }
 
 impl ErrorModel {
@@ -174,38 +207,36 @@ impl ErrorModel {
         periodic: &[usize],
         opts: &KrigingOptions,
         extras: &[Feature],
+        starts: Option<&[Hyperparameters]>,
     ) -> Result<Self> {
         let mut extras = extras.to_vec();
         extras.sort_by_key(Feature::trend_only);
         let extras = &extras[..];
         let d0 = space.encoded_dim(data.n_joints(), periodic);
         let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
-        let mut terms = opts.trend.monomials(d0);
-        terms.dim = d0 + extra_dims;
-        for e in &mut terms.exponents {
-            e.resize(d0 + extra_dims, 0);
-        }
-        for k in 0..extra_dims {
-            let mut e = vec![0u8; d0 + extra_dims];
-            e[d0 + k] = 1;
-            terms.exponents.push(e);
-        }
-        let trend = Trend::from(terms);
+        let trend = Trend::from(with_linear_columns(&opts.trend.monomials(d0), extra_dims));
         let (map, x) = InputMap::fit(data, space, periodic, extras)?;
-        fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
+        fit_outputs(
+            data,
+            &map,
+            &x,
+            opts,
+            &[trend.clone(), trend.clone(), trend],
+            starts,
+        )
     }
 
-    /// Refit on `data` at this model's correlation parameters ξ and nugget
-    /// (no search): the way to scale to thousands of rows when the O(m³)
-    /// search is too slow — choose ξ on a subset, then one factorisation on
-    /// everything (issue 10). Same space, periodic joints, options and kind
-    /// of trend; a
-    /// kinematic trend is rebuilt for `data` (its parameters and the input
-    /// normalisation are re-derived), a polynomial one reused. The reports
-    /// keep the subset's search figures (ln ψ, evaluations).
-    pub(crate) fn refit_at_hyperparameters(&self, data: &Dataset) -> Result<Self> {
-        // a calibrated model is identified anew on the rows, and its Kriging
-        // outputs refitted on what that calibration leaves
+    /// This model refitted on `data` at its own hyperparameters — ξ, ν and
+    /// family per output, no search — with the same space, periodic joints,
+    /// options and kind of trend (linfa's `FitWith`). The input
+    /// normalisation is re-fitted on `data`; a kinematic trend is rebuilt
+    /// for it, a polynomial one reused; a calibrated model is identified
+    /// anew on `data` and its Kriging outputs refitted on what that
+    /// calibration leaves. The reports keep the search's figures (ln ψ,
+    /// evaluations). The way to scale to thousands of rows when the O(m³)
+    /// search is too slow (ξ on a subset, then one factorisation on
+    /// everything), and what refit-mode CV folds use.
+    pub fn refit(&self, data: &Dataset) -> Result<Self> {
         if let Some(c) = &self.calibration {
             return self.refit_with_calibration(data, c.reidentify(data)?);
         }
@@ -229,22 +260,15 @@ impl ErrorModel {
             )?,
             _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
         };
-        let inputs = TrainingInputs::new(&x);
-        let fits: Vec<Result<KrigingModel>> = (0..3)
-            .into_par_iter()
-            .map(|a| {
-                let y: Vec<f64> = errors.iter().map(|e| e[a]).collect();
-                let r = &self.reports[a];
-                let at = crate::kriging::Hyperparameters {
-                    corr: self.outputs[a].corr(),
-                    theta: &r.theta,
-                    nugget: r.nugget,
-                    min_jitter: self.options.min_jitter,
-                };
-                crate::kriging::fit_output_with(&x, &inputs, &y, &trends[a], &at)
-            })
-            .collect();
-        let outputs = by_axis(fits)?;
+        let outputs = solve_outputs(
+            &x,
+            map.corr_dims(),
+            |a| errors.iter().map(|e| e[a]).collect(),
+            &[&trends[0], &trends[1], &trends[2]],
+            self.families(),
+            self.hyperparameters(),
+            &self.options,
+        )?;
         let secs = t0.elapsed().as_secs_f64();
         let reports = self
             .reports
@@ -263,7 +287,21 @@ impl ErrorModel {
         })
     }
 
-    /// [`ErrorModel::refit_at_hyperparameters`] on top of the calibration
+    /// Each output's correlation family.
+    fn families(&self) -> [crate::kriging::Correlation; 3] {
+        std::array::from_fn(|a| self.outputs[a].corr())
+    }
+
+    /// Each output's ξ (correlation inputs only) and ν, without curvature.
+    fn hyperparameters(&self) -> [Hyperparameters; 3] {
+        let d = self.correlation_dims();
+        std::array::from_fn(|a| {
+            let km = &self.outputs[a].data;
+            Hyperparameters::new(km.theta[..d].to_vec(), km.nugget)
+        })
+    }
+
+    /// [`ErrorModel::refit`] on top of the calibration
     /// `cal` (identified on `data` by the caller): the Kriging outputs are
     /// refitted to what `cal` leaves, and the model holds `cal`.
     pub(crate) fn refit_with_calibration(&self, data: &Dataset, cal: Calibration) -> Result<Self> {
@@ -271,9 +309,7 @@ impl ErrorModel {
             calibration: None,
             ..self.clone()
         };
-        Ok(plain
-            .refit_at_hyperparameters(&cal.residual(data)?)?
-            .with_calibration(cal))
+        Ok(plain.refit(&cal.residual(data)?)?.with_calibration(cal))
     }
 
     /// Drop every output's factors kept in memory (recomputed when next
@@ -290,31 +326,26 @@ impl ErrorModel {
     /// input normalisation stays that of all rows, no search. What
     /// `diagnose` scans candidates on when a campaign has more rows than it
     /// scans (its `ScanRows`); unlike
-    /// [`ErrorModel::refit_at_hyperparameters`] it keeps the model's extra
+    /// [`ErrorModel::refit`] it keeps the model's extra
     /// inputs, whose values on those rows are already in the training
     /// inputs. The fit reports are kept (the search's figures).
     pub(crate) fn restricted(&self, rows: &[usize], errors: &[[f64; 3]]) -> Result<Self> {
         // (the fits keep their factors up to KEEP_FACTOR_MAX_M rows:
         // `release_factors` when they are no longer needed)
-        let corr = self.correlation_dims();
-        let fits: Vec<Result<KrigingModel>> = (0..3)
-            .into_par_iter()
-            .map(|a| {
-                let km = &self.outputs[a];
-                let x: Vec<Vec<f64>> = rows.iter().map(|&i| km.data.x_train[i].clone()).collect();
-                let inputs =
-                    TrainingInputs::new(&x.iter().map(|r| r[..corr].to_vec()).collect::<Vec<_>>());
-                let y: Vec<f64> = rows.iter().map(|&i| errors[i][a]).collect();
-                let at = crate::kriging::Hyperparameters {
-                    corr: km.corr(),
-                    theta: &km.data.theta[..corr],
-                    nugget: km.data.nugget,
-                    min_jitter: self.options.min_jitter,
-                };
-                crate::kriging::fit_output_with(&x, &inputs, &y, &km.data.trend, &at)
-            })
+        let x: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|&i| self.outputs[0].data.x_train[i].clone())
             .collect();
-        let outputs = by_axis(fits)?;
+        let o = &self.outputs;
+        let outputs = solve_outputs(
+            &x,
+            self.correlation_dims(),
+            |a| rows.iter().map(|&i| errors[i][a]).collect(),
+            &[&o[0].data.trend, &o[1].data.trend, &o[2].data.trend],
+            self.families(),
+            self.hyperparameters(),
+            &self.options,
+        )?;
         Ok(ErrorModel {
             format: self.format.clone(),
             version: self.version,
@@ -342,7 +373,7 @@ mod tests {
         let data = crate::dataset::read_csv(path.as_ref())
             .unwrap()
             .select(&(0..60).collect::<Vec<_>>());
-        let opts = KrigingOptions::default().corr_auto(false).starts(2);
+        let opts = KrigingOptions::default().starts(2);
         let params = ErrorModelParams::new().kriging(opts).check().unwrap();
         let model = params.fit(&data).unwrap();
         let errors = data.errors_or_err().unwrap();

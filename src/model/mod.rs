@@ -12,7 +12,7 @@ mod record;
 
 pub use coverage::{CoverageIssue, CoverageWarning, GROSS_FACTOR, LOO_SAMPLE, TREND_SIGMAS, Z95};
 pub use fit::check_fit_memory;
-pub(crate) use fit::fit_outputs;
+pub(crate) use fit::{fit_outputs, solve_outputs, with_linear_columns};
 pub use record::RobotRecord;
 
 use crate::calibration::Calibration;
@@ -110,7 +110,14 @@ impl ErrorModel {
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
         let (map, x) = InputMap::fit(data, space, &[], &[])?;
         let trend: Trend = opts.trend.trend(map.dim());
-        fit_outputs(data, &map, &x, opts, &[trend.clone(), trend.clone(), trend])
+        fit_outputs(
+            data,
+            &map,
+            &x,
+            opts,
+            &[trend.clone(), trend.clone(), trend],
+            None,
+        )
     }
 
     /// File format tag, [`MODEL_FORMAT`].
@@ -225,13 +232,14 @@ impl ErrorModel {
         Some(out)
     }
 
-    /// This model's hyperparameters as warm starts of a refit on similar data
-    /// ([`KrigingOptions::warm_start`]), one per output.
-    pub fn warm_starts(&self) -> Vec<crate::kriging::WarmStart> {
+    /// This model's hyperparameters, with the curvature its search ended
+    /// with, as warm starts of a fit on similar data, one per output
+    /// ([`crate::params::HyperSpec::Warm`]).
+    pub fn warm_starts(&self) -> Vec<crate::kriging::Hyperparameters> {
         let d = self.correlation_dims();
         self.reports
             .iter()
-            .map(|r| crate::kriging::WarmStart::of(r, d))
+            .map(|r| crate::kriging::Hyperparameters::of(r, d))
             .collect()
     }
 

@@ -4,7 +4,9 @@
 use super::screen::screen_candidates;
 use super::selector::{BasisSelector, GaSelection, Selection, SelectionProblem};
 use crate::Result;
-use crate::kriging::{Hyperparameters, Trend, TrendKind, TrendModel, fit_output, fit_output_with};
+use crate::kriging::{
+    Hyperparameters, KrigingParams, Trend, TrendKind, TrendModel, Tuning, ValidKrigingParams,
+};
 use crate::optim::{GaOptions, ga};
 use crate::stats::{fold_blocks, kfold_partition};
 
@@ -51,17 +53,24 @@ impl BasisSelector for Ga<'_> {
             let screen = screen_candidates(&p.candidates[a], p.x, p.names);
             let cand = p.candidates[a].subset(&screen.kept);
             let y = &p.y[a];
-            let (_, base) = fit_output(p.x, p.inputs, y, &constant, p.names, p.options)?;
-            let at = Hyperparameters {
-                corr: p.options.corr,
-                theta: &base.theta,
-                nugget: base.nugget,
-                min_jitter: p.options.min_jitter,
+            // every candidate is scored at one family: the options' fixed
+            // one, the Gaussian when they choose it by CV
+            let params = |trend: Trend, tuning: Tuning| -> Result<ValidKrigingParams> {
+                KrigingParams::new(trend)
+                    .options(p.options.clone())
+                    .corr(p.options.get_corr().fixed().unwrap_or_default())
+                    .tuning(tuning)
+                    .correlation_inputs(p.inputs.d)
+                    .names(p.names.to_vec())
+                    .check()
             };
+            let (_, base) = params(constant.clone(), Tuning::Search)?.fit(p.x, y)?;
+            let at = Tuning::Fixed(Hyperparameters::of(&base, p.inputs.d));
             let rmse = |bits: &[bool]| {
                 let keep: Vec<usize> = (0..cand.len()).filter(|&j| j == 0 || bits[j]).collect();
-                fit_output_with(p.x, p.inputs, y, &cand.subset(&keep), &at)
-                    .and_then(|model| model.held_out_residuals(&blocks))
+                params(cand.subset(&keep), at.clone())
+                    .and_then(|fit| fit.fit(p.x, y))
+                    .and_then(|(model, _)| model.held_out_residuals(&blocks))
                     .map_or(f64::INFINITY, |e| {
                         (e.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
                     })

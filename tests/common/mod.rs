@@ -68,3 +68,41 @@ pub fn fit_pcc_pca(
     let reports = outputs.clone();
     (model, reports)
 }
+
+/// One output solved at given ξ and ν (no search), the first `theta.len()`
+/// input columns correlation inputs.
+#[allow(dead_code)]
+pub fn fit_at(
+    x: &[Vec<f64>],
+    y: &[f64],
+    trend: &robokrige::kriging::Trend,
+    theta: &[f64],
+    nugget: f64,
+    min_jitter: Option<f64>,
+) -> robokrige::Result<robokrige::kriging::KrigingModel> {
+    use robokrige::kriging::{Hyperparameters, KrigingOptions, KrigingParams, Tuning};
+    KrigingParams::new(trend.clone())
+        .options(KrigingOptions::default().min_jitter(min_jitter))
+        .tuning(Tuning::Fixed(Hyperparameters::new(theta.to_vec(), nugget)))
+        .correlation_inputs(theta.len())
+        .check()?
+        .fit(x, y)
+        .map(|(model, _)| model)
+}
+
+/// One output with its hyperparameters searched with `opts`.
+#[allow(dead_code)]
+pub fn fit_searched(
+    x: &[Vec<f64>],
+    y: &[f64],
+    trend: &robokrige::kriging::Trend,
+    opts: &robokrige::kriging::KrigingOptions,
+) -> robokrige::Result<(
+    robokrige::kriging::KrigingModel,
+    robokrige::kriging::FitReport,
+)> {
+    robokrige::kriging::KrigingParams::new(trend.clone())
+        .options(opts.clone())
+        .check()?
+        .fit(x, y)
+}
