@@ -88,7 +88,7 @@ fn pca_models_round_trip_and_bad_parameters_are_errors() {
         );
         assert!(r.components >= 1 && r.selected >= r.components);
         // the constant plus the components (none is dependent on the others)
-        assert_eq!(out.data().trend.len(), 1 + r.components);
+        assert_eq!(out.data().trend().len(), 1 + r.components);
     }
     let text = serde_json::to_string(&model).unwrap();
     let back = ErrorModel::from_json(&text, "pca.json").unwrap();

@@ -186,9 +186,9 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
     assert_eq!(m.extras(), stored);
     assert_eq!(m.correlation_dims(), 14);
     for o in m.outputs() {
-        assert_eq!(o.data().theta.len(), 16);
-        assert!(o.data().theta[14..].iter().all(|t| *t == 0.0));
-        assert!(o.data().theta[..14].iter().all(|t| *t > 0.0));
+        assert_eq!(o.data().theta().len(), 16);
+        assert!(o.data().theta()[14..].iter().all(|t| *t == 0.0));
+        assert!(o.data().theta()[..14].iter().all(|t| *t > 0.0));
     }
     let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
     assert_eq!(back.extras(), stored);

@@ -121,7 +121,7 @@ fn row_order_does_not_change_predictions() {
         assert!((pa.mean - pb.mean).abs() < 1e-9 * (1.0 + pa.mean.abs()));
         assert!((pa.mse - pb.mse).abs() < 1e-9 * (1e-6 + pa.mse));
     }
-    assert!((a.data().ln_psi - b.data().ln_psi).abs() < 1e-10);
+    assert!((a.data().ln_psi() - b.data().ln_psi()).abs() < 1e-10);
 }
 
 #[test]
@@ -253,7 +253,7 @@ fn optimisers_improve_on_their_start_and_gps_reaches_at_least_hj() {
             None,
         )
         .unwrap();
-        assert!(hj.reports()[a].ln_psi < at_centre.data().ln_psi);
+        assert!(hj.reports()[a].ln_psi < at_centre.data().ln_psi());
         // GPS starts from the centre too, and more places
         assert!(
             gps.reports()[a].ln_psi <= hj.reports()[a].ln_psi + 1e-3,
@@ -401,7 +401,7 @@ fn xi_converges_on_a_subset_and_the_model_solves_on_all_rows() {
     let opts = KrigingOptions::default().starts(2).converge_rows(100);
     let (model, rep) = common::fit_searched(&x, &y, &trend, &opts).unwrap();
     assert_eq!(rep.search_rows, 100);
-    assert_eq!(model.data().x_train.len(), 240);
+    assert_eq!(model.data().x_train().len(), 240);
     let rows = robokrige::kriging::converge_subset(240, &opts).unwrap();
     assert_eq!(rows.len(), 100);
     assert!(rows.windows(2).all(|w| w[0] < w[1]));

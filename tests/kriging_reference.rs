@@ -153,7 +153,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
         }
         // ψ: 1e-10, or the generator's float64-vs-long-double spread ×10 where
         // R is worse conditioned (js: cond(R) ≈ 3e8)
-        let ep = rel(model.data().ln_psi.exp(), c["psi"].as_f64().unwrap(), 0.0);
+        let ep = rel(model.data().ln_psi().exp(), c["psi"].as_f64().unwrap(), 0.0);
         let tol = c["suggested_tolerance"]["psi_rel"]
             .as_f64()
             .unwrap()
@@ -163,7 +163,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
             ep < tol,
             "{}: psi {} vs {} (tol {tol:e})",
             id(c),
-            model.data().ln_psi.exp(),
+            model.data().ln_psi().exp(),
             c["psi"]
         );
     }
@@ -216,7 +216,7 @@ fn our_optimiser_finds_psi_at_least_as_good_as_smt() {
         )
         .unwrap();
         assert!(
-            rel(at_smt.data().ln_psi.exp(), psi_smt, 0.0) < 1e-9,
+            rel(at_smt.data().ln_psi().exp(), psi_smt, 0.0) < 1e-9,
             "{}: ψ at SMT's ξ",
             id(c)
         );

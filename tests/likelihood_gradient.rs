@@ -37,14 +37,18 @@ fn ln_psi(prob: &KrigingProblem, z: &[f64], d: usize, ws: &mut Workspace) -> f64
 /// against central differences at three ξ, with and without a nugget.
 fn check(out: &KrigingModel, y: &[f64], what: &str) {
     let data = &out.data();
-    let x = &data.x_train;
-    let d = data.theta.len();
+    let x = data.x_train();
+    let d = data.theta().len();
     let inputs = TrainingInputs::new(x);
-    let f = trend_matrix(&data.trend, x);
-    let yn: Vec<f64> = y.iter().map(|v| (v - data.y_mean) / data.y_std).collect();
+    let f = trend_matrix(data.trend(), x);
+    let yn: Vec<f64> = y
+        .iter()
+        .map(|v| (v - data.y_mean()) / data.y_std())
+        .collect();
+    let corr = data.corr();
     let prob = KrigingProblem {
         min_jitter: None,
-        corr: &data.corr,
+        corr: &corr,
         inputs: &inputs,
         f: &f,
         y: &yn,
@@ -135,7 +139,7 @@ fn gradient_matches_central_differences_kinematic_trend() {
         .and_then(|p| p.fit(&data))
         .unwrap();
     assert!(matches!(
-        model.outputs()[0].data().trend,
+        model.outputs()[0].data().trend(),
         robokrige::kriging::Trend::Kinematic(_)
     ));
     check_model(&model, &data, "kinematic");
@@ -146,7 +150,7 @@ fn gradient_matches_central_differences_fused_trend() {
     let data = campaign(80);
     let (model, _) = common::fit_pcc_pca(&data, &quick(), None);
     assert!(matches!(
-        model.outputs()[0].data().trend,
+        model.outputs()[0].data().trend(),
         robokrige::kriging::Trend::Fused(_)
     ));
     check_model(&model, &data, "fused");

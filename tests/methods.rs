@@ -49,7 +49,7 @@ fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
     // same seed, same model (the reports differ only by their wall-clock seconds)
     assert_eq!(a.outputs(), b.outputs());
     for (out, report) in a.outputs().iter().zip(a.reports()) {
-        let p = out.data().trend.len();
+        let p = out.data().trend().len();
         assert!(
             (1..=44).contains(&p),
             "{p} terms for 50 rows, 10 folds (cap 45 − 1)"

@@ -52,7 +52,7 @@ fn the_params_path_gives_the_models_of_its_parts() {
         .fit(&data)
         .unwrap();
     // the selector's trends, given as per-axis trends, give the same model
-    let trends: [Trend; 3] = std::array::from_fn(|a| via.outputs()[a].data().trend.clone());
+    let trends: [Trend; 3] = std::array::from_fn(|a| via.outputs()[a].data().trend().clone());
     let by_hand = ErrorModelParams::new()
         .space(Space::Js)
         .kriging(opts.clone())
@@ -67,10 +67,10 @@ fn the_params_path_gives_the_models_of_its_parts() {
     for a in 0..3 {
         let (x, y) = (refit.outputs()[a].data(), via.outputs()[a].data());
         assert_eq!(
-            (&x.theta, x.nugget, &x.trend),
-            (&y.theta, y.nugget, &y.trend)
+            (x.theta(), x.nugget(), x.trend()),
+            (y.theta(), y.nugget(), y.trend())
         );
-        let db = x.beta.iter().zip(&y.beta).map(|(p, q)| (p - q).abs());
+        let db = x.beta().iter().zip(y.beta()).map(|(p, q)| (p - q).abs());
         assert!(db.fold(0.0, f64::max) < 1e-9);
     }
     // a paper method's params hold its constants: EJS, Hooke–Jeeves, no nugget

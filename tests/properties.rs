@@ -101,7 +101,7 @@ fn nearly_coincident_points_and_extreme_correlation_lengths_stay_finite() {
     let dace = (10.0 + x.len() as f64) * f64::EPSILON;
     for theta in [1e-6, 1e-2, 1.0, 1e2] {
         let m = fit(&x, &y, theta);
-        assert!(m.data().jitter >= dace);
+        assert!(m.data().jitter() >= dace);
 
         for p in m.predict(&probe).unwrap() {
             assert!(
@@ -189,9 +189,9 @@ fn an_unfactorisable_correlation_matrix_escalates_the_jitter() {
     )
     .unwrap();
     assert!(
-        m.data().jitter > 1e-29 && m.data().jitter <= 1e-6,
+        m.data().jitter() > 1e-29 && m.data().jitter() <= 1e-6,
         "jitter {:e}",
-        m.data().jitter
+        m.data().jitter()
     );
     let p = m.predict(&[vec![0.5], vec![2.0]]).unwrap();
     assert!(p.iter().all(|v| v.mean.is_finite() && v.mse.is_finite()));

@@ -23,38 +23,103 @@ const BLOCK: usize = 128;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KrigingModelData {
     /// Trend `f(s)` of the normalised inputs.
-    pub trend: Trend,
+    pub(crate) trend: Trend,
     /// Correlation family, by name (files without one are Gaussian).
     #[serde(default)]
-    pub corr: Correlation,
+    pub(crate) corr: Correlation,
     /// Correlation parameters ξ, one per input dimension (normalised inputs).
-    pub theta: Vec<f64>,
+    pub(crate) theta: Vec<f64>,
     /// Nugget ν added to R's diagonal (0: interpolation).
-    pub nugget: f64,
+    pub(crate) nugget: f64,
     /// Numerical jitter ε added to R's diagonal.
-    pub jitter: f64,
+    pub(crate) jitter: f64,
     /// Normalised training inputs, m rows.
-    pub x_train: Vec<Vec<f64>>,
+    pub(crate) x_train: Vec<Vec<f64>>,
     /// Training mean of the response, original units (mm for an error model).
-    pub y_mean: f64,
+    pub(crate) y_mean: f64,
     /// Training standard deviation of the response: a normalised value v is
     /// `y_mean + y_std·v` in original units.
-    pub y_std: f64,
+    pub(crate) y_std: f64,
     /// GLS trend coefficients β (eq 11), normalised units.
-    pub beta: Vec<f64>,
+    pub(crate) beta: Vec<f64>,
     /// `γ = R⁻¹(y − Fβ)` (eq 10) on the normalised response, one per training row.
-    pub gamma: Vec<f64>,
+    pub(crate) gamma: Vec<f64>,
     /// Process variance σ² (normalised units, eq 13).
-    pub sigma2: f64,
+    pub(crate) sigma2: f64,
     /// ln ψ at ξ (eq 14); `f64::MIN` stands for −∞ (σ² = 0).
-    pub ln_psi: f64,
+    pub(crate) ln_psi: f64,
     /// Lower Cholesky factor of R, packed by rows (`i ≥ j`): written by
     /// model files of version 1 only (O(m²)); now empty, and the factor is
     /// recomputed from ξ, ν, ε and the inputs when first needed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub chol_lower: Vec<f64>,
+    pub(crate) chol_lower: Vec<f64>,
     /// QR factor G of F̃, packed by rows (`i ≤ j`).
-    pub g_upper: Vec<f64>,
+    pub(crate) g_upper: Vec<f64>,
+}
+
+/// Read access to the saved part of a model (the factors' packed forms
+/// stay internal).
+impl KrigingModelData {
+    /// Trend `f(s)` of the normalised inputs.
+    pub fn trend(&self) -> &Trend {
+        &self.trend
+    }
+
+    /// Correlation family.
+    pub fn corr(&self) -> Correlation {
+        self.corr
+    }
+
+    /// Correlation parameters ξ, one per input dimension (0 for trend-only
+    /// inputs).
+    pub fn theta(&self) -> &[f64] {
+        &self.theta
+    }
+
+    /// Nugget ν (0: interpolation).
+    pub fn nugget(&self) -> f64 {
+        self.nugget
+    }
+
+    /// Numerical jitter ε added to R's diagonal.
+    pub fn jitter(&self) -> f64 {
+        self.jitter
+    }
+
+    /// Normalised training inputs, m rows.
+    pub fn x_train(&self) -> &[Vec<f64>] {
+        &self.x_train
+    }
+
+    /// Training mean of the response, original units.
+    pub fn y_mean(&self) -> f64 {
+        self.y_mean
+    }
+
+    /// Training standard deviation of the response.
+    pub fn y_std(&self) -> f64 {
+        self.y_std
+    }
+
+    /// GLS trend coefficients β (eq 11), normalised units.
+    pub fn beta(&self) -> &[f64] {
+        &self.beta
+    }
+
+    /// `γ = R⁻¹(y − Fβ)` (eq 10), one per training row.
+    pub fn gamma(&self) -> &[f64] {
+        &self.gamma
+    }
+
+    /// Process variance σ² (normalised units, eq 13).
+    pub fn sigma2(&self) -> f64 {
+        self.sigma2
+    }
+
+    /// ln ψ at ξ (eq 14); `f64::MIN` stands for −∞.
+    pub fn ln_psi(&self) -> f64 {
+        self.ln_psi
+    }
 }
 
 /// The m × m part of a fit, needed for the MSE and closed-form CV but not
