@@ -155,3 +155,75 @@ fn gradient_matches_central_differences_fused_trend() {
     ));
     check_model(&model, &data, "fused");
 }
+
+/// A correlation family of the user's own (ARCHITECTURE.md, "Add a
+/// correlation family"): the rational quadratic `R = 1/(1 + h²)`, whose
+/// `q = R′(h)/(2h) = −R²`, implemented as a `CorrelationModel` from its
+/// scalar `corr` and `gradient_weights` alone. The likelihood, its analytic
+/// gradient and the solve at ξ take it as they take the built-in families.
+#[test]
+fn a_users_correlation_family_reaches_the_likelihood_and_the_solve() {
+    use robokrige::kriging::CorrelationModel;
+    struct RationalQuadratic;
+    impl CorrelationModel for RationalQuadratic {
+        fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
+            let h2: f64 = theta
+                .iter()
+                .zip(a.iter().zip(b))
+                .map(|(t, (x, y))| t * (x - y) * (x - y))
+                .sum();
+            1.0 / (1.0 + h2)
+        }
+        fn gradient_weights(
+            &self,
+            _theta: &[f64],
+            _x: &TrainingInputs,
+            _i: usize,
+            r: &[f64],
+            w: &mut [f64],
+        ) {
+            // w ← −q·w with −q = R²
+            for (v, rv) in w.iter_mut().zip(r) {
+                *v *= rv * rv;
+            }
+        }
+    }
+    let data = campaign(60);
+    let model = ErrorModel::fit(&data, Space::Js, &quick()).unwrap();
+    let out = &model.outputs()[0];
+    let x = out.data().x_train();
+    let d = x[0].len();
+    let inputs = TrainingInputs::new(x);
+    let f = trend_matrix(out.data().trend(), x);
+    let y: Vec<f64> = data.errors.as_ref().unwrap().iter().map(|e| e[0]).collect();
+    let prob = KrigingProblem {
+        min_jitter: None,
+        corr: &RationalQuadratic,
+        inputs: &inputs,
+        f: &f,
+        y: &y,
+        prior: &[],
+    };
+    let mut ws = Workspace::new(x.len(), f.ncols());
+    let z: Vec<f64> = (0..d)
+        .map(|k| -1.0 + 0.1 * k as f64)
+        .chain([-2.0])
+        .collect();
+    let theta: Vec<f64> = z[..d].iter().map(|v| 10f64.powf(*v)).collect();
+    let mut grad = vec![0.0; d + 1];
+    let v = prob.psi_grad(&theta, 1e-2, &mut ws, &mut grad).unwrap();
+    let h = 1e-5;
+    let scale = grad.iter().map(|g| g.abs()).fold(0.0, f64::max);
+    assert!(scale > 1e-4);
+    for k in 0..=d {
+        let (mut zp, mut zm) = (z.clone(), z.clone());
+        zp[k] += h;
+        zm[k] -= h;
+        let fd = (ln_psi(&prob, &zp, d, &mut ws) - ln_psi(&prob, &zm, d, &mut ws)) / (2.0 * h);
+        assert!((grad[k] - fd).abs() <= 1e-6 + 1e-5 * scale, "component {k}");
+    }
+    // the solve at ξ reproduces ψ and interpolates up to the nugget
+    let sol = prob.solve(&theta, 1e-2).unwrap();
+    assert_eq!(sol.value.ln_psi, v.ln_psi);
+    assert_eq!(sol.gamma.len(), x.len());
+}
