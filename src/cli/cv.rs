@@ -9,6 +9,7 @@ use robokrige::cv::{
     group_partition, largest_training_rows,
 };
 use robokrige::plot::box_plot;
+use robokrige::report::cv as report;
 use robokrige::vec3::norms;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -131,7 +132,6 @@ pub fn run(a: CvArgs) -> Result<()> {
         }
     };
     res.seconds = t0.elapsed().as_secs_f64();
-    let s = &res.summary;
     let words = params.params().settings_line();
     let how = match &a.groups {
         Some(col) => format!(
@@ -140,40 +140,11 @@ pub fn run(a: CvArgs) -> Result<()> {
         ),
         None => format!("{}-fold CV", res.folds),
     };
-    say!(
-        "{how} ({}) of {} on {} rows ({words}), {:.1} s",
-        res.mode,
-        a.data.display(),
-        data.len(),
-        res.seconds
+    let data_name = a.data.display().to_string();
+    say_part!(
+        "{}",
+        report::summary(&res, &how, (&data_name, data.len()), &words)
     );
-    say!(
-        "  RMSE x / y / z (mm): {:.4} / {:.4} / {:.4}",
-        s.rms_mm[0],
-        s.rms_mm[1],
-        s.rms_mm[2]
-    );
-    say!(
-        "  3D error (mm): mean {:.4}  std {:.4}  range [{:.4}, {:.4}]",
-        s.mean_3d_mm,
-        s.std_3d_mm,
-        s.min_3d_mm,
-        s.max_3d_mm
-    );
-    if let Some(sc) = &res.scores {
-        say!(
-            "  95 % interval coverage x / y / z: {:.3} / {:.3} / {:.3}  NLPD {:.3}  flagged {:.1} % of rows, {}",
-            sc.coverage_95[0],
-            sc.coverage_95[1],
-            sc.coverage_95[2],
-            sc.nlpd,
-            100.0 * sc.flag_rate,
-            match sc.flag_recall {
-                Some(r) => format!("{:.0} % of the {} gross errors", 100.0 * r, sc.gross_rows),
-                None => "no gross error".into(),
-            }
-        );
-    }
     if let Some(path) = &a.json {
         let mut v = serde_json::to_value(&res)
             .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
@@ -226,15 +197,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         data.len(),
         a.cv_seed
     );
-    say!(
-        "{:<11} {:>18} {:>9} {:>9} {:>26} {:>8}",
-        "method",
-        "range (mm)",
-        "mean",
-        "std",
-        "RMSE x / y / z (mm)",
-        "time"
-    );
+    say!("{}", report::methods_header());
     let mut rows = Vec::new();
     let mut groups = Vec::new();
     for m in methods {
@@ -250,18 +213,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         let res = res?;
         groups.push((m.name().to_string(), norms(&res.residuals)));
         let s = &res.summary;
-        say!(
-            "{:<11} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
-            m.name(),
-            s.min_3d_mm,
-            s.max_3d_mm,
-            s.mean_3d_mm,
-            s.std_3d_mm,
-            s.rms_mm[0],
-            s.rms_mm[1],
-            s.rms_mm[2],
-            res.seconds
-        );
+        say!("{}", report::methods_row(m.name(), &res));
         rows.push(serde_json::json!({
             "name": m.name(), "cv_mode": res.mode, "cv_rmse_mm": s.rms_mm,
             "mean_3d_mm": s.mean_3d_mm, "max_3d_mm": s.max_3d_mm, "std_3d_mm": s.std_3d_mm,

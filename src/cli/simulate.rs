@@ -1,9 +1,7 @@
 //! `robokrige simulate`.
 
 use clap::{Args, ValueEnum};
-use robokrige::sim::{
-    CampaignKind, CampaignSpec, Effect, MEASUREMENT_EFFECTS, SimOutput, simulate,
-};
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, simulate};
 use robokrige::stats::summarize;
 use robokrige::{Error, Result, dataset, kinematics};
 use std::path::{Path, PathBuf};
@@ -96,47 +94,7 @@ pub struct SimulateArgs {
     json: Option<PathBuf>,
 }
 
-/// Refuse the options `a.kind` does not use (each would be silently ignored).
-fn check_kind_options(a: &SimulateArgs) -> Result<()> {
-    let kind = format!("{:?}", a.kind).to_lowercase();
-    let refuse = |what: &str| {
-        Err(Error::InvalidParameter(format!(
-            "{what} (here --kind {kind})"
-        )))
-    };
-    let grid = matches!(a.kind, Kind::Indexing | Kind::Crosstalk);
-    if grid && a.poses.is_some() {
-        return refuse(
-            "--poses is not used by an indexing or cross-talk campaign: its poses come from the joint grid and --cycles",
-        );
-    }
-    if a.diameter.is_some() && !matches!(a.kind, Kind::Circle) {
-        return refuse("--diameter is for --kind circle");
-    }
-    if a.cycles.is_some() && !grid {
-        return refuse("--cycles is for --kind indexing or crosstalk");
-    }
-    if matches!(a.kind, Kind::Circle) {
-        if a.ranges.is_some() {
-            return refuse(
-                "--ranges does not apply to a circle trajectory (it is drawn around the robot's home TCP)",
-            );
-        }
-        for spec in &a.effects {
-            let name = spec.split(':').next().unwrap_or("");
-            if MEASUREMENT_EFFECTS.contains(&name) {
-                return refuse(&format!(
-                    "--effect {name} acts on measurements, and a circle is a trajectory to compensate, not measured; evaluate runs it without that effect"
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
 pub fn run(a: SimulateArgs) -> Result<()> {
-    check_kind_options(&a)?;
-    let robot = kinematics::load_robot(&a.robot)?;
     let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
     if let Some(p) = a.poses {
         spec.poses = p;
@@ -153,6 +111,8 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     if let Some(c) = a.cycles {
         spec.indexing_cycles = c;
     }
+    spec.validate()?;
+    let robot = kinematics::load_robot(&a.robot)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }

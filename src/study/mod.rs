@@ -3,6 +3,8 @@
 //! on the true robot (before / after). The CLI's `compensate`, `evaluate`,
 //! `demo`, `diagnose` and `physics` and the examples all use these.
 
+pub mod diagnosis;
+
 use crate::compensate::{Compensated, CompensationOptions, compensate};
 use crate::kinematics::{Robot, table_digest};
 use crate::predictor::ErrorPredictor;
