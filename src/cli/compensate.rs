@@ -2,6 +2,7 @@
 
 use super::progress::spinner;
 use clap::Args;
+use robokrige::Result;
 use robokrige::compensate::{Compensated, CompensationOptions, compensate};
 use robokrige::kinematics::{self, Robot};
 use robokrige::physics::AnyModel;
@@ -9,7 +10,6 @@ use robokrige::plot::{Labels, error_along_path};
 use robokrige::report::compensate as report;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
-use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// Pre-compensate a trajectory with a fitted error model (feed-forward).
@@ -195,20 +195,13 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         eval = Some(ev);
     }
     if let Some(path) = &a.json {
-        let mut v = serde_json::json!({
-            "targets": a.traj, "output": a.output, "model": a.model, "robot": robot.name,
-            "space": match &model {
-                AnyModel::Kriging(m) => serde_json::to_value(m.space()).expect("plain enum"),
-                AnyModel::Physics(_) => "physics".into(),
-            }, "iterative": a.iterative, "converged": res.converged,
-            "stop": res.stop, "unsettled": res.unsettled,
-            "iterations": res.history, "seconds": secs,
-        });
-        if let Some(ev) = eval {
-            v["before"] = serde_json::to_value(ev.before).expect("plain numbers");
-            v["after"] = serde_json::to_value(ev.after).expect("plain numbers");
-            v["evaluation"] = serde_json::to_value(&ev).expect("plain numbers");
-        }
+        let files = report::Files {
+            targets: &a.traj,
+            output: &a.output,
+            model: &a.model,
+        };
+        let run = (&res, a.iterative, secs);
+        let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
         super::write_json(path, &v, "compensation report")?;
     }
     Ok(())
@@ -236,16 +229,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     say!("measured error vs target on the simulated robot (mm):");
     for (k, path) in a.compensated.iter().enumerate() {
         let commands = Trajectory::read_csv(path)?;
-        if commands.len() != targets.traj.len() {
-            return Err(Error::Input {
-                source_name: path.display().to_string(),
-                message: format!(
-                    "has {} points but the target trajectory has {}",
-                    commands.len(),
-                    targets.traj.len()
-                ),
-            });
-        }
+        targets.check_commands(&commands, path)?;
         let (ev, (before, after)) =
             evaluate(&a.truth, &truth, &targets, &commands, &start, a.seed)?;
         if k == 0 {

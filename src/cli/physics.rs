@@ -5,7 +5,7 @@ use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::kinematics;
 use robokrige::methods::Method;
-use robokrige::physics::{CompareOptions, compare, identify_physics, is_scara};
+use robokrige::physics::{CompareOptions, check_training_campaign, compare, identify_physics};
 use robokrige::report::physics as report;
 use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -214,21 +214,10 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
+    check_training_campaign(&robot, a.train.is_some())?;
     let train = match &a.train {
-        Some(_) if is_scara(&robot) => {
-            return Err(Error::InvalidParameter(format!(
-                "--train is for six-axis robots; '{}' is a SCARA, identified from its indexing tests alone",
-                robot.name
-            )));
-        }
         Some(p) => read_data(p)?,
-        None if is_scara(&robot) => indexing.clone(),
-        None => {
-            return Err(Error::InvalidParameter(format!(
-                "'{}' is not a SCARA: its D-H errors are identified by Levenberg–Marquardt on a campaign; give --train CAMPAIGN.csv",
-                robot.name
-            )));
-        }
+        None => indexing.clone(),
     };
     for d in [&indexing, &train] {
         robot
@@ -289,11 +278,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::parse(&a.ejs)?,
         nugget: a.nugget,
     };
-    if a.nugget && opts.js == Method::Recommended && opts.ejs == Method::Recommended {
-        return Err(Error::InvalidParameter(
-            "--nugget changes the papers' methods only; --js and --ejs are both `recommended`, which always estimates one".into(),
-        ));
-    }
+    opts.validate()?;
     let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
     let res = compare(&opts, &|k, total, what| {

@@ -51,6 +51,19 @@ pub struct CompareOptions {
     pub nugget: bool,
 }
 
+impl CompareOptions {
+    /// Refuse `nugget` when it changes nothing: both methods are
+    /// `recommended`, which always estimates a nugget.
+    pub fn validate(&self) -> Result<()> {
+        if self.nugget && self.js == Method::Recommended && self.ejs == Method::Recommended {
+            return Err(Error::InvalidParameter(
+                "--nugget changes the papers' methods only; --js and --ejs are both `recommended`, which always estimates one".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for CompareOptions {
     fn default() -> Self {
         CompareOptions {

@@ -2,9 +2,12 @@
 //! the simulated robot.
 
 use crate::compensate::{Compensated, Stop};
+use crate::physics::AnyModel;
 use crate::stats::PositionErrorTable;
 use crate::study::Evaluation;
+use serde_json::Value;
 use std::fmt::Write as _;
+use std::path::Path;
 
 /// One error table, labelled: the mean error per axis and the mean, std,
 /// min and max of |δ|.
@@ -96,4 +99,42 @@ pub fn evaluation(truth: &str, ev: &Evaluation) -> String {
         table_line("after (compensated)", &ev.after),
         reduction_line("", ev)
     )
+}
+
+/// The files of a compensation: targets, commands written, model.
+#[derive(Debug, Clone, Copy)]
+pub struct Files<'a> {
+    /// The target trajectory.
+    pub targets: &'a Path,
+    /// The commands written.
+    pub output: &'a Path,
+    /// The model file.
+    pub model: &'a Path,
+}
+
+/// The JSON of `compensate --json`: the files, the robot, the model's
+/// space (`physics` for a physics model), the iteration history and how it
+/// stopped, the wall time `secs`, and the evaluation on the simulated robot
+/// if there is one.
+pub fn json(
+    files: Files<'_>,
+    (robot, model): (&str, &AnyModel),
+    (res, iterative, secs): (&Compensated, bool, f64),
+    eval: Option<&Evaluation>,
+) -> Value {
+    let mut v = serde_json::json!({
+        "targets": files.targets, "output": files.output, "model": files.model, "robot": robot,
+        "space": match model {
+            AnyModel::Kriging(m) => serde_json::to_value(m.space()).expect("plain enum"),
+            AnyModel::Physics(_) => "physics".into(),
+        }, "iterative": iterative, "converged": res.converged,
+        "stop": res.stop, "unsettled": res.unsettled,
+        "iterations": res.history, "seconds": secs,
+    });
+    if let Some(ev) = eval {
+        v["before"] = serde_json::to_value(ev.before).expect("plain numbers");
+        v["after"] = serde_json::to_value(ev.after).expect("plain numbers");
+        v["evaluation"] = serde_json::to_value(ev).expect("plain numbers");
+    }
+    v
 }

@@ -17,6 +17,7 @@ pub mod holdout;
 pub mod import;
 pub mod physics;
 pub mod predict;
+pub mod simulate;
 
 /// `x / y / z` to 4 decimals (mm).
 pub fn xyz(v: &[f64; 3]) -> String {

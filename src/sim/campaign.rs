@@ -135,6 +135,24 @@ impl CampaignSpec {
     }
 }
 
+/// Joint ranges `LO:HI,LO:HI,…` (degrees; mm for a prismatic joint), one
+/// pair per joint, for [`CampaignSpec::ranges`].
+pub fn parse_ranges(s: &str) -> Result<Vec<(f64, f64)>> {
+    s.split(',')
+        .map(|part| {
+            let (lo, hi) = part.split_once(':').ok_or_else(|| {
+                Error::InvalidParameter(format!("--ranges: '{part}' is not LO:HI"))
+            })?;
+            let p = |x: &str| {
+                x.trim().parse::<f64>().map_err(|_| {
+                    Error::InvalidParameter(format!("--ranges: '{x}' is not a number"))
+                })
+            };
+            Ok((p(lo)?, p(hi)?))
+        })
+        .collect()
+}
+
 /// The simulator's ground truth, written beside the data (never into it).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Truth {

@@ -38,6 +38,22 @@ impl Targets {
         })
     }
 
+    /// Error unless `commands` (read from `source`) has one point per
+    /// target.
+    pub fn check_commands(&self, commands: &Trajectory, source: &Path) -> Result<()> {
+        if commands.len() != self.traj.len() {
+            return Err(Error::Input {
+                source_name: source.display().to_string(),
+                message: format!(
+                    "has {} points but the target trajectory has {}",
+                    commands.len(),
+                    self.traj.len()
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Targets along a trajectory (no hints).
     pub fn from_trajectory(traj: Trajectory) -> Self {
         Targets {
