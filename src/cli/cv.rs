@@ -96,41 +96,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     }
     let params = params.check()?;
     let t0 = std::time::Instant::now();
-    let mut res = match a.mode {
-        Mode::Refit => {
-            data.errors_or_err()?;
-            let fold = match &a.groups {
-                Some(col) => group_partition(&data.group_labels(col)?)?,
-                None => robokrige::cv::kfold_partition(data.len(), a.folds, a.cv_seed)?,
-            };
-            let k = fold.iter().max().map_or(0, |f| f + 1);
-            let pb = bar(k as u64, "folds");
-            let res = cross_validate_folds(&data, &fold, |train| {
-                let m = params.fit(train);
-                pb.inc(1);
-                m
-            });
-            pb.finish_and_clear();
-            let mut res = res?;
-            res.seed = if a.groups.is_some() { 0 } else { a.cv_seed };
-            res
-        }
-        Mode::ClosedForm => {
-            let (model, subset) = closed_form_model(&data, &params, a.hyper_rows)?;
-            if let Some(h) = subset {
-                eprintln!(
-                    "hyperparameters chosen on the first {} rows in {:.1} s",
-                    h.rows, h.seconds
-                );
-                eprintln!(
-                    "refit on all {} rows at those values in {:.1} s",
-                    data.len(),
-                    h.refit_seconds
-                );
-            }
-            cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
-        }
-    };
+    let mut res = cross_validate(&a, &data, &params)?;
     res.seconds = t0.elapsed().as_secs_f64();
     let words = params.params().settings_line();
     let how = match &a.groups {
@@ -145,8 +111,62 @@ pub fn run(a: CvArgs) -> Result<()> {
         "{}",
         report::summary(&res, &how, (&data_name, data.len()), &words)
     );
+    write_outputs(&a, &res, &params)
+}
+
+/// The cross-validation `a.mode` asks for: refit in every fold (random
+/// folds, or one per group), or closed form at the hyperparameters of one
+/// fit (on the first `--hyper-rows` rows if given).
+fn cross_validate(
+    a: &CvArgs,
+    data: &robokrige::dataset::Dataset,
+    params: &robokrige::params::ValidErrorModelParams,
+) -> Result<robokrige::cv::CvResult> {
+    Ok(match a.mode {
+        Mode::Refit => {
+            data.errors_or_err()?;
+            let fold = match &a.groups {
+                Some(col) => group_partition(&data.group_labels(col)?)?,
+                None => robokrige::cv::kfold_partition(data.len(), a.folds, a.cv_seed)?,
+            };
+            let k = fold.iter().max().map_or(0, |f| f + 1);
+            let pb = bar(k as u64, "folds");
+            let res = cross_validate_folds(data, &fold, |train| {
+                let m = params.fit(train);
+                pb.inc(1);
+                m
+            });
+            pb.finish_and_clear();
+            let mut res = res?;
+            res.seed = if a.groups.is_some() { 0 } else { a.cv_seed };
+            res
+        }
+        Mode::ClosedForm => {
+            let (model, subset) = closed_form_model(data, params, a.hyper_rows)?;
+            if let Some(h) = subset {
+                eprintln!(
+                    "hyperparameters chosen on the first {} rows in {:.1} s",
+                    h.rows, h.seconds
+                );
+                eprintln!(
+                    "refit on all {} rows at those values in {:.1} s",
+                    data.len(),
+                    h.refit_seconds
+                );
+            }
+            cross_validate_closed_form(data, &model, a.folds, a.cv_seed)?
+        }
+    })
+}
+
+/// `--json` and `--plot` of one model choice's CV.
+fn write_outputs(
+    a: &CvArgs,
+    res: &robokrige::cv::CvResult,
+    params: &robokrige::params::ValidErrorModelParams,
+) -> Result<()> {
     if let Some(path) = &a.json {
-        let mut v = serde_json::to_value(&res)
+        let mut v = serde_json::to_value(res)
             .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
         if let Some(o) = v.as_object_mut() {
             o.insert("data".into(), serde_json::json!(a.data));
