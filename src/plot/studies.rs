@@ -136,17 +136,6 @@ fn slug(name: &str) -> String {
         .join("_")
 }
 
-#[cfg(test)]
-mod tests {
-    use super::slug;
-
-    #[test]
-    fn a_model_name_becomes_a_file_name() {
-        assert_eq!(slug("D-H + APD"), "d_h_apd");
-        assert_eq!(slug("Kriging EJS (ejs-gps)"), "kriging_ejs_ejs_gps");
-    }
-}
-
 /// The demo's figures in the existing folder `dir`: box plots of the
 /// methods' out-of-fold 3D errors (`cv_methods.svg`), the measured error
 /// along the circle, nominal and compensated (`circle_compensation.svg`),
@@ -189,4 +178,15 @@ pub fn demo_plots(demo: &Demo, dir: &Path) -> Result<Figures> {
         circle,
         effects,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slug;
+
+    #[test]
+    fn a_model_name_becomes_a_file_name() {
+        assert_eq!(slug("D-H + APD"), "d_h_apd");
+        assert_eq!(slug("Kriging EJS (ejs-gps)"), "kriging_ejs_ejs_gps");
+    }
 }

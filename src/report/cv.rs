@@ -26,10 +26,8 @@ pub fn summary(res: &CvResult, how: &str, (data, rows): (&str, usize), settings:
     if let Some(sc) = &res.scores {
         let _ = writeln!(
             out,
-            "  95 % interval coverage x / y / z: {:.3} / {:.3} / {:.3}  NLPD {:.3}  flagged {:.1} % of rows, {}",
-            sc.coverage_95[0],
-            sc.coverage_95[1],
-            sc.coverage_95[2],
+            "  95 % interval coverage x / y / z: {}  NLPD {:.3}  flagged {:.1} % of rows, {}",
+            super::coverage3(sc),
             sc.nlpd,
             100.0 * sc.flag_rate,
             match sc.flag_recall {

@@ -42,10 +42,8 @@ pub fn scores(scores: &[PredictiveScores]) -> String {
     for (name, sc) in CV_MODELS.iter().zip(scores) {
         let _ = writeln!(
             s,
-            "| {name} | {:.3} / {:.3} / {:.3} | {:.3} | {:.1} % | {} |",
-            sc.coverage_95[0],
-            sc.coverage_95[1],
-            sc.coverage_95[2],
+            "| {name} | {} | {:.3} | {:.1} % | {} |",
+            super::coverage3(sc),
             sc.nlpd,
             100.0 * sc.flag_rate,
             match sc.flag_recall {
