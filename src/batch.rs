@@ -158,3 +158,74 @@ pub fn run_batch(
         })
         .collect()
 }
+
+/// A campaign's name: its file stem (`campaign` when it has none).
+pub fn campaign_name(file: &Path) -> String {
+    file.file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("campaign")
+        .to_string()
+}
+
+/// The columns of the fleet summary CSV ([`write_summary`]).
+pub const SUMMARY_COLUMNS: [&str; 11] = [
+    "campaign",
+    "rows",
+    "robot",
+    "measured_mean_3d_mm",
+    "cv_rmse_x_mm",
+    "cv_rmse_y_mm",
+    "cv_rmse_z_mm",
+    "cv_mean_3d_mm",
+    "correlation",
+    "seconds",
+    "status",
+];
+
+/// Write the fleet summary CSV to `path` (atomically): one row per
+/// campaign of `campaigns` with its result of `results` (the same order):
+/// the columns of [`SUMMARY_COLUMNS`], the correlation families joined by
+/// `/`, status `ok`; a failed campaign has only its name and the status
+/// `failed: <error>`.
+pub fn write_summary(
+    path: &Path,
+    campaigns: &[PathBuf],
+    results: &[Result<CampaignReport>],
+) -> Result<()> {
+    crate::output::write_atomic(path, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        w.write_record(SUMMARY_COLUMNS)?;
+        for (file, r) in campaigns.iter().zip(results) {
+            w.write_record(summary_row(&campaign_name(file), r))?;
+        }
+        w.flush()
+    })
+}
+
+/// One campaign's row of the summary CSV.
+fn summary_row(name: &str, r: &Result<CampaignReport>) -> Vec<String> {
+    match r {
+        Ok(rep) => {
+            let cv = rep.cv.rms_mm;
+            vec![
+                name.to_string(),
+                rep.rows.to_string(),
+                rep.robot.clone().unwrap_or_default(),
+                rep.measured.mean_3d_mm.to_string(),
+                cv[0].to_string(),
+                cv[1].to_string(),
+                cv[2].to_string(),
+                rep.cv.mean_3d_mm.to_string(),
+                rep.correlation.join("/"),
+                rep.seconds.to_string(),
+                "ok".into(),
+            ]
+        }
+        Err(e) => {
+            let mut row = vec![String::new(); SUMMARY_COLUMNS.len()];
+            row[0] = name.to_string();
+            row[10] = format!("failed: {e}");
+            row
+        }
+    }
+}

@@ -174,17 +174,7 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
     options.validate()?;
     let robot = kinematics::load_robot(ROBOT)?;
     progress(0, "simulating the COMAU campaigns");
-    let (lhs, _) = campaign(&robot, CampaignKind::Lhs, options.poses, None)?;
-    let lhs = measurements(lhs);
-    let (verify, verify_truth) = campaign(&robot, CampaignKind::Verify, VERIFY_POSES, None)?;
-    let verify = measurements(verify);
-    let (circle, circle_truth) = campaign(&robot, CampaignKind::Circle, CIRCLE_POINTS, None)?;
-    let SimOutput::Trajectory(circle) = circle else {
-        unreachable!("a trajectory campaign")
-    };
-    let step = options.step_effect();
-    let (bumped, _) = campaign(&robot, CampaignKind::Lhs, options.poses, Some(&step))?;
-    let tracker_step = measurements(bumped);
+    let c = Campaigns::simulate(&robot, options)?;
 
     // 1. models
     progress(
@@ -195,18 +185,89 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
         ),
     );
     let fit = |m: Method, data: &Dataset| m.params(SEED, false).check()?.fit(data);
-    let js = fit(Method::JsHj, &lhs)?;
-    let ejs = fit(Method::EjsGps, &lhs)?;
+    let js = fit(Method::JsHj, &c.lhs)?;
+    let ejs = fit(Method::EjsGps, &c.lhs)?;
 
     // 2. method comparison
-    let k = options.folds;
+    let (methods, ejs_ga) = compare_methods(&c.lhs, &ejs, options.folds, progress)?;
+
+    // 3. compensation
+    let (compensation, circle_runs) = compensate_with_both(&robot, &c, [&js, &ejs], progress)?;
+
+    // 4. diagnose
+    progress(
+        6,
+        "diagnosing comau_tracker_step.csv (an undeclared tracker bump)",
+    );
+    let diagnosis = diagnose(&c.tracker_step, &DiagnoseOptions::default(), &|m| {
+        progress(6, &format!("diagnose: {m}"))
+    })?;
+    progress(STEPS, "done");
+    Ok(Demo {
+        options: *options,
+        robot,
+        lhs: c.lhs,
+        verify: c.verify,
+        circle: c.circle,
+        tracker_step: c.tracker_step,
+        js,
+        ejs,
+        ejs_ga,
+        methods,
+        compensation,
+        circle_runs,
+        diagnosis,
+    })
+}
+
+/// The demo's simulated campaigns (those of `datasets/generate.sh`).
+struct Campaigns {
+    lhs: Dataset,
+    verify: Dataset,
+    verify_truth: Truth,
+    circle: Trajectory,
+    circle_truth: Truth,
+    tracker_step: Dataset,
+}
+
+impl Campaigns {
+    fn simulate(robot: &Robot, options: &DemoOptions) -> Result<Self> {
+        let (lhs, _) = campaign(robot, CampaignKind::Lhs, options.poses, None)?;
+        let (verify, verify_truth) = campaign(robot, CampaignKind::Verify, VERIFY_POSES, None)?;
+        let (circle, circle_truth) = campaign(robot, CampaignKind::Circle, CIRCLE_POINTS, None)?;
+        let SimOutput::Trajectory(circle) = circle else {
+            unreachable!("a trajectory campaign")
+        };
+        let step = options.step_effect();
+        let (bumped, _) = campaign(robot, CampaignKind::Lhs, options.poses, Some(&step))?;
+        Ok(Campaigns {
+            lhs: measurements(lhs),
+            verify: measurements(verify),
+            verify_truth,
+            circle,
+            circle_truth,
+            tracker_step: measurements(bumped),
+        })
+    }
+}
+
+/// K-fold CV of the methods on `lhs`: `recommended`, `js-hj`, `ejs-hj`
+/// refitted in every fold; `ejs-gps` (the fitted `ejs`), `ejs-pca`,
+/// `ejs-ga` in closed form at the full-data fit. Returns the `ejs-ga`
+/// model too.
+fn compare_methods(
+    lhs: &Dataset,
+    ejs: &ErrorModel,
+    k: usize,
+    progress: &(dyn Fn(usize, &str) + Sync),
+) -> Result<(Vec<MethodCv>, ErrorModel)> {
     let mut methods = Vec::new();
     for m in [Method::Recommended, Method::JsHj, Method::EjsHj] {
         progress(
             2,
             &format!("{k}-fold CV of {} (refit in every fold)", m.name()),
         );
-        let cv = cross_validate_method(&lhs, m, k, SEED, &|| {}, &|_, _, _| {})?;
+        let cv = cross_validate_method(lhs, m, k, SEED, &|| {}, &|_, _, _| {})?;
         methods.push(MethodCv { method: m, cv });
     }
     let mut ejs_ga = None;
@@ -223,7 +284,7 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
         } else {
             m.params(SEED, false)
                 .check()?
-                .fit_with_progress(&lhs, &|axis, g, best| {
+                .fit_with_progress(lhs, &|axis, g, best| {
                     progress(
                         3,
                         &format!(
@@ -233,32 +294,44 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
                     )
                 })?
         };
-        let cv = cross_validate_closed_form(&lhs, &model, k, SEED)?;
+        let cv = cross_validate_closed_form(lhs, &model, k, SEED)?;
         methods.push(MethodCv { method: m, cv });
         if m == Method::EjsGa {
             ejs_ga = Some(model);
         }
     }
-    let ejs_ga = ejs_ga.expect("ejs-ga is among the methods");
+    Ok((methods, ejs_ga.expect("ejs-ga is among the methods")))
+}
 
-    // 3. compensation
+/// The measured errors along a path: (label, error per point).
+type Runs = Vec<(String, Vec<[f64; 3]>)>;
+
+/// JS and EJS compensate the circle, then the verification poses, each run
+/// on the simulated robot: the table rows, and the circle's measured errors
+/// (nominal, JS compensated, EJS compensated).
+fn compensate_with_both(
+    robot: &Robot,
+    c: &Campaigns,
+    [js, ejs]: [&ErrorModel; 2],
+    progress: &(dyn Fn(usize, &str) + Sync),
+) -> Result<(Vec<CompensationRow>, Runs)> {
     let mut compensation = Vec::new();
-    let verify_targets = Targets::from_joints(&robot, &verify.q)?;
-    let circle_targets = Targets::from_trajectory(circle.clone());
-    let mut circle_runs: Vec<(String, Vec<[f64; 3]>)> = Vec::new();
+    let verify_targets = Targets::from_joints(robot, &c.verify.q)?;
+    let circle_targets = Targets::from_trajectory(c.circle.clone());
+    let mut circle_runs: Runs = Vec::new();
     let sets = [
         (
             "circle",
             "Ø100 mm circle (72 points)",
             &circle_targets,
-            &circle_truth,
+            &c.circle_truth,
             "comau_circle.truth.json",
         ),
         (
             "verification poses",
             "30 verification poses",
             &verify_targets,
-            &verify_truth,
+            &c.verify_truth,
             "comau_verify.truth.json",
         ),
     ];
@@ -268,8 +341,8 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
             &format!("compensating the {name} with JS and EJS, run on the simulated robot"),
         );
         let runs = compensate_and_evaluate_each(
-            &robot,
-            &[&js, &ejs],
+            robot,
+            &[js, ejs],
             Path::new(truth_file),
             truth,
             targets,
@@ -293,29 +366,5 @@ pub fn run_demo(options: &DemoOptions, progress: &(dyn Fn(usize, &str) + Sync)) 
             });
         }
     }
-
-    // 4. diagnose
-    progress(
-        6,
-        "diagnosing comau_tracker_step.csv (an undeclared tracker bump)",
-    );
-    let diagnosis = diagnose(&tracker_step, &DiagnoseOptions::default(), &|m| {
-        progress(6, &format!("diagnose: {m}"))
-    })?;
-    progress(STEPS, "done");
-    Ok(Demo {
-        options: *options,
-        robot,
-        lhs,
-        verify,
-        circle,
-        tracker_step,
-        js,
-        ejs,
-        ejs_ga,
-        methods,
-        compensation,
-        circle_runs,
-        diagnosis,
-    })
+    Ok((compensation, circle_runs))
 }

@@ -38,6 +38,7 @@
 //! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
 //! | studies | [`demo`] | the demo's job on the simulated COMAU: methods by CV, compensation, a diagnosis |
 //! | output | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
+//! | output | [`report`] | the studies' text reports: the tables the CLI prints, its Markdown reports |
 //!
 //! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
 //! `plot` (plotters), both on by default; `default-features = false` gives
@@ -69,6 +70,7 @@ pub mod physics;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod predictor;
+pub mod report;
 pub mod selection;
 pub mod sim;
 pub mod space;

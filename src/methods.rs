@@ -27,7 +27,7 @@ pub enum Method {
     /// Not a paper's method: the engine's recommendation for tracker data
     /// (issue 17): EJS, constant trend, BFGS, a nugget estimated, and each
     /// output's correlation family chosen by closed-form CV
-    /// ([`crate::kriging::fit_output_auto`]).
+    /// ([`crate::kriging::CorrChoice::ByCv`]).
     Recommended,
     /// Seed 003's JS model: joint space `[θ]`, constant trend, Gaussian
     /// correlation, Hooke–Jeeves on ln ψ, interpolating.

@@ -297,6 +297,22 @@ impl Calibration {
         &self.identified
     }
 
+    /// The identified robot as a robot of its own: named
+    /// `<nominal>-calibrated`, its convention noting the poses and the
+    /// directions seen (for `robot calibrated`).
+    pub fn calibrated_robot(&self) -> Robot {
+        let mut robot = self.identified().clone();
+        robot.name = format!("{}-calibrated", self.nominal().name);
+        robot.convention = format!(
+            "{}; MD-H, tool and base errors identified on {} poses ({} of {} directions seen)",
+            self.nominal().convention,
+            self.rows(),
+            self.identifiability().directions_seen,
+            self.identifiability().parameters_total
+        );
+        robot
+    }
+
     /// The identified parameter errors (degrees and mm), in the order of
     /// [`crate::kinematics::calib_names`].
     pub fn parameters(&self) -> &[f64] {

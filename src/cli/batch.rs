@@ -1,7 +1,10 @@
 //! `batch`: every campaign of a folder, one robot each, in parallel.
 
 use clap::Args;
-use robokrige::batch::{BatchOptions, CampaignReport, campaigns, run_batch};
+use robokrige::batch::{
+    BatchOptions, CampaignReport, campaign_name, campaigns, run_batch, write_summary,
+};
+use robokrige::report::batch as report;
 use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -84,74 +87,25 @@ pub fn run(a: BatchArgs) -> Result<()> {
         }
     });
     pb.finish_and_clear();
-    let stem = |p: &Path| {
-        p.file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("campaign")
-            .to_string()
-    };
-    let mut rows = vec![
-        "campaign,rows,robot,measured_mean_3d_mm,cv_rmse_x_mm,cv_rmse_y_mm,cv_rmse_z_mm,cv_mean_3d_mm,correlation,seconds,status"
-            .to_string(),
-    ];
-    say!(
-        "{:<28} {:>6} {:<20} {:>10} {:>26} {:>9} {:>7}",
-        "campaign",
-        "rows",
-        "robot",
-        "measured",
-        "CV RMSE x / y / z (mm)",
-        "CV mean",
-        "s"
-    );
-    let mut failed = 0;
+    say!("{}", report::header());
     let mut reports = Vec::new();
     for (file, r) in files.iter().zip(&results) {
-        let name = stem(file);
-        match r {
-            Ok(rep) => {
-                write_campaign(&a.output, &name, rep)?;
-                let cv = rep.cv.rms_mm;
-                say!(
-                    "{:<28} {:>6} {:<20} {:>10.4} {:>8.4} / {:.4} / {:.4} {:>9.4} {:>7.1}",
-                    name,
-                    rep.rows,
-                    rep.robot.as_deref().unwrap_or("-"),
-                    rep.measured.mean_3d_mm,
-                    cv[0],
-                    cv[1],
-                    cv[2],
-                    rep.cv.mean_3d_mm,
-                    rep.seconds
-                );
-                rows.push(format!(
-                    "{name},{},{},{},{},{},{},{},{},{},ok",
-                    rep.rows,
-                    rep.robot.as_deref().unwrap_or(""),
-                    rep.measured.mean_3d_mm,
-                    cv[0],
-                    cv[1],
-                    cv[2],
-                    rep.cv.mean_3d_mm,
-                    rep.correlation.join("/"),
-                    rep.seconds
-                ));
-                reports.push(serde_json::json!({"campaign": name, "report": rep}));
-            }
-            Err(e) => {
-                failed += 1;
-                say!("{name:<28} failed: {e}");
-                let msg = e.to_string().replace('"', "'");
-                rows.push(format!("{name},,,,,,,,,,\"failed: {msg}\""));
-                reports.push(serde_json::json!({"campaign": name, "error": e.to_string()}));
-            }
+        let name = campaign_name(file);
+        if let Ok(rep) = r {
+            write_campaign(&a.output, &name, rep)?;
         }
+        say!("{}", report::row(&name, r));
+        reports.push(match r {
+            Ok(rep) => serde_json::json!({"campaign": name, "report": rep}),
+            Err(e) => serde_json::json!({"campaign": name, "error": e.to_string()}),
+        });
     }
-    robokrige::output::write_text(&summary_csv, &(rows.join("\n") + "\n"))?;
+    write_summary(&summary_csv, &files, &results)?;
     say!("summary -> {}", summary_csv.display());
     if let Some(p) = &a.json {
         super::write_json(p, &reports, "batch summary")?;
     }
+    let failed = results.iter().filter(|r| r.is_err()).count();
     if failed > 0 {
         return Err(Error::InvalidParameter(format!(
             "{failed} of {} campaign(s) failed (listed above and in {})",

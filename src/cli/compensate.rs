@@ -2,14 +2,14 @@
 
 use super::progress::spinner;
 use clap::Args;
-use robokrige::compensate::{Compensated, CompensationOptions, Stop, compensate};
+use robokrige::Result;
+use robokrige::compensate::{Compensated, CompensationOptions, compensate};
 use robokrige::kinematics::{self, Robot};
 use robokrige::physics::AnyModel;
 use robokrige::plot::{Labels, error_along_path};
-use robokrige::stats::PositionErrorTable;
+use robokrige::report::compensate as report;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
-use robokrige::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// Pre-compensate a trajectory with a fitted error model (feed-forward).
@@ -115,19 +115,6 @@ pub(super) fn read_targets(
     Ok(t)
 }
 
-fn print_table(label: &str, t: &PositionErrorTable) {
-    say!(
-        "  {label:<22} mean x/y/z {:>8.4} {:>8.4} {:>8.4}   |δ| mean {:.4}  std {:.4}  min {:.4}  max {:.4}",
-        t.mean_mm[0],
-        t.mean_mm[1],
-        t.mean_mm[2],
-        t.mean_abs_mm,
-        t.std_abs_mm,
-        t.min_abs_mm,
-        t.max_abs_mm
-    );
-}
-
 /// The measured 3D error along the trajectory, one line per run.
 fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()> {
     let labels = Labels {
@@ -174,55 +161,18 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         super::print_coverage(&coverage, res.joints.len(), None);
     }
     res.commands.write_csv(&a.output)?;
-    say!(
-        "{} {} points with {} in {secs:.3} s -> {}",
-        if a.iterative {
-            "iteratively compensated"
-        } else {
-            "compensated (single step)"
-        },
-        targets.traj.len(),
-        model.describe(),
-        a.output.display()
-    );
-    for it in &res.history {
-        say!(
-            "  iteration {:>2}: RMSE of the change {:.5} mm (max {:.5}), mean predicted |δ̂| {:.4} mm, λ flips {}",
-            it.iteration,
-            it.rmse_change_mm,
-            it.max_change_mm,
-            it.mean_predicted_mm,
-            it.direction_flips
-        );
-    }
-    match res.stop {
-        Stop::Stalled => eprintln!(
-            "warning: the change stalled above {} mm at direction reversals; λ still switching at points {}",
-            a.tol,
-            list(&res.unsettled)
-        ),
-        Stop::MaxIterations => eprintln!(
-            "warning: the change did not fall below {} mm in {} iterations",
-            a.tol, a.max_iter
-        ),
-        Stop::Converged | Stop::SingleStep => {}
+    let output = a.output.display().to_string();
+    let text = report::iterations(&res, a.iterative, &model.describe(), secs, &output);
+    say_part!("{text}");
+    if let Some(w) = report::stop_warning(&res, a.tol, a.max_iter) {
+        eprintln!("{w}");
     }
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let truth = load_truth(tp)?;
         check_truth_robot(&truth, &robot, tp)?;
         let (ev, (before, after)) = evaluate(tp, &truth, &targets, &res.commands, &start, a.seed)?;
-        say!(
-            "on the simulated robot ({}), measured error vs target (mm):",
-            tp.display()
-        );
-        print_table("before (nominal)", &ev.before);
-        print_table("after (compensated)", &ev.after);
-        say!(
-            "  reduction: mean |δ| {:.1} %, max |δ| {:.1} %",
-            ev.reduction_mean_abs_pct,
-            ev.reduction_max_abs_pct
-        );
+        say_part!("{}", report::evaluation(&tp.display().to_string(), &ev));
         if let Some(p) = &a.plot {
             let name = a
                 .traj
@@ -245,32 +195,16 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         eval = Some(ev);
     }
     if let Some(path) = &a.json {
-        let mut v = serde_json::json!({
-            "targets": a.traj, "output": a.output, "model": a.model, "robot": robot.name,
-            "space": match &model {
-                AnyModel::Kriging(m) => serde_json::to_value(m.space()).expect("plain enum"),
-                AnyModel::Physics(_) => "physics".into(),
-            }, "iterative": a.iterative, "converged": res.converged,
-            "stop": res.stop, "unsettled": res.unsettled,
-            "iterations": res.history, "seconds": secs,
-        });
-        if let Some(ev) = eval {
-            v["before"] = serde_json::to_value(ev.before).expect("plain numbers");
-            v["after"] = serde_json::to_value(ev.after).expect("plain numbers");
-            v["evaluation"] = serde_json::to_value(&ev).expect("plain numbers");
-        }
+        let files = report::Files {
+            targets: &a.traj,
+            output: &a.output,
+            model: &a.model,
+        };
+        let run = (&res, a.iterative, secs);
+        let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
         super::write_json(path, &v, "compensation report")?;
     }
     Ok(())
-}
-
-/// Up to 12 indices, then an ellipsis.
-fn list(v: &[usize]) -> String {
-    let mut s: Vec<String> = v.iter().take(12).map(usize::to_string).collect();
-    if v.len() > 12 {
-        s.push(format!("… ({} in all)", v.len()));
-    }
-    s.join(", ")
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
@@ -295,20 +229,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     say!("measured error vs target on the simulated robot (mm):");
     for (k, path) in a.compensated.iter().enumerate() {
         let commands = Trajectory::read_csv(path)?;
-        if commands.len() != targets.traj.len() {
-            return Err(Error::Input {
-                source_name: path.display().to_string(),
-                message: format!(
-                    "has {} points but the target trajectory has {}",
-                    commands.len(),
-                    targets.traj.len()
-                ),
-            });
-        }
+        targets.check_commands(&commands, path)?;
         let (ev, (before, after)) =
             evaluate(&a.truth, &truth, &targets, &commands, &start, a.seed)?;
         if k == 0 {
-            print_table("before (nominal)", &ev.before);
+            say!("{}", report::table_line("before (nominal)", &ev.before));
             runs.push(("before".to_string(), before));
         }
         let name = path
@@ -316,13 +241,8 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             .and_then(|s| s.to_str())
             .unwrap_or("compensated")
             .to_string();
-        print_table(&name, &ev.after);
-        say!(
-            "  {:<22} reduction: mean |δ| {:.1} %, max |δ| {:.1} %",
-            "",
-            ev.reduction_mean_abs_pct,
-            ev.reduction_max_abs_pct
-        );
+        say!("{}", report::table_line(&name, &ev.after));
+        say!("{}", report::reduction_line(&format!("{:<22} ", ""), &ev));
         runs.push((name.clone(), after));
         reports.push(serde_json::json!({"file": path, "evaluation": ev}));
     }

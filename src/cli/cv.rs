@@ -9,6 +9,7 @@ use robokrige::cv::{
     group_partition, largest_training_rows,
 };
 use robokrige::plot::box_plot;
+use robokrige::report::cv as report;
 use robokrige::vec3::norms;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -95,7 +96,33 @@ pub fn run(a: CvArgs) -> Result<()> {
     }
     let params = params.check()?;
     let t0 = std::time::Instant::now();
-    let mut res = match a.mode {
+    let mut res = cross_validate(&a, &data, &params)?;
+    res.seconds = t0.elapsed().as_secs_f64();
+    let words = params.params().settings_line();
+    let how = match &a.groups {
+        Some(col) => format!(
+            "leave-one-group-out CV over the {} groups of '{col}'",
+            res.folds
+        ),
+        None => format!("{}-fold CV", res.folds),
+    };
+    let data_name = a.data.display().to_string();
+    say_part!(
+        "{}",
+        report::summary(&res, &how, (&data_name, data.len()), &words)
+    );
+    write_outputs(&a, &res, &params)
+}
+
+/// The cross-validation `a.mode` asks for: refit in every fold (random
+/// folds, or one per group), or closed form at the hyperparameters of one
+/// fit (on the first `--hyper-rows` rows if given).
+fn cross_validate(
+    a: &CvArgs,
+    data: &robokrige::dataset::Dataset,
+    params: &robokrige::params::ValidErrorModelParams,
+) -> Result<robokrige::cv::CvResult> {
+    Ok(match a.mode {
         Mode::Refit => {
             data.errors_or_err()?;
             let fold = match &a.groups {
@@ -104,7 +131,7 @@ pub fn run(a: CvArgs) -> Result<()> {
             };
             let k = fold.iter().max().map_or(0, |f| f + 1);
             let pb = bar(k as u64, "folds");
-            let res = cross_validate_folds(&data, &fold, |train| {
+            let res = cross_validate_folds(data, &fold, |train| {
                 let m = params.fit(train);
                 pb.inc(1);
                 m
@@ -115,7 +142,7 @@ pub fn run(a: CvArgs) -> Result<()> {
             res
         }
         Mode::ClosedForm => {
-            let (model, subset) = closed_form_model(&data, &params, a.hyper_rows)?;
+            let (model, subset) = closed_form_model(data, params, a.hyper_rows)?;
             if let Some(h) = subset {
                 eprintln!(
                     "hyperparameters chosen on the first {} rows in {:.1} s",
@@ -127,55 +154,19 @@ pub fn run(a: CvArgs) -> Result<()> {
                     h.refit_seconds
                 );
             }
-            cross_validate_closed_form(&data, &model, a.folds, a.cv_seed)?
+            cross_validate_closed_form(data, &model, a.folds, a.cv_seed)?
         }
-    };
-    res.seconds = t0.elapsed().as_secs_f64();
-    let s = &res.summary;
-    let words = params.params().settings_line();
-    let how = match &a.groups {
-        Some(col) => format!(
-            "leave-one-group-out CV over the {} groups of '{col}'",
-            res.folds
-        ),
-        None => format!("{}-fold CV", res.folds),
-    };
-    say!(
-        "{how} ({}) of {} on {} rows ({words}), {:.1} s",
-        res.mode,
-        a.data.display(),
-        data.len(),
-        res.seconds
-    );
-    say!(
-        "  RMSE x / y / z (mm): {:.4} / {:.4} / {:.4}",
-        s.rms_mm[0],
-        s.rms_mm[1],
-        s.rms_mm[2]
-    );
-    say!(
-        "  3D error (mm): mean {:.4}  std {:.4}  range [{:.4}, {:.4}]",
-        s.mean_3d_mm,
-        s.std_3d_mm,
-        s.min_3d_mm,
-        s.max_3d_mm
-    );
-    if let Some(sc) = &res.scores {
-        say!(
-            "  95 % interval coverage x / y / z: {:.3} / {:.3} / {:.3}  NLPD {:.3}  flagged {:.1} % of rows, {}",
-            sc.coverage_95[0],
-            sc.coverage_95[1],
-            sc.coverage_95[2],
-            sc.nlpd,
-            100.0 * sc.flag_rate,
-            match sc.flag_recall {
-                Some(r) => format!("{:.0} % of the {} gross errors", 100.0 * r, sc.gross_rows),
-                None => "no gross error".into(),
-            }
-        );
-    }
+    })
+}
+
+/// `--json` and `--plot` of one model choice's CV.
+fn write_outputs(
+    a: &CvArgs,
+    res: &robokrige::cv::CvResult,
+    params: &robokrige::params::ValidErrorModelParams,
+) -> Result<()> {
     if let Some(path) = &a.json {
-        let mut v = serde_json::to_value(&res)
+        let mut v = serde_json::to_value(res)
             .map_err(|e| Error::InvalidParameter(format!("cv result: {e}")))?;
         if let Some(o) = v.as_object_mut() {
             o.insert("data".into(), serde_json::json!(a.data));
@@ -226,15 +217,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         data.len(),
         a.cv_seed
     );
-    say!(
-        "{:<11} {:>18} {:>9} {:>9} {:>26} {:>8}",
-        "method",
-        "range (mm)",
-        "mean",
-        "std",
-        "RMSE x / y / z (mm)",
-        "time"
-    );
+    say!("{}", report::methods_header());
     let mut rows = Vec::new();
     let mut groups = Vec::new();
     for m in methods {
@@ -250,18 +233,7 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         let res = res?;
         groups.push((m.name().to_string(), norms(&res.residuals)));
         let s = &res.summary;
-        say!(
-            "{:<11} [{:.4}, {:.4}] {:>9.4} {:>9.4}   {:.4} / {:.4} / {:.4} {:>7.1}s",
-            m.name(),
-            s.min_3d_mm,
-            s.max_3d_mm,
-            s.mean_3d_mm,
-            s.std_3d_mm,
-            s.rms_mm[0],
-            s.rms_mm[1],
-            s.rms_mm[2],
-            res.seconds
-        );
+        say!("{}", report::methods_row(m.name(), &res));
         rows.push(serde_json::json!({
             "name": m.name(), "cv_mode": res.mode, "cv_rmse_mm": s.rms_mm,
             "mean_3d_mm": s.mean_3d_mm, "max_3d_mm": s.max_3d_mm, "std_3d_mm": s.std_3d_mm,

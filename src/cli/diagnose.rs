@@ -4,17 +4,14 @@ use super::compensate::read_targets;
 use super::progress::spinner;
 use clap::Args;
 use robokrige::dataset::Dataset;
-use robokrige::diagnose::{
-    CvStats, DiagnoseOptions, Diagnosis, EffectReport, diagnose, fit_with_effects,
-};
+use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use robokrige::kinematics;
 use robokrige::kriging::KrigingOptions;
-use robokrige::model::ErrorModel;
 use robokrige::plot::effect_plots;
-use robokrige::stats::PositionErrorTable;
-use robokrige::study::{compensate_and_evaluate_each, load_truth};
+use robokrige::report::diagnose::{self as report, Extras, Names};
+use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase, compare_compensation};
+use robokrige::study::load_truth;
 use robokrige::{Error, Result};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Find what the model still gets wrong, trace it to a missing effect, add it.
@@ -157,12 +154,8 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         ))
 }
 
-pub(super) fn rmse3(v: &[f64; 3]) -> String {
-    format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2])
-}
-
 pub fn run(a: DiagnoseArgs) -> Result<()> {
-    let inputs: Vec<&std::path::Path> = [
+    let inputs: Vec<&Path> = [
         Some(a.data.as_path()),
         a.traj.as_deref(),
         a.truth.as_deref(),
@@ -170,7 +163,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     .into_iter()
     .flatten()
     .collect();
-    let outputs: Vec<&std::path::Path> = [
+    let outputs: Vec<&Path> = [
         a.json.as_deref(),
         a.report.as_deref(),
         a.model_out.as_deref(),
@@ -184,63 +177,36 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         data = data.select(&(0..n).collect::<Vec<_>>());
     }
     let opts = options(&a, &data)?;
-    let mut calibration = None;
-    if a.calibrate {
-        let robot = opts
-            .get_robot()
-            .expect("clap: --calibrate requires --robot");
-        let cal = robokrige::calibration::calibrate(&data, robot, &Default::default())?;
-        data = cal.residual(&data)?;
+    let base = DiagnosisBase::new(data, &opts, a.calibrate)?;
+    if let Some(cal) = &base.calibration {
         say!(
             "calibrated base: {}; diagnosing its residual",
             cal.summary_line()
         );
-        calibration = Some(cal);
     }
-    let on_calibration = |m: robokrige::model::ErrorModel| match &calibration {
-        Some(c) => m.with_calibration(c.clone()),
-        None => m,
-    };
-    let plan = robokrige::diagnose::DiagnosePlan::new(&data, &opts);
+    let plan = robokrige::diagnose::DiagnosePlan::new(&base.data, &opts);
     plan.check(
         |n| format!("`--rows {n}`"),
         |n| format!("`--scan-rows {n}`"),
     )?;
-    if data.len() > robokrige::kriging::SEARCH_ROWS {
+    if base.data.len() > robokrige::kriging::SEARCH_ROWS {
         eprintln!("diagnose: {plan}");
     }
     let pb = spinner("diagnose");
-    let d = diagnose(&data, &opts, &|msg| pb.set_message(msg.to_string()));
+    let d = diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()));
     pb.finish_and_clear();
     let d = d?;
-    print_summary(&a, &d);
-    let mut plots = Vec::new();
-    if let Some(dir) = &a.plots {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        plots = effect_plots(dir, &data, &d)?;
-        for p in &plots {
-            say!("plot: {}", p.display());
-        }
-        if plots.is_empty() {
-            say!("no plots in {}: no effect was added", dir.display());
-        }
-    }
-    let need_models = a.model_out.is_some() || a.traj.is_some();
-    let mut compensation = None;
-    if need_models {
-        let after = on_calibration(fit_with_effects(&data, &opts, &d.extras)?);
-        if let Some(p) = &a.model_out {
-            after.save(p)?;
-            say!("model with the added effects: {}", p.display());
-        }
-        if let (Some(robot), Some(traj), Some(truth)) = (&a.robot, &a.traj, &a.truth) {
-            // (--traj and --truth without --robot are rejected by clap)
-            let before = on_calibration(fit_with_effects(&data, &opts, &[])?);
-            compensation = Some(compare_compensation(
-                robot, traj, truth, &before, &after, a.seed,
-            )?);
-        }
-    }
+    let (data_name, traj_name) = (
+        a.data.display().to_string(),
+        a.traj.as_ref().map(|p| p.display().to_string()),
+    );
+    let names = Names {
+        data: &data_name,
+        method: &a.method,
+    };
+    say_part!("{}", report::summary(&d, names));
+    let plots = draw_plots(a.plots.as_deref(), &base.data, &d)?;
+    let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
     if let Some(path) = &a.json {
         let mut v = serde_json::to_value(&d).map_err(|e| Error::Json {
             context: "diagnosis".into(),
@@ -249,356 +215,72 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         v["data"] = serde_json::json!(a.data);
         v["method"] = serde_json::json!(a.method);
         if let Some(c) = &compensation {
-            v["compensation"] = serde_json::json!({"before_model": c.0, "after_model": c.1});
+            v["compensation"] = serde_json::json!(c);
         }
         super::write_json(path, &v, "diagnosis")?;
     }
     if let Some(path) = &a.report {
-        let text = report(&a, &d, &plots, compensation.as_ref());
-        robokrige::output::write_text(path, &text)?;
+        let extras = Extras {
+            compensation: traj_name.as_deref().zip(compensation.as_ref()),
+            plots: &plots,
+        };
+        robokrige::output::write_text(path, &report::markdown(&d, names, extras))?;
         say!("report: {}", path.display());
     }
     Ok(())
 }
 
-fn print_summary(a: &DiagnoseArgs, d: &Diagnosis) {
-    say!(
-        "{} ({} rows{}): {}-fold {} CV ({}), {} candidates scanning {} parameter values, up to {} resamples, FDR {}, {:.1} s",
-        a.data.display(),
-        d.before.residuals.len(),
-        if d.scanned_rows > 0 && d.scanned_rows < d.rows {
-            format!(
-                ", candidates scanned on {} of them, evenly spread",
-                d.scanned_rows
-            )
-        } else {
-            String::new()
-        },
-        d.folds,
-        d.cv_mode(),
-        a.method,
-        d.candidates[0],
-        d.candidates[1],
-        d.permutations,
-        d.fdr,
-        d.seconds
-    );
-    for c in &d.dropped_covariates {
-        say!("  left out: covariate {}: {}", c.name, c.reason);
+/// With `--plots DIR`: the residual-vs-effect plots of the added effects.
+fn draw_plots(dir: Option<&Path>, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+    let Some(dir) = dir else {
+        return Ok(Vec::new());
+    };
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let plots = effect_plots(dir, data, d)?;
+    for p in &plots {
+        say!("plot: {}", p.display());
     }
-    say!(
-        "  before: CV RMSE x/y/z {} mm, mean 3D {:.4}",
-        rmse3(&d.before.cv_rmse_mm),
-        d.before.mean_3d_mm
-    );
-    let mut round = 0;
-    for e in &d.effects {
-        if e.round != round {
-            round = e.round;
-            say!(
-                "  round {round} (best 5 of {}):",
-                d.effects.iter().filter(|x| x.round == round).count()
-            );
-        }
-        let rank = d
-            .effects
-            .iter()
-            .filter(|x| x.round == round)
-            .position(|x| x == e)
-            .unwrap_or(0);
-        if rank < 5 || e.accepted {
-            say!(
-                "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}  evidence {:>6.3}{}{}",
-                e.describe(),
-                e.score,
-                if e.refit_xi { " ξ" } else { "  " },
-                e.p_value,
-                e.q_value,
-                e.evidence,
-                if e.accepted {
-                    "  ADDED"
-                } else if e.significant {
-                    "  significant"
-                } else {
-                    ""
-                },
-                e.note
-                    .as_deref()
-                    .map(|n| format!("  ({n})"))
-                    .unwrap_or_default()
-            );
-        }
+    if plots.is_empty() {
+        say!("no plots in {}: no effect was added", dir.display());
     }
-    let added: Vec<&EffectReport> = d.effects.iter().filter(|e| e.accepted).collect();
-    for (k, s) in d.steps.iter().enumerate() {
-        say!(
-            "  after effect {}: CV RMSE x/y/z {} mm, mean 3D {:.4}",
-            k + 1,
-            rmse3(&s.cv_rmse_mm),
-            s.mean_3d_mm
-        );
-        if let Some(e) = added.get(k) {
-            for line in effect_lines(e) {
-                say!("    {line}");
-            }
-        }
-    }
-    if d.steps.is_empty() {
-        if d.effects.iter().any(|e| e.significant) {
-            say!("  significant candidates, but none lowered the CV RMSE enough to be added");
-        } else {
-            say!("  no significant effect: nothing to add");
-        }
-    }
+    Ok(plots)
 }
 
-/// The size of an added effect (its trend coefficients with 95 % intervals)
-/// and its "after" check, one line each.
-fn effect_lines(e: &EffectReport) -> Vec<String> {
-    let mut out: Vec<String> = e
-        .size
-        .iter()
-        .map(|c| {
-            // per unit of a column in degree·mm/rad (a lag through the
-            // Jacobian) a coefficient is ~1e-5: four decimals would print 0
-            let largest = c
-                .estimate
-                .iter()
-                .chain(&c.ci95)
-                .fold(0.0f64, |m, v| m.max(v.abs()));
-            let num = |v: f64| {
-                if largest > 0.0 && largest < 1e-3 {
-                    format!("{v:.3e}")
-                } else {
-                    format!("{v:.4}")
-                }
-            };
-            let v: Vec<String> = (0..3)
-                .map(|a| {
-                    format!(
-                        "{} {} ± {}",
-                        ["x", "y", "z"][a],
-                        num(c.estimate[a]),
-                        num(c.ci95[a])
-                    )
-                })
-                .collect();
-            format!("{}: {} (mm per unit, 95 %)", c.column, v.join(", "))
-        })
-        .collect();
-    if let Some(c) = &e.after_check {
-        out.push(c.verdict.clone());
+/// With `--model-out`: save the model with the added effects; with
+/// `--traj` (and `--robot`, `--truth`): compare the models before and after
+/// compensating it on the simulated robot.
+fn write_and_compare_models(
+    a: &DiagnoseArgs,
+    base: &DiagnosisBase,
+    opts: &DiagnoseOptions,
+    d: &Diagnosis,
+) -> Result<Option<CompensationComparison>> {
+    if a.model_out.is_none() && a.traj.is_none() {
+        return Ok(None);
     }
-    out
-}
-
-type Comparison = (PositionErrorTable, PositionErrorTable);
-
-/// Iterative compensation of `traj` with the models before and after, both run
-/// on the simulated robot: (error with the before model, with the after model).
-fn compare_compensation(
-    robot: &str,
-    traj: &Path,
-    truth_path: &Path,
-    before: &ErrorModel,
-    after: &ErrorModel,
-    seed: u64,
-) -> Result<(Comparison, Comparison)> {
+    let after = base.model(opts, &d.extras)?;
+    if let Some(p) = &a.model_out {
+        after.save(p)?;
+        say!("model with the added effects: {}", p.display());
+    }
+    // (--traj and --truth without --robot are rejected by clap)
+    let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
+        return Ok(None);
+    };
+    let before = base.model(opts, &[])?;
     let robot = kinematics::load_robot(robot)?;
     let truth = load_truth(truth_path)?;
-    let start = robot.home.clone();
-    let targets = read_targets(traj, &robot, None, &start)?;
-    let runs = compensate_and_evaluate_each(
+    let targets = read_targets(traj, &robot, None, &robot.home)?;
+    let c = compare_compensation(
         &robot,
-        &[before, after],
-        truth_path,
-        &truth,
         &targets,
-        &start,
-        seed,
+        (truth_path, &truth),
+        [&before, &after],
+        a.seed,
     )?;
-    let [b, a] = [&runs[0], &runs[1]].map(|r| (r.evaluation.before, r.evaluation.after));
     say!(
-        "compensation of {} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
-        traj.display(),
-        b.0.mean_abs_mm,
-        b.1.mean_abs_mm,
-        a.1.mean_abs_mm
+        "{}",
+        report::compensation_line(&traj.display().to_string(), &c)
     );
-    Ok((b, a))
-}
-
-fn report(
-    a: &DiagnoseArgs,
-    d: &Diagnosis,
-    plots: &[PathBuf],
-    comp: Option<&(Comparison, Comparison)>,
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# Diagnosis of `{}`\n", a.data.display());
-    let _ = writeln!(
-        s,
-        "Base model `{}`; out-of-fold residuals of a {}-fold CV {} (fold seed {}); \
-         {} candidates (scanning {} parameter values in all), each tried inside the model and tested against up to {} \
-         sign-flipped pseudo-campaigns (maximum over its parameter scan), Benjamini–Hochberg at FDR {}; an effect \
-         is added only if it lowers the pooled CV RMSE by ≥ 2 % or by its worth at the noise floor. {:.1} s.\n",
-        a.method,
-        d.folds,
-        if d.cv_mode() == "closed-form" {
-            "in closed form at the hyperparameters of the model fitted on all rows"
-        } else {
-            "refitted on every training fold"
-        },
-        d.seed,
-        d.candidates[0],
-        d.candidates[1],
-        d.permutations,
-        d.fdr,
-        d.seconds
-    );
-    if d.scanned_rows > 0 && d.scanned_rows < d.rows {
-        let _ = writeln!(
-            s,
-            "Candidates scanned on {} of the {} rows, evenly spread in measurement order (their statistics, p-values, scores and evidence are of those rows; a step or block edge found on them is placed among the rows before it by the CV residuals of all rows); every model compared was fitted and cross-validated on all rows.\n",
-            d.scanned_rows, d.rows
-        );
-    }
-    for c in &d.dropped_covariates {
-        let _ = writeln!(
-            s,
-            "Covariate `{}` left out of the candidates: {} (it cannot explain anything here).\n",
-            c.name, c.reason
-        );
-    }
-    let _ = writeln!(
-        s,
-        "| model | extra inputs | CV RMSE x / y / z (mm) | mean 3D (mm) | max 3D (mm) |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|");
-    let row = |s: &mut String, name: &str, c: &CvStats| {
-        let ex = if c.extras.is_empty() {
-            "–".to_string()
-        } else {
-            c.extras.join(", ")
-        };
-        let _ = writeln!(
-            s,
-            "| {name} | {ex} | {} | {:.4} | {:.4} |",
-            rmse3(&c.cv_rmse_mm),
-            c.mean_3d_mm,
-            c.max_3d_mm
-        );
-    };
-    row(&mut s, "before", &d.before);
-    for (k, st) in d.steps.iter().enumerate() {
-        row(&mut s, &format!("after effect {}", k + 1), st);
-    }
-    let _ = writeln!(s);
-    for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
-        let _ = writeln!(
-            s,
-            "Effect {}, {}:
-",
-            k + 1,
-            e.describe()
-        );
-        for line in effect_lines(e) {
-            let _ = writeln!(s, "- {line}");
-        }
-        let _ = writeln!(s);
-    }
-    if d.steps.is_empty() {
-        let text = if d.effects.iter().any(|e| e.significant) {
-            "**Nothing added**: significant candidates were found (below), but none lowered the CV RMSE enough."
-        } else {
-            "**No significant effect**: the residual is not explained by any candidate beyond chance."
-        };
-        let _ = writeln!(s, "{text}\n");
-    }
-    let mut round = 0;
-    for e in &d.effects {
-        if e.round != round {
-            round = e.round;
-            let _ = writeln!(s, "\n## Round {round}\n");
-            let _ = writeln!(
-                s,
-                "| rank | kind | source | candidate | score | p | q (BH) | evidence | |"
-            );
-            let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
-        }
-        let rank = d
-            .effects
-            .iter()
-            .filter(|x| x.round == round)
-            .position(|x| x == e)
-            .unwrap_or(0)
-            + 1;
-        if rank <= 10 || e.accepted {
-            let status = if e.accepted {
-                "**added**".to_string()
-            } else if e.significant {
-                e.note.clone().unwrap_or_else(|| "significant".into())
-            } else {
-                String::new()
-            };
-            let status = if e.confounded_with.is_empty() {
-                status
-            } else {
-                format!(
-                    "{status}; indistinguishable here from {}",
-                    e.confounded_with.join("; ")
-                )
-            };
-            let _ = writeln!(
-                s,
-                "| {rank} | {} | {} | {} | {:.3} | {:.4} | {:.4} | {:.3} | {status} |",
-                e.kind.name(),
-                e.source.join(", "),
-                e.describe(),
-                e.score,
-                e.p_value,
-                e.q_value,
-                e.evidence
-            );
-        }
-    }
-    if let Some(((nb, bb), (_, ab))) = comp {
-        let _ = writeln!(s, "\n## Compensation\n");
-        let _ = writeln!(
-            s,
-            "Iterative compensation of `{}` run on the simulated robot: nominal mean |δ| {:.4} mm (max {:.4}); \
-             with the model before {:.4} mm (max {:.4}); after {:.4} mm (max {:.4}).",
-            a.traj
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default(),
-            nb.mean_abs_mm,
-            nb.max_abs_mm,
-            bb.mean_abs_mm,
-            bb.max_abs_mm,
-            ab.mean_abs_mm,
-            ab.max_abs_mm
-        );
-    }
-    if !plots.is_empty() {
-        let _ = writeln!(s, "\n## Plots\n");
-        for p in plots {
-            let _ = writeln!(
-                s,
-                "- `{}`: out-of-fold residual against the traced variable, before and after",
-                p.display()
-            );
-        }
-    }
-    let _ = writeln!(
-        s,
-        "\nScore: relative drop of the model's K-fold CV squared error with the candidate in its trend (closed \
-         form; at the correlation parameters refitted with it for the strongest candidates, marked ξ). p: \
-         share of sign-flipped pseudo-campaigns of the fitted model in which the candidate's best leave-one-out \
-         gain over its parameter scan is as large. q: Benjamini–Hochberg adjusted p over all candidates of the round. \
-         Evidence: the candidate's leave-one-out gain minus the mean of that null distribution (what scanning its \
-         grid finds by chance), as a share of the model's leave-one-out error; significant candidates are ranked \
-         (and added) by it."
-    );
-    s
+    Ok(Some(c))
 }

@@ -5,6 +5,7 @@ use robokrige::calibration::CalibrationOptions;
 use robokrige::kriging::{CorrChoice, Correlation, KrigingOptions, OptimizerKind, TrendKind};
 use robokrige::model::{AXES, ErrorModel};
 use robokrige::params::{ErrorModelParams, TrendSpec};
+use robokrige::report::fit as report;
 use robokrige::space::Space;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -230,7 +231,6 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             (params.fit(&data)?, params.params().settings())
         }
     };
-    let space = model.space();
     let secs = t0.elapsed().as_secs_f64();
     for w in model.conditioning_warnings() {
         eprintln!("warning: {w}");
@@ -247,105 +247,11 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             "calibration": model.calibration().map(|c| c.identifiability())});
         super::write_json(path, &v, "fit report")?;
     }
-    say!(
-        "fitted {} rows in {:?} space ({}, {}) in {secs:.2} s -> {}",
-        data.len(),
-        space,
-        if model.options().get_corr().is_by_cv() {
-            let c: Vec<String> = model
-                .outputs()
-                .iter()
-                .map(|o| o.corr().to_string())
-                .collect();
-            format!("correlation by CV: {}", c.join(" / "))
-        } else {
-            format!("{} correlation", model.outputs()[0].corr())
-        },
-        if model.options().get_nugget() {
-            "nugget estimated"
-        } else {
-            "interpolating"
-        },
-        a.output.display()
+    say_part!(
+        "{}",
+        report::summary(&model, data.len(), secs, &a.output.display().to_string())
     );
-    for (ax, r) in AXES.iter().zip(model.reports()) {
-        if !r.families.is_empty() {
-            let t: Vec<String> = r
-                .families
-                .iter()
-                .map(|f| format!("{} {:.4}", f.corr, f.cv_rmse))
-                .collect();
-            say!("  {ax}: family by 10-fold CV RMSE (mm): {}", t.join(", "));
-        }
-        let lt: Vec<String> = r
-            .theta
-            .iter()
-            .map(|t| format!("{:.2}", t.log10()))
-            .collect();
-        say!(
-            "  {ax}: ln ψ {:.4}  σ² {:.4}  nugget {:.2e}  trend terms {} (dropped {})  evals {}  {:.2} s\n      log10 ξ = [{}]",
-            r.ln_psi,
-            r.sigma2,
-            r.nugget,
-            r.trend_terms.len(),
-            r.dropped_terms.len(),
-            r.evals,
-            r.seconds,
-            lt.join(", ")
-        );
-    }
-    print_selection(&model);
-    if let Some(c) = model.calibration() {
-        print_calibration(c);
-    }
     Ok(())
-}
-
-/// The calibration under a model: what the campaign identified.
-pub fn print_calibration(c: &robokrige::calibration::Calibration) {
-    say!("  calibration: {}", c.summary_line());
-    let id = c.identifiability();
-    let fixed = id.fixed_names();
-    if !fixed.is_empty() {
-        say!(
-            "  fixed at nominal (the campaign does not see them): {}",
-            fixed.join(" ")
-        );
-    }
-}
-
-/// One line per output of what PCC+PCA or the GA selected.
-fn print_selection(model: &ErrorModel) {
-    use robokrige::selection::Selection;
-    match &model.selection() {
-        Some(Selection::PccPca { outputs }) => {
-            for (ax, r) in AXES.iter().zip(outputs) {
-                say!(
-                    "  {ax} PCC+PCA: {} candidates ranked ({} dependent dropped), {} with |r| > {}, {} components ({:.1} % of variance)",
-                    r.ranking.len(),
-                    r.dropped.len(),
-                    r.selected,
-                    r.threshold,
-                    r.components,
-                    100.0 * r.explained
-                );
-            }
-        }
-        Some(Selection::Ga { outputs }) => {
-            for (ax, r) in AXES.iter().zip(outputs) {
-                say!(
-                    "  {ax} GA: {} of {} candidates ({} dependent dropped), CV RMSE {:.4} mm after {} generations: {}",
-                    r.selected.len(),
-                    r.candidates,
-                    r.dropped.len(),
-                    r.cv_rmse_mm,
-                    r.generations,
-                    r.selected.join(" ")
-                );
-            }
-        }
-        None => {}
-    }
 }
 
 /// Predict TCP errors (mean and standard deviation per axis) at poses.
@@ -392,69 +298,25 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         _ => 0.0,
     };
     if assumed > 0.0 {
-        eprintln!(
-            "warning: {} has no dir1..dir{} columns: λ is derived from the row order, and the \
-             first pose gets λ = +1 on every joint (assumed; a joint that has not moved yet keeps it). \
-             Reversing it changes that pose's prediction by {assumed:.3} mm: give the dir columns, or put \
-             the pose the robot came from first.",
-            a.poses.display(),
-            data.n_joints()
-        );
+        let warning =
+            robokrige::report::predict::direction_warning(&a.poses, data.n_joints(), assumed);
+        eprintln!("{warning}");
     }
     let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    let noise = model.noise_std();
-    robokrige::output::write_atomic(&a.output, |out| {
-        let mut w = csv::Writer::from_writer(out);
-        let n = data.n_joints();
-        let mut header = vec!["id".to_string()];
-        header.extend((1..=n).map(|i| format!("q{i}")));
-        header.extend((1..=n).map(|i| format!("dir{i}")));
-        header.extend(AXES.iter().map(|a| format!("pred_{a}")));
-        header.extend(AXES.iter().map(|a| format!("std_{a}")));
-        header.extend(AXES.iter().map(|a| format!("std_new_{a}")));
-        if data.errors.is_some() {
-            header.extend(AXES.iter().map(|a| a.to_string()));
-        }
-        w.write_record(&header)?;
-        for k in 0..data.len() {
-            let id = data.ids.as_ref().map_or(k.to_string(), |v| v[k].clone());
-            let mut row = vec![id];
-            row.extend(data.q[k].iter().map(f64::to_string));
-            row.extend(data.dir[k].iter().map(|d| format!("{d}")));
-            row.extend(pred.mean[k].iter().map(f64::to_string));
-            row.extend(pred.std[k].iter().map(f64::to_string));
-            row.extend((0..3).map(|a| pred.std[k][a].hypot(noise[a]).to_string()));
-            if let Some(e) = &data.errors {
-                row.extend(e[k].iter().map(f64::to_string));
-            }
-            w.write_record(&row)?;
-        }
-        w.flush()
-    })?;
-    if let Some(e) = &data.errors {
-        let resid = robokrige::vec3::residuals(e, &pred.mean);
-        let before = robokrige::stats::summarize(e);
-        let after = robokrige::stats::summarize(&resid);
-        if let Some(path) = &a.json {
-            let v = serde_json::json!({"poses": data.len(), "output": a.output,
-                "measured": before, "after_subtracting_prediction": after,
-                "coverage_warnings": coverage});
-            super::write_json(path, &v, "prediction summary")?;
-        }
-        say!(
-            "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
-            data.len(),
-            before.mean_3d_mm,
-            after.mean_3d_mm,
-            before.max_3d_mm,
-            after.max_3d_mm
-        );
-    }
-    if let (None, Some(path)) = (&data.errors, &a.json) {
-        let v = serde_json::json!({"poses": data.len(), "output": a.output,
-            "coverage_warnings": coverage});
+    robokrige::dataset::write_predictions(
+        &a.output,
+        &data,
+        &pred.mean,
+        &pred.std,
+        model.noise_std(),
+    )?;
+    let (v, line) = robokrige::report::predict::summary(&data, &pred.mean, &coverage, &a.output);
+    if let Some(path) = &a.json {
         super::write_json(path, &v, "prediction summary")?;
+    }
+    if let Some(line) = line {
+        say!("{line}");
     }
     say!("wrote {}", a.output.display());
     Ok(())

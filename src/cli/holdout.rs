@@ -6,10 +6,11 @@ use super::progress::bar;
 use super::read_data;
 use clap::Args;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{HoldoutRow, SplitExtras, holdout_cv, holdout_split};
+use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split};
 use robokrige::kinematics::Robot;
 use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::params::ErrorModelParams;
+use robokrige::report::holdout as report;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
 
@@ -108,19 +109,6 @@ fn base_params(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<ErrorModelParams> {
     Ok(ErrorModelParams::new().periodic(periodic).kriging(opts))
 }
 
-/// `q1, q4` (or `none`).
-fn joint_list(periodic: &[usize]) -> String {
-    if periodic.is_empty() {
-        "none".to_string()
-    } else {
-        periodic
-            .iter()
-            .map(|j| format!("q{}", j + 1))
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-}
-
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
     let base = base_params(a, &data.q)?;
@@ -154,79 +142,20 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Resu
         if a.no_nugget { "" } else { " and nugget" },
         cv.hyper_rows,
         cv.hyper_seconds,
-        joint_list(base.get_periodic())
+        report::joint_list(base.get_periodic())
     );
-    print_rows(&cv.rows);
-    print_scores(&cv.scores);
-    let worst: Vec<String> = cv
-        .fold_max_mm
-        .iter()
-        .map(|f| {
-            format!(
-                "{:.2}",
-                f.iter().skip(1).fold(0.0f64, |a, b| a.max(*b)) / f[0]
-            )
-        })
-        .collect();
-    say!(
-        "worst Kriging model's max over the D-H calibration's max, per fold: {}",
-        worst.join(" ")
+    say_part!(
+        "{}{}{}",
+        report::rows(&cv.rows),
+        report::scores(&cv.scores),
+        report::cv_tail(&cv)
     );
-    for (name, (rows, worst)) in robokrige::holdout::CV_MODELS
-        .iter()
-        .zip(cv.flagged.iter().zip(cv.max_covered_mm()))
-        .skip(1)
-    {
-        if !rows.is_empty() {
-            say!(
-                "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
-                rows.len()
-            );
-        }
-    }
     if let Some(p) = &a.json {
         super::write_json(p, &cv, "cv table")?;
     }
     Ok(())
 }
 
-fn print_scores(scores: &[robokrige::stats::PredictiveScores]) {
-    say!("| model | 95 % coverage x / y / z | NLPD | flagged | gross errors flagged |");
-    say!("|---|---|---|---|---|");
-    for (name, s) in robokrige::holdout::CV_MODELS.iter().zip(scores) {
-        say!(
-            "| {name} | {:.3} / {:.3} / {:.3} | {:.3} | {:.1} % | {} |",
-            s.coverage_95[0],
-            s.coverage_95[1],
-            s.coverage_95[2],
-            s.nlpd,
-            100.0 * s.flag_rate,
-            match s.flag_recall {
-                Some(r) => format!("{:.0} % of {}", 100.0 * r, s.gross_rows),
-                None => "none gross".into(),
-            }
-        );
-    }
-}
-
-fn print_rows(rows: &[HoldoutRow]) {
-    say!("| model | mean 3D (mm) | max 3D (mm) | RMS x / y / z (mm) | time |");
-    say!("|---|---|---|---|---|");
-    for r in rows {
-        say!(
-            "| {} | {:.4} | {:.4} | {:.4} / {:.4} / {:.4} | {:.1} s |",
-            r.model,
-            r.mean_mm,
-            r.max_mm,
-            r.rms_xyz_mm[0],
-            r.rms_xyz_mm[1],
-            r.rms_xyz_mm[2],
-            r.seconds
-        );
-    }
-}
-
-/// Training rows of a hold-out split when `--train` is not given.
 /// How `holdout` cross-validates.
 enum Folds {
     /// A seeded random partition into K folds.
@@ -235,6 +164,7 @@ enum Folds {
     Groups(String),
 }
 
+/// Training rows of a hold-out split when `--train` is not given.
 const DEFAULT_TRAIN: usize = 600;
 /// Held-out rows after the training ones.
 const DEFAULT_TEST: usize = 300;
@@ -292,10 +222,10 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         } else {
             ", nugget estimated"
         },
-        joint_list(base.get_periodic())
+        report::joint_list(base.get_periodic())
     );
-    super::fit::print_calibration(&cal);
-    print_rows(&rows);
+    say_part!("{}", robokrige::report::fit::calibration(&cal));
+    say_part!("{}", report::rows(&rows));
     if let Some(p) = &a.json {
         super::write_json(p, &rows, "hold-out table")?;
     }

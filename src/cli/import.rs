@@ -4,6 +4,7 @@ use clap::{Args, ValueEnum};
 use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
 use robokrige::dataset::write_csv;
 use robokrige::kinematics::{self, Robot, errors_from_positions};
+use robokrige::report::import as report;
 use robokrige::{Error, Result};
 use std::path::PathBuf;
 
@@ -113,86 +114,39 @@ pub fn run(a: ImportArgs) -> Result<()> {
         .as_ref()
         .map(Robot::prismatic_joints)
         .unwrap_or_default();
-    let imported = import(&a.export, &spec, &prismatic)?;
-    let mut data = imported.data;
+    let mut imported = import(&a.export, &spec, &prismatic)?;
     if let Some(r) = &robot {
-        r.check_dataset(&data)?;
+        r.check_dataset(&imported.data)?;
     }
-    say!(
-        "read {} rows, {} joints from {} (delimiter {:?}, decimal {:?}, angles {}, lengths {})",
-        data.len(),
-        data.n_joints(),
-        a.export.display(),
-        imported.delimiter,
-        imported.decimal,
-        match spec.angles {
-            AngleUnit::Deg => "deg",
-            AngleUnit::Rad => "rad",
-        },
-        match spec.lengths {
-            LengthUnit::Mm => "mm",
-            LengthUnit::M => "m",
-        }
-    );
-    if !imported.ignored.is_empty() {
-        say!(
-            "  not imported (no target names them): {}",
-            imported.ignored.join(", ")
-        );
-    }
-    if robot.is_some() && data.errors.is_some() && data.positions.is_some() {
+    say_part!("{}", report::read(&imported, &spec, &a.export));
+    if robot.is_some() && imported.data.errors.is_some() && imported.data.positions.is_some() {
         return Err(Error::InvalidParameter(
             "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one"
                 .into(),
         ));
     }
     let located = match &robot {
-        Some(r) => errors_from_positions(r, &mut data)?,
+        Some(r) => errors_from_positions(r, &mut imported.data)?,
         None => None,
     };
     if let (Some(r), Some(fit)) = (&robot, &located) {
-        let t = fit.tracker_to_base.translation.vector;
-        let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
-        say!(
-            "  tracker → base of '{}' by least squares over all {} rows ({} iterations): translation ({:.3}, {:.3}, {:.3}) mm, rpy ({:.4}, {:.4}, {:.4})°",
-            r.name,
-            data.len(),
-            fit.iterations,
-            t.x,
-            t.y,
-            t.z,
-            roll.to_degrees(),
-            pitch.to_degrees(),
-            yaw.to_degrees()
-        );
-        say!(
-            "  TCP offset in the flange frame: ({:.4}, {:.4}, {:.4}) mm; errors measured − nominal: rms |e| {:.4} mm",
-            fit.tool_xyz_mm.x,
-            fit.tool_xyz_mm.y,
-            fit.tool_xyz_mm.z,
-            fit.rms_mm
-        );
+        say_part!("{}", report::located(&r.name, imported.data.len(), fit));
     }
-    if robot.is_none() && data.positions.is_some() {
+    if robot.is_none() && imported.data.positions.is_some() {
         say!(
             "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
         );
     }
-    write_csv(&a.output, &data)?;
+    write_csv(&a.output, &imported.data)?;
     say!("wrote {}", a.output.display());
     if let Some(path) = &a.json {
-        let v = serde_json::json!({
-            "export": a.export, "output": a.output, "rows": data.len(),
-            "joints": data.n_joints(), "delimiter": imported.delimiter.to_string(),
-            "decimal": imported.decimal.to_string(), "angles": spec.angles,
-            "lengths": spec.lengths, "columns": spec.columns, "ignored": imported.ignored,
-            "directions": format!("{:?}", data.dir_source).to_lowercase(),
-            "robot": robot.as_ref().map(|r| &r.name),
-            "located": located.as_ref().map(|f| serde_json::json!({
-                "tracker_to_base": f.tracker_to_base, "tool_xyz_mm": f.tool_xyz_mm,
-                "rms_mm": f.rms_mm, "iterations": f.iterations,
-            })),
-        });
+        let robot = robot.as_ref().map(|r| r.name.as_str());
+        let v = report::json(
+            (&a.export, &a.output),
+            &imported,
+            &spec,
+            (robot, located.as_ref()),
+        );
         super::write_json(path, &v, "import report")?;
     }
     Ok(())

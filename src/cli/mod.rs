@@ -192,25 +192,8 @@ pub fn print_coverage(
     total: usize,
     ids: Option<&[String]>,
 ) {
-    if warnings.is_empty() {
-        return;
-    }
-    eprintln!(
-        "warning: {} of {total} pose(s) leave what the training campaign covers; their predictions are extrapolations:",
-        warnings.len()
+    eprint!(
+        "{}",
+        robokrige::report::predict::coverage(warnings, total, ids)
     );
-    for w in warnings.iter().take(20) {
-        let label = ids.map_or_else(
-            || format!("row {}", w.index + 1),
-            |v| format!("id {}", v[w.index]),
-        );
-        let issues: Vec<String> = w.issues.iter().map(ToString::to_string).collect();
-        eprintln!("  {label}: {}", issues.join("; "));
-    }
-    if warnings.len() > 20 {
-        eprintln!(
-            "  … and {} more (all of them in --json)",
-            warnings.len() - 20
-        );
-    }
 }

@@ -5,13 +5,9 @@ use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::kinematics;
 use robokrige::methods::Method;
-use robokrige::physics::{
-    CompareOptions, Comparison, Geometry, PhysicsIdentification, compare, identify_physics,
-    is_scara,
-};
-use robokrige::sim::Truth;
+use robokrige::physics::{CompareOptions, check_training_campaign, compare, identify_physics};
+use robokrige::report::physics as report;
 use robokrige::{Error, Result};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Physics-based models of seeds 000 and 002 (lookup tables of angular
@@ -218,21 +214,10 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
+    check_training_campaign(&robot, a.train.is_some())?;
     let train = match &a.train {
-        Some(_) if is_scara(&robot) => {
-            return Err(Error::InvalidParameter(format!(
-                "--train is for six-axis robots; '{}' is a SCARA, identified from its indexing tests alone",
-                robot.name
-            )));
-        }
         Some(p) => read_data(p)?,
-        None if is_scara(&robot) => indexing.clone(),
-        None => {
-            return Err(Error::InvalidParameter(format!(
-                "'{}' is not a SCARA: its D-H errors are identified by Levenberg–Marquardt on a campaign; give --train CAMPAIGN.csv",
-                robot.name
-            )));
-        }
+        None => indexing.clone(),
     };
     for d in [&indexing, &train] {
         robot
@@ -244,10 +229,10 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     if let Some(p) = &a.dh_output {
         id.dh.save(p)?;
     }
-    say_part!("{}", identify_text(&id));
+    say_part!("{}", report::identification(&id));
     if let Some(tp) = &a.truth {
         let truth = robokrige::study::load_truth(tp)?;
-        say_part!("{}", truth_text(&id, &truth));
+        say_part!("{}", report::against_truth(&id, &truth));
     }
     say!("model: {}", a.output.display());
     if let Some(p) = &a.json {
@@ -274,81 +259,6 @@ fn default_robot_hint(e: Error, robot: &str) -> Error {
 /// `physics identify`'s robot when `--robot` is not given.
 const DEFAULT_ROBOT: &str = "scara-rh3frh5515";
 
-fn identify_text(id: &PhysicsIdentification) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "{}", id.method);
-    let _ = writeln!(
-        s,
-        "axis  rows angles cycles  radius(mm)  circle rms  plane rms  repeat spread(°)  backlash ½(°)"
-    );
-    for ax in &id.axes {
-        let _ = writeln!(
-            s,
-            "J{:<4} {:>4} {:>6} {:>6} {:>11.4} {:>11.4} {:>10.4} {:>17.5} {:>14.5}",
-            ax.axis,
-            ax.rows,
-            ax.angles,
-            ax.cycles,
-            ax.radius_mm,
-            ax.circle_rms_mm,
-            ax.plane_rms_mm,
-            ax.repeat_spread_deg,
-            ax.backlash_half_deg
-        );
-    }
-    if let Geometry::Scara(g) = &id.full.geometry {
-        let _ = writeln!(
-            s,
-            "ΔL1 = {:+.4} mm, ΔL2 = {:+.4} mm, θ20 = {:+.5}° (eqs 12–14); parallelism J2→J1: a = {:+.2e}, b = {:+.2e}, z1 = {:+.4} mm (eq 22)",
-            g.dl1_mm, g.dl2_mm, g.theta20_deg, g.parallel_a, g.parallel_b, g.z1_mm
-        );
-    }
-    for lm in &id.lm {
-        let _ = writeln!(
-            s,
-            "Levenberg–Marquardt: {} parameters ({} frozen as unidentifiable), rms {:.4} → {:.4} mm in {} steps ({})",
-            lm.parameters,
-            lm.frozen.len(),
-            lm.rms_before_mm,
-            lm.rms_after_mm,
-            lm.iterations,
-            lm.stop
-        );
-    }
-    for n in &id.notes {
-        let _ = writeln!(s, "note: {n}");
-    }
-    s
-}
-
-fn truth_text(id: &PhysicsIdentification, truth: &Truth) -> String {
-    let mut s = String::new();
-    let (Geometry::Scara(g), Some(check)) =
-        (&id.full.geometry, id.full.check_against(&truth.robot))
-    else {
-        let _ = writeln!(
-            s,
-            "(--truth: parameter comparison is printed for a SCARA only)"
-        );
-        return s;
-    };
-    let t = &check.truth;
-    let _ = writeln!(s, "identified vs simulator truth:");
-    let _ = writeln!(
-        s,
-        "  ΔL1 {:+.4} vs {:+.4} mm, ΔL2 {:+.4} vs {:+.4} mm, θ20 {:+.5} vs {:+.5}°",
-        g.dl1_mm, t.dl1_mm, g.dl2_mm, t.dl2_mm, g.theta20_deg, t.theta20_deg
-    );
-    for a in &check.apd {
-        let _ = writeln!(
-            s,
-            "  J{} APD table: error rms {:.5}°, max {:.5}° over {} entries",
-            a.joint, a.rms_deg, a.max_deg, a.entries
-        );
-    }
-    s
-}
-
 fn run_compare(a: CompareArgs) -> Result<()> {
     let outputs: Vec<&Path> = a
         .json
@@ -368,11 +278,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::parse(&a.ejs)?,
         nugget: a.nugget,
     };
-    if a.nugget && opts.js == Method::Recommended && opts.ejs == Method::Recommended {
-        return Err(Error::InvalidParameter(
-            "--nugget changes the papers' methods only; --js and --ejs are both `recommended`, which always estimates one".into(),
-        ));
-    }
+    opts.validate()?;
     let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
     let res = compare(&opts, &|k, total, what| {
@@ -382,7 +288,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     });
     pb.finish_and_clear();
     let res = res?;
-    let text = compare_text(&res, t0.elapsed().as_secs_f64());
+    let text = report::comparison(&res, t0.elapsed().as_secs_f64());
     say_part!("{text}");
     if let Some(p) = &a.report {
         write(p, &text)?;
@@ -399,97 +305,14 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     Ok(())
 }
 
-/// The comparison as Markdown.
-pub fn compare_text(c: &Comparison, secs: f64) -> String {
-    let o = &c.options;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Physics vs Kriging: {} (true robot of seed {})\n",
-        o.robot, o.seed
-    );
-    let _ = writeln!(
-        s,
-        "Physics model: {}. Data: {} indexing rows, {} training poses, a Ø{} mm circle path of {} points (forward and back), {} random poses. {secs:.0} s.\n",
-        c.physics, c.sizes[0], c.sizes[1], o.path_mm, c.sizes[2], c.sizes[3]
-    );
-    let _ = writeln!(
-        s,
-        "Prediction: |measured − predicted error|; compensation: |measured − target| after iterative feed-forward, on the simulated robot. Mean / max, mm; 3D and XY (seed 000's model is 2D).\n"
-    );
-    let _ = writeln!(
-        s,
-        "| model | predict path 3D | predict path XY | predict poses 3D | compensate path 3D | compensate path XY | compensate poses 3D | compensate poses XY |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
-    let f = |x: &robokrige::physics::Score, xy: bool| {
-        if xy {
-            format!("{:.4} / {:.4}", x.mean_xy_mm, x.max_xy_mm)
-        } else {
-            format!("{:.4} / {:.4}", x.mean_3d_mm, x.max_3d_mm)
-        }
-    };
-    for r in &c.rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            r.model,
-            f(&r.predict_path, false),
-            f(&r.predict_path, true),
-            f(&r.predict_poses, false),
-            f(&r.compensate_path, false),
-            f(&r.compensate_path, true),
-            f(&r.compensate_poses, false),
-            f(&r.compensate_poses, true),
-        );
-    }
-    let (np, nq) = (&c.noise_path, &c.noise_poses);
-    let _ = writeln!(
-        s,
-        "| *noise alone (simulator truth)* | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
-        np.mean_3d_mm,
-        np.mean_xy_mm,
-        nq.mean_3d_mm,
-        np.mean_3d_mm,
-        np.mean_xy_mm,
-        nq.mean_3d_mm,
-        nq.mean_xy_mm
-    );
-    let _ = writeln!(s);
-    for n in &c.notes {
-        let _ = writeln!(s, "- {n}");
-    }
-    s
-}
-
 fn run_probing(a: ProbingArgs) -> Result<()> {
     let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
     robokrige::output::check_outputs(&[], &outputs)?;
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
-    say!(
-        "# Probing a 1000 mm straightedge, 100 points: {} (true robot of seed {}{})\n",
-        a.robot,
-        a.seed,
-        if a.noise_free { ", noise off" } else { "" }
+    say_part!(
+        "{}",
+        report::probing(&rows, &how, (&a.robot, a.seed, !a.noise_free))
     );
-    say!("Physics model: {how}.\n");
-    say!(
-        "| location / face | nominal: straightness / std (mm) | D-H only | D-H + APD | reduction (straightness), D-H + APD vs nominal |"
-    );
-    say!("|---|---|---|---|---|");
-    for r in &rows {
-        let f = |s: &robokrige::physics::Straightness| {
-            format!("{:.4} / {:.4}", s.straightness_mm, s.std_mm)
-        };
-        say!(
-            "| {} | {} | {} | {} | {:.0} % |",
-            r.edge,
-            f(&r.nominal),
-            f(&r.dh),
-            f(&r.full),
-            r.reduction_pct()
-        );
-    }
     if let Some(p) = &a.json {
         super::write_json(p, &rows, "probing table")?;
     }
@@ -502,29 +325,7 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
     let model = robokrige::physics::PhysicsModel::load(&a.model)?;
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;
-    say!("J1 deviation the model misses, by J2 angle (seed 000 §5.2), degrees:");
-    say!("  J2      rows   mean shift   peak-to-peak");
-    for g in &r.groups {
-        say!(
-            "  {:>6.1} {:>6} {:>+12.5} {:>14.5}",
-            g.j2_deg,
-            g.rows,
-            g.mean_deg,
-            g.peak_to_peak_deg
-        );
-    }
-    say!(
-        "largest shift vs J2 = {:.1}°: {:.5}° (standard error {:.5}°, one entry {:.5}°): {}",
-        r.groups[0].j2_deg,
-        r.max_shift_deg,
-        r.shift_se_deg,
-        r.entry_se_deg,
-        if r.significant {
-            "cross-talk: J1 depends on J2 (> 4 standard errors)"
-        } else {
-            "no significant cross-talk"
-        }
-    );
+    say_part!("{}", report::crosstalk(&r));
     if let Some(p) = &a.json {
         super::write_json(p, &r, "cross-talk report")?;
     }
@@ -540,34 +341,9 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
     robokrige::dataset::write_csv(&a.output, &out)?;
-    let t = reg.transform.translation.vector;
-    let (axis, angle) = reg
-        .transform
-        .rotation
-        .axis_angle()
-        .map_or(([0.0, 0.0, 1.0], 0.0), |(ax, an)| ([ax.x, ax.y, ax.z], an));
-    say!(
-        "base ← tracker: translation ({:.3}, {:.3}, {:.3}) mm, rotation {:.5}° about ({:.4}, {:.4}, {:.4}){}",
-        t.x,
-        t.y,
-        t.z,
-        angle.to_degrees(),
-        axis[0],
-        axis[1],
-        axis[2],
-        if reg.reflection_guarded {
-            " (reflection guarded)"
-        } else {
-            ""
-        }
-    );
-    say!(
-        "residual |registered − nominal| over {} rows: rms {:.4} mm, max {:.4} mm -> {}",
-        out.len(),
-        reg.rms,
-        reg.max,
-        a.output.display()
-    );
+    let output = a.output.display().to_string();
+    say_part!("{}", report::registration(&reg, out.len(), &output));
+    let (axis, angle) = report::axis_angle(&reg);
     if let Some(p) = &a.json {
         let v = serde_json::json!({
             "data": a.data, "output": a.output, "robot": robot.name, "rows": out.len(),

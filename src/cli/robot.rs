@@ -83,21 +83,8 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
         source_name: a.model.display().to_string(),
         message: "holds no calibration: fit it with --robot (and without --no-calibrate)".into(),
     })?;
-    let mut robot = cal.identified().clone();
-    robot.name = format!("{}-calibrated", cal.nominal().name);
-    robot.convention = format!(
-        "{}; MD-H, tool and base errors identified on {} poses ({} of {} directions seen)",
-        cal.nominal().convention,
-        cal.rows(),
-        cal.identifiability().directions_seen,
-        cal.identifiability().parameters_total
-    );
-    let text = format!(
-        "# {} joints, kinematic-table digest {}\n{}",
-        robot.dof(),
-        kinematics::table_digest(&robot),
-        RobotFile::of(&robot).to_toml()?
-    );
+    let robot = cal.calibrated_robot();
+    let text = RobotFile::text_of(&robot)?;
     robokrige::output::write_text(&a.output, &text)?;
     if let Some(path) = &a.json {
         super::write_json(path, cal.identifiability(), "identifiability report")?;
@@ -109,16 +96,11 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
 
 fn show(a: ShowArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
-    let file = RobotFile::of(&robot);
     let digest = kinematics::table_digest(&robot);
     if let Some(path) = &a.json {
-        super::write_json(path, &file, "robot file")?;
+        super::write_json(path, &RobotFile::of(&robot), "robot file")?;
     }
-    let text = format!(
-        "# {} joints, kinematic-table digest {digest}\n{}",
-        robot.dof(),
-        file.to_toml()?
-    );
+    let text = RobotFile::text_of(&robot)?;
     match &a.output {
         Some(path) => {
             robokrige::output::write_text(path, &text)?;

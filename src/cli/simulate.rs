@@ -1,10 +1,8 @@
 //! `robokrige simulate`.
 
 use clap::{Args, ValueEnum};
-use robokrige::sim::{
-    CampaignKind, CampaignSpec, Effect, MEASUREMENT_EFFECTS, SimOutput, simulate,
-};
-use robokrige::stats::summarize;
+use robokrige::report::simulate as report;
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, parse_ranges, simulate};
 use robokrige::{Error, Result, dataset, kinematics};
 use std::path::{Path, PathBuf};
 
@@ -96,47 +94,7 @@ pub struct SimulateArgs {
     json: Option<PathBuf>,
 }
 
-/// Refuse the options `a.kind` does not use (each would be silently ignored).
-fn check_kind_options(a: &SimulateArgs) -> Result<()> {
-    let kind = format!("{:?}", a.kind).to_lowercase();
-    let refuse = |what: &str| {
-        Err(Error::InvalidParameter(format!(
-            "{what} (here --kind {kind})"
-        )))
-    };
-    let grid = matches!(a.kind, Kind::Indexing | Kind::Crosstalk);
-    if grid && a.poses.is_some() {
-        return refuse(
-            "--poses is not used by an indexing or cross-talk campaign: its poses come from the joint grid and --cycles",
-        );
-    }
-    if a.diameter.is_some() && !matches!(a.kind, Kind::Circle) {
-        return refuse("--diameter is for --kind circle");
-    }
-    if a.cycles.is_some() && !grid {
-        return refuse("--cycles is for --kind indexing or crosstalk");
-    }
-    if matches!(a.kind, Kind::Circle) {
-        if a.ranges.is_some() {
-            return refuse(
-                "--ranges does not apply to a circle trajectory (it is drawn around the robot's home TCP)",
-            );
-        }
-        for spec in &a.effects {
-            let name = spec.split(':').next().unwrap_or("");
-            if MEASUREMENT_EFFECTS.contains(&name) {
-                return refuse(&format!(
-                    "--effect {name} acts on measurements, and a circle is a trajectory to compensate, not measured; evaluate runs it without that effect"
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
 pub fn run(a: SimulateArgs) -> Result<()> {
-    check_kind_options(&a)?;
-    let robot = kinematics::load_robot(&a.robot)?;
     let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
     if let Some(p) = a.poses {
         spec.poses = p;
@@ -153,6 +111,8 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     if let Some(c) = a.cycles {
         spec.indexing_cycles = c;
     }
+    spec.validate()?;
+    let robot = kinematics::load_robot(&a.robot)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
@@ -162,84 +122,19 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     robokrige::output::check_outputs(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;
-    let summary = match &out {
-        SimOutput::Measurements(d) => {
-            dataset::write_csv(&a.output, d)?;
-            let s = summarize(d.errors.as_deref().unwrap_or(&[]));
-            serde_json::json!({
-                "output": a.output, "truth": truth_path, "rows": d.q.len(),
-                "error": s,
-                "noise_floor_mm": truth.noise_floor_mm,
-                "direction_spread_mm": truth.direction_spread_mm,
-            })
-        }
-        SimOutput::Trajectory(t) => {
-            t.write_csv(&a.output)?;
-            serde_json::json!({"output": a.output, "truth": truth_path, "points": t.len()})
-        }
-    };
-    print_summary(&summary);
+    match &out {
+        SimOutput::Measurements(d) => dataset::write_csv(&a.output, d)?,
+        SimOutput::Trajectory(t) => t.write_csv(&a.output)?,
+    }
+    let summary = report::json(&out, &truth, (&a.output, &truth_path));
+    say_part!("{}", report::summary(&summary));
     if let Some(path) = &a.json {
         super::write_json(path, &summary, "summary")?;
     }
     Ok(())
 }
 
-fn print_summary(s: &serde_json::Value) {
-    let f = |v: &serde_json::Value| v.as_f64().map_or("-".into(), |x| format!("{x:.4}"));
-    let v3 = |v: &serde_json::Value| {
-        v.as_array().map_or("-".into(), |a| {
-            a.iter().map(&f).collect::<Vec<_>>().join(" / ")
-        })
-    };
-    say!(
-        "wrote {} ({})",
-        s["output"].as_str().unwrap_or(""),
-        s["truth"]
-            .as_str()
-            .map_or(String::new(), |t| format!("truth: {t}"))
-    );
-    if let Some(n) = s.get("points") {
-        say!("trajectory points: {n}");
-        return;
-    }
-    let e = &s["error"];
-    say!("rows: {}", s["rows"]);
-    say!(
-        "3D error (mm): mean {}  std {}  min {}  max {}",
-        f(&e["mean_3d_mm"]),
-        f(&e["std_3d_mm"]),
-        f(&e["min_3d_mm"]),
-        f(&e["max_3d_mm"])
-    );
-    say!("per-axis RMS x / y / z (mm): {}", v3(&e["rms_mm"]));
-    say!(
-        "direction spread |δ(λ=+1) − δ(λ=−1)| x / y / z (mm, truth, mean over poses): {}",
-        v3(&s["direction_spread_mm"])
-    );
-    say!(
-        "noise floor σ x / y / z (mm, truth): {}",
-        v3(&s["noise_floor_mm"])
-    );
-}
-
 /// `a.csv` → `a.truth.json`.
 pub fn truth_path_for(output: &Path) -> PathBuf {
     output.with_extension("truth.json")
-}
-
-fn parse_ranges(s: &str) -> Result<Vec<(f64, f64)>> {
-    s.split(',')
-        .map(|part| {
-            let (lo, hi) = part.split_once(':').ok_or_else(|| {
-                Error::InvalidParameter(format!("--ranges: '{part}' is not LO:HI"))
-            })?;
-            let p = |x: &str| {
-                x.trim().parse::<f64>().map_err(|_| {
-                    Error::InvalidParameter(format!("--ranges: '{x}' is not a number"))
-                })
-            };
-            Ok((p(lo)?, p(hi)?))
-        })
-        .collect()
 }

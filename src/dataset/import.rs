@@ -168,10 +168,6 @@ pub fn import_text(
     spec: &ImportSpec,
     prismatic: &[bool],
 ) -> Result<Imported> {
-    let bad = |message: String| Error::Input {
-        source_name: source.into(),
-        message,
-    };
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let header_line = text.lines().next().unwrap_or("");
     let delimiter = spec.delimiter.unwrap_or_else(|| sniff(header_line));
@@ -186,11 +182,127 @@ pub fn import_text(
         .from_reader(text.as_bytes());
     let header: Vec<String> = rdr
         .headers()
-        .map_err(|e| bad(format!("header: {e}")))?
+        .map_err(|e| bad(source, format!("header: {e}")))?
         .iter()
         .map(|h| h.trim().to_string())
         .collect();
-    // targets → export column index
+    let plan = ColumnPlan::new(spec, &header, prismatic, source)?;
+    let records: Vec<(u64, csv::StringRecord)> = rdr
+        .records()
+        .enumerate()
+        .map(|(i, r)| {
+            r.map(|r| (i as u64 + 2, r))
+                .map_err(|e| bad(source, format!("line {}: {e}", i + 2)))
+        })
+        .collect::<Result<_>>()?;
+    if records.is_empty() {
+        return Err(bad(source, "no data rows after the header".into()));
+    }
+    let mapped: Vec<usize> = plan.index.values().copied().collect();
+    let decimal = decimal_separator(spec, delimiter, &records, &mapped)?;
+    let cells = Cells {
+        source,
+        header: &header,
+        decimal,
+    };
+    let data = read_rows(&records, &plan, &cells, spec, prismatic)?.into_dataset(source, &plan);
+    data.validate()?;
+    let ignored = header
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| !mapped.contains(k))
+        .map(|(_, h)| h.clone())
+        .collect();
+    Ok(Imported {
+        data,
+        delimiter,
+        decimal,
+        ignored,
+    })
+}
+
+/// An input error in `source`.
+fn bad(source: &str, message: String) -> Error {
+    Error::Input {
+        source_name: source.into(),
+        message,
+    }
+}
+
+/// Which export column each target reads, checked: every mapped column
+/// exists, joints are `q1..qN` without gaps (with a `dir` for each or none),
+/// errors and positions are whole triples.
+struct ColumnPlan<'a> {
+    /// Target → export column index.
+    index: BTreeMap<&'a str, usize>,
+    /// Joints N.
+    n: usize,
+    /// Columns of `ex, ey, ez`, if mapped.
+    err_cols: Option<[usize; 3]>,
+    /// Columns of `x, y, z`, if mapped.
+    pos_cols: Option<[usize; 3]>,
+    /// Columns of `dir1..dirN`, or none.
+    dir_cols: Vec<usize>,
+    /// Covariates: every other target, by name.
+    covariates: Vec<(&'a str, usize)>,
+}
+
+impl<'a> ColumnPlan<'a> {
+    fn new(
+        spec: &'a ImportSpec,
+        header: &[String],
+        prismatic: &[bool],
+        source: &str,
+    ) -> Result<Self> {
+        let index = column_index(spec, header, source)?;
+        let n = joint_count(&index, source)?;
+        if !prismatic.is_empty() && prismatic.len() != n {
+            return Err(Error::JointCount {
+                expected: prismatic.len(),
+                got: n,
+            });
+        }
+        let triple = |names: [&str; 3]| -> Result<Option<[usize; 3]>> {
+            let found: Vec<usize> = names.iter().filter_map(|t| index.get(t).copied()).collect();
+            match found.len() {
+                0 => Ok(None),
+                3 => Ok(Some([found[0], found[1], found[2]])),
+                _ => Err(bad(
+                    source,
+                    format!("map all of {} or none", names.join(", ")),
+                )),
+            }
+        };
+        let err_cols = triple(["ex", "ey", "ez"])?;
+        let pos_cols = triple(["x", "y", "z"])?;
+        let dir_cols: Vec<usize> = (1..=n)
+            .filter_map(|k| index.get(format!("dir{k}").as_str()).copied())
+            .collect();
+        if !dir_cols.is_empty() && dir_cols.len() != n {
+            return Err(bad(source, format!("map all of dir1..dir{n} or none")));
+        }
+        let covariates: Vec<(&str, usize)> = index
+            .iter()
+            .filter(|(t, _)| !fixed_target(t))
+            .map(|(t, &k)| (*t, k))
+            .collect();
+        Ok(ColumnPlan {
+            index,
+            n,
+            err_cols,
+            pos_cols,
+            dir_cols,
+            covariates,
+        })
+    }
+}
+
+/// Target → index of its export column in `header`.
+fn column_index<'a>(
+    spec: &'a ImportSpec,
+    header: &[String],
+    source: &str,
+) -> Result<BTreeMap<&'a str, usize>> {
     if spec.columns.is_empty() {
         return Err(Error::InvalidParameter(
             "no column map: give --map target=column,… or --map-file (q1..qN are required)".into(),
@@ -199,13 +311,21 @@ pub fn import_text(
     let mut index: BTreeMap<&str, usize> = BTreeMap::new();
     for (target, column) in &spec.columns {
         let Some(k) = header.iter().position(|h| h == column) else {
-            return Err(bad(format!(
-                "no column '{column}' (for {target}); found: {}",
-                header.join(", ")
-            )));
+            return Err(bad(
+                source,
+                format!(
+                    "no column '{column}' (for {target}); found: {}",
+                    header.join(", ")
+                ),
+            ));
         };
         index.insert(target, k);
     }
+    Ok(index)
+}
+
+/// N of the mapped `q1..qN`; an error for a gap or a `qK`/`dirK` beyond N.
+fn joint_count(index: &BTreeMap<&str, usize>, source: &str) -> Result<usize> {
     let n = (1..)
         .take_while(|k| index.contains_key(format!("q{k}").as_str()))
         .count();
@@ -213,58 +333,33 @@ pub fn import_text(
         if let Some((prefix, k)) = numbered(t)
             && (k == 0 || k > n)
         {
-            return Err(bad(format!(
-                "target {t}: joints must be q1..qN without gaps (found q1..q{n}){}",
-                if prefix == "dir" {
-                    ", with a dir for each"
-                } else {
-                    ""
-                }
-            )));
+            return Err(bad(
+                source,
+                format!(
+                    "target {t}: joints must be q1..qN without gaps (found q1..q{n}){}",
+                    if prefix == "dir" {
+                        ", with a dir for each"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
         }
     }
     if n == 0 {
-        return Err(bad("the column map has no q1 (joint 1)".into()));
+        return Err(bad(source, "the column map has no q1 (joint 1)".into()));
     }
-    if !prismatic.is_empty() && prismatic.len() != n {
-        return Err(Error::JointCount {
-            expected: prismatic.len(),
-            got: n,
-        });
-    }
-    let triple = |names: [&str; 3]| -> Result<Option<[usize; 3]>> {
-        let found: Vec<usize> = names.iter().filter_map(|t| index.get(t).copied()).collect();
-        match found.len() {
-            0 => Ok(None),
-            3 => Ok(Some([found[0], found[1], found[2]])),
-            _ => Err(bad(format!("map all of {} or none", names.join(", ")))),
-        }
-    };
-    let err_cols = triple(["ex", "ey", "ez"])?;
-    let pos_cols = triple(["x", "y", "z"])?;
-    let dir_cols: Vec<usize> = (1..=n)
-        .filter_map(|k| index.get(format!("dir{k}").as_str()).copied())
-        .collect();
-    if !dir_cols.is_empty() && dir_cols.len() != n {
-        return Err(bad(format!("map all of dir1..dir{n} or none")));
-    }
-    let covariates: Vec<(&str, usize)> = index
-        .iter()
-        .filter(|(t, _)| !fixed_target(t))
-        .map(|(t, &k)| (*t, k))
-        .collect();
-    let records: Vec<(u64, csv::StringRecord)> = rdr
-        .records()
-        .enumerate()
-        .map(|(i, r)| {
-            r.map(|r| (i as u64 + 2, r))
-                .map_err(|e| bad(format!("line {}: {e}", i + 2)))
-        })
-        .collect::<Result<_>>()?;
-    if records.is_empty() {
-        return Err(bad("no data rows after the header".into()));
-    }
-    let mapped: Vec<usize> = index.values().copied().collect();
+    Ok(n)
+}
+
+/// The decimal separator: the spec's, else `,` when the delimiter is not a
+/// comma and a mapped cell of the first 20 rows holds one, else `.`.
+fn decimal_separator(
+    spec: &ImportSpec,
+    delimiter: char,
+    records: &[(u64, csv::StringRecord)],
+    mapped: &[usize],
+) -> Result<char> {
     let decimal = spec.decimal.unwrap_or_else(|| {
         let comma = delimiter != ','
             && records.iter().take(20).any(|(_, r)| {
@@ -284,24 +379,80 @@ pub fn import_text(
             "decimal separator '{decimal}': expected . or ,"
         )));
     }
-    let cell = |line: u64, r: &csv::StringRecord, k: usize, missing_ok: bool| -> Result<f64> {
+    Ok(decimal)
+}
+
+/// Reads the export's cells as numbers.
+struct Cells<'a> {
+    source: &'a str,
+    header: &'a [String],
+    decimal: char,
+}
+
+impl Cells<'_> {
+    /// Cell `k` of record `r` (file line `line`) as a finite number; an
+    /// empty cell is NaN when `missing_ok`.
+    fn number(&self, line: u64, r: &csv::StringRecord, k: usize, missing_ok: bool) -> Result<f64> {
         let raw = r.get(k).unwrap_or("").trim();
         if raw.is_empty() && missing_ok {
             return Ok(f64::NAN);
         }
-        let s = if decimal == ',' {
+        let s = if self.decimal == ',' {
             raw.replace(',', ".")
         } else {
             raw.to_string()
         };
         match s.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(bad(format!(
-                "line {line}, column '{}': '{raw}' is not a finite number (decimal separator '{decimal}')",
-                header[k]
-            ))),
+            _ => Err(bad(
+                self.source,
+                format!(
+                    "line {line}, column '{}': '{raw}' is not a finite number (decimal separator '{}')",
+                    self.header[k], self.decimal
+                ),
+            )),
         }
-    };
+    }
+
+    /// Cell `k` as a direction: +1 or −1.
+    fn direction(&self, line: u64, r: &csv::StringRecord, k: usize) -> Result<f64> {
+        let v = self.number(line, r, k, false)?;
+        if v == 1.0 || v == -1.0 {
+            Ok(v)
+        } else {
+            Err(bad(
+                self.source,
+                format!(
+                    "line {line}, column '{}': a direction is +1 or -1, not {v}",
+                    self.header[k]
+                ),
+            ))
+        }
+    }
+}
+
+/// The columns read from the records, in the format's units (degrees, mm).
+#[derive(Default)]
+struct Rows {
+    q: Vec<Vec<f64>>,
+    dir: Vec<Vec<f64>>,
+    errors: Vec<[f64; 3]>,
+    positions: Vec<[f64; 3]>,
+    cov: Vec<Vec<f64>>,
+    ids: Vec<String>,
+    lines: Vec<u64>,
+}
+
+/// Every record through the plan: joints (radians → degrees, prismatic
+/// joints and all lengths × 1000 from metres), directions, errors,
+/// positions, covariates, ids.
+fn read_rows(
+    records: &[(u64, csv::StringRecord)],
+    plan: &ColumnPlan<'_>,
+    cells: &Cells<'_>,
+    spec: &ImportSpec,
+    prismatic: &[bool],
+) -> Result<Rows> {
     let mm = spec.lengths.to_mm();
     let joint_value = |j: usize, raw: f64| {
         if prismatic.get(j).copied().unwrap_or(false) {
@@ -312,92 +463,79 @@ pub fn import_text(
             raw
         }
     };
-    let mut q = Vec::with_capacity(records.len());
-    let mut dir = Vec::with_capacity(records.len());
-    let mut errors = Vec::new();
-    let mut positions = Vec::new();
-    let mut cov: Vec<Vec<f64>> = vec![Vec::with_capacity(records.len()); covariates.len()];
-    let mut ids = Vec::new();
-    let mut lines = Vec::with_capacity(records.len());
-    for (line, r) in &records {
-        let mut qi = Vec::with_capacity(n);
-        for j in 0..n {
-            let raw = cell(*line, r, index[format!("q{}", j + 1).as_str()], false)?;
+    let mut rows = Rows {
+        cov: vec![Vec::with_capacity(records.len()); plan.covariates.len()],
+        ..Rows::default()
+    };
+    for (line, r) in records {
+        let mut qi = Vec::with_capacity(plan.n);
+        for j in 0..plan.n {
+            let raw = cells.number(*line, r, plan.index[format!("q{}", j + 1).as_str()], false)?;
             qi.push(joint_value(j, raw));
         }
-        q.push(qi);
-        if !dir_cols.is_empty() {
-            let d: Vec<f64> = dir_cols
+        rows.q.push(qi);
+        if !plan.dir_cols.is_empty() {
+            let d: Vec<f64> = plan
+                .dir_cols
                 .iter()
-                .map(|&k| {
-                    let v = cell(*line, r, k, false)?;
-                    if v == 1.0 || v == -1.0 {
-                        Ok(v)
-                    } else {
-                        Err(bad(format!(
-                            "line {line}, column '{}': a direction is +1 or -1, not {v}",
-                            header[k]
-                        )))
-                    }
-                })
+                .map(|&k| cells.direction(*line, r, k))
                 .collect::<Result<_>>()?;
-            dir.push(d);
+            rows.dir.push(d);
         }
-        for (cols, out) in [(&err_cols, &mut errors), (&pos_cols, &mut positions)] {
+        for (cols, out) in [
+            (&plan.err_cols, &mut rows.errors),
+            (&plan.pos_cols, &mut rows.positions),
+        ] {
             if let Some(c) = cols {
                 let mut v = [0.0; 3];
                 for a in 0..3 {
-                    v[a] = cell(*line, r, c[a], false)? * mm;
+                    v[a] = cells.number(*line, r, c[a], false)? * mm;
                 }
                 out.push(v);
             }
         }
-        for (c, (_, k)) in cov.iter_mut().zip(&covariates) {
-            c.push(cell(*line, r, *k, true)?);
+        for (c, (_, k)) in rows.cov.iter_mut().zip(&plan.covariates) {
+            c.push(cells.number(*line, r, *k, true)?);
         }
-        if let Some(&k) = index.get("id") {
-            ids.push(r.get(k).unwrap_or("").trim().to_string());
+        if let Some(&k) = plan.index.get("id") {
+            rows.ids.push(r.get(k).unwrap_or("").trim().to_string());
         }
-        lines.push(*line);
+        rows.lines.push(*line);
     }
-    let (dir, dir_source) = if dir_cols.is_empty() {
-        (derive_directions(&q, None), DirSource::Derived)
-    } else {
-        (dir, DirSource::Given)
-    };
-    let data = Dataset {
-        source: source.into(),
-        q,
-        dir,
-        dir_source,
-        errors: err_cols.map(|_| errors),
-        positions: pos_cols.map(|_| positions),
-        ids: index.contains_key("id").then_some(ids),
-        covariates: covariates
-            .iter()
-            .zip(cov)
-            .map(|((name, _), values)| Covariate {
-                name: name.to_string(),
-                missing: values.iter().filter(|v| v.is_nan()).count(),
-                values,
-            })
-            .collect(),
-        text: Vec::new(),
-        lines: SourceLines(lines),
-    };
-    data.validate()?;
-    let ignored = header
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| !mapped.contains(k))
-        .map(|(_, h)| h.clone())
-        .collect();
-    Ok(Imported {
-        data,
-        delimiter,
-        decimal,
-        ignored,
-    })
+    Ok(rows)
+}
+
+impl Rows {
+    /// The campaign (directions derived from the row order when the export
+    /// has none), not yet validated.
+    fn into_dataset(self, source: &str, plan: &ColumnPlan<'_>) -> Dataset {
+        let (dir, dir_source) = if plan.dir_cols.is_empty() {
+            (derive_directions(&self.q, None), DirSource::Derived)
+        } else {
+            (self.dir, DirSource::Given)
+        };
+        Dataset {
+            source: source.into(),
+            q: self.q,
+            dir,
+            dir_source,
+            errors: plan.err_cols.map(|_| self.errors),
+            positions: plan.pos_cols.map(|_| self.positions),
+            ids: plan.index.contains_key("id").then_some(self.ids),
+            covariates: plan
+                .covariates
+                .iter()
+                .zip(self.cov)
+                .map(|((name, _), values)| Covariate {
+                    name: name.to_string(),
+                    missing: values.iter().filter(|v| v.is_nan()).count(),
+                    values,
+                })
+                .collect(),
+            text: Vec::new(),
+            lines: SourceLines(self.lines),
+        }
+    }
 }
 
 #[cfg(test)]

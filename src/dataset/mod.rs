@@ -31,10 +31,12 @@
 //! back as [`DirSource::Given`]; everything else round-trips exactly.
 
 pub mod import;
+mod predictions;
 mod read;
 pub(crate) mod table;
 mod write;
 
+pub use predictions::write_predictions;
 pub(crate) use read::from_table;
 pub use read::{read_csv, read_csv_from};
 pub use write::{write_csv, write_csv_to};

@@ -190,6 +190,18 @@ impl RobotFile {
             .map_err(|e| Error::InvalidParameter(format!("robot file as TOML: {e}")))
     }
 
+    /// The robot file of `robot` as TOML text under a comment line with
+    /// its number of joints and [`table_digest`] (what `robot show` prints
+    /// and `robot calibrated` writes).
+    pub fn text_of(robot: &Robot) -> Result<String> {
+        Ok(format!(
+            "# {} joints, kinematic-table digest {}\n{}",
+            robot.dof(),
+            table_digest(robot),
+            RobotFile::of(robot).to_toml()?
+        ))
+    }
+
     /// The robot, after checking every value (`source_name` for messages).
     pub fn robot(&self, source_name: &str) -> Result<Robot> {
         let bad = |message: String| Error::Input {

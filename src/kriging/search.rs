@@ -241,7 +241,7 @@ impl std::fmt::Display for FitPlan {
 ///   rows from there: the result is a stationary point of the full
 ///   likelihood, at a few dozen full evaluations instead of hundreds;
 /// - larger: the same with the convergence on a subset of `converge_rows`
-///   rows ([`converge_subset`]); [`super::fit_output_from`] then solves once on all rows at that ξ.
+///   rows ([`converge_subset`]); the fit then solves once on all rows at that ξ.
 fn optimise_bfgs(
     problem: &KrigingProblem,
     bounds: &Bounds,

@@ -239,20 +239,7 @@ where
         return Err(invalid("x0 is not finite"));
     }
     validate_options(opts)?;
-
-    let (mut r, mut jac) = residual_and_jacobian(x0)?;
-    let mut evaluations = 1;
-    let m = r.len();
-    if m == 0 {
-        return Err(invalid("the residual vector is empty"));
-    }
-    check_sizes(&r, &jac, m, n)?;
-    if r.iter().any(|v| !v.is_finite()) {
-        return Err(invalid("the residual at x0 is not finite"));
-    }
-    if jac.iter().any(|v| !v.is_finite()) {
-        return Err(invalid("the Jacobian at x0 is not finite"));
-    }
+    let (r, jac) = start(&mut residual_and_jacobian, x0)?;
 
     // Marquardt scaling and the identifiable subset, both from J(x0).
     let mut d: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
@@ -263,110 +250,193 @@ where
             *dj = 1.0;
         }
     }
-    let k = free.len();
-
-    let mut x = x0.to_vec();
-    let mut cost = 0.5 * r.norm_squared();
-    let mut lambda = opts.lambda0;
-    let mut nu = 2.0;
-    let mut iterations = 0;
-
-    let stop = 'outer: loop {
-        // scaled Jacobian of the free parameters and the scaled gradient
-        let js = DMatrix::from_fn(m, k, |i, c| jac[(i, free[c])] / d[free[c]]);
-        let g = js.tr_mul(&r);
-        if k == 0 || g.amax() <= opts.tol_grad {
+    let mut st = LmState {
+        x: x0.to_vec(),
+        cost: 0.5 * r.norm_squared(),
+        r,
+        jac,
+        d,
+        lambda: opts.lambda0,
+        nu: 2.0,
+        iterations: 0,
+        evaluations: 1,
+    };
+    let stop = loop {
+        let Some(lin) = st.linearise(&free, opts) else {
             break LmStop::SmallGradient;
-        }
-        let qr = js.qr();
-        let rr = qr.r();
-        let p = rr.nrows();
-        let mut qtr_full = r.clone();
-        qr.q_tr_mul(&mut qtr_full);
-        let qtr = qtr_full.rows(0, p).into_owned();
-        let dx_norm = free
-            .iter()
-            .map(|&j| (d[j] * x[j]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-
-        // trial steps at this point until one is accepted
-        loop {
-            if iterations >= opts.max_iter {
-                break 'outer LmStop::MaxIterations;
-            }
-            if !lambda.is_finite() {
-                break 'outer LmStop::SmallStep;
-            }
-            let u = match damped_step(&rr, &qtr, lambda) {
-                Some(u) => u,
-                None => {
-                    // λ too small for a (numerically) singular R: damp more
-                    lambda = (lambda * nu).max(f64::MIN_POSITIVE);
-                    nu *= 2.0;
-                    continue;
-                }
-            };
-            let small_step = u.norm() <= opts.tol_step * (dx_norm + opts.tol_step);
-            let ru = &rr * &u;
-            let predicted = -qtr.dot(&ru) - 0.5 * ru.norm_squared();
-            let mut x_new = x.clone();
-            for (c, &j) in free.iter().enumerate() {
-                x_new[j] += u[c] / d[j];
-            }
-            iterations += 1;
-            let (r_new, jac_new) = residual_and_jacobian(&x_new)?;
-            evaluations += 1;
-            check_sizes(&r_new, &jac_new, m, n)?;
-            let finite =
-                r_new.iter().all(|v| v.is_finite()) && jac_new.iter().all(|v| v.is_finite());
-            if finite {
-                let cost_new = 0.5 * r_new.norm_squared();
-                let actual = cost - cost_new;
-                if actual > 0.0 && predicted > 0.0 {
-                    let rho = actual / predicted;
-                    let small = actual <= opts.tol_cost * cost && predicted <= opts.tol_cost * cost;
-                    x = x_new;
-                    r = r_new;
-                    jac = jac_new;
-                    cost = cost_new;
-                    lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                    lambda = lambda.max(f64::MIN_POSITIVE);
-                    nu = 2.0;
-                    for &j in &free {
-                        d[j] = d[j].max(jac.column(j).norm());
-                    }
-                    if small_step {
-                        break 'outer LmStop::SmallStep;
-                    }
-                    if small {
-                        break 'outer LmStop::SmallCostDecrease;
-                    }
-                    continue 'outer;
-                }
-            }
-            if small_step {
-                break 'outer LmStop::SmallStep;
-            }
-            lambda *= nu;
-            nu *= 2.0;
+        };
+        if let Some(stop) = st.trial_steps(&mut residual_and_jacobian, &lin, &free, opts)? {
+            break stop;
         }
     };
 
-    let rms = (2.0 * cost / m as f64).sqrt();
-    let rank = numerical_rank(&jac, opts.rank_tol);
-    let std_errors = standard_errors(&jac, &free, n, rms, opts.rank_tol);
+    let m = st.r.len();
+    let rms = (2.0 * st.cost / m as f64).sqrt();
+    let rank = numerical_rank(&st.jac, opts.rank_tol);
+    let std_errors = standard_errors(&st.jac, &free, n, rms, opts.rank_tol);
     Ok(LmResult {
-        x,
-        cost,
+        x: st.x,
+        cost: st.cost,
         rms,
-        iterations,
-        evaluations,
+        iterations: st.iterations,
+        evaluations: st.evaluations,
         stop,
         rank,
         unidentifiable,
         std_errors,
     })
+}
+
+/// The residual and Jacobian at `x0`, checked: a non-empty residual, sizes
+/// that agree, finite values.
+fn start<F>(residual_and_jacobian: &mut F, x0: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>
+where
+    F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
+{
+    let (r, jac) = residual_and_jacobian(x0)?;
+    let m = r.len();
+    if m == 0 {
+        return Err(invalid("the residual vector is empty"));
+    }
+    check_sizes(&r, &jac, m, x0.len())?;
+    if r.iter().any(|v| !v.is_finite()) {
+        return Err(invalid("the residual at x0 is not finite"));
+    }
+    if jac.iter().any(|v| !v.is_finite()) {
+        return Err(invalid("the Jacobian at x0 is not finite"));
+    }
+    Ok((r, jac))
+}
+
+/// The iterate of [`levenberg_marquardt`]: the point, its residual and
+/// Jacobian, the cost `C = ½‖r‖²`, the Marquardt scaling `d`, the damping
+/// `λ` and its growth factor `ν`, and the counters.
+struct LmState {
+    x: Vec<f64>,
+    r: DVector<f64>,
+    jac: DMatrix<f64>,
+    cost: f64,
+    d: Vec<f64>,
+    lambda: f64,
+    nu: f64,
+    iterations: usize,
+    evaluations: usize,
+}
+
+/// A point, its residual, Jacobian and cost.
+type Point = (Vec<f64>, DVector<f64>, DMatrix<f64>, f64);
+
+/// The linear model at the current point, in the scaled free variables:
+/// `J D⁻¹ = Q R`, `Qᵀ r` (its first `p` rows) and `‖D x‖`.
+struct Linearisation {
+    rr: DMatrix<f64>,
+    qtr: DVector<f64>,
+    dx_norm: f64,
+}
+
+impl LmState {
+    /// The QR of the scaled Jacobian of the free parameters, or `None` when
+    /// the scaled gradient `‖D⁻¹ Jᵀ r‖_∞ ≤ tol_grad` (or nothing is free).
+    fn linearise(&self, free: &[usize], opts: &LmOptions) -> Option<Linearisation> {
+        let (m, k, d) = (self.r.len(), free.len(), &self.d);
+        let js = DMatrix::from_fn(m, k, |i, c| self.jac[(i, free[c])] / d[free[c]]);
+        let g = js.tr_mul(&self.r);
+        if k == 0 || g.amax() <= opts.tol_grad {
+            return None;
+        }
+        let qr = js.qr();
+        let rr = qr.r();
+        let p = rr.nrows();
+        let mut qtr_full = self.r.clone();
+        qr.q_tr_mul(&mut qtr_full);
+        let qtr = qtr_full.rows(0, p).into_owned();
+        let dx_norm = free
+            .iter()
+            .map(|&j| (d[j] * self.x[j]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        Some(Linearisation { rr, qtr, dx_norm })
+    }
+
+    /// Trial steps at this linearisation until one is accepted (`None`: go
+    /// on from the new point) or a stopping rule holds (`Some`).
+    fn trial_steps<F>(
+        &mut self,
+        residual_and_jacobian: &mut F,
+        lin: &Linearisation,
+        free: &[usize],
+        opts: &LmOptions,
+    ) -> Result<Option<LmStop>>
+    where
+        F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
+    {
+        let (m, n) = (self.r.len(), self.x.len());
+        loop {
+            if self.iterations >= opts.max_iter {
+                return Ok(Some(LmStop::MaxIterations));
+            }
+            if !self.lambda.is_finite() {
+                return Ok(Some(LmStop::SmallStep));
+            }
+            let Some(u) = damped_step(&lin.rr, &lin.qtr, self.lambda) else {
+                // λ too small for a (numerically) singular R: damp more
+                self.lambda = (self.lambda * self.nu).max(f64::MIN_POSITIVE);
+                self.nu *= 2.0;
+                continue;
+            };
+            let small_step = u.norm() <= opts.tol_step * (lin.dx_norm + opts.tol_step);
+            let ru = &lin.rr * &u;
+            let predicted = -lin.qtr.dot(&ru) - 0.5 * ru.norm_squared();
+            let mut x_new = self.x.clone();
+            for (c, &j) in free.iter().enumerate() {
+                x_new[j] += u[c] / self.d[j];
+            }
+            self.iterations += 1;
+            let (r_new, jac_new) = residual_and_jacobian(&x_new)?;
+            self.evaluations += 1;
+            check_sizes(&r_new, &jac_new, m, n)?;
+            let finite =
+                r_new.iter().all(|v| v.is_finite()) && jac_new.iter().all(|v| v.is_finite());
+            if finite {
+                let cost_new = 0.5 * r_new.norm_squared();
+                let actual = self.cost - cost_new;
+                if actual > 0.0 && predicted > 0.0 {
+                    let cost = self.cost;
+                    let small = actual <= opts.tol_cost * cost && predicted <= opts.tol_cost * cost;
+                    let rho = actual / predicted;
+                    self.accept((x_new, r_new, jac_new, cost_new), rho, free);
+                    return Ok(if small_step {
+                        Some(LmStop::SmallStep)
+                    } else if small {
+                        Some(LmStop::SmallCostDecrease)
+                    } else {
+                        None
+                    });
+                }
+            }
+            if small_step {
+                return Ok(Some(LmStop::SmallStep));
+            }
+            self.lambda *= self.nu;
+            self.nu *= 2.0;
+        }
+    }
+
+    /// Move to an accepted point `(x, r, J, C)` of gain ratio `rho`:
+    /// `λ ← λ · max(1/3, 1 − (2ρ − 1)³)`, `ν ← 2`, `d_j ← max(d_j, ‖J_j‖)`.
+    fn accept(&mut self, point: Point, rho: f64, free: &[usize]) {
+        let (x, r, jac, cost) = point;
+        self.cost = cost;
+        self.x = x;
+        self.r = r;
+        self.jac = jac;
+        self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+        self.lambda = self.lambda.max(f64::MIN_POSITIVE);
+        self.nu = 2.0;
+        for &j in free {
+            self.d[j] = self.d[j].max(self.jac.column(j).norm());
+        }
+    }
 }
 
 fn validate_options(o: &LmOptions) -> Result<()> {

@@ -142,58 +142,16 @@ where
             break StopReason::Budget;
         }
         iterations += 1;
-        let mut p = newton_direction(&hinv, &g, &free);
-        if p.iter().zip(&g).map(|(a, b)| a * b).sum::<f64>() >= 0.0 {
-            hinv = identity(d);
-            scaled = false;
-            p = (0..d).map(|i| if free[i] { -g[i] } else { 0.0 }).collect();
-        }
-        let norm = p.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let mut alpha = if norm > opts.max_step {
-            opts.max_step / norm
-        } else {
-            1.0
-        };
-        let mut accepted = None;
-        for _ in 0..30 {
-            if evals.get() >= opts.max_evals {
-                break;
-            }
-            let trial = bounds.clamp(
-                &x.iter()
-                    .zip(&p)
-                    .map(|(a, b)| a + alpha * b)
-                    .collect::<Vec<_>>(),
-            );
-            let decrease: f64 = g
-                .iter()
-                .zip(trial.iter().zip(&x))
-                .map(|(gi, (t, xi))| gi * (t - xi))
-                .sum();
-            if decrease >= 0.0 {
-                break; // the projected path no longer descends
-            }
-            let ft = eval(&trial, &mut gn);
-            if ft <= fx + 1e-4 * decrease {
-                accepted = Some((trial, ft));
-                break;
-            }
-            alpha *= 0.5;
-        }
-        let Some((xn, fxn)) = accepted else {
+        let p = descent_direction(&mut hinv, &mut scaled, &g, &free);
+        let Some((xn, fxn)) =
+            line_search(&mut eval, &evals, (&x, fx, &g), &p, &mut gn, bounds, opts)
+        else {
             break StopReason::MeshTolerance;
         };
         let s: Vec<f64> = xn.iter().zip(&x).map(|(a, b)| a - b).collect();
         let y: Vec<f64> = gn.iter().zip(&g).map(|(a, b)| a - b).collect();
-        let sy: f64 = s.iter().zip(&y).map(|(a, b)| a * b).sum();
-        if !scaled && sy > 0.0 {
-            let yy: f64 = y.iter().map(|v| v * v).sum();
-            let gamma = sy / yy;
-            hinv = identity(d);
-            for (i, row) in hinv.iter_mut().enumerate() {
-                row[i] = gamma;
-            }
-            scaled = true;
+        if !scaled {
+            scaled = initial_scaling(&mut hinv, &s, &y);
         }
         bfgs_update(&mut hinv, &s, &y);
         let small = fx - fxn < (opts.ftol * fx.abs().max(1.0)).max(opts.fatol);
@@ -215,6 +173,90 @@ where
         hinv,
         g,
     )
+}
+
+/// `p = −H g` on the free set; when that is not a descent direction
+/// (`pᵀg ≥ 0`), H is reset to the identity (unscaled) and `p = −g` there.
+fn descent_direction(
+    hinv: &mut Vec<Vec<f64>>,
+    scaled: &mut bool,
+    g: &[f64],
+    free: &[bool],
+) -> Vec<f64> {
+    let d = g.len();
+    let mut p = newton_direction(hinv, g, free);
+    if p.iter().zip(g).map(|(a, b)| a * b).sum::<f64>() >= 0.0 {
+        *hinv = identity(d);
+        *scaled = false;
+        p = (0..d).map(|i| if free[i] { -g[i] } else { 0.0 }).collect();
+    }
+    p
+}
+
+/// Backtracking Armijo search along the projected path
+/// `x(α) = clamp(x + αp)`, α halved from `min(1, max_step/‖p‖)` at most 30
+/// times: the first point with `f(x(α)) ≤ f(x) + 10⁻⁴ gᵀ(x(α) − x)`, its
+/// gradient left in `gn`. `None` when the path no longer descends
+/// (`gᵀ(x(α) − x) ≥ 0`), the budget is spent, or no trial is accepted.
+fn line_search<F>(
+    eval: &mut F,
+    evals: &std::cell::Cell<usize>,
+    (x, fx, g): (&[f64], f64, &[f64]),
+    p: &[f64],
+    gn: &mut [f64],
+    bounds: &Bounds,
+    opts: &QuasiNewtonOptions,
+) -> Option<(Vec<f64>, f64)>
+where
+    F: FnMut(&[f64], &mut [f64]) -> f64,
+{
+    let norm = p.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mut alpha = if norm > opts.max_step {
+        opts.max_step / norm
+    } else {
+        1.0
+    };
+    for _ in 0..30 {
+        if evals.get() >= opts.max_evals {
+            return None;
+        }
+        let trial = bounds.clamp(
+            &x.iter()
+                .zip(p)
+                .map(|(a, b)| a + alpha * b)
+                .collect::<Vec<_>>(),
+        );
+        let decrease: f64 = g
+            .iter()
+            .zip(trial.iter().zip(x))
+            .map(|(gi, (t, xi))| gi * (t - xi))
+            .sum();
+        if decrease >= 0.0 {
+            return None; // the projected path no longer descends
+        }
+        let ft = eval(&trial, gn);
+        if ft <= fx + 1e-4 * decrease {
+            return Some((trial, ft));
+        }
+        alpha *= 0.5;
+    }
+    None
+}
+
+/// Before the first BFGS update: `H = (sᵀy / yᵀy) I` when `sᵀy > 0`
+/// (Nocedal & Wright eq 6.20). Returns whether H is now scaled.
+fn initial_scaling(hinv: &mut Vec<Vec<f64>>, s: &[f64], y: &[f64]) -> bool {
+    let sy: f64 = s.iter().zip(y).map(|(a, b)| a * b).sum();
+    if sy > 0.0 {
+        let yy: f64 = y.iter().map(|v| v * v).sum();
+        let gamma = sy / yy;
+        *hinv = identity(s.len());
+        for (i, row) in hinv.iter_mut().enumerate() {
+            row[i] = gamma;
+        }
+        return true;
+    }
+    false
 }
 
 #[cfg(test)]

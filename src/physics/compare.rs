@@ -19,7 +19,9 @@ use crate::dataset::Dataset;
 use crate::kinematics::{self, Robot};
 use crate::methods::Method;
 use crate::predictor::ErrorPredictor;
-use crate::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot, campaign, execute, rng_for};
+use crate::sim::{
+    CampaignKind, CampaignSpec, ErrorProfile, Execution, TrueRobot, campaign, execute, rng_for,
+};
 use crate::stats::spread;
 use crate::trajectory::Trajectory;
 use crate::vec3::{Vec3, norms, residuals};
@@ -47,6 +49,19 @@ pub struct CompareOptions {
     pub ejs: Method,
     /// Estimate a nugget in every Kriging fit (the papers interpolate: no nugget).
     pub nugget: bool,
+}
+
+impl CompareOptions {
+    /// Refuse `nugget` when it changes nothing: both methods are
+    /// `recommended`, which always estimates a nugget.
+    pub fn validate(&self) -> Result<()> {
+        if self.nugget && self.js == Method::Recommended && self.ejs == Method::Recommended {
+            return Err(Error::InvalidParameter(
+                "--nugget changes the papers' methods only; --js and --ejs are both `recommended`, which always estimates one".into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for CompareOptions {
@@ -178,31 +193,10 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     let step = |k: usize, what: &str| progress(k, total, what);
 
     step(0, "indexing tests and training campaign");
-    let indexing = campaign::measurements(
-        &robot,
-        &CampaignSpec::new(CampaignKind::Indexing, opts.seed),
-    )?;
-    let mut lhs = CampaignSpec::new(CampaignKind::Lhs, opts.seed);
-    lhs.poses = opts.train_poses;
-    let train = campaign::measurements(&robot, &lhs)?;
-    let mut ver = CampaignSpec::new(CampaignKind::Verify, opts.seed + 1000);
-    // a SCARA with a stretched elbow is singular: a compensated target there
-    // can lie out of reach, so its random poses keep |q2| ≥ 15°
-    let scara = super::is_scara(&nominal);
-    ver.poses = if scara {
-        2 * opts.verify_poses
-    } else {
-        opts.verify_poses
-    };
-    let all = campaign::measurements(&robot, &ver)?;
-    let keep: Vec<usize> = (0..all.len())
-        .filter(|&k| !scara || all.q[k][1].abs() >= 15.0)
-        .take(opts.verify_poses)
-        .collect();
-    let poses = all.select(&keep);
+    let c = Campaigns::simulate(&robot, &nominal, opts)?;
 
     step(1, "physics identification");
-    let id = identify_physics(&indexing, &train, &nominal)?;
+    let id = identify_physics(&c.indexing, &c.train, &nominal)?;
     let (phys, dh, how, mut notes) = (id.full, id.dh, id.method, id.notes);
 
     step(2, "Kriging JS");
@@ -212,36 +206,20 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
             .check()?
             .fit_with_progress(d, quiet)
     };
-    let js = fit(opts.js, &train)?;
+    let js = fit(opts.js, &c.train)?;
     step(3, "Kriging EJS");
-    let ejs = fit(opts.ejs, &train)?;
+    let ejs = fit(opts.ejs, &c.train)?;
     step(4, "hybrid");
-    let mut resid = train.clone();
-    let pred = phys.predict(&train.q, &train.dir)?;
-    resid.errors = Some(residuals(train.errors_or_err()?, &pred));
+    let mut resid = c.train.clone();
+    let pred = phys.predict(&c.train.q, &c.train.dir)?;
+    resid.errors = Some(residuals(c.train.errors_or_err()?, &pred));
     let hybrid = HybridModel {
         physics: phys.clone(),
         residual: fit(opts.ejs, &resid)?,
     };
 
     step(5, "executing the path and the poses");
-    let traj = path(&nominal, opts)?;
-    let start = nominal.home.clone();
-    let exec_seed = |tag: &str| rng_for(opts.seed, &format!("compare-{tag}"));
-    let run = execute(&robot, &traj, &start, None, &[], &mut exec_seed("path"))?;
-    let nom_err = |q: &[Vec<f64>], meas: &[[f64; 3]]| -> Vec<[f64; 3]> {
-        q.iter()
-            .zip(meas)
-            .map(|(qk, m)| {
-                let p = nominal.fk_unchecked(qk).translation.vector;
-                [m[0] - p.x, m[1] - p.y, m[2] - p.z]
-            })
-            .collect()
-    };
-    let path_err = nom_err(&run.joints, &run.measured);
-    let pose_err = poses.errors_or_err()?.to_vec();
-    let pose_targets = Trajectory::new(poses.q.iter().map(|q| nominal.fk_unchecked(q)).collect());
-
+    let scene = Scene::run(&robot, &nominal, &c.poses, opts)?;
     let models: Vec<(&str, Option<&dyn ErrorPredictor>)> = vec![
         ("nominal", None),
         ("D-H only", Some(&dh)),
@@ -253,22 +231,157 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
     let mut rows = Vec::new();
     for (k, (name, model)) in models.iter().enumerate() {
         step(6 + k, &format!("predicting and compensating: {name}"));
+        rows.push(scene.row(name, *model)?);
+    }
+    if c.scara {
+        notes.push("random poses: the first of a uniform draw with the elbow bent by at least 15° (|q2| ≥ 15°; a stretched SCARA is singular)".into());
+    }
+    notes.push(kriging_note(opts, c.train.len()));
+    step(total, "done");
+    Ok(Comparison {
+        options: opts.clone(),
+        physics: how,
+        noise_path: noise_score(&robot, &scene.run.joints),
+        path_nominal: scene
+            .run
+            .joints
+            .iter()
+            .map(|q| nominal.fk_unchecked(q).translation.vector.into())
+            .collect(),
+        path_errors: scene.path_err.clone(),
+        noise_poses: noise_score(&robot, &c.poses.q),
+        rows,
+        sizes: [
+            c.indexing.len(),
+            c.train.len(),
+            scene.traj.len(),
+            c.poses.len(),
+        ],
+        notes,
+    })
+}
+
+/// The simulated campaigns of a comparison.
+struct Campaigns {
+    /// The indexing tests (for the physics model).
+    indexing: Dataset,
+    /// The Latin-hypercube training campaign (Kriging, the hybrid).
+    train: Dataset,
+    /// The independent random poses.
+    poses: Dataset,
+    /// Whether the robot is a SCARA (its poses keep the elbow bent).
+    scara: bool,
+}
+
+impl Campaigns {
+    fn simulate(robot: &TrueRobot, nominal: &Robot, opts: &CompareOptions) -> Result<Self> {
+        let indexing =
+            campaign::measurements(robot, &CampaignSpec::new(CampaignKind::Indexing, opts.seed))?;
+        let mut lhs = CampaignSpec::new(CampaignKind::Lhs, opts.seed);
+        lhs.poses = opts.train_poses;
+        let train = campaign::measurements(robot, &lhs)?;
+        let mut ver = CampaignSpec::new(CampaignKind::Verify, opts.seed + 1000);
+        // a SCARA with a stretched elbow is singular: a compensated target there
+        // can lie out of reach, so its random poses keep |q2| ≥ 15°
+        let scara = super::is_scara(nominal);
+        ver.poses = if scara {
+            2 * opts.verify_poses
+        } else {
+            opts.verify_poses
+        };
+        let all = campaign::measurements(robot, &ver)?;
+        let keep: Vec<usize> = (0..all.len())
+            .filter(|&k| !scara || all.q[k][1].abs() >= 15.0)
+            .take(opts.verify_poses)
+            .collect();
+        Ok(Campaigns {
+            indexing,
+            train,
+            poses: all.select(&keep),
+            scara,
+        })
+    }
+}
+
+/// The path and the poses every model is scored on: the path executed
+/// uncompensated, and the measured − nominal errors of both.
+struct Scene<'a> {
+    robot: &'a TrueRobot,
+    nominal: &'a Robot,
+    poses: &'a Dataset,
+    seed: u64,
+    traj: Trajectory,
+    start: Vec<f64>,
+    run: Execution,
+    path_err: Vec<[f64; 3]>,
+    pose_err: Vec<[f64; 3]>,
+    pose_targets: Trajectory,
+}
+
+impl<'a> Scene<'a> {
+    fn run(
+        robot: &'a TrueRobot,
+        nominal: &'a Robot,
+        poses: &'a Dataset,
+        opts: &CompareOptions,
+    ) -> Result<Self> {
+        let traj = path(nominal, opts)?;
+        let start = nominal.home.clone();
+        let run = execute(
+            robot,
+            &traj,
+            &start,
+            None,
+            &[],
+            &mut exec_rng(opts.seed, "path"),
+        )?;
+        let path_err: Vec<[f64; 3]> = run
+            .joints
+            .iter()
+            .zip(&run.measured)
+            .map(|(qk, m)| {
+                let p = nominal.fk_unchecked(qk).translation.vector;
+                [m[0] - p.x, m[1] - p.y, m[2] - p.z]
+            })
+            .collect();
+        let pose_err = poses.errors_or_err()?.to_vec();
+        let pose_targets =
+            Trajectory::new(poses.q.iter().map(|q| nominal.fk_unchecked(q)).collect());
+        Ok(Scene {
+            robot,
+            nominal,
+            poses,
+            seed: opts.seed,
+            traj,
+            start,
+            run,
+            path_err,
+            pose_err,
+            pose_targets,
+        })
+    }
+
+    /// One model's row: it predicts the path's and the poses' errors, and
+    /// compensates both (the commands run on the true robot). `None`: the
+    /// nominal row (predicts zero, compensates nothing).
+    fn row(&self, name: &str, model: Option<&dyn ErrorPredictor>) -> Result<CompareRow> {
+        let (run, poses) = (&self.run, self.poses);
         let (pp, pq) = match model {
             Some(m) => (
                 m.predict_errors(&run.joints, &run.dir)?,
                 m.predict_errors(&poses.q, &poses.dir)?,
             ),
             None => (
-                vec![[0.0; 3]; path_err.len()],
-                vec![[0.0; 3]; pose_err.len()],
+                vec![[0.0; 3]; self.path_err.len()],
+                vec![[0.0; 3]; self.pose_err.len()],
             ),
         };
         let (comp_path, iterations) = match model {
             Some(m) => {
-                let c = compensate(&nominal, *m, &traj, &CompensationOptions::default())?;
+                let c = compensate(self.nominal, m, &self.traj, &CompensationOptions::default())?;
                 (c.commands.clone(), c.history.len())
             }
-            None => (traj.clone(), 0),
+            None => (self.traj.clone(), 0),
         };
         let comp_poses = match model {
             Some(m) => {
@@ -276,49 +389,57 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
                     hints: Some(poses.q.clone()),
                     ..CompensationOptions::default()
                 };
-                compensate(&nominal, *m, &pose_targets, &o)?.commands
+                compensate(self.nominal, m, &self.pose_targets, &o)?.commands
             }
-            None => pose_targets.clone(),
+            None => self.pose_targets.clone(),
         };
         let after_path = execute(
-            &robot,
+            self.robot,
             &comp_path,
-            &start,
+            &self.start,
             None,
             &[],
-            &mut exec_seed("cpath"),
+            &mut exec_rng(self.seed, "cpath"),
         )?;
         let after_poses = execute(
-            &robot,
+            self.robot,
             &comp_poses,
-            &start,
+            &self.start,
             Some(&poses.q),
             &[],
-            &mut exec_seed("cposes"),
+            &mut exec_rng(self.seed, "cposes"),
         )?;
-        let vs_target = |meas: &[[f64; 3]], tr: &Trajectory| -> Vec<[f64; 3]> {
-            meas.iter()
-                .zip(&tr.poses)
-                .map(|(m, t)| {
-                    let p = t.translation.vector;
-                    [m[0] - p.x, m[1] - p.y, m[2] - p.z]
-                })
-                .collect()
-        };
-        rows.push(CompareRow {
+        Ok(CompareRow {
             model: name.to_string(),
-            predict_path: Score::of(&residuals(&path_err, &pp)),
-            predict_poses: Score::of(&residuals(&pose_err, &pq)),
-            compensate_path: Score::of(&vs_target(&after_path.measured, &traj)),
-            compensate_poses: Score::of(&vs_target(&after_poses.measured, &pose_targets)),
+            predict_path: Score::of(&residuals(&self.path_err, &pp)),
+            predict_poses: Score::of(&residuals(&self.pose_err, &pq)),
+            compensate_path: Score::of(&vs_target(&after_path.measured, &self.traj)),
+            compensate_poses: Score::of(&vs_target(&after_poses.measured, &self.pose_targets)),
             iterations,
             path_predicted: pp.clone(),
-        });
+        })
     }
-    if scara {
-        notes.push("random poses: the first of a uniform draw with the elbow bent by at least 15° (|q2| ≥ 15°; a stretched SCARA is singular)".into());
-    }
-    // `recommended` always estimates a nugget; the papers' methods only when asked
+}
+
+/// The seeded noise stream of one execution (`tag`: path, cpath, cposes).
+fn exec_rng(seed: u64, tag: &str) -> rand::rngs::StdRng {
+    rng_for(seed, &format!("compare-{tag}"))
+}
+
+/// Measured − target at every point of `tr`.
+fn vs_target(meas: &[[f64; 3]], tr: &Trajectory) -> Vec<[f64; 3]> {
+    meas.iter()
+        .zip(&tr.poses)
+        .map(|(m, t)| {
+            let p = t.translation.vector;
+            [m[0] - p.x, m[1] - p.y, m[2] - p.z]
+        })
+        .collect()
+}
+
+/// The note that names the Kriging methods and whether they estimate a
+/// nugget (`recommended` always does; the papers' methods only when asked).
+fn kriging_note(opts: &CompareOptions, train_rows: usize) -> String {
     let nugget = |m: Method| {
         if opts.nugget || m == Method::Recommended {
             "with a nugget"
@@ -326,52 +447,38 @@ pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> 
             "interpolating, as in the papers"
         }
     };
-    notes.push(format!(
+    format!(
         "Kriging: JS {} ({}) and EJS {} ({}) fitted on the {}-pose Latin-hypercube campaign; the hybrid's residual model is {} on the same poses",
         opts.js.name(),
         nugget(opts.js),
         opts.ejs.name(),
         nugget(opts.ejs),
-        train.len(),
+        train_rows,
         opts.ejs.name(),
-    ));
-    step(total, "done");
-    // E‖n‖ for n ~ N(0, σ² I): 2σ√(2/π) in 3D, σ√(π/2) in 2D
-    let noise = |q: &[Vec<f64>]| -> Score {
-        let s: Vec<[f64; 3]> = q.iter().map(|qk| robot.noise_sigma(qk)).collect();
-        let m3: Vec<f64> = s
-            .iter()
-            .map(|v| {
-                2.0 * (2.0 / std::f64::consts::PI).sqrt()
-                    * ((v[0].powi(2) + v[1].powi(2) + v[2].powi(2)) / 3.0).sqrt()
-            })
-            .collect();
-        let m2: Vec<f64> = s
-            .iter()
-            .map(|v| {
-                (std::f64::consts::PI / 2.0).sqrt() * ((v[0].powi(2) + v[1].powi(2)) / 2.0).sqrt()
-            })
-            .collect();
-        Score {
-            mean_3d_mm: spread(&m3).mean,
-            max_3d_mm: f64::NAN,
-            mean_xy_mm: spread(&m2).mean,
-            max_xy_mm: f64::NAN,
-        }
-    };
-    Ok(Comparison {
-        options: opts.clone(),
-        physics: how,
-        noise_path: noise(&run.joints),
-        path_nominal: run
-            .joints
-            .iter()
-            .map(|q| nominal.fk_unchecked(q).translation.vector.into())
-            .collect(),
-        path_errors: path_err.clone(),
-        noise_poses: noise(&poses.q),
-        rows,
-        sizes: [indexing.len(), train.len(), traj.len(), poses.len()],
-        notes,
-    })
+    )
+}
+
+/// What measurement noise alone gives at the joints `q`: the mean of
+/// `E‖n‖` for `n ~ N(0, σ² I)` with the simulator's σ per axis —
+/// `2σ√(2/π)` in 3D (σ the RMS of the three), `σ√(π/2)` in XY (of the two);
+/// maxima NaN.
+fn noise_score(robot: &TrueRobot, q: &[Vec<f64>]) -> Score {
+    let s: Vec<[f64; 3]> = q.iter().map(|qk| robot.noise_sigma(qk)).collect();
+    let m3: Vec<f64> = s
+        .iter()
+        .map(|v| {
+            2.0 * (2.0 / std::f64::consts::PI).sqrt()
+                * ((v[0].powi(2) + v[1].powi(2) + v[2].powi(2)) / 3.0).sqrt()
+        })
+        .collect();
+    let m2: Vec<f64> = s
+        .iter()
+        .map(|v| (std::f64::consts::PI / 2.0).sqrt() * ((v[0].powi(2) + v[1].powi(2)) / 2.0).sqrt())
+        .collect();
+    Score {
+        mean_3d_mm: spread(&m3).mean,
+        max_3d_mm: f64::NAN,
+        mean_xy_mm: spread(&m2).mean,
+        max_xy_mm: f64::NAN,
+    }
 }

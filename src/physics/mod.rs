@@ -70,6 +70,25 @@ pub fn is_scara(robot: &Robot) -> bool {
         && robot.links[1].alpha_deg.abs() < 1e-9
 }
 
+/// Whether a training campaign (`given`) fits `robot`'s identification
+/// ([`identify_physics`]): a SCARA is identified from its indexing tests
+/// alone and takes none; a six-axis robot's D-H errors are identified by
+/// Levenberg–Marquardt on one, which it needs. Messages name the
+/// `physics identify` option.
+pub fn check_training_campaign(robot: &Robot, given: bool) -> Result<()> {
+    match (is_scara(robot), given) {
+        (true, true) => Err(crate::Error::InvalidParameter(format!(
+            "--train is for six-axis robots; '{}' is a SCARA, identified from its indexing tests alone",
+            robot.name
+        ))),
+        (false, false) => Err(crate::Error::InvalidParameter(format!(
+            "'{}' is not a SCARA: its D-H errors are identified by Levenberg–Marquardt on a campaign; give --train CAMPAIGN.csv",
+            robot.name
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// Identify the physics models of `nominal`:
 /// - a SCARA (seed 000): everything from the indexing tests
 ///   ([`identify_scara`]); the D-H model is the same without tables (eq 2);

@@ -34,7 +34,7 @@
 use super::BidirectionalTable;
 use super::model::{Geometry, PhysicsModel, ScaraGeometry};
 use crate::dataset::Dataset;
-use crate::frames::{angle_2d, fit_circle_2d, fit_plane, wrap_pi};
+use crate::frames::{Circle2, Plane, angle_2d, fit_circle_2d, fit_plane, wrap_pi};
 use crate::kinematics::{JointKind, Robot};
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
@@ -153,7 +153,6 @@ pub fn identify_scara(
             nominal.name
         )));
     }
-    let src = &data.source;
     let by_axis = indexing_rows(data)?;
     let rows_of = |j: usize| by_axis.get(j - 1).cloned().unwrap_or_default();
     let mut r1 = rows_of(1);
@@ -161,7 +160,7 @@ pub fn identify_scara(
     for (j, rows) in [(1, &r1), (2, &r2)] {
         if rows.len() < 6 {
             return Err(Error::Input {
-                source_name: src.clone(),
+                source_name: data.source.clone(),
                 message: format!(
                     "the J{j} indexing test has {} rows (axis = {j}); at least 6 are needed",
                     rows.len()
@@ -169,90 +168,16 @@ pub fn identify_scara(
             });
         }
     }
-    let l1 = nominal.links[0].a_mm;
-    let l2 = nominal.links[1].a_mm;
     let rest = rest_pose(&r1, &r2);
 
     // 1. provisional frame: J1 plane (eq 9) and circle (eq 7)
-    let pts1: Vec<Vector3<f64>> = r1.iter().map(|r| r.p).collect();
-    let plane = fit_plane(&pts1)?;
-    let mut ez = plane.normal;
-    let ex0 = (pts1[0] - plane.point - ez * ez.dot(&(pts1[0] - plane.point))).normalize();
-    let uv = |p: &Vector3<f64>, ex: &Vector3<f64>, ey: &Vector3<f64>| {
-        let d = p - plane.point;
-        [d.dot(ex), d.dot(ey)]
-    };
-    // orient Z so that J1 turns counter-clockwise with increasing q1
-    let ey0 = ez.cross(&ex0);
-    let (lo, hi) = extreme_pair(&r1, 0);
-    let (a, b) = (uv(&r1[lo].p, &ex0, &ey0), uv(&r1[hi].p, &ex0, &ey0));
-    let turn = wrap_pi(angle_2d(b) - angle_2d(a));
-    let (ex0, ey0) = if turn < 0.0 {
-        ez = -ez;
-        (ex0, ez.cross(&ex0))
-    } else {
-        (ex0, ey0)
-    };
-    let uv1: Vec<[f64; 2]> = pts1.iter().map(|p| uv(p, &ex0, &ey0)).collect();
-    let c1 = fit_circle_2d(&uv1)?;
-    let origin = plane.point + ex0 * c1.center[0] + ey0 * c1.center[1];
-    let r_prov = Matrix3::from_columns(&[ex0, ey0, ez]);
-    let to_prov = |p: &Vector3<f64>| r_prov.transpose() * (p - origin);
+    let prov = ProvisionalFrame::fit(&r1)?;
     for r in r1.iter_mut().chain(r2.iter_mut()) {
-        r.p = to_prov(&r.p);
+        r.p = prov.to_frame(&r.p);
     }
-
-    // 3. J1 table (eq 11) about Q1 = 0
-    let zero = [0.0, 0.0];
-    let about = |c: [f64; 2]| move |p: &Vector3<f64>| angle_2d([p.x - c[0], p.y - c[1]]);
-    let radius = |c: [f64; 2]| move |p: &Vector3<f64>| (p.x - c[0]).hypot(p.y - c[1]);
-    let t1 = angle_table(&r1, 0, rest[0], &about(zero), &radius(zero))?;
-    // 2. J2 circle (eq 10)
-    let xy2: Vec<[f64; 2]> = r2.iter().map(|r| [r.p.x, r.p.y]).collect();
-    let c2 = fit_circle_2d(&xy2)?;
-    // J1 angle at which the J2 test was run: θ̂1 = q1* + Δθ1(q1*, λ1)
-    let th1_j2 = r2[0].q[0] + t1.table.at(r2[0].q[0], r2[0].dir[0]);
-    let psi = angle_2d(c2.center) - th1_j2.to_radians();
-    let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), -psi);
-    let z0 = nominal.fk_unchecked(&rest).translation.vector.z;
-    for r in r1.iter_mut().chain(r2.iter_mut()) {
-        r.p = rot * r.p + Vector3::new(0.0, 0.0, z0);
-    }
-    let q2c = rot * Vector3::new(c2.center[0], c2.center[1], 0.0);
-    let q2c = [q2c.x, q2c.y];
-    let t2 = angle_table(&r2, 1, rest[1], &about(q2c), &radius(q2c))?;
-
-    // 4.–5. link errors and θ20
-    let dl1 = q2c[0].hypot(q2c[1]) - l1;
-    let dl2 = c2.radius - l2;
-    let theta20 = (t2.ref_angle - angle_2d(q2c)).to_degrees() - rest[1];
-    let theta20 = wrap_pi(theta20.to_radians()).to_degrees();
-
-    // 7. parallelism (eq 22) in link-1 coordinates
-    let (pa, pb, z1) = if opts.parallelism {
-        let (s, c) = th1_j2.to_radians().sin_cos();
-        let local: Vec<Vector3<f64>> = r2
-            .iter()
-            .map(|r| Vector3::new(c * r.p.x + s * r.p.y, -s * r.p.x + c * r.p.y, r.p.z))
-            .collect();
-        let pl = fit_plane(&local)?;
-        let nz = pl.normal.z;
-        let (a, b) = (-pl.normal.x / nz, -pl.normal.y / nz);
-        (a, b, pl.point.z - a * pl.point.x - b * pl.point.y)
-    } else {
-        (0.0, 0.0, z0)
-    };
-    let geometry = ScaraGeometry {
-        l1_mm: l1,
-        l2_mm: l2,
-        dl1_mm: dl1,
-        dl2_mm: dl2,
-        theta20_deg: theta20,
-        parallel_a: pa,
-        parallel_b: pb,
-        z1_mm: if opts.parallelism { z1 } else { z0 },
-        rest: rest.clone(),
-    };
+    // 2.–3. the J2 circle, the reference frame and the tables
+    let refs = References::identify(&mut r1, &mut r2, &rest, nominal)?;
+    let geometry = refs.geometry(&r2, nominal, rest.clone(), opts)?;
     let mut model = PhysicsModel::new(
         format!(
             "seed 000 SCARA model identified from the indexing tests of {}",
@@ -262,17 +187,199 @@ pub fn identify_scara(
         Geometry::Scara(geometry),
     );
     // measurement ← reference: p = origin + R_prov·Rz(ψ)·(p_ref − z0·ẑ)
-    let r_total = r_prov * Rotation3::from_axis_angle(&Vector3::z_axis(), psi).into_inner();
+    let r_total =
+        prov.rotation * Rotation3::from_axis_angle(&Vector3::z_axis(), refs.psi).into_inner();
     let rq = UnitQuaternion::from_matrix(&r_total);
-    let shift = origin - (rq * Vector3::new(0.0, 0.0, z0));
+    let shift = prov.origin - (rq * Vector3::new(0.0, 0.0, refs.z0));
     model.frame = Isometry3::from_parts(Translation3::from(shift), rq);
-    model.apd[0] = Some(t1.table.clone());
-    model.apd[1] = Some(t2.table.clone());
+    model.apd[0] = Some(refs.t1.table.clone());
+    model.apd[1] = Some(refs.t2.table.clone());
     if opts.radial {
-        model.radial[0] = Some(t1.radial.clone());
-        model.radial[1] = Some(t2.radial.clone());
+        model.radial[0] = Some(refs.t1.radial.clone());
+        model.radial[1] = Some(refs.t2.radial.clone());
     }
-    let report = |j: usize, t: &AxisTable, radius: f64, rms: f64, plane_rms: f64| AxisReport {
+    let plane2 = fit_plane(&r2.iter().map(|r| r.p).collect::<Vec<_>>())?.rms;
+    let axes = vec![
+        axis_report(
+            1,
+            &refs.t1,
+            prov.circle.radius,
+            prov.circle.rms,
+            prov.plane.rms,
+        ),
+        axis_report(2, &refs.t2, refs.c2.radius, refs.c2.rms, plane2),
+    ];
+    let skipped = (3..=n)
+        .map(|j| (j, rows_of(j)))
+        .filter(|(_, rows)| !rows.is_empty())
+        .map(|(j, rows)| skipped_axis(j, &rows, &prov))
+        .collect();
+    Ok(ScaraIdentification {
+        model,
+        axes,
+        skipped,
+    })
+}
+
+/// The frame of step 1 (eqs 7, 9): Z the J1 test's plane normal, oriented
+/// so that J1 turns counter-clockwise with increasing q1; the origin the
+/// centre of its best-fit circle in that plane; X toward its first point.
+struct ProvisionalFrame {
+    /// The best-fit plane of the J1 test (measurement frame).
+    plane: Plane,
+    /// The best-fit circle of the J1 test in that plane.
+    circle: Circle2,
+    /// The origin, in the measurement frame.
+    origin: Vector3<f64>,
+    /// Columns X, Y, Z of the frame, in the measurement frame.
+    rotation: Matrix3<f64>,
+}
+
+impl ProvisionalFrame {
+    fn fit(r1: &[Row]) -> Result<Self> {
+        let pts1: Vec<Vector3<f64>> = r1.iter().map(|r| r.p).collect();
+        let plane = fit_plane(&pts1)?;
+        let mut ez = plane.normal;
+        let ex0 = (pts1[0] - plane.point - ez * ez.dot(&(pts1[0] - plane.point))).normalize();
+        let uv = |p: &Vector3<f64>, ex: &Vector3<f64>, ey: &Vector3<f64>| {
+            let d = p - plane.point;
+            [d.dot(ex), d.dot(ey)]
+        };
+        // orient Z so that J1 turns counter-clockwise with increasing q1
+        let ey0 = ez.cross(&ex0);
+        let (lo, hi) = extreme_pair(r1, 0);
+        let (a, b) = (uv(&r1[lo].p, &ex0, &ey0), uv(&r1[hi].p, &ex0, &ey0));
+        let turn = wrap_pi(angle_2d(b) - angle_2d(a));
+        let (ex0, ey0) = if turn < 0.0 {
+            ez = -ez;
+            (ex0, ez.cross(&ex0))
+        } else {
+            (ex0, ey0)
+        };
+        let uv1: Vec<[f64; 2]> = pts1.iter().map(|p| uv(p, &ex0, &ey0)).collect();
+        let circle = fit_circle_2d(&uv1)?;
+        let origin = plane.point + ex0 * circle.center[0] + ey0 * circle.center[1];
+        Ok(ProvisionalFrame {
+            plane,
+            circle,
+            origin,
+            rotation: Matrix3::from_columns(&[ex0, ey0, ez]),
+        })
+    }
+
+    /// A measured point in this frame.
+    fn to_frame(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.rotation.transpose() * (p - self.origin)
+    }
+}
+
+/// Steps 2–3: the J1 table (eq 11) about the axis, the J2 circle (eq 10),
+/// the rotation ψ about Z that puts X along link 1 at `θ̂1 = 0`, the height
+/// `z0` of the rest pose, and the J2 table about its circle's centre.
+struct References {
+    t1: AxisTable,
+    t2: AxisTable,
+    /// The J2 circle, in the provisional frame.
+    c2: Circle2,
+    /// Its centre `Q2` in the reference frame (XY).
+    q2c: [f64; 2],
+    /// The J1 angle the J2 test ran at, `θ̂1 = q1* + Δθ1(q1*, λ1)`, degrees.
+    th1_j2: f64,
+    /// Rotation of the reference frame about the provisional Z, radians.
+    psi: f64,
+    /// Nominal TCP height of the rest pose, mm.
+    z0: f64,
+}
+
+impl References {
+    /// Moves the rows (in the provisional frame) into the reference frame.
+    fn identify(r1: &mut [Row], r2: &mut [Row], rest: &[f64], nominal: &Robot) -> Result<Self> {
+        // 3. J1 table (eq 11) about Q1 = 0
+        let zero = [0.0, 0.0];
+        let t1 = angle_table(r1, 0, rest[0], &about(zero), &radius_about(zero))?;
+        // 2. J2 circle (eq 10)
+        let xy2: Vec<[f64; 2]> = r2.iter().map(|r| [r.p.x, r.p.y]).collect();
+        let c2 = fit_circle_2d(&xy2)?;
+        // J1 angle at which the J2 test was run: θ̂1 = q1* + Δθ1(q1*, λ1)
+        let th1_j2 = r2[0].q[0] + t1.table.at(r2[0].q[0], r2[0].dir[0]);
+        let psi = angle_2d(c2.center) - th1_j2.to_radians();
+        let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), -psi);
+        let z0 = nominal.fk_unchecked(rest).translation.vector.z;
+        for r in r1.iter_mut().chain(r2.iter_mut()) {
+            r.p = rot * r.p + Vector3::new(0.0, 0.0, z0);
+        }
+        let q2c = rot * Vector3::new(c2.center[0], c2.center[1], 0.0);
+        let q2c = [q2c.x, q2c.y];
+        let t2 = angle_table(r2, 1, rest[1], &about(q2c), &radius_about(q2c))?;
+        Ok(References {
+            t1,
+            t2,
+            c2,
+            q2c,
+            th1_j2,
+            psi,
+            z0,
+        })
+    }
+
+    /// Steps 4, 5 and 7: `ΔL1`, `ΔL2`, θ20 and, if asked, the parallelism
+    /// of J2 to J1 (the plane of the J2 test `r2`, in link-1 coordinates).
+    fn geometry(
+        &self,
+        r2: &[Row],
+        nominal: &Robot,
+        rest: Vec<f64>,
+        opts: &ScaraOptions,
+    ) -> Result<ScaraGeometry> {
+        let l1 = nominal.links[0].a_mm;
+        let l2 = nominal.links[1].a_mm;
+        let q2c = self.q2c;
+        // 4.–5. link errors and θ20
+        let dl1 = q2c[0].hypot(q2c[1]) - l1;
+        let dl2 = self.c2.radius - l2;
+        let theta20 = (self.t2.ref_angle - angle_2d(q2c)).to_degrees() - rest[1];
+        let theta20 = wrap_pi(theta20.to_radians()).to_degrees();
+        // 7. parallelism (eq 22) in link-1 coordinates
+        let (pa, pb, z1) = if opts.parallelism {
+            let (s, c) = self.th1_j2.to_radians().sin_cos();
+            let local: Vec<Vector3<f64>> = r2
+                .iter()
+                .map(|r| Vector3::new(c * r.p.x + s * r.p.y, -s * r.p.x + c * r.p.y, r.p.z))
+                .collect();
+            let pl = fit_plane(&local)?;
+            let nz = pl.normal.z;
+            let (a, b) = (-pl.normal.x / nz, -pl.normal.y / nz);
+            (a, b, pl.point.z - a * pl.point.x - b * pl.point.y)
+        } else {
+            (0.0, 0.0, self.z0)
+        };
+        Ok(ScaraGeometry {
+            l1_mm: l1,
+            l2_mm: l2,
+            dl1_mm: dl1,
+            dl2_mm: dl2,
+            theta20_deg: theta20,
+            parallel_a: pa,
+            parallel_b: pb,
+            z1_mm: if opts.parallelism { z1 } else { self.z0 },
+            rest,
+        })
+    }
+}
+
+/// ∠(P − c) in the XY plane, radians.
+fn about(c: [f64; 2]) -> impl Fn(&Vector3<f64>) -> f64 {
+    move |p: &Vector3<f64>| angle_2d([p.x - c[0], p.y - c[1]])
+}
+
+/// ‖P − c‖ in the XY plane, mm.
+fn radius_about(c: [f64; 2]) -> impl Fn(&Vector3<f64>) -> f64 {
+    move |p: &Vector3<f64>| (p.x - c[0]).hypot(p.y - c[1])
+}
+
+/// The report of axis `j` from its table and its circle and plane fits.
+fn axis_report(j: usize, t: &AxisTable, radius: f64, rms: f64, plane_rms: f64) -> AxisReport {
+    AxisReport {
         axis: j,
         rows: t.rows,
         angles: t.table.angles_deg.len(),
@@ -282,42 +389,30 @@ pub fn identify_scara(
         plane_rms_mm: plane_rms,
         repeat_spread_deg: t.spread,
         backlash_half_deg: t.table.mean_half_difference(),
-    };
-    let plane2 = fit_plane(&r2.iter().map(|r| r.p).collect::<Vec<_>>())?.rms;
-    let axes = vec![
-        report(1, &t1, c1.radius, c1.rms, plane.rms),
-        report(2, &t2, c2.radius, c2.rms, plane2),
-    ];
-    let mut skipped = Vec::new();
-    for j in 3..=n {
-        let rows = rows_of(j);
-        if rows.is_empty() {
-            continue;
-        }
-        let xy: Vec<[f64; 2]> = rows
-            .iter()
-            .map(|r| {
-                let p = to_prov(&r.p);
-                [p.x, p.y]
-            })
-            .collect();
-        let why = match fit_circle_2d(&xy) {
-            Ok(c) => format!(
-                "the TCP turns on a circle of radius {:.4} mm (rms {:.4} mm) about it: too close to the axis to resolve its angle",
-                c.radius, c.rms
-            ),
-            Err(e) => format!("no circle could be fitted ({e})"),
-        };
-        skipped.push(format!(
-            "J{j} indexing test ({} rows) not used: the seed 000 model has tables for J1 and J2 only; {why}",
-            rows.len()
-        ));
     }
-    Ok(ScaraIdentification {
-        model,
-        axes,
-        skipped,
-    })
+}
+
+/// Why the indexing test of joint `j` ≥ 3 is not used: the model has tables
+/// for J1 and J2 only, and the TCP's circle about such an axis is too small.
+fn skipped_axis(j: usize, rows: &[Row], prov: &ProvisionalFrame) -> String {
+    let xy: Vec<[f64; 2]> = rows
+        .iter()
+        .map(|r| {
+            let p = prov.to_frame(&r.p);
+            [p.x, p.y]
+        })
+        .collect();
+    let why = match fit_circle_2d(&xy) {
+        Ok(c) => format!(
+            "the TCP turns on a circle of radius {:.4} mm (rms {:.4} mm) about it: too close to the axis to resolve its angle",
+            c.radius, c.rms
+        ),
+        Err(e) => format!("no circle could be fitted ({e})"),
+    };
+    format!(
+        "J{j} indexing test ({} rows) not used: the seed 000 model has tables for J1 and J2 only; {why}",
+        rows.len()
+    )
 }
 
 /// The rest pose of the tests: J1's value during the J2 test, J2's during

@@ -3,11 +3,11 @@
 //! (trajectories before and after compensation, residual against a variable).
 //! The charts of the studies are drawn with them: [`error_along_path`]
 //! (compensation), [`effect_plots`] (diagnosis), [`path_plots`] (physics
-//! comparison).
+//! comparison), [`demo_plots`] (the demo).
 
 mod studies;
 
-pub use studies::{effect_plots, error_along_path, path_plots};
+pub use studies::{demo_plots, effect_plots, error_along_path, path_plots};
 
 use crate::stats::box_stats;
 use crate::{Error, Result};

@@ -1,15 +1,17 @@
 //! The charts of the studies: the 3D error along a trajectory (before and
 //! after compensation), each added effect's residual against its traced
-//! variable (`diagnose`), and the paths of a physics comparison (seed 000
-//! Figs 9–11).
+//! variable (`diagnose`), the paths of a physics comparison (seed 000
+//! Figs 9–11), and the demo's figures.
 
-use super::{Labels, Series, xy_plot};
+use super::{Labels, Series, box_plot, xy_plot};
 use crate::Result;
 use crate::dataset::Dataset;
+use crate::demo::Demo;
 use crate::diagnose::{CvStats, Diagnosis};
 use crate::model::AXES;
 use crate::physics::Comparison;
-use crate::vec3::Vec3;
+use crate::report::demo::Figures;
+use crate::vec3::{Vec3, norms};
 use std::path::{Path, PathBuf};
 
 /// The 3D error |δ| of each run along the trajectory (x: the point's
@@ -132,6 +134,50 @@ fn slug(name: &str) -> String {
         .filter(|t| !t.is_empty())
         .collect::<Vec<_>>()
         .join("_")
+}
+
+/// The demo's figures in the existing folder `dir`: box plots of the
+/// methods' out-of-fold 3D errors (`cv_methods.svg`), the measured error
+/// along the circle, nominal and compensated (`circle_compensation.svg`),
+/// and the diagnosis' [`effect_plots`].
+pub fn demo_plots(demo: &Demo, dir: &Path) -> Result<Figures> {
+    let groups: Vec<(String, Vec<f64>)> = demo
+        .methods
+        .iter()
+        .map(|r| {
+            let mode = if r.cv.mode == "refit" { "refit" } else { "c-f" };
+            (
+                format!("{} ({mode})", r.method.name()),
+                norms(&r.cv.residuals),
+            )
+        })
+        .collect();
+    let cv = dir.join("cv_methods.svg");
+    box_plot(
+        &cv,
+        &format!(
+            "{}-fold CV: out-of-fold 3D error by method",
+            demo.options.folds
+        ),
+        "3D error (mm)",
+        &groups,
+    )?;
+    let circle = dir.join("circle_compensation.svg");
+    error_along_path(
+        &circle,
+        &Labels {
+            title: "Ø100 mm circle: measured error, nominal vs compensated (iterative)",
+            x: "trajectory point",
+            y: "3D position error (mm)",
+        },
+        &demo.circle_runs,
+    )?;
+    let effects = effect_plots(dir, &demo.tracker_step, &demo.diagnosis)?;
+    Ok(Figures {
+        cv,
+        circle,
+        effects,
+    })
 }
 
 #[cfg(test)]

@@ -86,6 +86,71 @@ impl CampaignSpec {
             indexing_cycles: 3,
         }
     }
+
+    /// Refuse a setting the kind does not use (it would be silently
+    /// ignored): a field the kind ignores must keep the value [`new`](Self::new)
+    /// gives it. `poses` is not used by an indexing or cross-talk campaign
+    /// (their poses come from the joint grid and the cycles),
+    /// `circle_diameter_mm` only by a circle, `indexing_cycles` only by
+    /// indexing and cross-talk; a circle takes no `ranges` (it is drawn
+    /// around the home TCP) and no effect of
+    /// [`MEASUREMENT_EFFECTS`](super::MEASUREMENT_EFFECTS) (a circle is
+    /// commanded, not measured). Messages name the `simulate` options.
+    pub fn validate(&self) -> Result<()> {
+        let defaults = CampaignSpec::new(self.kind, self.seed);
+        let kind = format!("{:?}", self.kind).to_lowercase();
+        let refuse = |what: &str| {
+            Err(Error::InvalidParameter(format!(
+                "{what} (here --kind {kind})"
+            )))
+        };
+        let grid = matches!(self.kind, CampaignKind::Indexing | CampaignKind::Crosstalk);
+        let circle = self.kind == CampaignKind::Circle;
+        if grid && self.poses != defaults.poses {
+            return refuse(
+                "--poses is not used by an indexing or cross-talk campaign: its poses come from the joint grid and --cycles",
+            );
+        }
+        if self.circle_diameter_mm != defaults.circle_diameter_mm && !circle {
+            return refuse("--diameter is for --kind circle");
+        }
+        if self.indexing_cycles != defaults.indexing_cycles && !grid {
+            return refuse("--cycles is for --kind indexing or crosstalk");
+        }
+        if circle {
+            if self.ranges.is_some() {
+                return refuse(
+                    "--ranges does not apply to a circle trajectory (it is drawn around the robot's home TCP)",
+                );
+            }
+            for name in self.effects.iter().map(Effect::name) {
+                if super::MEASUREMENT_EFFECTS.contains(&name) {
+                    return refuse(&format!(
+                        "--effect {name} acts on measurements, and a circle is a trajectory to compensate, not measured; evaluate runs it without that effect"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Joint ranges `LO:HI,LO:HI,…` (degrees; mm for a prismatic joint), one
+/// pair per joint, for [`CampaignSpec::ranges`].
+pub fn parse_ranges(s: &str) -> Result<Vec<(f64, f64)>> {
+    s.split(',')
+        .map(|part| {
+            let (lo, hi) = part.split_once(':').ok_or_else(|| {
+                Error::InvalidParameter(format!("--ranges: '{part}' is not LO:HI"))
+            })?;
+            let p = |x: &str| {
+                x.trim().parse::<f64>().map_err(|_| {
+                    Error::InvalidParameter(format!("--ranges: '{x}' is not a number"))
+                })
+            };
+            Ok((p(lo)?, p(hi)?))
+        })
+        .collect()
 }
 
 /// The simulator's ground truth, written beside the data (never into it).

@@ -167,6 +167,20 @@ impl Effect {
         Ok(effect)
     }
 
+    /// The effect's name, as [`Effect::parse`] reads it (one of
+    /// [`EFFECT_NAMES`]).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Effect::Temperature { .. } => "temperature",
+            Effect::Payload { .. } => "payload",
+            Effect::Harmonic { .. } => "harmonic",
+            Effect::TrackerStep { .. } => "tracker-step",
+            Effect::Crosstalk { .. } => "crosstalk",
+            Effect::Hysteresis { .. } => "hysteresis",
+            Effect::Lag { .. } => "lag",
+        }
+    }
+
     /// Check parameter ranges.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidParameter(m));

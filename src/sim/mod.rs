@@ -24,7 +24,7 @@ pub mod iso_cubes;
 mod scara_truth;
 mod true_robot;
 
-pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, simulate};
+pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, parse_ranges, simulate};
 pub use effects::{EFFECT_NAMES, Effect, MEASUREMENT_EFFECTS};
 pub use execute::{Execution, execute};
 pub use scara_truth::ScaraTruth;

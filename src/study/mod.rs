@@ -3,6 +3,8 @@
 //! on the true robot (before / after). The CLI's `compensate`, `evaluate`,
 //! `demo`, `diagnose` and `physics` and the examples all use these.
 
+pub mod diagnosis;
+
 use crate::compensate::{Compensated, CompensationOptions, compensate};
 use crate::kinematics::{Robot, table_digest};
 use crate::predictor::ErrorPredictor;
@@ -34,6 +36,22 @@ impl Targets {
             hints: Some(q.to_vec()),
             warnings: Vec::new(),
         })
+    }
+
+    /// Error unless `commands` (read from `source`) has one point per
+    /// target.
+    pub fn check_commands(&self, commands: &Trajectory, source: &Path) -> Result<()> {
+        if commands.len() != self.traj.len() {
+            return Err(Error::Input {
+                source_name: source.display().to_string(),
+                message: format!(
+                    "has {} points but the target trajectory has {}",
+                    commands.len(),
+                    self.traj.len()
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// Targets along a trajectory (no hints).

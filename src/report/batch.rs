@@ -1,0 +1,35 @@
+//! `batch`: the fleet's table, one line per campaign.
+
+use crate::Result;
+use crate::batch::CampaignReport;
+
+/// The header of the fleet table.
+pub fn header() -> String {
+    format!(
+        "{:<28} {:>6} {:<20} {:>10} {:>26} {:>9} {:>7}",
+        "campaign", "rows", "robot", "measured", "CV RMSE x / y / z (mm)", "CV mean", "s"
+    )
+}
+
+/// Campaign `name`'s line: rows, robot, the measured mean 3D error, the CV
+/// RMSE per axis and mean 3D error, the wall time; or its error.
+pub fn row(name: &str, r: &Result<CampaignReport>) -> String {
+    match r {
+        Ok(rep) => {
+            let cv = rep.cv.rms_mm;
+            format!(
+                "{:<28} {:>6} {:<20} {:>10.4} {:>8.4} / {:.4} / {:.4} {:>9.4} {:>7.1}",
+                name,
+                rep.rows,
+                rep.robot.as_deref().unwrap_or("-"),
+                rep.measured.mean_3d_mm,
+                cv[0],
+                cv[1],
+                cv[2],
+                rep.cv.mean_3d_mm,
+                rep.seconds
+            )
+        }
+        Err(e) => format!("{name:<28} failed: {e}"),
+    }
+}

@@ -1,0 +1,140 @@
+//! `compensate` and `evaluate`: the iterations and the errors measured on
+//! the simulated robot.
+
+use crate::compensate::{Compensated, Stop};
+use crate::physics::AnyModel;
+use crate::stats::PositionErrorTable;
+use crate::study::Evaluation;
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One error table, labelled: the mean error per axis and the mean, std,
+/// min and max of |δ|.
+pub fn table_line(label: &str, t: &PositionErrorTable) -> String {
+    format!(
+        "  {label:<22} mean x/y/z {:>8.4} {:>8.4} {:>8.4}   |δ| mean {:.4}  std {:.4}  min {:.4}  max {:.4}",
+        t.mean_mm[0],
+        t.mean_mm[1],
+        t.mean_mm[2],
+        t.mean_abs_mm,
+        t.std_abs_mm,
+        t.min_abs_mm,
+        t.max_abs_mm
+    )
+}
+
+/// The reduction of the mean and of the max |δ|, after `indent`.
+pub fn reduction_line(indent: &str, ev: &Evaluation) -> String {
+    format!(
+        "  {indent}reduction: mean |δ| {:.1} %, max |δ| {:.1} %",
+        ev.reduction_mean_abs_pct, ev.reduction_max_abs_pct
+    )
+}
+
+/// What `compensate` prints: the points compensated with `model` (its
+/// description) in `secs` s into `output`, then one line per iteration.
+pub fn iterations(
+    res: &Compensated,
+    iterative: bool,
+    model: &str,
+    secs: f64,
+    output: &str,
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{} {} points with {model} in {secs:.3} s -> {output}",
+        if iterative {
+            "iteratively compensated"
+        } else {
+            "compensated (single step)"
+        },
+        res.commands.len(),
+    );
+    for it in &res.history {
+        let _ = writeln!(
+            s,
+            "  iteration {:>2}: RMSE of the change {:.5} mm (max {:.5}), mean predicted |δ̂| {:.4} mm, λ flips {}",
+            it.iteration,
+            it.rmse_change_mm,
+            it.max_change_mm,
+            it.mean_predicted_mm,
+            it.direction_flips
+        );
+    }
+    s
+}
+
+/// The warning for an iterative compensation that did not converge below
+/// `tol` mm within `max_iter` iterations, if it did not.
+pub fn stop_warning(res: &Compensated, tol: f64, max_iter: usize) -> Option<String> {
+    match res.stop {
+        Stop::Stalled => Some(format!(
+            "warning: the change stalled above {tol} mm at direction reversals; λ still switching at points {}",
+            index_list(&res.unsettled)
+        )),
+        Stop::MaxIterations => Some(format!(
+            "warning: the change did not fall below {tol} mm in {max_iter} iterations"
+        )),
+        Stop::Converged | Stop::SingleStep => None,
+    }
+}
+
+/// Up to 12 indices, then an ellipsis.
+fn index_list(v: &[usize]) -> String {
+    let mut s: Vec<String> = v.iter().take(12).map(usize::to_string).collect();
+    if v.len() > 12 {
+        s.push(format!("… ({} in all)", v.len()));
+    }
+    s.join(", ")
+}
+
+/// The evaluation of a compensation on the simulated robot of `truth`: the
+/// errors before and after, and the reduction.
+pub fn evaluation(truth: &str, ev: &Evaluation) -> String {
+    format!(
+        "on the simulated robot ({truth}), measured error vs target (mm):\n{}\n{}\n{}\n",
+        table_line("before (nominal)", &ev.before),
+        table_line("after (compensated)", &ev.after),
+        reduction_line("", ev)
+    )
+}
+
+/// The files of a compensation: targets, commands written, model.
+#[derive(Debug, Clone, Copy)]
+pub struct Files<'a> {
+    /// The target trajectory.
+    pub targets: &'a Path,
+    /// The commands written.
+    pub output: &'a Path,
+    /// The model file.
+    pub model: &'a Path,
+}
+
+/// The JSON of `compensate --json`: the files, the robot, the model's
+/// space (`physics` for a physics model), the iteration history and how it
+/// stopped, the wall time `secs`, and the evaluation on the simulated robot
+/// if there is one.
+pub fn json(
+    files: Files<'_>,
+    (robot, model): (&str, &AnyModel),
+    (res, iterative, secs): (&Compensated, bool, f64),
+    eval: Option<&Evaluation>,
+) -> Value {
+    let mut v = serde_json::json!({
+        "targets": files.targets, "output": files.output, "model": files.model, "robot": robot,
+        "space": match model {
+            AnyModel::Kriging(m) => serde_json::to_value(m.space()).expect("plain enum"),
+            AnyModel::Physics(_) => "physics".into(),
+        }, "iterative": iterative, "converged": res.converged,
+        "stop": res.stop, "unsettled": res.unsettled,
+        "iterations": res.history, "seconds": secs,
+    });
+    if let Some(ev) = eval {
+        v["before"] = serde_json::to_value(ev.before).expect("plain numbers");
+        v["after"] = serde_json::to_value(ev.after).expect("plain numbers");
+        v["evaluation"] = serde_json::to_value(ev).expect("plain numbers");
+    }
+    v
+}

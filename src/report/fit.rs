@@ -1,0 +1,122 @@
+//! `fit`: what a fitted model reports, as text.
+
+use crate::calibration::Calibration;
+use crate::model::{AXES, ErrorModel};
+use crate::selection::Selection;
+use std::fmt::Write as _;
+
+/// What `fit` prints after fitting `rows` rows in `secs` s into the file
+/// `output`: the space, correlation and nugget; per axis the family CV (if
+/// chosen by CV), ln ψ, σ², the nugget, the trend terms, the evaluations
+/// and log10 ξ; the trend selection; the calibration.
+pub fn summary(model: &ErrorModel, rows: usize, secs: f64, output: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "fitted {rows} rows in {:?} space ({}, {}) in {secs:.2} s -> {output}",
+        model.space(),
+        if model.options().get_corr().is_by_cv() {
+            let c: Vec<String> = model
+                .outputs()
+                .iter()
+                .map(|o| o.corr().to_string())
+                .collect();
+            format!("correlation by CV: {}", c.join(" / "))
+        } else {
+            format!("{} correlation", model.outputs()[0].corr())
+        },
+        if model.options().get_nugget() {
+            "nugget estimated"
+        } else {
+            "interpolating"
+        },
+    );
+    for (ax, r) in AXES.iter().zip(model.reports()) {
+        if !r.families.is_empty() {
+            let t: Vec<String> = r
+                .families
+                .iter()
+                .map(|f| format!("{} {:.4}", f.corr, f.cv_rmse))
+                .collect();
+            let _ = writeln!(
+                s,
+                "  {ax}: family by 10-fold CV RMSE (mm): {}",
+                t.join(", ")
+            );
+        }
+        let lt: Vec<String> = r
+            .theta
+            .iter()
+            .map(|t| format!("{:.2}", t.log10()))
+            .collect();
+        let _ = writeln!(
+            s,
+            "  {ax}: ln ψ {:.4}  σ² {:.4}  nugget {:.2e}  trend terms {} (dropped {})  evals {}  {:.2} s\n      log10 ξ = [{}]",
+            r.ln_psi,
+            r.sigma2,
+            r.nugget,
+            r.trend_terms.len(),
+            r.dropped_terms.len(),
+            r.evals,
+            r.seconds,
+            lt.join(", ")
+        );
+    }
+    s.push_str(&selection(model));
+    if let Some(c) = model.calibration() {
+        s.push_str(&calibration(c));
+    }
+    s
+}
+
+/// The calibration under a model: what the campaign identified, and the
+/// parameters it left at nominal.
+pub fn calibration(c: &Calibration) -> String {
+    let mut s = format!("  calibration: {}\n", c.summary_line());
+    let fixed = c.identifiability().fixed_names();
+    if !fixed.is_empty() {
+        let _ = writeln!(
+            s,
+            "  fixed at nominal (the campaign does not see them): {}",
+            fixed.join(" ")
+        );
+    }
+    s
+}
+
+/// One line per output of what PCC+PCA or the GA selected.
+pub fn selection(model: &ErrorModel) -> String {
+    let mut s = String::new();
+    match &model.selection() {
+        Some(Selection::PccPca { outputs }) => {
+            for (ax, r) in AXES.iter().zip(outputs) {
+                let _ = writeln!(
+                    s,
+                    "  {ax} PCC+PCA: {} candidates ranked ({} dependent dropped), {} with |r| > {}, {} components ({:.1} % of variance)",
+                    r.ranking.len(),
+                    r.dropped.len(),
+                    r.selected,
+                    r.threshold,
+                    r.components,
+                    100.0 * r.explained
+                );
+            }
+        }
+        Some(Selection::Ga { outputs }) => {
+            for (ax, r) in AXES.iter().zip(outputs) {
+                let _ = writeln!(
+                    s,
+                    "  {ax} GA: {} of {} candidates ({} dependent dropped), CV RMSE {:.4} mm after {} generations: {}",
+                    r.selected.len(),
+                    r.candidates,
+                    r.dropped.len(),
+                    r.cv_rmse_mm,
+                    r.generations,
+                    r.selected.join(" ")
+                );
+            }
+        }
+        None => {}
+    }
+    s
+}

@@ -1,0 +1,103 @@
+//! `holdout`: the table of models, and with `--cv` their predictive scores,
+//! worst folds and flagged rows.
+
+use crate::holdout::{CV_MODELS, HoldoutCv, HoldoutRow};
+use crate::stats::PredictiveScores;
+use std::fmt::Write as _;
+
+/// The Markdown table of the models' held-out errors: mean and max 3D,
+/// RMS per axis, wall time.
+pub fn rows(rows: &[HoldoutRow]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| model | mean 3D (mm) | max 3D (mm) | RMS x / y / z (mm) | time |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {:.4} | {:.4} | {:.4} / {:.4} / {:.4} | {:.1} s |",
+            r.model,
+            r.mean_mm,
+            r.max_mm,
+            r.rms_xyz_mm[0],
+            r.rms_xyz_mm[1],
+            r.rms_xyz_mm[2],
+            r.seconds
+        );
+    }
+    s
+}
+
+/// The Markdown table of the models' predictive scores: 95 % coverage per
+/// axis, NLPD, the share of rows flagged and of gross errors among them.
+pub fn scores(scores: &[PredictiveScores]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| model | 95 % coverage x / y / z | NLPD | flagged | gross errors flagged |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for (name, sc) in CV_MODELS.iter().zip(scores) {
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {:.3} | {:.1} % | {} |",
+            super::coverage3(sc),
+            sc.nlpd,
+            100.0 * sc.flag_rate,
+            match sc.flag_recall {
+                Some(r) => format!("{:.0} % of {}", 100.0 * r, sc.gross_rows),
+                None => "none gross".into(),
+            }
+        );
+    }
+    s
+}
+
+/// After a hold-out CV's tables: per fold, the worst Kriging model's max
+/// error over the D-H calibration's (`f[k≥1].max / f[0]`), and per model
+/// the held-out rows flagged as outside its coverage.
+pub fn cv_tail(cv: &HoldoutCv) -> String {
+    let worst: Vec<String> = cv
+        .fold_max_mm
+        .iter()
+        .map(|f| {
+            format!(
+                "{:.2}",
+                f.iter().skip(1).fold(0.0f64, |a, b| a.max(*b)) / f[0]
+            )
+        })
+        .collect();
+    let mut s = format!(
+        "worst Kriging model's max over the D-H calibration's max, per fold: {}\n",
+        worst.join(" ")
+    );
+    for (name, (rows, worst)) in CV_MODELS
+        .iter()
+        .zip(cv.flagged.iter().zip(cv.max_covered_mm()))
+        .skip(1)
+    {
+        if !rows.is_empty() {
+            let _ = writeln!(
+                s,
+                "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
+                rows.len()
+            );
+        }
+    }
+    s
+}
+
+/// `q1, q4` (or `none`): the periodic joints.
+pub fn joint_list(periodic: &[usize]) -> String {
+    if periodic.is_empty() {
+        "none".to_string()
+    } else {
+        periodic
+            .iter()
+            .map(|j| format!("q{}", j + 1))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}

@@ -1,0 +1,82 @@
+//! `predict`: the warnings about a pose file and the summary of its
+//! prediction.
+
+use crate::dataset::Dataset;
+use crate::model::CoverageWarning;
+use crate::stats::summarize;
+use crate::vec3::residuals;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The warning for points that leave the campaign's coverage (at most 20
+/// listed, by id when `ids` are given, else by row); empty without any.
+pub fn coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String]>) -> String {
+    let mut s = String::new();
+    if warnings.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "warning: {} of {total} pose(s) leave what the training campaign covers; their predictions are extrapolations:",
+        warnings.len()
+    );
+    for w in warnings.iter().take(20) {
+        let label = ids.map_or_else(
+            || format!("row {}", w.index + 1),
+            |v| format!("id {}", v[w.index]),
+        );
+        let issues: Vec<String> = w.issues.iter().map(ToString::to_string).collect();
+        let _ = writeln!(s, "  {label}: {}", issues.join("; "));
+    }
+    if warnings.len() > 20 {
+        let _ = writeln!(
+            s,
+            "  … and {} more (all of them in --json)",
+            warnings.len() - 20
+        );
+    }
+    s
+}
+
+/// The warning for a pose file `poses` of `joints` joints without
+/// direction columns, when reversing the first pose's assumed λ changes its
+/// prediction by `assumed` mm (> 0).
+pub fn direction_warning(poses: &Path, joints: usize, assumed: f64) -> String {
+    format!(
+        "warning: {} has no dir1..dir{joints} columns: λ is derived from the row order, and the \
+         first pose gets λ = +1 on every joint (assumed; a joint that has not moved yet keeps it). \
+         Reversing it changes that pose's prediction by {assumed:.3} mm: give the dir columns, or put \
+         the pose the robot came from first.",
+        poses.display()
+    )
+}
+
+/// The summary of the prediction `mean` of `data`, written to `output`:
+/// the JSON of `predict --json` and, when `data` has measured errors, the
+/// line that compares them before and after subtracting the prediction.
+pub fn summary(
+    data: &Dataset,
+    mean: &[[f64; 3]],
+    coverage: &[CoverageWarning],
+    output: &Path,
+) -> (serde_json::Value, Option<String>) {
+    let Some(e) = &data.errors else {
+        let v = serde_json::json!({"poses": data.len(), "output": output,
+            "coverage_warnings": coverage});
+        return (v, None);
+    };
+    let before = summarize(e);
+    let after = summarize(&residuals(e, mean));
+    let v = serde_json::json!({"poses": data.len(), "output": output,
+        "measured": before, "after_subtracting_prediction": after,
+        "coverage_warnings": coverage});
+    let line = format!(
+        "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
+        data.len(),
+        before.mean_3d_mm,
+        after.mean_3d_mm,
+        before.max_3d_mm,
+        after.max_3d_mm
+    );
+    (v, Some(line))
+}
