@@ -234,7 +234,7 @@ impl ErrorModel {
 
     /// This model's hyperparameters, with the curvature its search ended
     /// with, as warm starts of a fit on similar data, one per output
-    /// ([`crate::params::HyperSpec::Warm`]).
+    /// (`HyperSpec::Warm` of the error-model params).
     pub fn warm_starts(&self) -> Vec<crate::kriging::Hyperparameters> {
         let d = self.correlation_dims();
         self.reports
