@@ -131,4 +131,5 @@ def diagnose(
     progress: _Progress = None,
     refit_rows: Optional[int] = None,
     scan_rows: Optional[int] = None,
+    calibrate: bool = False,
 ) -> Tuple[str, Model]: ...

@@ -327,7 +327,7 @@ fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
 #[pyfunction]
 #[pyo3(signature = (data, method="ejs", nugget=true, folds=10, seed=1, permutations=1999,
     fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None,
-    refit_rows=None, scan_rows=None))]
+    refit_rows=None, scan_rows=None, calibrate=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     py: Python<'_>,
@@ -344,6 +344,7 @@ pub fn diagnose(
     progress: Option<Py<PyAny>>,
     refit_rows: Option<usize>,
     scan_rows: Option<usize>,
+    calibrate: bool,
 ) -> PyResult<(String, Model)> {
     let d = &data.inner;
     let p = Progress::new(progress);
@@ -371,11 +372,15 @@ pub fn diagnose(
             robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
                 format!("e.g. the first {n} rows")
             })?;
-            let diag = robokrige::diagnose::diagnose(d, &o, &|msg: &str| {
+            // with `calibrate`, the residual of a D-H calibration is
+            // diagnosed and the model holds that calibration (as the CLI's
+            // `diagnose --calibrate`)
+            let base = robokrige::study::diagnosis::DiagnosisBase::new(d.clone(), &o, calibrate)?;
+            let diag = robokrige::diagnose::diagnose(&base.data, &o, &|msg: &str| {
                 let k = step.fetch_add(1, Ordering::SeqCst) + 1;
                 p.call((k, 0usize, msg.to_string()));
             })?;
-            let model = robokrige::diagnose::fit_with_effects(d, &o, &diag.extras)?;
+            let model = base.model(&o, &diag.extras)?;
             let mut v = serde_json::to_value(&diag).map_err(|e| Error::Json {
                 context: "diagnosis".into(),
                 source: e,

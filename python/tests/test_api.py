@@ -231,3 +231,50 @@ def test_a_robot_calibrates_by_default(datasets, lhs):
     assert np.all(noise < np.std(e, axis=0))
     with pytest.raises(rk.RobokrigeError, match="calibrate must be True or False"):
         rk.ErrorModel(calibrate="yes", **opts).fit(q, d, e)
+
+
+def test_one_calibrated_model_fits_predicts_compensates_and_diagnoses(datasets, lhs, tmp_path):
+    """fit -> save/load -> predict -> compensate (measured on the simulated
+    robot's truth) -> diagnose(calibrate=True), from one calibrated model."""
+    import json
+
+    q, d, e = arrays(lhs)
+    opts = dict(robot="comau-nj220", corr="gaussian", optimizer="hj")
+    cal = rk.ErrorModel(**opts).fit(q, d, e)
+    raw = rk.ErrorModel(calibrate=False, **opts).fit(q, d, e)
+    path = tmp_path / "cal.json"
+    cal.save(path)
+    loaded = rk.ErrorModel.load(path)
+    assert json.loads(loaded.model_.to_json())["version"] == 4
+    verify = rk.read_campaign(datasets / "comau_verify.csv", as_frame=False)
+    vq, vd, _ = arrays(verify)
+    assert np.array_equal(loaded.predict(vq, vd), cal.predict(vq, vd))
+
+    def reduction(m):
+        out = rk.compensate(
+            m,
+            "comau-nj220",
+            datasets / "comau_circle.csv",
+            truth=datasets / "comau_circle.truth.json",
+        )
+        s = out["evaluation"]["summary"]
+        return 1.0 - s["after"]["mean_abs_mm"] / s["before"]["mean_abs_mm"]
+
+    r_cal, r_raw = reduction(loaded), reduction(raw)
+    assert r_cal >= 0.85, r_cal
+    assert r_cal >= r_raw - 0.02, (r_cal, r_raw)
+    # the diagnosis of the calibration's residual keeps the calibration
+    _, improved, report = rk.diagnose(
+        datasets / "comau_lhs.csv",
+        method="js-hj",
+        robot="comau-nj220",
+        calibrate=True,
+        max_effects=1,
+        permutations=199,
+        as_frame=False,
+    )
+    saved = json.loads(improved.model_.to_json())
+    assert saved["version"] == 4 and saved["calibration"]["parameters"]
+    assert report["before_residuals"].shape == (len(lhs["q1"]), 3)
+    with pytest.raises(rk.RobokrigeError, match="robot"):
+        rk.diagnose(datasets / "comau_lhs.csv", method="js-hj", calibrate=True, permutations=199)
