@@ -80,7 +80,7 @@ pub fn run(a: CvArgs) -> Result<()> {
         return run_methods(&a, list);
     }
     let data = super::read_data(&a.data)?;
-    let params = a.model.resolve(&data)?;
+    let params = a.model.resolve(None, &data)?;
     super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
     if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
         return Err(Error::InvalidParameter(

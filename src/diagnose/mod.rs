@@ -47,7 +47,9 @@ use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partitio
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
 use crate::kriging::{KrigingOptions, WarmStart};
+use crate::methods::Method;
 use crate::model::ErrorModel;
+use crate::params::ErrorModelParams;
 use crate::space::Space;
 use crate::stats::summarize;
 use crate::{Error, Result};
@@ -194,6 +196,11 @@ impl DiagnoseOptions {
     pub fn kriging(mut self, kriging: KrigingOptions) -> Self {
         self.kriging = kriging;
         self
+    }
+    /// The space and Kriging options of a base model ([`base_params`]).
+    pub fn base(self, params: &ErrorModelParams) -> Self {
+        self.space(params.get_space())
+            .kriging(params.get_kriging().clone())
     }
     /// Number of CV folds K.
     pub fn folds(mut self, k: usize) -> Self {
@@ -963,23 +970,33 @@ fn after_check(
     }
 }
 
-/// The base model a diagnosis starts from, by name: `ejs` (the default)
-/// and `js` (BFGS with the options' nugget), or the papers' `js-hj`,
-/// `ejs-hj`, `ejs-gps`. Returns its space and optimiser.
-pub fn base_method(name: &str) -> Result<(Space, crate::kriging::OptimizerKind)> {
-    use crate::kriging::OptimizerKind;
-    Ok(match name {
-        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
-        "js" => (Space::Js, OptimizerKind::Bfgs),
-        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
-        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
-        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
-        other => {
-            return Err(Error::InvalidParameter(format!(
-                "diagnose supports the base methods ejs, js, js-hj, ejs-hj or ejs-gps, not '{other}'"
-            )));
-        }
-    })
+/// The base model a diagnosis starts from, by name, as fit parameters
+/// (their space and Kriging options; [`DiagnoseOptions::base`]):
+/// - `ejs` (the default) and `js`: BFGS, constant trend, the Gaussian
+///   family, in that space (`robokrige fit --space S --corr gaussian`);
+/// - the papers' methods whose trend is the options' and whose family is
+///   fixed, `js-hj`, `ejs-hj` and `ejs-gps`: the method's own set-up
+///   ([`Method::params`]: space, optimiser, starts).
+///
+/// `nugget` estimates a nugget in either (the default of `diagnose`:
+/// measured data has noise); for a method that is [`Method::params`]'s own
+/// switch, so `--method ejs-gps --no-nugget` is exactly `ejs-gps`.
+pub fn base_params(name: &str, seed: u64, nugget: bool) -> Result<ErrorModelParams> {
+    let space = match name {
+        "ejs" => Some(Space::Ejs),
+        "js" => Some(Space::Js),
+        _ => None,
+    };
+    if let Some(space) = space {
+        let opts = KrigingOptions::default().nugget(nugget).seed(seed);
+        return Ok(ErrorModelParams::new().space(space).kriging(opts));
+    }
+    match Method::from_name(name) {
+        Ok(m @ (Method::JsHj | Method::EjsHj | Method::EjsGps)) => Ok(m.params(seed, nugget)),
+        _ => Err(Error::InvalidParameter(format!(
+            "diagnose supports the base models ejs, js, js-hj, ejs-hj or ejs-gps, not '{name}'"
+        ))),
+    }
 }
 
 /// The model of `data` with `extras` as inputs, fitted with the options of
@@ -991,7 +1008,7 @@ pub fn fit_with_effects(
     extras: &[Feature],
 ) -> Result<ErrorModel> {
     let work = with_columns(data, extras)?;
-    crate::params::ErrorModelParams::new()
+    ErrorModelParams::new()
         .space(o.space)
         .periodic(o.periodic.clone())
         .kriging(o.kriging.clone())
