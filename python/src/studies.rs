@@ -11,7 +11,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use robokrige::compensate::{CompensationOptions, Stop};
-use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
+use robokrige::cv::{CvMode, cross_validate_closed_form, cross_validate_refit};
 use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
@@ -35,15 +35,7 @@ pub fn cross_validate(
     mode: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let refit = match mode {
-        "refit" => true,
-        "closed-form" => false,
-        _ => {
-            return Err(invalid(format!(
-                "mode '{mode}': expected 'refit' or 'closed-form'"
-            )));
-        }
-    };
+    let refit = CvMode::from_name(mode).map_err(to_py)? == CvMode::Refit;
     let d = &data.inner;
     let p = Progress::new(progress);
     let done = AtomicUsize::new(0);

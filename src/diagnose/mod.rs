@@ -44,7 +44,7 @@ mod rounds;
 mod rows;
 pub mod scan;
 
-use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partition};
+use crate::cv::{CvMode, cross_validate_closed_form, cross_validate_refit, kfold_partition};
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
 use crate::kriging::{KrigingOptions, WarmStart};
@@ -421,9 +421,9 @@ pub struct CvStats {
     #[serde(default)]
     pub noise_mm: [f64; 3],
     /// How the folds were predicted ([`crate::cv::CvResult::mode`]):
-    /// `"refit"`, or `"closed-form"` above [`DiagnoseOptions::refit_rows`].
-    #[serde(default = "refit_mode")]
-    pub mode: String,
+    /// refit, or closed form above [`DiagnoseOptions::refit_rows`].
+    #[serde(default)]
+    pub mode: CvMode,
     /// Closed-form CV only: the model's own expectation of its
     /// leave-one-out RMSE per axis on all rows, mm
     /// ([`crate::cv::CvResult::expected_loo_rmse_mm`]).
@@ -643,13 +643,9 @@ pub struct Diagnosis {
 
 impl Diagnosis {
     /// How every CV of the diagnosis was run ([`CvStats::mode`]).
-    pub fn cv_mode(&self) -> &str {
-        &self.before.mode
+    pub fn cv_mode(&self) -> CvMode {
+        self.before.mode
     }
-}
-
-fn refit_mode() -> String {
-    "refit".into()
 }
 
 /// Precompute the columns of `extras` on the whole campaign (named like the
