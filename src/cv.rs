@@ -25,6 +25,53 @@ use std::time::Instant;
 
 pub use crate::stats::{group_partition, kfold_partition};
 
+/// How the folds of a cross-validation were predicted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum CvMode {
+    /// The model refitted (hyperparameters re-optimised) on every training fold.
+    #[default]
+    Refit,
+    /// ξ, normalisation and nugget of one fit on all rows; each fold's
+    /// residuals from the bordered system (fast).
+    ClosedForm,
+}
+
+impl CvMode {
+    /// `refit` or `closed-form`, as in results and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            CvMode::Refit => "refit",
+            CvMode::ClosedForm => "closed-form",
+        }
+    }
+
+    /// The mode called `name` ([`CvMode::name`]).
+    pub fn from_name(name: &str) -> Result<CvMode> {
+        [CvMode::Refit, CvMode::ClosedForm]
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| {
+                Error::InvalidParameter(format!("mode '{name}': expected 'refit' or 'closed-form'"))
+            })
+    }
+}
+
+impl std::fmt::Display for CvMode {
+    /// The name, padded and aligned as a string would be (`{:<12}`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+/// A mode equals its name (`mode == "refit"`).
+impl PartialEq<&str> for CvMode {
+    fn eq(&self, other: &&str) -> bool {
+        self.name() == *other
+    }
+}
+
 /// Result of a cross-validation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CvResult {
@@ -32,9 +79,10 @@ pub struct CvResult {
     pub folds: usize,
     /// Seed of the random fold partition ([`kfold_partition`]).
     pub seed: u64,
-    /// How the folds were predicted: `"refit"` (hyperparameters re-optimised per
-    /// fold) or `"closed-form"` (one fit's ξ and nugget on all rows).
-    pub mode: String,
+    /// How the folds were predicted: refit (hyperparameters re-optimised per
+    /// fold) or closed form (one fit's ξ and nugget on all rows); serialised
+    /// as `"refit"` or `"closed-form"`.
+    pub mode: CvMode,
     /// Fold of every row.
     pub fold: Vec<usize>,
     /// Out-of-fold residuals δ − δ̂ (mm), measurement order.
@@ -116,7 +164,7 @@ where
     Ok(CvResult {
         folds: k,
         seed: 0,
-        mode: "refit".into(),
+        mode: CvMode::Refit,
         summary: summarize(&residuals),
         fold: fold.to_vec(),
         residuals,
@@ -157,7 +205,7 @@ pub fn cross_validate_closed_form(
     Ok(CvResult {
         folds: k,
         seed,
-        mode: "closed-form".into(),
+        mode: CvMode::ClosedForm,
         summary: summarize(&residuals),
         fold,
         residuals,
@@ -240,6 +288,20 @@ pub fn closed_form_model(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mode_reads_and_writes_as_its_name() {
+        for m in [CvMode::Refit, CvMode::ClosedForm] {
+            let json = serde_json::to_string(&m).unwrap();
+            assert_eq!(json, format!("\"{}\"", m.name()));
+            assert_eq!(serde_json::from_str::<CvMode>(&json).unwrap(), m);
+            assert_eq!(CvMode::from_name(m.name()).unwrap(), m);
+        }
+        assert_eq!(format!("[{:<8}]", CvMode::Refit), "[refit   ]");
+        assert!(CvMode::ClosedForm == "closed-form");
+        let err = CvMode::from_name("fast").unwrap_err().to_string();
+        assert!(err.contains("mode 'fast'"), "{err}");
+    }
 
     #[test]
     fn partition_is_balanced_seeded_and_checked() {

@@ -27,7 +27,7 @@
 //! | engine | [`selection`] | trend selection: candidates, PCC + PCA (seed 003 eqs 15–20), GA (seed 004), the kinematic trend |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
 //! | model | [`params`] | `ErrorModelParams` → checked → `fit`: every space × trend × hyperparameter choice |
-//! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended` |
+//! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended`; a fit by names and its rules (`params_with`) |
 //! | studies | [`cv`] | K-fold cross-validation (seed 003 eq 21), refit or closed form |
 //! | studies | [`compensate`] | single-step and iterative feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22) |
 //! | studies | [`diagnose`] | closing the loop: what the model still misses |

@@ -288,6 +288,50 @@ fn physics_identify_then_compensate_with_the_physics_model() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// One rule, one message: a refused combination of model options gives the
+/// library's message (`methods::params_with`), which Python prints too
+/// (python/tests/test_bad_input.py compares the two front ends).
+#[test]
+fn refused_combinations_give_the_library_message() {
+    use robokrige::methods::{Method, Overrides, params_with};
+    use robokrige::space::Space;
+    let lhs = format!("{}/datasets/comau_lhs.csv", env!("CARGO_MANIFEST_DIR"));
+    let data = robokrige::dataset::read_csv(lhs.as_ref()).unwrap();
+    let robot = robokrige::kinematics::load_robot("comau-nj220").unwrap();
+    let cases: [(&[&str], Option<Method>, Overrides); 4] = [
+        (
+            &["--method", "ejs-gps", "--space", "js", "--starts", "2"],
+            Some(Method::EjsGps),
+            Overrides::new().space(Space::Js).starts(2),
+        ),
+        (
+            &["--optimizer", "hj", "--starts", "3"],
+            None,
+            Overrides::new()
+                .optimizer(robokrige::kriging::OptimizerKind::HookeJeeves)
+                .starts(3),
+        ),
+        (&["--kinematic"], None, Overrides::new().kinematic(true)),
+        (
+            &["--method", "js-hj", "--robot", "comau-nj220", "--kinematic"],
+            Some(Method::JsHj),
+            Overrides::new().robot(robot).kinematic(true),
+        ),
+    ];
+    let out = std::env::temp_dir().join(format!("rk-rules-{}.json", std::process::id()));
+    for (flags, method, overrides) in cases {
+        let expected = params_with(method, &overrides, &data)
+            .unwrap_err()
+            .to_string();
+        let mut args = vec!["fit", lhs.as_str(), "-o", out.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        let (c, _, err) = rk(&args);
+        assert_eq!(c, 1, "{flags:?}: {err}");
+        assert_eq!(err.trim(), format!("error: {expected}"), "{flags:?}");
+    }
+    assert!(!out.exists());
+}
+
 #[test]
 fn kinematic_and_periodic_options_are_checked() {
     let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
@@ -295,7 +339,7 @@ fn kinematic_and_periodic_options_are_checked() {
     let o = out.display().to_string();
     let (c, _, err) = rk(&["fit", &ds("comau_lhs.csv"), "--kinematic", "-o", &o]);
     assert_eq!(c, 1, "{err}");
-    assert!(err.contains("--kinematic needs --robot"), "{err}");
+    assert!(err.contains("kinematic needs robot"), "{err}");
     let (c, _, err) = rk(&["fit", &ds("comau_lhs.csv"), "--periodic", "9", "-o", &o]);
     assert_eq!(c, 1, "{err}");
     assert!(err.contains("joint numbers 1..6"), "{err}");
@@ -788,12 +832,12 @@ fn options_a_mode_does_not_use_are_refused() {
         ),
         (
             vec!["fit", &p("s.csv"), "--method", "ejs-hj", "--space", "js"],
-            "--space",
+            "leave space at the defaults",
         ),
         (vec!["fit", &p("s.csv"), "--tool", "1,2,3"], "--robot"),
         (
             vec!["fit", &p("s.csv"), "--optimizer", "hj", "--starts", "3"],
-            "--starts",
+            "starts is for optimizer",
         ),
         (
             vec![

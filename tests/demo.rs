@@ -24,7 +24,7 @@ fn a_small_demo_runs_every_step_and_finds_the_bump() {
     let methods: Vec<(Method, &str)> = demo
         .methods
         .iter()
-        .map(|m| (m.method, m.cv.mode.as_str()))
+        .map(|m| (m.method, m.cv.mode.name()))
         .collect();
     assert_eq!(
         methods,

@@ -75,7 +75,7 @@ fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
         .refit_rows(100)
         .max_effects(1);
     let d = diagnose(&data, &o, &|_| {}).unwrap();
-    assert_eq!(d.cv_mode(), "closed-form");
+    assert_eq!(d.cv_mode(), robokrige::cv::CvMode::ClosedForm);
     let top = &d.effects[0];
     assert_eq!(top.kind, EffectKind::Order, "{top:?}");
     assert!((top.params["row"] - 80.0).abs() <= 2.0, "{top:?}");
@@ -83,7 +83,7 @@ fn a_campaign_above_refit_rows_is_diagnosed_with_closed_form_cv() {
     assert!(d.after.pooled_rmse_mm < 0.7 * d.before.pooled_rmse_mm);
     // below it, the same campaign is refitted per fold
     let refit = diagnose(&data, &o.clone().refit_rows(1000), &|_| {}).unwrap();
-    assert_eq!(refit.cv_mode(), "refit");
+    assert_eq!(refit.cv_mode(), robokrige::cv::CvMode::Refit);
     assert_eq!(refit.effects[0].params["row"], top.params["row"]);
 }
 

@@ -382,7 +382,7 @@ fn closed_form_cv_of_an_error_model_matches_its_outputs_and_rejects_other_data()
         .max_evals(60);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let cv = robokrige::cv::cross_validate_closed_form(&d, &model, 8, 2).unwrap();
-    assert_eq!(cv.mode, "closed-form");
+    assert_eq!(cv.mode, robokrige::cv::CvMode::ClosedForm);
     assert_eq!(cv.residuals.len(), 80);
     assert!(cv.residuals.iter().flatten().all(|v| v.is_finite()));
     let other = campaign(81);

@@ -19,7 +19,7 @@ fn names_parse_and_round_trip() {
         vec![Method::EjsGps, Method::JsHj]
     );
     for m in ALL_METHODS {
-        assert_eq!(Method::parse(m.name()).unwrap(), m);
+        assert_eq!(Method::from_name(m.name()).unwrap(), m);
     }
     let err = parse_methods("ejs-gps,ejs-magic").unwrap_err().to_string();
     assert!(err.contains("ejs-magic") && err.contains("ejs-ga"), "{err}");
@@ -28,7 +28,10 @@ fn names_parse_and_round_trip() {
 #[test]
 fn the_recommended_method_comes_first_with_a_nugget_and_the_family_by_cv() {
     assert_eq!(ALL_METHODS[0], Method::Recommended);
-    assert_eq!(Method::parse("recommended").unwrap(), Method::Recommended);
+    assert_eq!(
+        Method::from_name("recommended").unwrap(),
+        Method::Recommended
+    );
     let m = fit(Method::Recommended, &campaign(60), 1);
     assert!(m.options().get_nugget() && m.options().get_corr().is_by_cv());
     for (out, rep) in m.outputs().iter().zip(m.reports()) {

@@ -36,8 +36,9 @@ _DEFAULTS: Dict[str, Any] = dict(
     method=None,
 )
 
-#: Parameters a named method fixes itself (``robokrige fit --method``
-#: refuses them).
+#: Model options a named method fixes itself: passed to the library only
+#: when they differ from the defaults (the library refuses them with a
+#: method, as ``robokrige fit --method`` does).
 _METHOD_FIXES = ("space", "trend", "corr", "optimizer", "nugget", "starts", "periodic")
 
 
@@ -156,12 +157,6 @@ class ErrorModel:
     def _params(self) -> Dict[str, Any]:
         """The parameters as the extension reads them (checked types)."""
         p = self.get_params()
-        if p["method"] is not None:
-            changed = [k for k in _METHOD_FIXES if p[k] != _DEFAULTS[k]]
-            if changed:
-                raise _bad(
-                    f"method '{p['method']}' fixes its own settings: leave {', '.join(changed)} at the defaults"
-                )
         p["periodic"] = _periodic_spec(p["periodic"])
         for key in ("nugget", "kinematic", "calibrate"):
             if not isinstance(p[key], (bool, np.bool_)):
@@ -184,6 +179,11 @@ class ErrorModel:
             if t.shape != (3,):
                 raise _bad(f"tool must be (x, y, z) in mm, not {p['tool']!r}")
             p["tool"] = (float(t[0]), float(t[1]), float(t[2]))
+        # left at its default: not given (the library applies its default,
+        # and a named method refuses only what was given)
+        for key in _METHOD_FIXES:
+            if p[key] == _DEFAULTS[key]:
+                p[key] = None
         return p
 
     # -- fit and predict ---------------------------------------------------

@@ -1,10 +1,11 @@
-//! Every read of `ErrorModel`, `KrigingModel` or `KrigingOptions`, and every
-//! `KrigingOptions` built, is here and nowhere else in this crate. Their
-//! fields are private in the library: models have getters of the fields'
-//! names, options builder setters of the fields' names and `get_` getters.
+//! Every read of `ErrorModel`, `KrigingModel` or `KrigingOptions` is here
+//! and nowhere else in this crate (options are built by the library, from
+//! names: `methods::params_with`, `diagnose::base_params`). Their fields
+//! are private in the library: models have getters of the fields' names,
+//! options `get_` getters.
 
 use robokrige::features::Feature;
-use robokrige::kriging::{CorrChoice, FitReport, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::kriging::{FitReport, KrigingOptions, OptimizerKind};
 use robokrige::model::{ErrorModel, RobotRecord};
 use robokrige::space::Space;
 
@@ -68,29 +69,7 @@ pub fn nugget(o: &KrigingOptions) -> bool {
     o.get_nugget()
 }
 
-/// `KrigingOptions::default()` with what `robokrige fit` sets from its flags.
-#[allow(clippy::too_many_arguments)]
-pub fn fit_options(
-    trend: TrendKind,
-    corr: CorrChoice,
-    optimizer: OptimizerKind,
-    nugget: bool,
-    starts: usize,
-    seed: u64,
-) -> KrigingOptions {
-    KrigingOptions::default()
-        .trend(trend)
-        .corr(corr)
-        .optimizer(optimizer)
-        .nugget(nugget)
-        .starts(starts)
-        .seed(seed)
-}
-
-/// `KrigingOptions::default()` with what `robokrige diagnose` sets.
-pub fn diagnose_options(optimizer: OptimizerKind, nugget: bool, seed: u64) -> KrigingOptions {
-    KrigingOptions::default()
-        .optimizer(optimizer)
-        .nugget(nugget)
-        .seed(seed)
+/// The hyperparameter search of the options.
+pub fn optimizer(o: &KrigingOptions) -> OptimizerKind {
+    o.get_optimizer()
 }

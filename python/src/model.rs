@@ -1,13 +1,14 @@
 //! `Model`: a fitted `robokrige::model::ErrorModel`: fit, predict, files.
 
 use crate::data::{Data, triplets_to_py};
-use crate::params::{FitParams, parse_optimizer};
+use crate::params::FitParams;
 use crate::progress::Progress;
 use crate::{access, to_py};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use robokrige::Error;
 use robokrige::dataset::Dataset;
+use robokrige::kriging::OptimizerKind;
 use robokrige::model::{AXES, ErrorModel};
 use std::path::PathBuf;
 
@@ -32,8 +33,7 @@ pub fn json(value: &impl serde::Serialize, what: &str) -> PyResult<String> {
 
 /// Refuse a fit of `rows` rows that would exceed the memory limit, with
 /// the command line's rule ([`robokrige::model::check_fit_memory`]).
-pub fn check_memory(rows: usize, optimizer: &str) -> robokrige::Result<()> {
-    let optimizer = parse_optimizer(optimizer)?;
+pub fn check_memory(rows: usize, optimizer: OptimizerKind) -> robokrige::Result<()> {
     robokrige::model::check_fit_memory(rows, optimizer, |n| {
         format!("e.g. the first {n} rows, q[:{n}]")
     })?;
@@ -52,7 +52,7 @@ pub fn fit_model(
     let model = py
         .detach(|| {
             let valid = params.resolve(data)?;
-            check_memory(data.len(), &params.optimizer)?;
+            check_memory(data.len(), access::optimizer(valid.params().get_kriging()))?;
             valid.fit_with_progress(data, &|axis: usize, generation: usize, best: f64| {
                 p.call((
                     generation,

@@ -4,34 +4,37 @@
 //! same settings give the same model file.
 
 use pyo3::prelude::*;
-use robokrige::dataset::Dataset;
 use robokrige::calibration::CalibrationOptions;
+use robokrige::dataset::Dataset;
 use robokrige::kinematics::Robot;
-use robokrige::kriging::{CorrChoice, KrigingOptions, OptimizerKind, TrendKind};
-use robokrige::methods::Method;
-use robokrige::params::{ErrorModelParams, TrendSpec, ValidErrorModelParams};
+use robokrige::kriging::{OptimizerKind, TrendKind};
+use robokrige::kriging::CorrChoice;
+use robokrige::methods::{Method, Overrides, params_with};
+use robokrige::params::ValidErrorModelParams;
 use robokrige::space::Space;
 use robokrige::{Error, Result};
 
-/// `ErrorModel.get_params()` of the Python layer, read item by item.
+/// `ErrorModel.get_params()` of the Python layer, read item by item. A
+/// model option is `None` when left at its default (the library's default
+/// then applies, and a named method does not count it as given).
 #[derive(Debug, Clone, FromPyObject)]
 pub struct FitParams {
     #[pyo3(item)]
-    pub space: String,
+    pub space: Option<String>,
     #[pyo3(item)]
-    pub trend: String,
+    pub trend: Option<String>,
     #[pyo3(item)]
-    pub nugget: bool,
+    pub nugget: Option<bool>,
     #[pyo3(item)]
-    pub corr: String,
+    pub corr: Option<String>,
     #[pyo3(item)]
-    pub optimizer: String,
+    pub optimizer: Option<String>,
     #[pyo3(item)]
     pub starts: Option<usize>,
     #[pyo3(item)]
     pub seed: u64,
     #[pyo3(item)]
-    pub periodic: String,
+    pub periodic: Option<String>,
     #[pyo3(item)]
     pub robot: Option<String>,
     #[pyo3(item)]
@@ -66,15 +69,6 @@ fn parse_trend(s: &str) -> Result<TrendKind> {
             "trend '{s}': expected 'constant', 'linear' or 'quadratic'"
         ))),
     }
-}
-
-/// The options' correlation choice, as `--corr`.
-fn parse_corr(s: &str) -> Result<CorrChoice> {
-    CorrChoice::from_name(s).ok_or_else(|| {
-        bad(format!(
-            "corr '{s}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
-        ))
-    })
 }
 
 /// `"bfgs"`, `"gps"` or `"hj"`.
@@ -113,36 +107,9 @@ pub fn robot_with_tool(spec: &str, tool: Option<(f64, f64, f64)>) -> Result<Robo
 }
 
 impl FitParams {
-    /// Space, periodic joints (resolved on `data`) and options as
-    /// `robokrige fit` makes them from its flags.
-    fn options(&self, data: &Dataset) -> Result<(Space, Vec<usize>, KrigingOptions)> {
-        let optimizer = parse_optimizer(&self.optimizer)?;
-        if self.starts.is_some() && optimizer == OptimizerKind::HookeJeeves {
-            return Err(bad(
-                "starts is for optimizer 'bfgs' or 'gps' (Hooke–Jeeves runs once, from the centre of the box)".into(),
-            ));
-        }
-        let opts = crate::access::fit_options(
-            parse_trend(&self.trend)?,
-            parse_corr(&self.corr)?,
-            optimizer,
-            self.nugget,
-            self.starts.unwrap_or(optimizer.default_starts()),
-            self.seed,
-        );
-        let periodic = parse_periodic(&self.periodic, &data.q)?;
-        Ok((parse_space(&self.space)?, periodic, opts))
-    }
-
-    /// The checked fit parameters for `data` (periodic joints resolved on
-    /// its rows, the robot checked against its joint count): what
-    /// `robokrige fit` fits with the same flags.
-    pub fn resolve(&self, data: &Dataset) -> Result<ValidErrorModelParams> {
-        if self.kinematic && self.robot.is_none() {
-            return Err(bad(
-                "kinematic=True needs robot (the robot whose Jacobian forms the trend)".into(),
-            ));
-        }
+    /// The parameters given, as the library's overrides (the rules and
+    /// defaults are the library's: [`params_with`]).
+    fn overrides(&self) -> Result<Overrides> {
         let robot = self
             .robot
             .as_deref()
@@ -151,53 +118,42 @@ impl FitParams {
         if self.tool.is_some() && robot.is_none() {
             return Err(bad("tool needs robot (the robot the tool is on)".into()));
         }
-        if let Some(r) = &robot {
-            r.check_dataset(data)?;
+        let mut o = Overrides::new()
+            .seed(self.seed)
+            .kinematic(self.kinematic)
+            .calibrate(self.calibrate.then(CalibrationOptions::default));
+        if let Some(v) = &self.space {
+            o = o.space(parse_space(v)?);
         }
-        let kinematic = robot.as_ref().filter(|_| self.kinematic);
-        let params = match &self.method {
-            Some(name) => {
-                let method = Method::parse(name)?;
-                match (kinematic, method) {
-                    (Some(r), Method::EjsGa | Method::EjsPca) => {
-                        // as `fit --method … --kinematic`: the flags' options
-                        let (_, periodic, opts) = self.options(data)?;
-                        ErrorModelParams::new()
-                            .periodic(periodic)
-                            .kriging(opts)
-                            .trend(method.trend(Some(r)))
-                    }
-                    (Some(_), _) => {
-                        return Err(bad(
-                            "kinematic=True with a method works for 'ejs-pca' and 'ejs-ga' (selection among polynomial and kinematic candidates); use kinematic=True without a method otherwise".into(),
-                        ));
-                    }
-                    (None, m) => m.params(self.seed, false),
-                }
-            }
-            None => {
-                let (space, periodic, opts) = self.options(data)?;
-                let p = ErrorModelParams::new()
-                    .space(space)
-                    .periodic(periodic)
-                    .kriging(opts);
-                match kinematic {
-                    Some(r) => p.trend(TrendSpec::Kinematic(Box::new(r.clone()))),
-                    None => p,
-                }
-            }
-        };
-        match robot {
-            // as `robokrige fit --robot`: calibrated unless the kinematic
-            // trend does it or the caller said no
-            Some(r) => {
-                let calibrate = self.calibrate && !self.kinematic;
-                params
-                    .robot(r)
-                    .calibrate(calibrate.then(CalibrationOptions::default))
-            }
-            None => params,
+        if let Some(v) = &self.trend {
+            o = o.trend(parse_trend(v)?);
         }
-        .check()
+        if let Some(v) = &self.corr {
+            o = o.corr(CorrChoice::from_name(v)?);
+        }
+        if let Some(v) = &self.optimizer {
+            o = o.optimizer(parse_optimizer(v)?);
+        }
+        if let Some(v) = self.nugget {
+            o = o.nugget(v);
+        }
+        if let Some(v) = self.starts {
+            o = o.starts(v);
+        }
+        if let Some(v) = &self.periodic {
+            o = o.periodic(v.as_str());
+        }
+        if let Some(r) = robot {
+            o = o.robot(r);
+        }
+        Ok(o)
+    }
+
+    /// The checked fit parameters for `data` (periodic joints resolved on
+    /// its rows, the robot checked against its joint count): what
+    /// `robokrige fit` fits with the same flags.
+    pub fn resolve(&self, data: &Dataset) -> Result<ValidErrorModelParams> {
+        let method = self.method.as_deref().map(Method::from_name).transpose()?;
+        params_with(method, &self.overrides()?, data)?.check()
     }
 }

@@ -11,11 +11,9 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use robokrige::compensate::{CompensationOptions, Stop};
-use robokrige::cv::{cross_validate_closed_form, cross_validate_refit};
+use robokrige::cv::{CvMode, cross_validate_closed_form, cross_validate_refit};
 use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
-use robokrige::kriging::OptimizerKind;
-use robokrige::space::Space;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
 use robokrige::{Error, Result};
@@ -37,22 +35,17 @@ pub fn cross_validate(
     mode: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let refit = match mode {
-        "refit" => true,
-        "closed-form" => false,
-        _ => {
-            return Err(invalid(format!(
-                "mode '{mode}': expected 'refit' or 'closed-form'"
-            )));
-        }
-    };
+    let refit = CvMode::from_name(mode).map_err(to_py)? == CvMode::Refit;
     let d = &data.inner;
     let p = Progress::new(progress);
     let done = AtomicUsize::new(0);
     let res = py
         .detach(|| {
             let valid = params.resolve(d)?;
-            check_memory(d.len(), &params.optimizer)?;
+            check_memory(
+                d.len(),
+                crate::access::optimizer(valid.params().get_kriging()),
+            )?;
             let t0 = std::time::Instant::now();
             let mut res = if refit {
                 cross_validate_refit(d, folds, cv_seed, |train| {
@@ -316,11 +309,6 @@ pub fn compensate(
     json(&v, "compensation")
 }
 
-/// The base model of `robokrige diagnose --method M`: space and optimiser.
-fn diagnose_method(method: &str) -> Result<(Space, OptimizerKind)> {
-    robokrige::diagnose::base_method(method)
-}
-
 /// Find what the model misses, trace it to an effect, add it, re-validate
 /// (`robokrige diagnose`, same defaults). Returns the diagnosis as JSON and
 /// the final model (with the effects added, refitted on all rows).
@@ -351,11 +339,10 @@ pub fn diagnose(
     let step = AtomicUsize::new(0);
     let (v, model) = py
         .detach(|| {
-            let (space, optimizer) = diagnose_method(method)?;
+            let base = robokrige::diagnose::base_params(method, seed, nugget)?;
             let o = DiagnoseOptions::default()
-                .space(space)
+                .base(&base)
                 .periodic(parse_periodic(periodic, &d.q)?)
-                .kriging(crate::access::diagnose_options(optimizer, nugget, seed))
                 .folds(folds)
                 .seed(seed)
                 .permutations(permutations)
@@ -369,6 +356,7 @@ pub fn diagnose(
                         .map(robokrige::kinematics::load_robot)
                         .transpose()?,
                 );
+            let optimizer = crate::access::optimizer(base.get_kriging());
             robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
                 format!("e.g. the first {n} rows")
             })?;

@@ -68,7 +68,7 @@ def test_parameters():
         rk.ErrorModel(optimizer="hj", starts=3).fit(q, errors=e)
     with raises(r"starts, max_evals and tol must be positive"):
         rk.ErrorModel(starts=0).fit(q, errors=e)
-    with raises(r"kinematic=True needs robot"):
+    with raises(r"kinematic needs robot"):
         rk.ErrorModel(kinematic=True).fit(q, errors=e)
     with raises(r"unknown robot 'nope'"):
         rk.ErrorModel(robot="nope").fit(q, errors=e)
@@ -121,6 +121,40 @@ def test_csv_messages_are_the_cli_messages(cli, tmp_path):
         rk.ErrorModel().fit(bad)
     assert str(info.value) == cli_message
     assert "bad.csv:3: column 'q2'" in cli_message
+
+
+@pytest.mark.parametrize(
+    "flags, params, message",
+    [
+        # a named method fixes its own options
+        (
+            ["--method", "ejs-gps", "--space", "js", "--starts", "2"],
+            dict(method="ejs-gps", space="js", starts=2),
+            "method 'ejs-gps' fixes its own settings: leave space, starts at the defaults",
+        ),
+        # --starts with Hooke–Jeeves
+        (["--optimizer", "hj", "--starts", "3"], dict(optimizer="hj", starts=3), "starts is for optimizer 'bfgs' or 'gps'"),
+        # the kinematic trend needs a robot
+        (["--kinematic"], dict(kinematic=True), "kinematic needs robot"),
+        # only a selecting method takes the kinematic candidates
+        (
+            ["--method", "js-hj", "--robot", "comau-nj220", "--kinematic"],
+            dict(method="js-hj", robot="comau-nj220", kinematic=True),
+            "kinematic with method 'js-hj': it works for ejs-pca and ejs-ga",
+        ),
+    ],
+)
+def test_refused_combinations_give_the_cli_message(cli, datasets, tmp_path, flags, params, message):
+    """One rule, one message: the library's (`methods::params_with`) from
+    both front ends."""
+    lhs = datasets / "comau_lhs.csv"
+    proc = cli("fit", lhs, *flags, "-o", tmp_path / "m.json", check=False)
+    assert proc.returncode == 1, proc.stderr
+    cli_message = proc.stderr.strip().splitlines()[-1].removeprefix("error: ")
+    with pytest.raises(rk.RobokrigeError) as info:
+        rk.ErrorModel(**params).fit(lhs)
+    assert str(info.value) == cli_message
+    assert message in cli_message
 
 
 def test_compensate_targets():

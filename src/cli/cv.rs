@@ -3,10 +3,9 @@
 use super::fit::ModelArgs;
 use super::progress::bar;
 use clap::Args;
-use clap::ValueEnum;
 use robokrige::cv::{
-    closed_form_model, cross_validate_closed_form, cross_validate_folds, cross_validate_method,
-    group_partition, largest_training_rows,
+    CvMode, closed_form_model, cross_validate_closed_form, cross_validate_folds,
+    cross_validate_method, group_partition, largest_training_rows,
 };
 use robokrige::plot::box_plot;
 use robokrige::report::cv as report;
@@ -44,7 +43,7 @@ pub struct CvArgs {
     /// refit: re-optimise ξ on every training fold; closed-form: ξ from one fit
     /// on all rows, fold residuals from the bordered system (fast).
     #[arg(long, value_enum, default_value = "refit")]
-    mode: Mode,
+    mode: CvMode,
     /// Closed-form mode at scale: choose ξ (and the nugget) on the first N
     /// rows, then factorise all rows once at those values.
     #[arg(long)]
@@ -65,12 +64,6 @@ pub struct CvArgs {
     plot: Option<PathBuf>,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum Mode {
-    Refit,
-    ClosedForm,
-}
-
 pub fn run(a: CvArgs) -> Result<()> {
     let outputs: Vec<&std::path::Path> = [a.json.as_deref(), a.plot.as_deref()]
         .into_iter()
@@ -81,9 +74,9 @@ pub fn run(a: CvArgs) -> Result<()> {
         return run_methods(&a, list);
     }
     let data = super::read_data(&a.data)?;
-    let params = a.model.resolve(&data)?;
+    let params = a.model.resolve(None, &data)?;
     super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
-    if a.hyper_rows.is_some() && !matches!(a.mode, Mode::ClosedForm) {
+    if a.hyper_rows.is_some() && !matches!(a.mode, CvMode::ClosedForm) {
         return Err(Error::InvalidParameter(
             "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)".into(),
         ));
@@ -123,7 +116,7 @@ fn cross_validate(
     params: &robokrige::params::ValidErrorModelParams,
 ) -> Result<robokrige::cv::CvResult> {
     Ok(match a.mode {
-        Mode::Refit => {
+        CvMode::Refit => {
             data.errors_or_err()?;
             let fold = match &a.groups {
                 Some(col) => group_partition(&data.group_labels(col)?)?,
@@ -141,7 +134,7 @@ fn cross_validate(
             res.seed = if a.groups.is_some() { 0 } else { a.cv_seed };
             res
         }
-        Mode::ClosedForm => {
+        CvMode::ClosedForm => {
             let (model, subset) = closed_form_model(data, params, a.hyper_rows)?;
             if let Some(h) = subset {
                 eprintln!(

@@ -6,7 +6,6 @@ use clap::Args;
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use robokrige::kinematics;
-use robokrige::kriging::KrigingOptions;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase, compare_compensation};
@@ -44,7 +43,8 @@ pub struct DiagnoseArgs {
     data: PathBuf,
     /// Base model (constant trend, nugget): ejs or js (BFGS on the analytic
     /// gradient; CV folds warm-started from the full fit), or the papers'
-    /// js-hj, ejs-hj, ejs-gps.
+    /// js-hj, ejs-hj, ejs-gps (the method's own set-up, with a nugget
+    /// unless --no-nugget).
     #[arg(long, default_value = "ejs")]
     method: String,
     /// Fit the base model as an interpolator (no nugget). The default
@@ -129,16 +129,10 @@ pub struct DiagnoseArgs {
 }
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
-    let (space, optimizer) = robokrige::diagnose::base_method(&a.method)?;
+    let base = robokrige::diagnose::base_params(&a.method, a.seed, !a.no_nugget)?;
     Ok(DiagnoseOptions::default()
-        .space(space)
+        .base(&base)
         .periodic(robokrige::space::parse_periodic(&a.periodic, &data.q)?)
-        .kriging(
-            KrigingOptions::default()
-                .optimizer(optimizer)
-                .nugget(!a.no_nugget)
-                .seed(a.seed),
-        )
         .folds(a.folds)
         .seed(a.seed)
         .permutations(a.permutations)

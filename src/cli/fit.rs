@@ -2,9 +2,11 @@
 
 use clap::{Args, ValueEnum};
 use robokrige::calibration::CalibrationOptions;
-use robokrige::kriging::{CorrChoice, Correlation, KrigingOptions, OptimizerKind, TrendKind};
+use robokrige::kriging::CorrChoice;
+use robokrige::kriging::{Correlation, OptimizerKind, TrendKind};
+use robokrige::methods::{Method, Overrides, params_with};
 use robokrige::model::{AXES, ErrorModel};
-use robokrige::params::{ErrorModelParams, TrendSpec};
+use robokrige::params::ErrorModelParams;
 use robokrige::report::fit as report;
 use robokrige::space::Space;
 use robokrige::{Error, Result};
@@ -26,31 +28,36 @@ pub enum CorrArg {
 
 impl CorrArg {
     /// The options' correlation choice.
-    pub fn resolve(self) -> CorrChoice {
+    pub fn choice(self) -> CorrChoice {
         match self {
             CorrArg::Gaussian => Correlation::Gaussian.into(),
             CorrArg::Matern52 => Correlation::Matern52.into(),
             CorrArg::Matern32 => Correlation::Matern32.into(),
             CorrArg::Exponential => Correlation::Exponential.into(),
-            CorrArg::Auto => KrigingOptions::recommended().get_corr(),
+            CorrArg::Auto => robokrige::kriging::KrigingOptions::recommended().get_corr(),
         }
     }
 }
 
-/// Model choices shared by `fit` and `cv`.
+/// Model choices shared by `fit` and `cv`. An option not given keeps the
+/// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
+/// the model options (the library's rule and message).
 #[derive(Debug, Args)]
 pub struct ModelArgs {
-    #[arg(long, value_enum, default_value = "ejs")]
-    space: Space,
-    #[arg(long, value_enum, default_value = "constant")]
-    trend: TrendKind,
+    /// Input space [default: ejs].
+    #[arg(long, value_enum)]
+    space: Option<Space>,
+    /// Trend of every output [default: constant].
+    #[arg(long, value_enum)]
+    trend: Option<TrendKind>,
     /// Correlation family, one length scale per input (h² = Σ ξ_k Δs_k²);
     /// by default each output's family is chosen by closed-form 10-fold CV
-    /// (the `recommended` method). `gaussian` is the papers'.
-    #[arg(long, value_enum, default_value = "auto")]
-    corr: CorrArg,
-    #[arg(long, value_enum, default_value = "bfgs")]
-    optimizer: OptimizerKind,
+    /// (the `recommended` method). `gaussian` is the papers' [default: auto].
+    #[arg(long, value_enum)]
+    corr: Option<CorrArg>,
+    /// Hyperparameter search [default: bfgs].
+    #[arg(long, value_enum)]
+    optimizer: Option<OptimizerKind>,
     /// Interpolate the measurements exactly (no nugget), as the papers' Kriging.
     /// By default a nugget (measurement-noise variance) is estimated with the
     /// correlation parameters: tracker data is noisy.
@@ -66,9 +73,10 @@ pub struct ModelArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Joints entered as (sin θ, cos θ) so θ and θ ± 360° coincide: "auto"
-    /// (those whose range in the data exceeds 180°), "none", or "1,4,6".
-    #[arg(long, default_value = "auto")]
-    periodic: String,
+    /// (those whose range in the data exceeds 180°), "none", or "1,4,6"
+    /// [default: auto].
+    #[arg(long)]
+    periodic: Option<String>,
     /// The measured robot: a preset name or a robot file (TOML/JSON). The
     /// model records it, and `compensate` refuses another; `--kinematic` uses
     /// its Jacobian.
@@ -100,54 +108,54 @@ pub struct ModelArgs {
 }
 
 impl ModelArgs {
-    /// The fit parameters for `data` (periodic joints resolved on its
-    /// rows): space, periodic joints, options, the measured robot (recorded
-    /// in the model) and, with `--kinematic`, its kinematic trend.
-    pub fn resolve(&self, data: &robokrige::dataset::Dataset) -> Result<ErrorModelParams> {
-        if self.starts.is_some() && self.optimizer == OptimizerKind::HookeJeeves {
-            return Err(Error::InvalidParameter(
-                "--starts is for --optimizer bfgs or gps (Hooke–Jeeves runs once, from the centre of the box)".into(),
-            ));
-        }
-        let (space, opts) = self.options();
-        let periodic = robokrige::space::parse_periodic(&self.periodic, &data.q)?;
-        if self.kinematic && self.robot.is_none() {
-            return Err(Error::InvalidParameter(
-                "--kinematic needs --robot (the robot whose Jacobian forms the trend)".into(),
-            ));
-        }
-        let mut params = ErrorModelParams::new()
-            .space(space)
-            .periodic(periodic)
-            .kriging(opts);
-        if let Some(r) = &self.robot {
-            let robot = robokrige::kinematics::load_robot_with_tool(r, self.tool.as_deref())?;
-            robot.check_dataset(data)?;
-            if self.kinematic {
-                params = params.trend(TrendSpec::Kinematic(Box::new(robot.clone())));
-            } else if !self.no_calibrate {
-                params = params.calibrate(Some(CalibrationOptions {
-                    noise_mm: self.calibration_noise,
-                    ..CalibrationOptions::default()
-                }));
-            }
-            params = params.robot(robot);
-        }
-        Ok(params)
+    /// The fit parameters of `method` (`None`: these options) for `data`
+    /// ([`params_with`]: the library's rules and defaults).
+    pub fn resolve(
+        &self,
+        method: Option<&str>,
+        data: &robokrige::dataset::Dataset,
+    ) -> Result<ErrorModelParams> {
+        let method = method.map(Method::from_name).transpose()?;
+        params_with(method, &self.overrides()?, data)
     }
 
-    /// The space and fitting options these arguments select (no periodic
-    /// joints: see [`ModelArgs::resolve`]).
-    pub fn options(&self) -> (Space, KrigingOptions) {
-        let optimizer = self.optimizer;
-        let opts = KrigingOptions::default()
-            .trend(self.trend)
-            .corr(self.corr.resolve())
-            .optimizer(optimizer)
-            .nugget(!self.no_nugget)
-            .starts(self.starts.unwrap_or(optimizer.default_starts()))
-            .seed(self.seed);
-        (self.space, opts)
+    /// The flags given, as the library's overrides.
+    fn overrides(&self) -> Result<Overrides> {
+        let mut o = Overrides::new()
+            .seed(self.seed)
+            .kinematic(self.kinematic)
+            .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
+                noise_mm: self.calibration_noise,
+                ..CalibrationOptions::default()
+            }));
+        if let Some(v) = self.space {
+            o = o.space(v);
+        }
+        if let Some(v) = self.trend {
+            o = o.trend(v);
+        }
+        if let Some(v) = self.corr {
+            o = o.corr(v.choice());
+        }
+        if let Some(v) = self.optimizer {
+            o = o.optimizer(v);
+        }
+        if self.no_nugget || self.nugget {
+            o = o.nugget(self.nugget);
+        }
+        if let Some(v) = self.starts {
+            o = o.starts(v);
+        }
+        if let Some(v) = &self.periodic {
+            o = o.periodic(v.as_str());
+        }
+        if let Some(r) = &self.robot {
+            o = o.robot(robokrige::kinematics::load_robot_with_tool(
+                r,
+                self.tool.as_deref(),
+            )?);
+        }
+        Ok(o)
     }
 }
 
@@ -164,9 +172,7 @@ pub struct FitArgs {
     /// Fit a named method instead (recommended, js-hj, ejs-hj, ejs-gps, ejs-pca, ejs-ga):
     /// each fixes its own settings, so the model options (--space, --trend,
     /// --corr, --optimizer, --no-nugget, --starts, --periodic) are refused with it.
-    #[arg(long, conflicts_with_all = [
-        "space", "trend", "corr", "optimizer", "no_nugget", "nugget", "starts", "periodic",
-    ])]
+    #[arg(long)]
     method: Option<String>,
     /// Output model JSON.
     #[arg(short, long)]
@@ -182,40 +188,17 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&[&a.data], &outputs)?;
     let data = super::read_data(&a.data)?;
-    let params = a.model.resolve(&data)?;
+    let params = a.model.resolve(a.method.as_deref(), &data)?.check()?;
     super::plan_fit(
         "fit",
         data.len(),
-        params.get_kriging().get_optimizer(),
+        params.params().get_kriging().get_optimizer(),
         None,
     )?;
     let t0 = std::time::Instant::now();
-    let (model, settings) = match &a.method {
+    let model = match &a.method {
         Some(name) => {
-            use robokrige::methods::Method;
-            let method = Method::parse(name)?;
-            let params = match params.kinematic_robot() {
-                // the method's selection among the kinematic candidates, on
-                // the command line's options
-                Some(robot) if method.selects_trend() => {
-                    let trend = method.trend(Some(robot));
-                    params.trend(trend)
-                }
-                Some(_) => return Err(Error::InvalidParameter(
-                    "--kinematic with --method works for ejs-pca and ejs-ga (selection among polynomial and kinematic candidates); use --kinematic without --method otherwise".into(),
-                )),
-                None => {
-                    let p = method.params(params.get_kriging().get_seed(), false);
-                    match params.get_robot() {
-                        Some(r) => p
-                            .robot(r.clone())
-                            .calibrate(params.get_calibration().cloned()),
-                        None => p,
-                    }
-                }
-            }
-            .check()?;
-            let pb = super::progress::spinner(method.name());
+            let pb = super::progress::spinner(name);
             let progress = |axis: usize, generation: usize, best: f64| {
                 pb.set_message(format!(
                     "GA {} generation {generation}: best CV RMSE {best:.4} mm",
@@ -224,13 +207,11 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
             };
             let model = params.fit_with_progress(&data, &progress);
             pb.finish_and_clear();
-            (model?, params.params().settings())
+            model?
         }
-        None => {
-            let params = params.check()?;
-            (params.fit(&data)?, params.params().settings())
-        }
+        None => params.fit(&data)?,
     };
+    let settings = params.params().settings();
     let secs = t0.elapsed().as_secs_f64();
     for w in model.conditioning_warnings() {
         eprintln!("warning: {w}");

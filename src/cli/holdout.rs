@@ -8,7 +8,8 @@ use clap::Args;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split};
 use robokrige::kinematics::Robot;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::OptimizerKind;
+use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
 use robokrige::report::holdout as report;
 use robokrige::{Error, Result};
@@ -97,21 +98,20 @@ pub struct HoldoutArgs {
 }
 
 /// The base parameters of the Kriging fits of `a` (options and the
-/// periodic joints it gives for training rows `q`).
-fn base_params(a: &HoldoutArgs, q: &[Vec<f64>]) -> Result<ErrorModelParams> {
-    let opts = KrigingOptions::default()
+/// periodic joints it gives for the training rows `rows`).
+fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
+    let o = Overrides::new()
         .optimizer(a.optimizer)
-        .corr(a.corr.resolve())
-        .starts(a.optimizer.default_starts())
+        .corr(a.corr.choice())
+        .nugget(!a.no_nugget)
         .seed(a.seed)
-        .nugget(!a.no_nugget);
-    let periodic = robokrige::space::parse_periodic(&a.periodic, q)?;
-    Ok(ErrorModelParams::new().periodic(periodic).kriging(opts))
+        .periodic(a.periodic.as_str());
+    params_with(None, &o, rows)
 }
 
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
-    let base = base_params(a, &data.q)?;
+    let base = base_params(a, data)?;
     super::plan_fit("holdout", data.len(), a.optimizer, None)?;
     let (fold, how) = match folds {
         Folds::Random(k) => (
@@ -193,7 +193,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     }
     let train = data.select(&(0..n_train).collect::<Vec<_>>());
     let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
-    let base = base_params(&a, &train.q)?;
+    let base = base_params(&a, &train)?;
     super::plan_fit("holdout", train.len(), a.optimizer, Some("--train"))?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {

@@ -274,8 +274,8 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         path_points: a.path_points,
         path_mm: a.path_mm,
         verify_poses: a.verify_poses,
-        js: Method::parse(&a.js)?,
-        ejs: Method::parse(&a.ejs)?,
+        js: Method::from_name(&a.js)?,
+        ejs: Method::from_name(&a.ejs)?,
         nugget: a.nugget,
     };
     opts.validate()?;

@@ -40,14 +40,17 @@
 mod describe;
 pub mod gls;
 mod plan;
+mod rounds;
 mod rows;
 pub mod scan;
 
-use crate::cv::{cross_validate_closed_form, cross_validate_refit, kfold_partition};
+use crate::cv::{CvMode, cross_validate_closed_form, cross_validate_refit, kfold_partition};
 use crate::dataset::{Covariate, Dataset};
 use crate::features::Feature;
 use crate::kriging::{Hyperparameters, KrigingOptions};
+use crate::methods::Method;
 use crate::model::ErrorModel;
+use crate::params::ErrorModelParams;
 use crate::space::Space;
 use crate::stats::summarize;
 use crate::{Error, Result};
@@ -194,6 +197,11 @@ impl DiagnoseOptions {
     pub fn kriging(mut self, kriging: KrigingOptions) -> Self {
         self.kriging = kriging;
         self
+    }
+    /// The space and Kriging options of a base model ([`base_params`]).
+    pub fn base(self, params: &ErrorModelParams) -> Self {
+        self.space(params.get_space())
+            .kriging(params.get_kriging().clone())
     }
     /// Number of CV folds K.
     pub fn folds(mut self, k: usize) -> Self {
@@ -413,9 +421,9 @@ pub struct CvStats {
     #[serde(default)]
     pub noise_mm: [f64; 3],
     /// How the folds were predicted ([`crate::cv::CvResult::mode`]):
-    /// `"refit"`, or `"closed-form"` above [`DiagnoseOptions::refit_rows`].
-    #[serde(default = "refit_mode")]
-    pub mode: String,
+    /// refit, or closed form above [`DiagnoseOptions::refit_rows`].
+    #[serde(default)]
+    pub mode: CvMode,
     /// Closed-form CV only: the model's own expectation of its
     /// leave-one-out RMSE per axis on all rows, mm
     /// ([`crate::cv::CvResult::expected_loo_rmse_mm`]).
@@ -635,13 +643,9 @@ pub struct Diagnosis {
 
 impl Diagnosis {
     /// How every CV of the diagnosis was run ([`CvStats::mode`]).
-    pub fn cv_mode(&self) -> &str {
-        &self.before.mode
+    pub fn cv_mode(&self) -> CvMode {
+        self.before.mode
     }
-}
-
-fn refit_mode() -> String {
-    "refit".into()
 }
 
 /// Precompute the columns of `extras` on the whole campaign (named like the
@@ -965,23 +969,33 @@ fn after_check(
     }
 }
 
-/// The base model a diagnosis starts from, by name: `ejs` (the default)
-/// and `js` (BFGS with the options' nugget), or the papers' `js-hj`,
-/// `ejs-hj`, `ejs-gps`. Returns its space and optimiser.
-pub fn base_method(name: &str) -> Result<(Space, crate::kriging::OptimizerKind)> {
-    use crate::kriging::OptimizerKind;
-    Ok(match name {
-        "ejs" => (Space::Ejs, OptimizerKind::Bfgs),
-        "js" => (Space::Js, OptimizerKind::Bfgs),
-        "js-hj" => (Space::Js, OptimizerKind::HookeJeeves),
-        "ejs-hj" => (Space::Ejs, OptimizerKind::HookeJeeves),
-        "ejs-gps" => (Space::Ejs, OptimizerKind::Gps),
-        other => {
-            return Err(Error::InvalidParameter(format!(
-                "diagnose supports the base methods ejs, js, js-hj, ejs-hj or ejs-gps, not '{other}'"
-            )));
-        }
-    })
+/// The base model a diagnosis starts from, by name, as fit parameters
+/// (their space and Kriging options; [`DiagnoseOptions::base`]):
+/// - `ejs` (the default) and `js`: BFGS, constant trend, the Gaussian
+///   family, in that space (`robokrige fit --space S --corr gaussian`);
+/// - the papers' methods whose trend is the options' and whose family is
+///   fixed, `js-hj`, `ejs-hj` and `ejs-gps`: the method's own set-up
+///   ([`Method::params`]: space, optimiser, starts).
+///
+/// `nugget` estimates a nugget in either (the default of `diagnose`:
+/// measured data has noise); for a method that is [`Method::params`]'s own
+/// switch, so `--method ejs-gps --no-nugget` is exactly `ejs-gps`.
+pub fn base_params(name: &str, seed: u64, nugget: bool) -> Result<ErrorModelParams> {
+    let space = match name {
+        "ejs" => Some(Space::Ejs),
+        "js" => Some(Space::Js),
+        _ => None,
+    };
+    if let Some(space) = space {
+        let opts = KrigingOptions::default().nugget(nugget).seed(seed);
+        return Ok(ErrorModelParams::new().space(space).kriging(opts));
+    }
+    match Method::from_name(name) {
+        Ok(m @ (Method::JsHj | Method::EjsHj | Method::EjsGps)) => Ok(m.params(seed, nugget)),
+        _ => Err(Error::InvalidParameter(format!(
+            "diagnose supports the base models ejs, js, js-hj, ejs-hj or ejs-gps, not '{name}'"
+        ))),
+    }
 }
 
 /// The model of `data` with `extras` as inputs, fitted with the options of
@@ -993,7 +1007,7 @@ pub fn fit_with_effects(
     extras: &[Feature],
 ) -> Result<ErrorModel> {
     let work = with_columns(data, extras)?;
-    crate::params::ErrorModelParams::new()
+    ErrorModelParams::new()
         .space(o.space)
         .periodic(o.periodic.clone())
         .kriging(o.kriging.clone())
@@ -1040,250 +1054,23 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         ));
         rows.pick(errors).into()
     };
+    let campaign = rounds::Campaign {
+        data,
+        errors,
+        rows: &rows,
+        fold: &scan_fold,
+        scan_errors: &scan_errors,
+        o,
+    };
     progress("cross-validating the current model");
-    let (before, mut model) = cross_validated(data, &[], o, None)?;
-    let mut current = before.clone();
-    let mut extras: Vec<Feature> = Vec::new();
-    let mut steps = Vec::new();
-    let mut effects: Vec<EffectReport> = Vec::new();
-    let mut permutations = o.permutations;
-    let mut candidates = [0; 2];
-    // the effect accepted in the last round, awaiting its "after" check:
-    // (its index in `effects`, promised and achieved RMSE drop, CV after)
-    let mut pending: Option<(usize, f64, f64, CvStats)> = None;
-    let mut added_kinds: Vec<EffectKind> = Vec::new();
+    let (before, model) = cross_validated(data, &[], o, None)?;
+    let mut state = rounds::Rounds::new(model, before, o.permutations);
     for round in 1..=o.max_effects + 1 {
-        let used: Vec<String> = extras
-            .iter()
-            .filter_map(|f| match f {
-                Feature::Covariate { name, .. } => Some(name.clone()),
-                _ => None,
-            })
-            .collect();
-        let fams = scan::families_on(data, &used, o.robot.as_ref(), &rows);
-        let resamples = o.permutations.max(min_resamples(fams.len(), o.fdr));
-        permutations = permutations.max(resamples);
-        if round == 1 {
-            candidates = [fams.len(), fams.iter().map(|f| f.grid.len()).sum()];
-        }
-        progress(&format!(
-            "round {round}: testing {} candidate effects with up to {resamples} resamples",
-            fams.len(),
-        ));
-        // the model on the scanned rows (at its hyperparameters)
-        let mut restricted = if rows.is_all() {
-            None
-        } else {
-            Some(model.restricted(rows.indices(), errors)?)
-        };
-        let systems: Vec<gls::AxisSystem> = restricted
-            .as_ref()
-            .unwrap_or(&model)
-            .outputs
-            .iter()
-            .map(|km| gls::AxisSystem::new(km, &scan_fold))
-            .collect::<Result<_>>()?;
-        // the systems hold what the test needs of the subset's factors
-        if let Some(r) = restricted.as_mut() {
-            r.release_factors();
-        }
-        let scanned = restricted.as_ref().unwrap_or(&model);
-        // the level of the after check: the model's own leave-one-out
-        // expectation on all rows (from the closed-form CV) when only some
-        // are scanned — on every fourth row its interpolation error is larger
-        let level: [f64; 3] = match current.expected_loo_rmse_mm {
-            Some(all) if !rows.is_all() => all,
-            _ => std::array::from_fn(|a| systems[a].expected_loo_rmse()),
-        };
-        let refit = |cols: &[Vec<f64>]| {
-            gls::refit_systems(scanned, &scan_errors, &o.kriging, cols, &scan_fold).ok()
-        };
-        let mut tested = scan::test_families(
-            &fams, &rows, systems, resamples, o.seed, o.refine, &refit, progress,
-        );
-        drop(restricted);
-        // the CV residuals at the scanned rows (what a candidate's columns
-        // are compared with)
-        let scan_residuals = rows.pick(&current.residuals);
-        let worth = Worth::new(o.min_gain, &current.noise_mm);
-        let rows3 = 3.0 * rows.len() as f64;
-        // the closed-form CV mean squared error before and with a candidate
-        let cf = |t: &scan::Tested| {
-            let before = t.cv_sse_before / rows3;
-            (before, before * (1.0 - t.score))
-        };
-        // significant candidates first: kinds of effect not in the model yet
-        // before more of a kind already added (so that a cap of a few
-        // effects is not spent on harmonic after harmonic while a drift the
-        // data shows clearly waits), each by evidence (what the data shows
-        // most clearly, not the largest share of a large misfit); the others
-        // by score
-        let significant = |t: &scan::Tested| {
-            let (b, a) = cf(t);
-            t.q_value <= o.fdr && worth.counts(b, a)
-        };
-        let seen = |t: &scan::Tested| added_kinds.contains(&fams[t.family].kind);
-        tested.sort_by(|a, b| match (significant(a), significant(b)) {
-            (true, false) => std::cmp::Ordering::Less,
-            (false, true) => std::cmp::Ordering::Greater,
-            (true, true) => seen(a)
-                .cmp(&seen(b))
-                .then(b.evidence.total_cmp(&a.evidence))
-                .then(b.score.total_cmp(&a.score)),
-            (false, false) => b
-                .score
-                .total_cmp(&a.score)
-                .then(a.p_value.total_cmp(&b.p_value)),
-        });
-        let preferred = prefer_simpler(&mut tested, &fams, &scan_residuals, &significant);
-        let mut reports: Vec<EffectReport> = tested
-            .iter()
-            .map(|t| {
-                let f = &fams[t.family];
-                let g = t.point(f);
-                EffectReport {
-                    round,
-                    kind: f.kind,
-                    source: f.source.clone(),
-                    label: f.label.clone(),
-                    params: g.params.clone(),
-                    params_ci: match &t.refined {
-                        Some(r) => support_interval(&r.support),
-                        None => support_interval(t.support.iter().map(|&i| &f.grid[i].params)),
-                    },
-                    score: t.score,
-                    explained: t.explained,
-                    p_value: t.p_value,
-                    q_value: t.q_value,
-                    evidence: t.evidence,
-                    significant: significant(t),
-                    accepted: false,
-                    confounded_with: Vec::new(),
-                    note: (t.q_value <= o.fdr && !worth.counts(cf(t).0, cf(t).1)).then(|| {
-                        format!(
-                            "q within the FDR, but it would lower the CV RMSE by only {:.1} % (closed form) and its mean square by {:.2e} mm², under the {:.0} % and the {:.2e} mm² (its worth at the noise floor) that count",
-                            100.0 * (1.0 - (1.0 - t.score.max(0.0)).sqrt()),
-                            (cf(t).0 - cf(t).1).max(0.0),
-                            100.0 * o.min_gain,
-                            worth.floor_mse()
-                        )
-                    }),
-                    refit_xi: t.refit,
-                    resamples: t.resamples,
-                    size: Vec::new(),
-                    after_check: None,
-                    add: g.add.clone(),
-                }
-            })
-            .collect();
-        if let Some((k, over)) = preferred {
-            reports[k].add_note(format!(
-                "ranked before '{over}': it explains the same with fewer model columns"
-            ));
-        }
-        let pick = reports.iter().position(|r| r.significant && r.score > 0.0);
-        if let Some(k) = pick {
-            // `reports` is in the order of `tested`
-            reports[k].confounded_with = alike(&tested, &fams, &scan_residuals, k, &significant)
-                .into_iter()
-                .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
-                .collect();
-        }
-        if let Some((idx, promised, achieved, after)) = pending.take() {
-            let source = &effects[idx].source;
-            let again = reports
-                .iter()
-                .find(|r| r.significant && &r.source == source)
-                .map(|r| r.label.clone());
-            effects[idx].after_check =
-                Some(after_check(promised, achieved, &after, level, again, round));
-        }
-        // the best significant candidates in turn, until the refit CV
-        // confirms one (at most CONFIRMATIONS per round)
-        let mut done = true;
-        let mut next_model = None;
-        let order: Vec<usize> = (0..reports.len())
-            .filter(|&i| reports[i].significant && reports[i].score > 0.0)
-            .take(CONFIRMATIONS)
-            .collect();
-        for k in order {
-            if round > o.max_effects {
-                reports[k].add_note(format!("not added: the cap of {} effects", o.max_effects));
-                break;
-            }
-            if !rows.is_all() {
-                place_steps(&mut reports[k], &rows, &current.residuals);
-            }
-            let mut trial = extras.clone();
-            for f in &reports[k].add {
-                if !trial.contains(f) {
-                    trial.push(f.clone());
-                }
-            }
-            progress(&format!(
-                "adding '{}' and cross-validating again",
-                reports[k].label
-            ));
-            let (after, trial_model) = cross_validated(data, &trial, o, Some(&model))?;
-            if worth.counts(current.pooled_rmse_mm.powi(2), after.pooled_rmse_mm.powi(2)) {
-                reports[k].accepted = true;
-                added_kinds.push(reports[k].kind);
-                reports[k].size = coefficients(&trial_model, &reports[k].add);
-                pending = Some((
-                    effects.len() + k,
-                    1.0 - (1.0 - reports[k].score.clamp(0.0, 1.0)).sqrt(),
-                    1.0 - after.pooled_rmse_mm / current.pooled_rmse_mm,
-                    after.clone(),
-                ));
-                extras = trial;
-                next_model = Some(trial_model);
-                current = after.clone();
-                steps.push(after);
-                done = false;
-                break;
-            }
-            let drop = format!(
-                "CV RMSE {:.4} → {:.4} mm, less than the required {:.0} % drop or its worth at the noise floor ({:.2e} mm² of mean square)",
-                current.pooled_rmse_mm,
-                after.pooled_rmse_mm,
-                100.0 * o.min_gain,
-                worth.floor_mse()
-            );
-            if reports[k].refit_xi && reports[k].kind.pose_function() {
-                // tested at ξ re-estimated on these data, whose null is
-                // optimistic: without the refit CV's confirmation it does
-                // not count
-                reports[k].significant = false;
-                reports[k].add_note(format!(
-                    "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
-                ));
-            } else {
-                reports[k].add_note(format!("not added: {drop}"));
-            }
-        }
-        effects.extend(reports);
-        if done {
+        if !state.round(&campaign, round, progress)? {
             break;
         }
-        model = next_model.expect("an accepted effect has its model");
     }
-    Ok(Diagnosis {
-        space: o.space,
-        folds: o.folds,
-        seed: o.seed,
-        permutations,
-        candidates,
-        fdr: o.fdr,
-        before,
-        after: current,
-        steps,
-        effects,
-        extras,
-        rows: data.len(),
-        scanned_rows: rows.len(),
-        dropped_covariates: scan::dropped_covariates_on(data, &[], &rows),
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    Ok(state.into_diagnosis(o, data, &rows, t0.elapsed().as_secs_f64()))
 }
 
 #[cfg(test)]

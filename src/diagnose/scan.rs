@@ -323,7 +323,6 @@ pub fn families_on(
     robot: Option<&Robot>,
     rows: &ScanRows,
 ) -> Vec<Family> {
-    let m = data.len();
     let n = data.n_joints();
     // covariates constant on the scanned rows are left out like constant ones
     let mut exclude = exclude.to_vec();
@@ -336,15 +335,35 @@ pub fn families_on(
     let u: Vec<Vec<f64>> = (0..n)
         .map(|j| zscore(&data.q.iter().map(|r| r[j]).collect::<Vec<_>>()))
         .collect();
-    let single = |params: BTreeMap<String, f64>, col: Vec<f64>, add: Feature| GridPoint {
-        params,
-        columns: vec![col],
-        add: vec![add],
-    };
     let mut out = Sink {
         rows,
         out: Vec::new(),
     };
+    covariate_families(data, exclude, &u, &mut out);
+    order_families(data.len(), rows, &mut out);
+    harmonic_families(data, &mut out);
+    interaction_families(&u, &mut out);
+    if let Some(robot) = robot {
+        crosstalk_families(data, robot, &mut out);
+    }
+    for j in 0..n {
+        direction_families(data, j, &mut out);
+    }
+    motion_families(data, exclude, robot, &u, &mut out);
+    out.out
+}
+
+/// A grid point of one column and one feature.
+fn single(params: BTreeMap<String, f64>, col: Vec<f64>, add: Feature) -> GridPoint {
+    GridPoint {
+        params,
+        columns: vec![col],
+        add: vec![add],
+    }
+}
+
+/// Each usable covariate alone and times the joint angles `u` (z-scored).
+fn covariate_families(data: &Dataset, exclude: &[String], u: &[Vec<f64>], out: &mut Sink) {
     // a constant column z-scores to round-off (or to ±1 everywhere): "c ×
     // joint angles" would then be a joint-angle trend in c's name
     for c in usable_covariates(data, exclude).filter(|c| constant_covariate(c).is_none()) {
@@ -377,6 +396,11 @@ pub fn families_on(
             zoom: None,
         });
     }
+}
+
+/// The measurement order (of `m` rows): a slow drift on all rows, a step
+/// and a block of rows at each scanned row.
+fn order_families(m: usize, rows: &ScanRows, out: &mut Sink) {
     // measurement order: slow drift and a change point
     let row = zscore(&(0..m).map(|i| i as f64).collect::<Vec<_>>());
     out.push(Family {
@@ -432,8 +456,11 @@ pub fn families_on(
             });
         }
     }
-    // periodic terms per joint
-    for j in 0..n {
+}
+
+/// Harmonics of each joint, periods from 2° to half its range.
+fn harmonic_families(data: &Dataset, out: &mut Sink) {
+    for j in 0..data.n_joints() {
         let (lo, hi) = data
             .q
             .iter()
@@ -468,7 +495,11 @@ pub fn families_on(
             });
         }
     }
-    // cross-joint interactions
+}
+
+/// Products of two joint angles `u` (z-scored).
+fn interaction_families(u: &[Vec<f64>], out: &mut Sink) {
+    let n = u.len();
     for a in 0..n {
         for b in a + 1..n {
             let col = zscore(
@@ -491,95 +522,98 @@ pub fn families_on(
             });
         }
     }
-    // joint cross-talk through the Jacobian (needs the robot)
-    if let Some(robot) = robot {
-        for j in 1..=n {
-            for k in (1..=n).filter(|&k| k != j) {
-                let f = Feature::Crosstalk {
-                    robot: Box::new(robot.clone()),
-                    joint: j,
-                    from: k,
-                };
-                let Ok(cols) = f.columns_from_poses(&data.q, &data.dir) else {
-                    continue;
-                };
-                out.push(Family {
-                    kind: EffectKind::Interaction,
-                    source: vec![format!("q{j}"), format!("q{k}")],
-                    label: format!("q{j} deviating with sin/cos q{k} (via the Jacobian)"),
-                    grid: vec![GridPoint {
-                        params: BTreeMap::new(),
-                        columns: cols.iter().map(|c| zscore(c)).collect(),
-                        add: vec![f],
-                    }],
-                    zoom: None,
-                });
-            }
-        }
-    }
-    // direction history: each alone and signed by the current direction λ
-    // (a history effect on a joint acts along its λ, like backlash)
-    for j in 0..n {
-        let lam: Vec<f64> = data.dir.iter().map(|d| d[j]).collect();
-        let signed = |v: &[f64]| -> Vec<Vec<f64>> {
-            vec![
-                zscore(v),
-                zscore(&v.iter().zip(&lam).map(|(a, l)| a * l).collect::<Vec<_>>()),
-            ]
-        };
-        let prev = Feature::PreviousDirection { joint: j + 1 };
-        let pv = prev
-            .columns_from_poses(&data.q, &data.dir)
-            .expect("pose feature");
-        if pv[0].iter().any(|v| *v != pv[0][0]) {
+}
+
+/// Joint cross-talk mapped through `robot`'s Jacobian.
+fn crosstalk_families(data: &Dataset, robot: &Robot, out: &mut Sink) {
+    let n = data.n_joints();
+    for j in 1..=n {
+        for k in (1..=n).filter(|&k| k != j) {
+            let f = Feature::Crosstalk {
+                robot: Box::new(robot.clone()),
+                joint: j,
+                from: k,
+            };
+            let Ok(cols) = f.columns_from_poses(&data.q, &data.dir) else {
+                continue;
+            };
             out.push(Family {
-                kind: EffectKind::DirectionHistory,
-                source: vec![format!("dir{}", j + 1)],
-                label: format!("previous direction of q{}", j + 1),
+                kind: EffectKind::Interaction,
+                source: vec![format!("q{j}"), format!("q{k}")],
+                label: format!("q{j} deviating with sin/cos q{k} (via the Jacobian)"),
                 grid: vec![GridPoint {
                     params: BTreeMap::new(),
-                    columns: signed(&pv[0]),
-                    add: vec![prev],
+                    columns: cols.iter().map(|c| zscore(c)).collect(),
+                    add: vec![f],
                 }],
                 zoom: None,
             });
         }
-        // travel s since the last reversal: linear, and saturating
-        // 1 − e^(−s/S) over a geometric scan of the scale S
-        let since = Feature::SinceReversal { joint: j + 1 };
-        let s = since
-            .columns_from_poses(&data.q, &data.dir)
-            .expect("pose feature")[0]
-            .clone();
-        let smax = s.iter().cloned().fold(0.0, f64::max);
-        if smax <= 0.0 {
-            continue;
-        }
-        let mut grid = vec![GridPoint {
-            params: BTreeMap::new(),
-            columns: signed(&s),
-            add: vec![since.clone()],
-        }];
-        let mut scale = smax / 2.0;
-        while scale >= 0.5 && grid.len() < 24 {
-            let sat: Vec<f64> = s.iter().map(|v| 1.0 - (-v / scale).exp()).collect();
-            grid.push(GridPoint {
-                params: params(&[("scale_deg", scale)]),
-                columns: signed(&sat),
-                add: vec![since.clone()],
-            });
-            scale /= 1.5;
-        }
+    }
+}
+
+/// Direction history of joint `j` (0-based): its previous direction, and
+/// its travel since the last reversal (linear, and saturating over a scan
+/// of scales); each alone and signed by the current direction λ (a history
+/// effect on a joint acts along its λ, like backlash).
+fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
+    let lam: Vec<f64> = data.dir.iter().map(|d| d[j]).collect();
+    let signed = |v: &[f64]| -> Vec<Vec<f64>> {
+        vec![
+            zscore(v),
+            zscore(&v.iter().zip(&lam).map(|(a, l)| a * l).collect::<Vec<_>>()),
+        ]
+    };
+    let prev = Feature::PreviousDirection { joint: j + 1 };
+    let pv = prev
+        .columns_from_poses(&data.q, &data.dir)
+        .expect("pose feature");
+    if pv[0].iter().any(|v| *v != pv[0][0]) {
         out.push(Family {
             kind: EffectKind::DirectionHistory,
             source: vec![format!("dir{}", j + 1)],
-            label: format!("travel of q{} since its last reversal", j + 1),
-            grid,
+            label: format!("previous direction of q{}", j + 1),
+            grid: vec![GridPoint {
+                params: BTreeMap::new(),
+                columns: signed(&pv[0]),
+                add: vec![prev],
+            }],
             zoom: None,
         });
     }
-    motion_families(data, exclude, robot, &u, &mut out);
-    out.out
+    // travel s since the last reversal: linear, and saturating
+    // 1 − e^(−s/S) over a geometric scan of the scale S
+    let since = Feature::SinceReversal { joint: j + 1 };
+    let s = since
+        .columns_from_poses(&data.q, &data.dir)
+        .expect("pose feature")[0]
+        .clone();
+    let smax = s.iter().cloned().fold(0.0, f64::max);
+    if smax <= 0.0 {
+        return;
+    }
+    let mut grid = vec![GridPoint {
+        params: BTreeMap::new(),
+        columns: signed(&s),
+        add: vec![since.clone()],
+    }];
+    let mut scale = smax / 2.0;
+    while scale >= 0.5 && grid.len() < 24 {
+        let sat: Vec<f64> = s.iter().map(|v| 1.0 - (-v / scale).exp()).collect();
+        grid.push(GridPoint {
+            params: params(&[("scale_deg", scale)]),
+            columns: signed(&sat),
+            add: vec![since.clone()],
+        });
+        scale /= 1.5;
+    }
+    out.push(Family {
+        kind: EffectKind::DirectionHistory,
+        source: vec![format!("dir{}", j + 1)],
+        label: format!("travel of q{} since its last reversal", j + 1),
+        grid,
+        zoom: None,
+    });
 }
 
 /// Memories τ (poses) scanned for a joint's decaying sum of moves.
@@ -628,11 +662,28 @@ fn motion_families(
     u: &[Vec<f64>],
     out: &mut Sink,
 ) {
-    let n = data.n_joints();
-    let from_poses = |f: &Feature| f.columns_from_poses(&data.q, &data.dir).ok();
-    let z_all = |cols: Vec<Vec<f64>>| cols.iter().map(|c| zscore(c)).collect::<Vec<_>>();
-    // memories in time, when the campaign has a time column: the same
-    // multiples of its median interval as `MOVE_TAUS` in poses
+    let memories = move_memories(data, exclude);
+    for j in 1..=data.n_joints() {
+        move_families(data, j, robot, u, &memories, out);
+    }
+    if let Some(r) = robot {
+        tcp_move_family(data, r, out);
+    }
+    let (bases, lagged) = generic_bases(data, exclude, out);
+    for (b, base) in bases.iter().enumerate() {
+        generic_families(data, base, b < lagged, out);
+    }
+}
+
+/// Every column z-scored.
+fn z_all(cols: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    cols.iter().map(|c| zscore(c)).collect()
+}
+
+/// The memories a joint's moves are scanned over: `MOVE_TAUS` in poses
+/// and, when the campaign has a time column, the same multiples of its
+/// median interval in time.
+fn move_memories(data: &Dataset, exclude: &[String]) -> Vec<(f64, Option<Clock>)> {
     let clocks: Vec<Clock> = time_column(data, exclude)
         .and_then(|t| {
             let median = median_interval(t)?;
@@ -649,97 +700,132 @@ fn motion_families(
             })
         })
         .unwrap_or_default();
-    let memories = MOVE_TAUS
+    MOVE_TAUS
         .iter()
         .map(|&tau| (tau, None))
-        .chain(clocks.into_iter().map(|c| (0.0, Some(c))));
-    for j in 1..=n {
-        let mut grid = Vec::new();
-        for (tau, clock) in memories.clone() {
+        .chain(clocks.into_iter().map(|c| (0.0, Some(c))))
+        .collect()
+}
+
+/// Joint `j`'s (1-based) moves into the pose over `memories` (through the
+/// robot's Jacobian when given, else times the joint angles `u`), and the
+/// size of its last move.
+fn move_families(
+    data: &Dataset,
+    j: usize,
+    robot: Option<&Robot>,
+    u: &[Vec<f64>],
+    memories: &[(f64, Option<Clock>)],
+    out: &mut Sink,
+) {
+    let grid: Vec<GridPoint> = memories
+        .iter()
+        .filter_map(|(tau, clock)| move_point(data, j, *tau, clock, robot, u))
+        .collect();
+    if !grid.is_empty() {
+        out.push(Family {
+            kind: EffectKind::MotionHistory,
+            source: vec![format!("move{j}")],
+            label: format!("moves of q{j} into the pose (lag)"),
+            grid,
+            zoom: None,
+        });
+    }
+    // the size alone: signed by λ it would be the signed move, which the
+    // family above tests (and a candidate's columns must be what it adds)
+    let size = Feature::MoveSize { joint: j };
+    if let Ok(s) = size.columns_from_poses(&data.q, &data.dir) {
+        out.push(Family {
+            kind: EffectKind::MotionHistory,
+            source: vec![format!("move{j}")],
+            label: format!("size of q{j}'s last move"),
+            grid: vec![GridPoint {
+                params: BTreeMap::new(),
+                columns: vec![zscore(&s[0])],
+                add: vec![size],
+            }],
+            zoom: None,
+        });
+    }
+}
+
+/// One memory (`tau` poses, or `clock`) of joint `j`'s moves: through the
+/// robot's Jacobian when given, else the moves alone and times the joint
+/// angles `u`. `None` when the columns cannot be computed.
+fn move_point(
+    data: &Dataset,
+    j: usize,
+    tau: f64,
+    clock: &Option<Clock>,
+    robot: Option<&Robot>,
+    u: &[Vec<f64>],
+) -> Option<GridPoint> {
+    let (columns, add) = match robot {
+        Some(r) => {
+            let f = Feature::MovesJacobian {
+                robot: Box::new(r.clone()),
+                joint: j,
+                tau_poses: tau,
+                clock: clock.clone(),
+            };
+            (z_all(f.columns(data).ok()?), f)
+        }
+        None => {
             let plain = Feature::Moves {
                 joint: j,
                 tau_poses: tau,
                 clock: clock.clone(),
             };
-            let (columns, add) = match robot {
-                Some(r) => {
-                    let f = Feature::MovesJacobian {
-                        robot: Box::new(r.clone()),
-                        joint: j,
-                        tau_poses: tau,
-                        clock: clock.clone(),
-                    };
-                    let Ok(c) = f.columns(data) else { continue };
-                    (z_all(c), f)
-                }
-                None => {
-                    let Ok(h) = plain.columns(data) else {
-                        continue;
-                    };
-                    let z = zscore(&h[0]);
-                    let mut cols = vec![z.clone()];
-                    cols.extend(
-                        u.iter()
-                            .map(|uk| z.iter().zip(uk).map(|(a, b)| a * b).collect()),
-                    );
-                    (cols, plain)
-                }
-            };
-            grid.push(GridPoint {
-                params: match &clock {
-                    Some(c) => params(&[("tau_s", c.tau_s)]),
-                    None => params(&[("tau_poses", tau)]),
-                },
-                columns,
-                add: vec![add],
-            });
+            let h = plain.columns(data).ok()?;
+            let z = zscore(&h[0]);
+            let mut cols = vec![z.clone()];
+            cols.extend(
+                u.iter()
+                    .map(|uk| z.iter().zip(uk).map(|(a, b)| a * b).collect()),
+            );
+            (cols, plain)
         }
-        if !grid.is_empty() {
-            out.push(Family {
-                kind: EffectKind::MotionHistory,
-                source: vec![format!("move{j}")],
-                label: format!("moves of q{j} into the pose (lag)"),
-                grid,
-                zoom: None,
-            });
-        }
-        // the size alone: signed by λ it would be the signed move, which the
-        // family above tests (and a candidate's columns must be what it adds)
-        let size = Feature::MoveSize { joint: j };
-        if let Some(s) = from_poses(&size) {
-            out.push(Family {
-                kind: EffectKind::MotionHistory,
-                source: vec![format!("move{j}")],
-                label: format!("size of q{j}'s last move"),
-                grid: vec![GridPoint {
-                    params: BTreeMap::new(),
-                    columns: vec![zscore(&s[0])],
-                    add: vec![size],
-                }],
-                zoom: None,
-            });
-        }
+    };
+    Some(GridPoint {
+        params: match clock {
+            Some(c) => params(&[("tau_s", c.tau_s)]),
+            None => params(&[("tau_poses", tau)]),
+        },
+        columns,
+        add: vec![add],
+    })
+}
+
+/// The TCP's last move (needs the robot).
+fn tcp_move_family(data: &Dataset, robot: &Robot, out: &mut Sink) {
+    let f = Feature::TcpMove {
+        robot: Box::new(robot.clone()),
+    };
+    if let Ok(c) = f.columns_from_poses(&data.q, &data.dir) {
+        out.push(Family {
+            kind: EffectKind::MotionHistory,
+            source: vec!["tcp_move".into()],
+            label: "the TCP's last move".into(),
+            grid: vec![GridPoint {
+                params: BTreeMap::new(),
+                columns: z_all(c),
+                add: vec![f],
+            }],
+            zoom: None,
+        });
     }
-    if let Some(r) = robot {
-        let f = Feature::TcpMove {
-            robot: Box::new(r.clone()),
-        };
-        if let Some(c) = from_poses(&f) {
-            out.push(Family {
-                kind: EffectKind::MotionHistory,
-                source: vec!["tcp_move".into()],
-                label: "the TCP's last move".into(),
-                grid: vec![GridPoint {
-                    params: BTreeMap::new(),
-                    columns: z_all(c),
-                    add: vec![f],
-                }],
-                zoom: None,
-            });
-        }
-    }
-    // one-column bases of the generic search: (feature, its values, label)
-    let mut bases: Vec<(Feature, Vec<f64>, String)> = Vec::new();
+}
+
+/// A one-column basis of the generic search: the feature, its values, its
+/// label.
+type Base = (Feature, Vec<f64>, String);
+
+/// The one-column bases of the generic search, and how many of them (the
+/// first) are also tried lagged: the usable covariates, the time since the
+/// previous pose (whose family is pushed here, with a time column), each
+/// joint's last move.
+fn generic_bases(data: &Dataset, exclude: &[String], out: &mut Sink) -> (Vec<Base>, usize) {
+    let mut bases: Vec<Base> = Vec::new();
     for c in usable_covariates(data, exclude).filter(|c| constant_covariate(c).is_none()) {
         let f = Feature::Covariate {
             name: c.name.clone(),
@@ -767,72 +853,78 @@ fn motion_families(
             bases.push((f, v[0].clone(), format!("Δ{}", t.name)));
         }
     }
-    let lagged_bases = bases.len();
-    for j in 1..=n {
+    let lagged = bases.len();
+    for j in 1..=data.n_joints() {
         let f = Feature::Moves {
             joint: j,
             tau_poses: 0.0,
             clock: None,
         };
-        if let Some(v) = from_poses(&f) {
+        if let Ok(v) = f.columns_from_poses(&data.q, &data.dir) {
             bases.push((f, v[0].clone(), format!("q{j}'s last move")));
         }
     }
-    for (b, (f, v, label)) in bases.iter().enumerate() {
-        let (kind, source) = match f {
-            Feature::Covariate { name, .. } => (EffectKind::Covariate, name.clone()),
-            Feature::Interval { column, .. } => (EffectKind::MotionHistory, column.clone()),
-            other => (EffectKind::MotionHistory, other.names().concat()),
-        };
-        // the columns as the model would get them ([`Feature::Times`]),
-        // centred at the feature's mean: the product with a covariate near
-        // 22 °C must not be a joint-angle trend in the covariate's name
-        let centre = v.iter().sum::<f64>() / v.len() as f64;
-        let grid: Vec<GridPoint> = (1..=n)
-            .filter_map(|k| {
-                let t = Feature::Times {
-                    of: Box::new(f.clone()),
-                    joint: k,
-                    centre,
-                };
-                Some(GridPoint {
-                    params: params(&[("joint", k as f64)]),
-                    columns: z_all(t.columns(data).ok()?),
-                    add: vec![t],
-                })
+    (bases, lagged)
+}
+
+/// A base times one joint angle (θ, sin θ, cos θ), and lagged when
+/// `lagged`.
+fn generic_families(data: &Dataset, (f, v, label): &Base, lagged: bool, out: &mut Sink) {
+    let n = data.n_joints();
+    let (kind, source) = match f {
+        Feature::Covariate { name, .. } => (EffectKind::Covariate, name.clone()),
+        Feature::Interval { column, .. } => (EffectKind::MotionHistory, column.clone()),
+        other => (EffectKind::MotionHistory, other.names().concat()),
+    };
+    // the columns as the model would get them ([`Feature::Times`]),
+    // centred at the feature's mean: the product with a covariate near
+    // 22 °C must not be a joint-angle trend in the covariate's name
+    let centre = v.iter().sum::<f64>() / v.len() as f64;
+    let grid: Vec<GridPoint> = (1..=n)
+        .filter_map(|k| {
+            let t = Feature::Times {
+                of: Box::new(f.clone()),
+                joint: k,
+                centre,
+            };
+            Some(GridPoint {
+                params: params(&[("joint", k as f64)]),
+                columns: z_all(t.columns(data).ok()?),
+                add: vec![t],
             })
-            .collect();
-        out.push(Family {
-            kind,
-            source: vec![source.clone()],
-            label: format!("{label} × one joint angle (θ, sin θ, cos θ)"),
-            grid,
-            zoom: None,
-        });
-        if b < lagged_bases {
-            out.push(Family {
-                kind,
-                source: vec![source],
-                label: format!("{label}, lagged"),
-                grid: LAGS
-                    .iter()
-                    .map(|&lag| GridPoint {
-                        params: params(&[("lag", lag as f64)]),
-                        columns: vec![zscore(
-                            &(0..v.len())
-                                .map(|i| v[i.saturating_sub(lag)])
-                                .collect::<Vec<_>>(),
-                        )],
-                        add: vec![Feature::Lagged {
-                            of: Box::new(f.clone()),
-                            lag,
-                        }],
-                    })
-                    .collect(),
-                zoom: None,
-            });
-        }
+        })
+        .collect();
+    out.push(Family {
+        kind,
+        source: vec![source.clone()],
+        label: format!("{label} × one joint angle (θ, sin θ, cos θ)"),
+        grid,
+        zoom: None,
+    });
+    if !lagged {
+        return;
     }
+    out.push(Family {
+        kind,
+        source: vec![source],
+        label: format!("{label}, lagged"),
+        grid: LAGS
+            .iter()
+            .map(|&lag| GridPoint {
+                params: params(&[("lag", lag as f64)]),
+                columns: vec![zscore(
+                    &(0..v.len())
+                        .map(|i| v[i.saturating_sub(lag)])
+                        .collect::<Vec<_>>(),
+                )],
+                add: vec![Feature::Lagged {
+                    of: Box::new(f.clone()),
+                    lag,
+                }],
+            })
+            .collect(),
+        zoom: None,
+    });
 }
 
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
@@ -998,29 +1090,229 @@ pub fn test_families(
     refit: &Refit<'_>,
     progress: &dyn Fn(&str),
 ) -> Vec<Tested> {
-    let m = systems[0].rows();
     let grids: Vec<Vec<Vec<Vec<f64>>>> = families
         .iter()
         .map(|f| f.grid.iter().map(|g| g.columns.clone()).collect())
         .collect();
-    let data = gls::observed(&systems);
-    let loo0 = gls::loo_sse_before(&systems);
-    // score and share against the model as it is (at its own ξ)
-    let before = gls::kfold_sse_before(&systems);
-    let mut trials: Vec<Trial> = grids
-        .par_iter()
-        .map(|grid| {
-            let base = FamilyTest::new(&systems, grid);
-            let (best, stat) = base.best(&systems, &data);
-            Trial {
-                base,
-                stat,
-                base_stat: stat,
-                best,
-                refit: None,
+    let base = Baseline::new(&systems);
+    let mut trials: Vec<Trial> = grids.par_iter().map(|grid| base.trial(grid)).collect();
+    refine_strongest(
+        families,
+        &grids,
+        &mut trials,
+        refine,
+        refit,
+        base.loo0,
+        progress,
+    );
+    // the statistic each family's null distribution tests
+    let observed: Vec<f64> = families
+        .iter()
+        .zip(&trials)
+        .map(|(f, t)| {
+            if f.kind.pose_function() {
+                t.stat
+            } else {
+                t.base_stat
             }
         })
         .collect();
+    let null = base.sign_flip(&trials, &observed, permutations, seed, progress);
+    let p = null.p_values(&trials);
+    let q = benjamini_hochberg(&p);
+    let within = support_width(&systems);
+    (0..families.len())
+        .into_par_iter()
+        .map(|k| {
+            let mut t = base.tested(k, &families[k], &trials[k], &null, within);
+            t.p_value = p[k];
+            t.q_value = q[k];
+            if t.resamples > 0 && trials[k].stat.is_finite() && base.loo0 > 0.0 {
+                t.evidence = (observed[k] - null.moments[k][0] / t.resamples as f64) / base.loo0;
+            }
+            if let Some(zoom) = families[k].zoom.filter(|_| trials[k].stat.is_finite()) {
+                let start = &families[k].grid[trials[k].best];
+                t.refined = resolve(zoom, start, rows, &systems, &base.data, within);
+            }
+            t
+        })
+        .collect()
+}
+
+/// The model as it is, at its own ξ, that every family is tested inside:
+/// its systems, their observed responses, its leave-one-out SSE and its
+/// closed-form K-fold CV SSE (score and share are against these).
+struct Baseline<'a> {
+    systems: &'a [AxisSystem],
+    data: Vec<gls::Response>,
+    loo0: f64,
+    before: f64,
+}
+
+/// The sign-flip resamples of every family: exceedances of its observed
+/// statistic, resamples run, and the sum and sum of squares of its null
+/// statistics.
+struct Null {
+    exceed: Vec<usize>,
+    run: Vec<usize>,
+    moments: Vec<[f64; 2]>,
+}
+
+impl Null {
+    /// `(1 + exceedances) / (1 + resamples)`, 1 for a family without a
+    /// finite statistic.
+    fn p_values(&self, trials: &[Trial]) -> Vec<f64> {
+        (0..trials.len())
+            .map(|k| {
+                if trials[k].stat.is_finite() {
+                    (1 + self.exceed[k]) as f64 / (1 + self.run[k]) as f64
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    }
+}
+
+impl<'a> Baseline<'a> {
+    fn new(systems: &'a [AxisSystem]) -> Self {
+        Baseline {
+            systems,
+            data: gls::observed(systems),
+            loo0: gls::loo_sse_before(systems),
+            before: gls::kfold_sse_before(systems),
+        }
+    }
+
+    /// A family's grid tested at the model's ξ: its best point and gain.
+    fn trial(&self, grid: &[Vec<Vec<f64>>]) -> Trial {
+        let base = FamilyTest::new(self.systems, grid);
+        let (best, stat) = base.best(self.systems, &self.data);
+        Trial {
+            base,
+            stat,
+            base_stat: stat,
+            best,
+            refit: None,
+        }
+    }
+
+    /// The sequential sign-flip test: pseudo-campaigns (sign-flipped
+    /// whitened residuals, seeded, the same for every family) in batches,
+    /// a family dropping out once [`SETTLED`] of them reach its `observed`
+    /// statistic, at most `permutations` in all.
+    fn sign_flip(
+        &self,
+        trials: &[Trial],
+        observed: &[f64],
+        permutations: usize,
+        seed: u64,
+        progress: &dyn Fn(&str),
+    ) -> Null {
+        let (f, m) = (trials.len(), self.systems[0].rows());
+        let mut null = Null {
+            exceed: vec![0; f],
+            run: vec![0; f],
+            moments: vec![[0.0; 2]; f],
+        };
+        let mut done = 0;
+        while done < permutations {
+            let active: Vec<usize> = (0..f)
+                .filter(|&k| null.exceed[k] < SETTLED && trials[k].stat.is_finite())
+                .collect();
+            if active.is_empty() {
+                break;
+            }
+            progress(&format!(
+                "resamples {done}/{permutations}: {} candidate(s) still open",
+                active.len()
+            ));
+            let batch = BATCH.min(permutations - done);
+            let signs: Vec<Vec<f64>> = (done..done + batch)
+                .map(|b| {
+                    let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-signs");
+                    (0..m)
+                        .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
+                        .collect()
+                })
+                .collect();
+            let pseudo = gls::flipped_batch(self.systems, &signs);
+            // the best gain of every active family in every pseudo-campaign
+            let hits: Vec<Vec<f64>> = active
+                .par_iter()
+                .map(|&k| trials[k].base.best_of_batch(self.systems, &pseudo))
+                .collect();
+            for (&k, h) in active.iter().zip(hits) {
+                let o = observed[k];
+                for g in h {
+                    null.exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
+                    null.run[k] += 1;
+                    if g.is_finite() {
+                        null.moments[k][0] += g;
+                        null.moments[k][1] += g * g;
+                    }
+                }
+            }
+            done += batch;
+        }
+        null
+    }
+
+    /// Family `k` as tested (its p-value, q-value, evidence and refined
+    /// point are set by the caller): share, score and support set at the ξ
+    /// it was scored at.
+    fn tested(&self, k: usize, family: &Family, t: &Trial, null: &Null, within: f64) -> Tested {
+        let finite = t.stat.is_finite();
+        let (kfold, support) = match &t.refit {
+            Some((kfold, support)) => (*kfold, support.clone()),
+            None if finite => (
+                t.base.kfold_sse(self.systems, t.best),
+                t.base.near_best(self.systems, &self.data, within),
+            ),
+            None => (self.before, Vec::new()),
+        };
+        Tested {
+            family: k,
+            best: t.best,
+            explained: if finite && self.loo0 > 0.0 {
+                t.stat / self.loo0
+            } else {
+                0.0
+            },
+            p_value: 1.0,
+            q_value: 1.0,
+            score: if finite && self.before > 0.0 {
+                1.0 - kfold / self.before
+            } else {
+                0.0
+            },
+            resamples: null.run[k],
+            refit: t.refit.is_some(),
+            cv_sse_before: self.before,
+            evidence: 0.0,
+            support: if finite && family.grid.len() > 1 {
+                support
+            } else {
+                Vec::new()
+            },
+            refined: None,
+        }
+    }
+}
+
+/// The `refine` families with the largest statistic tried again at the ξ
+/// the model would choose with their best grid point (`refit`); a family's
+/// statistic, best point, score and support become those of the new ξ when
+/// its improvement over the model as it is (`loo0`) is larger there.
+fn refine_strongest(
+    families: &[Family],
+    grids: &[Vec<Vec<Vec<f64>>>],
+    trials: &mut [Trial],
+    refine: usize,
+    refit: &Refit<'_>,
+    loo0: f64,
+    progress: &dyn Fn(&str),
+) {
     let mut order: Vec<usize> = (0..families.len())
         .filter(|&k| trials[k].stat.is_finite() && trials[k].stat > 0.0)
         .collect();
@@ -1052,126 +1344,6 @@ pub fn test_families(
             ));
         }
     }
-    // the statistic each family's null distribution tests
-    let tested = |k: usize| {
-        if families[k].kind.pose_function() {
-            trials[k].stat
-        } else {
-            trials[k].base_stat
-        }
-    };
-    let mut exceed = vec![0usize; families.len()];
-    let mut run = vec![0usize; families.len()];
-    // sum and sum of squares of each family's null statistics
-    let mut moments = vec![[0.0f64; 2]; families.len()];
-    let mut done = 0;
-    while done < permutations {
-        let active: Vec<usize> = (0..families.len())
-            .filter(|&k| exceed[k] < SETTLED && trials[k].stat.is_finite())
-            .collect();
-        if active.is_empty() {
-            break;
-        }
-        progress(&format!(
-            "resamples {done}/{permutations}: {} candidate(s) still open",
-            active.len()
-        ));
-        let batch = BATCH.min(permutations - done);
-        let signs: Vec<Vec<f64>> = (done..done + batch)
-            .map(|b| {
-                let mut rng = rng_for(seed.wrapping_add(b as u64), "diagnose-signs");
-                (0..m)
-                    .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
-                    .collect()
-            })
-            .collect();
-        let pseudo = gls::flipped_batch(&systems, &signs);
-        // the best gain of every active family in every pseudo-campaign
-        let hits: Vec<Vec<f64>> = active
-            .par_iter()
-            .map(|&k| trials[k].base.best_of_batch(&systems, &pseudo))
-            .collect();
-        for (&k, h) in active.iter().zip(hits) {
-            let o = tested(k);
-            for g in h {
-                exceed[k] += usize::from(g >= o - 1e-12 * o.abs());
-                run[k] += 1;
-                if g.is_finite() {
-                    moments[k][0] += g;
-                    moments[k][1] += g * g;
-                }
-            }
-        }
-        done += batch;
-    }
-    let p: Vec<f64> = (0..families.len())
-        .map(|k| {
-            if trials[k].stat.is_finite() {
-                (1 + exceed[k]) as f64 / (1 + run[k]) as f64
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let q = benjamini_hochberg(&p);
-    let within = support_width(&systems);
-    (0..families.len())
-        .into_par_iter()
-        .map(|k| {
-            let t = &trials[k];
-            let finite = t.stat.is_finite();
-            let (kfold, support) = match &t.refit {
-                Some((kfold, support)) => (*kfold, support.clone()),
-                None if finite => (
-                    t.base.kfold_sse(&systems, t.best),
-                    t.base.near_best(&systems, &data, within),
-                ),
-                None => (before, Vec::new()),
-            };
-            Tested {
-                family: k,
-                best: t.best,
-                explained: if finite && loo0 > 0.0 {
-                    t.stat / loo0
-                } else {
-                    0.0
-                },
-                p_value: p[k],
-                q_value: q[k],
-                score: if finite && before > 0.0 {
-                    1.0 - kfold / before
-                } else {
-                    0.0
-                },
-                resamples: run[k],
-                refit: t.refit.is_some(),
-                cv_sse_before: before,
-                evidence: {
-                    let n = run[k] as f64;
-                    if finite && n >= 1.0 && loo0 > 0.0 {
-                        (tested(k) - moments[k][0] / n) / loo0
-                    } else {
-                        0.0
-                    }
-                },
-                support: if finite && families[k].grid.len() > 1 {
-                    support
-                } else {
-                    Vec::new()
-                },
-                refined: families[k].zoom.filter(|_| finite).and_then(|zoom| {
-                    resolve(
-                        zoom,
-                        &families[k].grid[t.best],
-                        rows,
-                        &systems,
-                        &data,
-                        within,
-                    )
-                }),
-            }
-        })
-        .collect()
 }
 
 /// The best of the finer points around `start` ([`Zoom`]) on the data, the

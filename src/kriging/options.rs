@@ -476,13 +476,18 @@ impl CorrChoice {
     }
 
     /// `auto` (the choice by CV with [`FAMILY_FOLDS`] folds) or a family's
-    /// name ([`Correlation::name`]), as on the command line.
-    pub fn from_name(name: &str) -> Option<CorrChoice> {
+    /// name ([`Correlation::name`]), as on the command line; an error naming
+    /// the choices otherwise.
+    pub fn from_name(name: &str) -> Result<CorrChoice> {
         match name {
-            "auto" => Some(CorrChoice::ByCv {
+            "auto" => Ok(CorrChoice::ByCv {
                 folds: FAMILY_FOLDS,
             }),
-            _ => Correlation::parse(name).map(CorrChoice::Fixed),
+            _ => Correlation::parse(name).map(CorrChoice::Fixed).ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "corr '{name}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
+                ))
+            }),
         }
     }
 }

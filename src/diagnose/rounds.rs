@@ -1,0 +1,432 @@
+//! One round of the [`diagnose`](super::diagnose) loop: test the candidate
+//! families inside the current model, rank and report them, give the
+//! effect added last round its "after" check, and add the best candidate
+//! the refit CV confirms.
+
+use super::scan::{self, Family, Tested};
+use super::{
+    AfterCheck, CONFIRMATIONS, CvStats, DiagnoseOptions, Diagnosis, EffectKind, EffectReport,
+    ScanRows, Worth, after_check, alike, coefficients, cross_validated, gls, min_resamples,
+    place_steps, prefer_simpler, support_interval,
+};
+use crate::Result;
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use crate::model::ErrorModel;
+
+/// The campaign as the loop sees it: all rows for the fits and CVs, the
+/// scanned rows ([`ScanRows`]) with their fold partition and errors for
+/// the candidate test.
+pub(super) struct Campaign<'a> {
+    pub data: &'a Dataset,
+    pub errors: &'a [[f64; 3]],
+    pub rows: &'a ScanRows,
+    pub fold: &'a [usize],
+    pub scan_errors: &'a [[f64; 3]],
+    pub o: &'a DiagnoseOptions,
+}
+
+/// The effect accepted in the last round, awaiting its "after" check.
+struct Pending {
+    /// Its index in [`Rounds::effects`].
+    index: usize,
+    /// The pooled CV RMSE drop its test promised.
+    promised: f64,
+    /// The drop the refit CV measured.
+    achieved: f64,
+    /// The CV with it.
+    after: CvStats,
+}
+
+/// What the loop carries from round to round.
+pub(super) struct Rounds {
+    model: ErrorModel,
+    before: CvStats,
+    current: CvStats,
+    extras: Vec<Feature>,
+    steps: Vec<CvStats>,
+    effects: Vec<EffectReport>,
+    permutations: usize,
+    candidates: [usize; 2],
+    pending: Option<Pending>,
+    added_kinds: Vec<EffectKind>,
+}
+
+/// How a round judges a tested candidate: its closed-form CV mean squared
+/// error before and with it, and whether the drop counts.
+struct Judge {
+    fdr: f64,
+    min_gain: f64,
+    worth: Worth,
+    /// Values the closed-form CV squared error is summed over (3 × rows).
+    values: f64,
+}
+
+impl Judge {
+    fn new(o: &DiagnoseOptions, current: &CvStats, rows: usize) -> Self {
+        Judge {
+            fdr: o.fdr,
+            min_gain: o.min_gain,
+            worth: Worth::new(o.min_gain, &current.noise_mm),
+            values: 3.0 * rows as f64,
+        }
+    }
+
+    /// The closed-form CV mean squared error before and with `t`.
+    fn mse(&self, t: &Tested) -> (f64, f64) {
+        let before = t.cv_sse_before / self.values;
+        (before, before * (1.0 - t.score))
+    }
+
+    /// A discovery: q within the FDR and a drop worth an effect.
+    fn significant(&self, t: &Tested) -> bool {
+        let (b, a) = self.mse(t);
+        t.q_value <= self.fdr && self.worth.counts(b, a)
+    }
+
+    /// Why a candidate with q within the FDR does not count, if so.
+    fn note(&self, t: &Tested) -> Option<String> {
+        let (b, a) = self.mse(t);
+        (t.q_value <= self.fdr && !self.worth.counts(b, a)).then(|| {
+            format!(
+                "q within the FDR, but it would lower the CV RMSE by only {:.1} % (closed form) and its mean square by {:.2e} mm², under the {:.0} % and the {:.2e} mm² (its worth at the noise floor) that count",
+                100.0 * (1.0 - (1.0 - t.score.max(0.0)).sqrt()),
+                (b - a).max(0.0),
+                100.0 * self.min_gain,
+                self.worth.floor_mse()
+            )
+        })
+    }
+}
+
+impl Rounds {
+    /// The loop before its first round: the current model and its CV.
+    pub(super) fn new(model: ErrorModel, before: CvStats, permutations: usize) -> Self {
+        Rounds {
+            model,
+            current: before.clone(),
+            before,
+            extras: Vec::new(),
+            steps: Vec::new(),
+            effects: Vec::new(),
+            permutations,
+            candidates: [0; 2],
+            pending: None,
+            added_kinds: Vec::new(),
+        }
+    }
+
+    /// Round `round`: test, rank and report the candidates, check the
+    /// effect added last, add the best one the refit CV confirms. Returns
+    /// whether one was added (the loop goes on).
+    pub(super) fn round(
+        &mut self,
+        c: &Campaign,
+        round: usize,
+        progress: &dyn Fn(&str),
+    ) -> Result<bool> {
+        let o = c.o;
+        let fams = scan::families_on(c.data, &self.used_covariates(), o.robot.as_ref(), c.rows);
+        let resamples = o.permutations.max(min_resamples(fams.len(), o.fdr));
+        self.permutations = self.permutations.max(resamples);
+        if round == 1 {
+            self.candidates = [fams.len(), fams.iter().map(|f| f.grid.len()).sum()];
+        }
+        progress(&format!(
+            "round {round}: testing {} candidate effects with up to {resamples} resamples",
+            fams.len(),
+        ));
+        let (mut tested, level) = self.test_candidates(c, &fams, resamples, progress)?;
+        // the CV residuals at the scanned rows (what a candidate's columns
+        // are compared with)
+        let residuals = c.rows.pick(&self.current.residuals);
+        let judge = Judge::new(o, &self.current, c.rows.len());
+        let significant = |t: &Tested| judge.significant(t);
+        rank(&mut tested, &significant, &|t: &Tested| {
+            self.added_kinds.contains(&fams[t.family].kind)
+        });
+        let preferred = prefer_simpler(&mut tested, &fams, &residuals, &significant);
+        let mut reports = report_candidates(&tested, &fams, &judge, round);
+        if let Some((k, over)) = preferred {
+            reports[k].add_note(format!(
+                "ranked before '{over}': it explains the same with fewer model columns"
+            ));
+        }
+        mark_confounded(&mut reports, &tested, &fams, &residuals, &significant);
+        self.check_last_effect(&reports, level, round);
+        let added = self.add_confirmed(c, &mut reports, round, &judge.worth, progress)?;
+        self.effects.extend(reports);
+        Ok(added)
+    }
+
+    /// The covariates the model already holds as inputs (not candidates).
+    fn used_covariates(&self) -> Vec<String> {
+        self.extras
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Covariate { name, .. } => Some(name.clone()),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Every family tried inside the current model on the scanned rows (at
+    /// its hyperparameters, refactorised on them when they are a subset),
+    /// and the level of the after check: the model's own leave-one-out
+    /// expectation per axis — on all rows (from the closed-form CV) when
+    /// only some are scanned, for on every fourth row its interpolation
+    /// error is larger.
+    fn test_candidates(
+        &self,
+        c: &Campaign,
+        fams: &[Family],
+        resamples: usize,
+        progress: &dyn Fn(&str),
+    ) -> Result<(Vec<Tested>, [f64; 3])> {
+        let o = c.o;
+        let mut restricted = if c.rows.is_all() {
+            None
+        } else {
+            Some(self.model.restricted(c.rows.indices(), c.errors)?)
+        };
+        let systems: Vec<gls::AxisSystem> = restricted
+            .as_ref()
+            .unwrap_or(&self.model)
+            .outputs
+            .iter()
+            .map(|km| gls::AxisSystem::new(km, c.fold))
+            .collect::<Result<_>>()?;
+        // the systems hold what the test needs of the subset's factors
+        if let Some(r) = restricted.as_mut() {
+            r.release_factors();
+        }
+        let scanned = restricted.as_ref().unwrap_or(&self.model);
+        let level: [f64; 3] = match self.current.expected_loo_rmse_mm {
+            Some(all) if !c.rows.is_all() => all,
+            _ => std::array::from_fn(|a| systems[a].expected_loo_rmse()),
+        };
+        let refit = |cols: &[Vec<f64>]| {
+            gls::refit_systems(scanned, c.scan_errors, &o.kriging, cols, c.fold).ok()
+        };
+        let tested = scan::test_families(
+            fams, c.rows, systems, resamples, o.seed, o.refine, &refit, progress,
+        );
+        Ok((tested, level))
+    }
+
+    /// The "after" check of the effect added last round, now that this
+    /// round's reports say whether its source is still significant.
+    fn check_last_effect(&mut self, reports: &[EffectReport], level: [f64; 3], round: usize) {
+        let Some(p) = self.pending.take() else { return };
+        let source = &self.effects[p.index].source;
+        let again = reports
+            .iter()
+            .find(|r| r.significant && &r.source == source)
+            .map(|r| r.label.clone());
+        let check: AfterCheck = after_check(p.promised, p.achieved, &p.after, level, again, round);
+        self.effects[p.index].after_check = Some(check);
+    }
+
+    /// The best significant candidates in turn, until the refit CV
+    /// confirms one (at most [`CONFIRMATIONS`] per round): it joins the
+    /// model. Returns whether one did.
+    fn add_confirmed(
+        &mut self,
+        c: &Campaign,
+        reports: &mut [EffectReport],
+        round: usize,
+        worth: &Worth,
+        progress: &dyn Fn(&str),
+    ) -> Result<bool> {
+        let o = c.o;
+        let order: Vec<usize> = (0..reports.len())
+            .filter(|&i| reports[i].significant && reports[i].score > 0.0)
+            .take(CONFIRMATIONS)
+            .collect();
+        for k in order {
+            let report = &mut reports[k];
+            if round > o.max_effects {
+                report.add_note(format!("not added: the cap of {} effects", o.max_effects));
+                break;
+            }
+            if !c.rows.is_all() {
+                place_steps(report, c.rows, &self.current.residuals);
+            }
+            let mut trial = self.extras.clone();
+            for f in &report.add {
+                if !trial.contains(f) {
+                    trial.push(f.clone());
+                }
+            }
+            progress(&format!(
+                "adding '{}' and cross-validating again",
+                report.label
+            ));
+            let (after, trial_model) = cross_validated(c.data, &trial, o, Some(&self.model))?;
+            let (now, then) = (self.current.pooled_rmse_mm, after.pooled_rmse_mm);
+            if worth.counts(now.powi(2), then.powi(2)) {
+                self.accept(report, self.effects.len() + k, trial, trial_model, after);
+                return Ok(true);
+            }
+            refuse(report, now, then, o.min_gain, worth);
+        }
+        Ok(false)
+    }
+
+    /// `report`, at `index` among the effects once this round's are in,
+    /// joins the model: `extras` and their refit `model` with CV `after`.
+    fn accept(
+        &mut self,
+        report: &mut EffectReport,
+        index: usize,
+        extras: Vec<Feature>,
+        model: ErrorModel,
+        after: CvStats,
+    ) {
+        report.accepted = true;
+        self.added_kinds.push(report.kind);
+        report.size = coefficients(&model, &report.add);
+        self.pending = Some(Pending {
+            index,
+            promised: 1.0 - (1.0 - report.score.clamp(0.0, 1.0)).sqrt(),
+            achieved: 1.0 - after.pooled_rmse_mm / self.current.pooled_rmse_mm,
+            after: after.clone(),
+        });
+        self.extras = extras;
+        self.model = model;
+        self.current = after.clone();
+        self.steps.push(after);
+    }
+
+    /// The report of the loop on `data` (`scanned` rows), after `seconds`.
+    pub(super) fn into_diagnosis(
+        self,
+        o: &DiagnoseOptions,
+        data: &Dataset,
+        rows: &ScanRows,
+        seconds: f64,
+    ) -> Diagnosis {
+        Diagnosis {
+            space: o.space,
+            folds: o.folds,
+            seed: o.seed,
+            permutations: self.permutations,
+            candidates: self.candidates,
+            fdr: o.fdr,
+            before: self.before,
+            after: self.current,
+            steps: self.steps,
+            effects: self.effects,
+            extras: self.extras,
+            rows: data.len(),
+            scanned_rows: rows.len(),
+            dropped_covariates: scan::dropped_covariates_on(data, &[], rows),
+            seconds,
+        }
+    }
+}
+
+/// Significant candidates first: kinds of effect not in the model yet
+/// (`seen` false) before more of a kind already added (so that a cap of a
+/// few effects is not spent on harmonic after harmonic while a drift the
+/// data shows clearly waits), each by evidence (what the data shows most
+/// clearly, not the largest share of a large misfit); the others by score.
+fn rank(
+    tested: &mut [Tested],
+    significant: &dyn Fn(&Tested) -> bool,
+    seen: &dyn Fn(&Tested) -> bool,
+) {
+    tested.sort_by(|a, b| match (significant(a), significant(b)) {
+        (true, false) => std::cmp::Ordering::Less,
+        (false, true) => std::cmp::Ordering::Greater,
+        (true, true) => seen(a)
+            .cmp(&seen(b))
+            .then(b.evidence.total_cmp(&a.evidence))
+            .then(b.score.total_cmp(&a.score)),
+        (false, false) => b
+            .score
+            .total_cmp(&a.score)
+            .then(a.p_value.total_cmp(&b.p_value)),
+    });
+}
+
+/// One report per tested candidate of round `round`, in the order of
+/// `tested`: nothing accepted yet.
+fn report_candidates(
+    tested: &[Tested],
+    fams: &[Family],
+    judge: &Judge,
+    round: usize,
+) -> Vec<EffectReport> {
+    tested
+        .iter()
+        .map(|t| {
+            let f = &fams[t.family];
+            let g = t.point(f);
+            EffectReport {
+                round,
+                kind: f.kind,
+                source: f.source.clone(),
+                label: f.label.clone(),
+                params: g.params.clone(),
+                params_ci: match &t.refined {
+                    Some(r) => support_interval(&r.support),
+                    None => support_interval(t.support.iter().map(|&i| &f.grid[i].params)),
+                },
+                score: t.score,
+                explained: t.explained,
+                p_value: t.p_value,
+                q_value: t.q_value,
+                evidence: t.evidence,
+                significant: judge.significant(t),
+                accepted: false,
+                confounded_with: Vec::new(),
+                note: judge.note(t),
+                refit_xi: t.refit,
+                resamples: t.resamples,
+                size: Vec::new(),
+                after_check: None,
+                add: g.add.clone(),
+            }
+        })
+        .collect()
+}
+
+/// The candidates the first one to be added cannot be told apart from
+/// ([`alike`]), in its report.
+fn mark_confounded(
+    reports: &mut [EffectReport],
+    tested: &[Tested],
+    fams: &[Family],
+    residuals: &[[f64; 3]],
+    significant: &dyn Fn(&Tested) -> bool,
+) {
+    let Some(k) = reports.iter().position(|r| r.significant && r.score > 0.0) else {
+        return;
+    };
+    // `reports` is in the order of `tested`
+    reports[k].confounded_with = alike(tested, fams, residuals, k, significant)
+        .into_iter()
+        .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
+        .collect();
+}
+
+/// The note of a significant candidate the refit CV did not confirm (CV
+/// RMSE `now` → `then`, mm). Tested at ξ re-estimated on these data, whose
+/// null is optimistic, a pose function loses its significance without
+/// that confirmation.
+fn refuse(report: &mut EffectReport, now: f64, then: f64, min_gain: f64, worth: &Worth) {
+    let drop = format!(
+        "CV RMSE {now:.4} → {then:.4} mm, less than the required {:.0} % drop or its worth at the noise floor ({:.2e} mm² of mean square)",
+        100.0 * min_gain,
+        worth.floor_mse()
+    );
+    if report.refit_xi && report.kind.pose_function() {
+        report.significant = false;
+        report.add_note(format!(
+            "significant only at the ξ re-estimated with it, and the refit CV does not confirm it: {drop}"
+        ));
+    } else {
+        report.add_note(format!("not added: {drop}"));
+    }
+}
