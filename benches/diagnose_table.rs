@@ -1,6 +1,6 @@
 //! Bench binary: `diagnose` on simulated COMAU campaigns with one undeclared
 //! effect each, at two magnitudes and two seeds, plus controls without any.
-//! Prints the table of issues 6 and 22 (case, effect found, p / q, CV RMSE
+//! Prints the table (case, effect found, p / q, CV RMSE
 //! before and after, after over the CV RMSE of the same campaign simulated
 //! without the effect, the "after" check, noise floor). Run: `cargo bench --bench diagnose_table`
 //! (about 10 minutes on 2 cores). The robot preset is given, so joint

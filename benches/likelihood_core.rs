@@ -1,4 +1,4 @@
-//! Bench binary for the likelihood core (issue 16): for simulated COMAU
+//! Bench binary for the likelihood core: for simulated COMAU
 //! campaigns of m training poses (held-out: 200 uniform poses of the same
 //! true robot) and the shipped campaign, the 3-output fit with the previous
 //! default (GPS from 4 starts + finite-difference BFGS polish) against the
@@ -19,7 +19,7 @@
 //! rows (default 1200). The train/test CSVs are written to
 //! `target/bench-data/` for `benches/reference_scale.py`.
 //!
-//! `-- --families` prints the correlation-family table of issue 17 instead:
+//! `-- --families` prints the correlation-family table instead:
 //! simulated campaigns of 300 poses (robot seeds 931–932, not used
 //! elsewhere; three robots) and the shipped campaign (`comau_lhs.csv`, its
 //! 30 verification poses held out), each family and `corr_auto`, with and without

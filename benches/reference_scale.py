@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference fits at the sizes of the likelihood-core scale table (issue 16).
+"""Reference fits at the sizes of the likelihood-core scale table.
 
 Run after `cargo bench --bench likelihood_core -- --scale`, which writes
 target/bench-data/{train,test}_M.csv and floor_M.txt (simulated COMAU

@@ -1,4 +1,4 @@
-//! Memory estimates before large allocations (issue 16 §2): a fit or CV on
+//! Memory estimates before large allocations: a fit or CV on
 //! m rows holds several m × m matrices, and at m = 20 000 one is 3.2 GB.
 //! Commands estimate what they will allocate, print it for large inputs and
 //! refuse, naming an option that fits, when it exceeds the limit.

@@ -46,8 +46,8 @@ pub const PAPER_GPS_STARTS: usize = OptimizerKind::Gps.default_starts();
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
-    /// Not a paper's method: the engine's recommendation for tracker data
-    /// (issue 17): EJS, constant trend, BFGS, a nugget estimated, and each
+    /// Not a paper's method: the engine's recommendation for tracker data:
+    /// EJS, constant trend, BFGS, a nugget estimated, and each
     /// output's correlation family chosen by closed-form CV
     /// ([`crate::kriging::CorrChoice::ByCv`]).
     Recommended,

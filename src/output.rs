@@ -1,8 +1,8 @@
 //! Output files: checked before any work, written atomically.
 //!
-//! Issue 18: `fit data.csv -o data.csv` replaced the measurements with model
-//! JSON, an unwritable output failed only after the fit, and an interrupted
-//! write left a half-written file. So every command
+//! Unguarded, `fit data.csv -o data.csv` replaced the measurements with
+//! model JSON, an unwritable output failed only after the fit, and an
+//! interrupted write left a half-written file. So every command
 //!
 //! 1. calls [`check_outputs`] before it starts: no output may be the same
 //!    file as an input or as another output (the same path once resolved, or

@@ -6,7 +6,7 @@
 //!
 //! The direction coefficient of seed 003 eq 5: `λi = +1` for forward motion,
 //! `−1` for backward motion of joint i into the pose. For a visited sequence
-//! `θ(k)` (DESIGN.md §3):
+//! `θ(k)`:
 //!
 //! `λi(k) = sign(θi(k) − θi(k−1))`; a joint that did not move keeps its
 //! previous λ; the first pose's λ comes from the start pose (and is +1 where the
@@ -98,7 +98,7 @@ impl Space {
 
     /// One row with the joints in `periodic` (0-based) encoded as
     /// `(sin θ, cos θ)` instead of θ, so that θ and θ ± 360° are the same
-    /// input and the correlation wraps around (issue 10): joint columns in
+    /// input and the correlation wraps around: joint columns in
     /// joint order (one or two each), then the λ's for EJS.
     pub fn encode(self, periodic: &[usize], q: &[f64], dir: &[f64]) -> Vec<f64> {
         let mut s = Vec::with_capacity(q.len() + periodic.len() + dir.len());

@@ -524,7 +524,7 @@ fn c24_same_command_twice_gives_byte_identical_json() {
 }
 
 /// A failure in one output keeps its cause's variant under the axis
-/// (issue 19: errors keep their variant through the layers).
+/// (errors keep their variant through the layers).
 #[test]
 fn a_per_axis_failure_keeps_its_cause() {
     use robokrige::Error;

@@ -1,4 +1,4 @@
-//! The bad-input catalogue of issue 18, table-driven: every case runs the
+//! The bad-input catalogue, table-driven: every case runs the
 //! `robokrige` binary on files written for it and asserts
 //!
 //! - the exit code (1: a clear error, 2: bad usage, 0: a documented
@@ -1466,7 +1466,7 @@ fn catalogue() {
     );
 }
 
-/// Issue 18 §5: an `id` with a comma (or a quote) is quoted in `predict`'s
+/// An `id` with a comma (or a quote) is quoted in `predict`'s
 /// CSV, which reads back with the same ids.
 #[test]
 fn predicted_ids_are_quoted_and_read_back() {
@@ -1485,7 +1485,7 @@ fn predicted_ids_are_quoted_and_read_back() {
     );
 }
 
-/// Issue 18 §3: every model writer's file loads back (fit, diagnose
+/// Every model writer's file loads back (fit, diagnose
 /// --model-out); the loader is the same one `predict` uses.
 #[test]
 fn written_models_load_back() {

@@ -382,7 +382,7 @@ fn kinematic_and_periodic_options_are_checked() {
     std::fs::remove_file(out).ok();
 }
 
-/// Issue 18 §1: an output that is an input (by path, through `..`, or a
+/// An output that is an input (by path, through `..`, or a
 /// hard link) or another output is refused before any work, and the input
 /// is left as it was.
 #[test]
@@ -426,7 +426,7 @@ fn outputs_never_overwrite_inputs() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Issue 17 §1: the default (a nugget estimated) cross-validates better than
+/// The default (a nugget estimated) cross-validates better than
 /// the papers' interpolator on a noisy simulated campaign (by > 5 %), and
 /// both stay above the simulator's noise floor (the RMS of the noise
 /// alone, from the truth file).
@@ -480,7 +480,7 @@ fn default_nugget_cross_validates_no_worse_than_the_interpolator() {
     );
 }
 
-/// `predict` says when it assumed the first pose's λ (issue 20), and
+/// `predict` says when it assumed the first pose's λ, and
 /// `cv --methods` refuses the model options it would not honour.
 #[test]
 fn predict_warns_about_derived_directions_and_cv_methods_refuses_unused_options() {
@@ -526,7 +526,7 @@ fn predict_warns_about_derived_directions_and_cv_methods_refuses_unused_options(
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// Every subcommand has an example and every option a help text (issue 20).
+/// Every subcommand has an example and every option a help text.
 #[test]
 fn every_subcommand_has_an_example_and_every_option_a_help_text() {
     let subcommands = |args: &[&str]| -> Vec<String> {
@@ -766,8 +766,8 @@ fn json_dash_writes_only_json_to_stdout_on_every_subcommand() {
     }
 }
 
-/// Options a mode does not use are refused, not silently ignored (issue 20's
-/// sweep): each case exits 1 or 2 with a message naming the option.
+/// Options a mode does not use are refused, not silently ignored: each
+/// case exits 1 or 2 with a message naming the option.
 #[test]
 fn options_a_mode_does_not_use_are_refused() {
     let dir = tempfile::tempdir().unwrap();

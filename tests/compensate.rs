@@ -248,7 +248,7 @@ fn mean_only_prediction_matches_the_full_prediction() {
     }
 }
 
-/// Servo lag (issue 22): a model with the joint's moves as an input
+/// Servo lag: a model with the joint's moves as an input
 /// compensates along a path, each point predicted from the move into it
 /// (from the start pose for the first), and leaves less error on the
 /// simulated robot than the same model without the lag input.

@@ -1,4 +1,4 @@
-//! Correlation families (issue 17 §2–3): the vectorised fills agree with
+//! Correlation families: the vectorised fills agree with
 //! the scalar definition, every family is saved by name and loads back to
 //! the same predictions, files without a family load as Gaussian, and
 //! `corr_auto` keeps the family with the lowest closed-form CV error.

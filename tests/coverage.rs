@@ -1,4 +1,4 @@
-//! Predictions that leave the campaign's coverage are flagged (issue 16 §3):
+//! Predictions that leave the campaign's coverage are flagged:
 //! a joint outside the training range, a standard deviation near the prior,
 //! a Kriging correction far from the trend.
 

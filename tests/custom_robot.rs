@@ -1,4 +1,4 @@
-//! A robot that is not a preset, from its robot file alone (issue 20):
+//! A robot that is not a preset, from its robot file alone:
 //! simulate → fit → cv → compensate with `--robot FILE`, and a model refused
 //! for another robot or tool.
 

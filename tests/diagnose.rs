@@ -260,7 +260,7 @@ fn direction_history_features_follow_the_sequence() {
     assert_eq!(travel[0], vec![0.0, 1.0, 3.0, 1.0, 1.0, 3.0]);
 }
 
-/// Servo lag (issue 22): an error that depends on how the robot moved into
+/// Servo lag: an error that depends on how the robot moved into
 /// the pose is traced to the joint's moves with the right memory, added as
 /// an input, and modelled to the level of the same campaign without it;
 /// the improved model predicts along a pose sequence from its order alone.
@@ -442,7 +442,7 @@ fn bad_options_are_errors() {
 }
 
 /// A covariate that does not vary over the rows used is left out of the
-/// candidates and reported (issue 22): "temp_c × joint angles" with a
+/// candidates and reported: "temp_c × joint angles" with a
 /// constant temp_c is only a joint-angle trend under a wrong name.
 #[test]
 fn constant_covariates_are_left_out_and_reported() {
@@ -483,8 +483,8 @@ fn constant_covariates_are_left_out_and_reported() {
 }
 
 /// An effect counts when it lowers the CV RMSE by `min_gain`, or the CV
-/// mean square by what that is worth at the model's noise (issue 22: a
-/// clear effect must not hide behind an under-fitted base model).
+/// mean square by what that is worth at the model's noise (so that a
+/// clear effect does not hide behind an under-fitted base model).
 #[test]
 fn an_effect_is_worth_adding_by_its_share_or_by_its_size_against_the_noise() {
     use robokrige::diagnose::{Worth, min_resamples};
@@ -589,7 +589,7 @@ fn a_tracker_bump_is_found_as_a_block_with_both_edges() {
     assert!((top.size[1].estimate[0] + 0.15).abs() < 0.04);
 }
 
-/// A joint's moves with a memory in time (issue 22): each earlier move
+/// A joint's moves with a memory in time: each earlier move
 /// decays over the measured interval, a pause lets the robot settle, and a
 /// pose sequence without times takes the reference interval.
 #[test]
@@ -670,9 +670,9 @@ fn a_memory_in_time_decays_over_the_interval_between_poses() {
     );
 }
 
-/// The memory a diagnosis needs is estimated before it allocates (issue
-/// 16): it grows with rows × scanned values, and the number of rows it
-/// names for a smaller limit does fit that limit.
+/// The memory a diagnosis needs is estimated before it allocates: it grows
+/// with rows × scanned values, and the number of rows it names for a
+/// smaller limit does fit that limit.
 #[test]
 fn the_diagnosis_memory_plan_names_a_row_count_that_fits() {
     use robokrige::diagnose::DiagnosePlan;
@@ -703,8 +703,8 @@ fn the_diagnosis_memory_plan_names_a_row_count_that_fits() {
 }
 
 /// Above `scan_rows` the candidates are scanned on an evenly spread subset
-/// of the rows (issue 16: a diagnosis of a whole campaign of thousands of
-/// rows): a step is still found, placed to within the spacing of the
+/// of the rows (so that a whole campaign of thousands of rows can be
+/// diagnosed): a step is still found, placed to within the spacing of the
 /// scanned rows, and the models compared are fitted and cross-validated on
 /// every row.
 #[test]

@@ -1,4 +1,4 @@
-//! `import`: a tracker's own export becomes a measurement CSV (issue 20).
+//! `import`: a tracker's own export becomes a measurement CSV.
 
 mod common;
 

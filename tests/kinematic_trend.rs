@@ -1,4 +1,4 @@
-//! Issue 10: the kinematic-error trend basis and periodic joints.
+//! The kinematic-error trend basis and periodic joints.
 
 mod common;
 
@@ -138,7 +138,7 @@ fn kinematic_trend_captures_geometric_errors() {
     assert!(names.iter().any(|t| t.starts_with("dPx/d")), "{names:?}");
 }
 
-/// The public UR10 data (issue 10), if present: 200 training rows, the next
+/// The public UR10 data, if present: 200 training rows, the next
 /// 100 held out. Skips cleanly when ../shared/data is absent.
 #[test]
 fn ur10_real_data_small_split() {
@@ -189,7 +189,7 @@ fn ur10_real_data_small_split() {
 
 /// Refitting at a model's own hyperparameters on its own rows reproduces it,
 /// for the polynomial and the kinematic trend; on more rows it still
-/// predicts (the scaling path of issue 10).
+/// predicts (the scaling path).
 #[test]
 fn refit_at_hyperparameters_reproduces_the_model() {
     let data =

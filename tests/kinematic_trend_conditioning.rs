@@ -1,4 +1,4 @@
-//! Issue 16 §3: the kinematic trend of universal Kriging must stay well
+//! The kinematic trend of universal Kriging must stay well
 //! conditioned *per output axis*. On a campaign where the tool keeps one
 //! direction, some identification-Jacobian rows of one axis are nearly
 //! dependent (e.g. `dPz/dd6` ≈ constant): the GLS gave them opposite β of

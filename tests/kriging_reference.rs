@@ -173,7 +173,7 @@ fn same_fixed_theta_same_predictions_mse_and_psi() {
             w.0, w.1, w.2
         );
     }
-    // the well-conditioned space meets the 1e-8 outright
+    // the well-conditioned space meets 1e-8 outright
     assert!(worst["ejs"].0 < 1e-8 && worst["ejs"].1 < 1e-8);
 }
 

@@ -1,7 +1,7 @@
-//! The analytic gradient of the concentrated likelihood ln ψ (issue 16 §1)
+//! The analytic gradient of the concentrated likelihood ln ψ
 //! against central differences, for constant, linear, kinematic and fused
 //! (PCC+PCA) trends, at several ξ, with and without a nugget, for every
-//! correlation family (issue 17 §2).
+//! correlation family.
 
 use robokrige::dataset::Dataset;
 use robokrige::kinematics;

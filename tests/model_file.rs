@@ -1,11 +1,11 @@
-//! Model files across versions (issue 19). Version 3 stores the input map
+//! Model files across versions. Version 3 stores the input map
 //! (space, periodic joints, extras, names, normalisation) as one field,
 //! `inputs`. A version-2 file written by the code before that
 //! (`tests/fixtures/model_v2.json`: periodic joints, two extras) loads and
 //! predicts what it predicted then, and so does its version-1 form (with the
 //! Cholesky factors); a refit with today's code writes the same model in the
 //! version-3 layout. "The same" is to [`REL`] relative: the correlation fill
-//! uses fused multiply-adds since 2026-11-25 (issue 16), which moves the last
+//! uses fused multiply-adds since 2026-11-25, which moves the last
 //! bits; everything else (structure, names, integers, strings) is exact.
 
 mod common;

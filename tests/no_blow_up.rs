@@ -1,4 +1,4 @@
-//! Issue 16, "done when": on a simulated wide-range campaign (five joints
+//! On a simulated wide-range campaign (five joints
 //! over 180°, the tool kept pointing down, with the home pose and two check
 //! poses out of that family, as on the real UR10 campaign
 //! where universal Kriging with the kinematic trend had 43–46 mm folds),
@@ -68,7 +68,7 @@ fn no_fold_of_a_wide_range_campaign_blows_up() {
                 .join(" / ")
         );
         for k in 1..5 {
-            // the issue's bound, on every row the model claims to cover
+            // the 3× D-H bound, on every row the model claims to cover
             assert!(
                 covered[k] <= 3.0 * dh,
                 "fold {f}: {} max {:.3} mm on covered rows against the D-H calibration's {dh:.3} mm",

@@ -50,7 +50,7 @@ pub const MAX_ABS_JOINT: f64 = 1e6;
 
 /// Largest |TCP error| accepted, in mm. Absolute errors of industrial
 /// robots are 0.1–10 mm; a metre is not an error in mm but a unit or
-/// column mistake (issue 18: one `ex` of `1e300` overflowed the model).
+/// column mistake (one `ex` of `1e300` would overflow the model).
 pub const MAX_ABS_ERROR_MM: f64 = 1e3;
 
 /// Largest |measured TCP coordinate| accepted, in mm (a kilometre).
@@ -220,7 +220,7 @@ impl Dataset {
             .iter()
             .zip(&self.dir)
             .filter(|(q, d)| {
-                // `+ 0.0` makes −0.0 equal to 0.0 (issue 18 §9)
+                // `+ 0.0` makes −0.0 equal to 0.0
                 let key: Vec<u64> = q
                     .iter()
                     .chain(d.iter())

@@ -1,5 +1,5 @@
 //! The one CSV table reader behind every CSV input (measurements,
-//! trajectories): the same rules everywhere (issue 18 §6).
+//! trajectories): the same rules everywhere.
 //!
 //! - A UTF-8 byte-order mark is accepted; other text must be UTF-8.
 //! - Cells are trimmed of surrounding whitespace.

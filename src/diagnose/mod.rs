@@ -9,7 +9,7 @@
 //!    harmonics of each joint over a scanned period range; cross-joint
 //!    products; direction history; the motion into each pose (a joint's
 //!    moves with a scanned memory, their size, the TCP's move, the time
-//!    since the previous pose; issue 22).
+//!    since the previous pose).
 //! 3. **Tracing** ([`scan::test_families`], [`gls`]): each grid point is
 //!    tried inside the current model (its columns join the trend at the
 //!    model's ξ and nugget); a family's statistic is its best leave-one-out
@@ -358,7 +358,7 @@ pub fn min_resamples(families: usize, fdr: f64) -> usize {
     (families as f64 / fdr).ceil() as usize
 }
 
-/// When a drop of the CV error is worth an effect (issue 22): the pooled CV
+/// When a drop of the CV error is worth an effect: the pooled CV
 /// RMSE falls by the share `g` (`min_gain`), **or** the CV mean squared
 /// error falls by what that share is worth at the noise floor,
 /// `(1 − (1 − g)²)·σ̄_ν²` with σ̄_ν the model's noise (its nugget, pooled over
@@ -535,7 +535,7 @@ pub struct Coefficient {
     pub ci95: [f64; 3],
 }
 
-/// The "after" check of an added effect (issue 22): did the model with it
+/// The "after" check of an added effect: did the model with it
 /// reach the level of a campaign without it?
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AfterCheck {
@@ -911,7 +911,8 @@ const SAME_FIT: f64 = 0.9;
 const SAME_SCORE: f64 = 0.8;
 
 /// A CV RMSE above this multiple of the level a campaign without the effect
-/// would reach counts as only partly modelled (the target of issue 22).
+/// would reach counts as only partly modelled (the target an added effect
+/// must meet).
 pub const AFTER_LEVEL_RATIO: f64 = 1.3;
 
 /// The "after" check of an added effect: `promised` and `achieved` drops of

@@ -1,5 +1,5 @@
-//! The rows the candidate test scans (issue 16: a diagnosis of a whole
-//! campaign of thousands of rows).
+//! The rows the candidate test scans (so that a diagnosis of a whole
+//! campaign of thousands of rows fits in memory and time).
 //!
 //! The candidate test keeps, for every scanned parameter value, whitened
 //! columns of every row ([`super::plan`]), and the step family scans one

@@ -227,7 +227,7 @@ fn params(kv: &[(&str, f64)]) -> BTreeMap<String, f64> {
 pub const MIN_VARYING_ROWS: usize = 5;
 
 /// A covariate left out of the candidates because it does not vary over the
-/// rows used (issue 22): with a constant covariate, "covariate × joint
+/// rows used: with a constant covariate, "covariate × joint
 /// angles" is only a linear trend in the joint angles, and its name would
 /// claim an effect the data cannot show.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -642,7 +642,7 @@ fn median_interval(t: &Covariate) -> Option<f64> {
     dt.get(dt.len() / 2).copied()
 }
 
-/// How the robot moved into each pose (issue 22), and the generic search:
+/// How the robot moved into each pose, and the generic search:
 /// - per joint j, its signed moves with a scanned memory τ (through the
 ///   robot's Jacobian when it is given, so that the candidate is the TCP
 ///   displacement a lag of joint j causes; else the moves and their product

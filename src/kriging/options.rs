@@ -47,7 +47,7 @@ impl TrendKind {
 pub enum OptimizerKind {
     /// Projected BFGS with the analytic gradient of ln ψ
     /// ([`super::KrigingProblem::psi_grad`], `optim::quasi_newton`) from the box
-    /// centre and LHS starts (the default; issue 16).
+    /// centre and LHS starts (the default).
     #[cfg_attr(
         feature = "cli",
         value(help = "Projected BFGS on the analytic likelihood gradient, 8 starts (default)")
@@ -79,7 +79,7 @@ impl OptimizerKind {
 }
 
 /// Fitting options. `Default`: constant trend, Gaussian correlation, a
-/// nugget estimated (tracker data is noisy: issue 17), projected BFGS on
+/// nugget estimated (tracker data is noisy), projected BFGS on
 /// the analytic gradient from 8 starts. [`KrigingOptions::recommended`]
 /// adds the family choice by CV (the `recommended` method, the CLI's
 /// default); the papers' set-ups are interpolating and name GPS or

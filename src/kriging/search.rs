@@ -233,7 +233,7 @@ impl std::fmt::Display for FitPlan {
     }
 }
 
-/// The default search, sized to the campaign (issue 16 §2):
+/// The default search, sized to the campaign:
 /// - m ≤ [`SEARCH_ROWS`]: [`multistart_bfgs`] on all rows;
 /// - m ≤ `converge_rows` ([`REFINE_ROWS`] by default): the multistart on a
 ///   seeded random subset of

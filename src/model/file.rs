@@ -22,7 +22,7 @@ use std::path::Path;
 
 impl ErrorModel {
     /// Write as JSON, atomically. The text is loaded back first: a model
-    /// that would not load (issue 18: a `y_std` that overflowed to `null`)
+    /// that would not load (e.g. a `y_std` that overflowed to `null`)
     /// is never written.
     pub fn save(&self, path: &Path) -> Result<()> {
         let text = self.to_json()?;
@@ -43,7 +43,7 @@ impl ErrorModel {
         })
     }
 
-    /// The ranges of a loaded model's values (issue 18 §4: a model file
+    /// The ranges of a loaded model's values (left unchecked, a model file
     /// with ξ < 0, an input scale of 0 or `y_std = 1e308` predicted NaN or
     /// constants). Shapes are checked by the caller; ξ, ν, σ² and
     /// finiteness by [`KrigingModel`]'s own loader.

@@ -1,6 +1,7 @@
 //! The TCP error model: one universal-Kriging model per output axis
-//! (ex, ey, ez), each with its own ξ and trend (DESIGN.md §3), over JS or EJS
-//! inputs z-scored by one shared [`Normalizer`].
+//! (ex, ey, ez), each with its own ξ and trend (`docs/ARCHITECTURE.md`,
+//! "The pipeline", step 3), over JS or EJS inputs z-scored by one shared
+//! [`Normalizer`].
 //!
 //! `fit` returns a model, `predict` is pure; `save`/`load` write a versioned
 //! JSON that predicts bit-identically after loading.

@@ -1,6 +1,6 @@
-//! Projected BFGS with analytic gradients: the default hyperparameter search
-//! (issue 16). For box-constrained smooth objectives of a few dozen
-//! variables at most, such as ln ψ over `(log10 ξ, log10 ν)`.
+//! Projected BFGS with analytic gradients: the default hyperparameter search.
+//! For box-constrained smooth objectives of a few dozen variables at most,
+//! such as ln ψ over `(log10 ξ, log10 ν)`.
 //!
 //! Each iteration:
 //! 1. the *free* set is every coordinate not held at a bound by its gradient

@@ -1,4 +1,4 @@
-//! Physics vs Kriging on one simulated robot (issue 7): prediction error on
+//! Physics vs Kriging on one simulated robot: prediction error on
 //! an independent path (seed 000 §4.1) and compensation error (§4.2).
 //!
 //! Everything is simulated in-process from one seed: the true robot, its

@@ -229,8 +229,8 @@ impl PhysicsModel {
     }
 }
 
-/// Physics model first, universal Kriging on what it leaves (issue 7's
-/// hybrid): `δ̂ = δ̂_phys(θ, λ) + δ̂_UK(θ, λ)`, the Kriging model fitted to the
+/// Physics model first, universal Kriging on what it leaves (a hybrid):
+/// `δ̂ = δ̂_phys(θ, λ) + δ̂_UK(θ, λ)`, the Kriging model fitted to the
 /// residuals `e − δ̂_phys` of the training campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HybridModel {

@@ -1,4 +1,4 @@
-//! The kinematic-error trend (issue 10; seed 003 eq 4): the rows of the
+//! The kinematic-error trend (seed 003 eq 4): the rows of the
 //! robot's identification Jacobian as trend terms, screened so that each
 //! output's GLS stays well conditioned; and the same rows, unscreened, as
 //! candidates of the basis selections.
@@ -15,8 +15,9 @@ use rayon::prelude::*;
 /// ([`kinematic_trends`]): a column is kept when its component orthogonal to
 /// the columns kept before it has at least this share of its norm (the
 /// column-scaled trend matrix then stays well conditioned: ≲ 10⁴ on the
-/// campaigns of issue 16 §3, against 10⁷–10¹⁰ without the screen). A column
-/// whose independent share is r has its β amplified ~1/r.
+/// wide-range campaigns of `tests/kinematic_trend_conditioning.rs`, against
+/// 10⁷–10¹⁰ without the screen). A column whose independent share is r has
+/// its β amplified ~1/r.
 pub const KINEMATIC_AXIS_TOL: f64 = 1e-3;
 
 /// Rows a kinematic trend column's new component must be spread over, on
