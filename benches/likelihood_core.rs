@@ -22,7 +22,7 @@
 //! `-- --families` prints the correlation-family table instead:
 //! simulated campaigns of 300 poses (robot seeds 931–932, not used
 //! elsewhere; three robots) and the shipped campaign (`comau_lhs.csv`, its
-//! 30 verification poses held out), each family and `corr_auto`, with and without
+//! 30 verification poses held out), each family and the family chosen by CV, with and without
 //! a nugget: fit wall time and held-out RMS 3D / floor. The splits are
 //! written to `target/bench-data/fam_*` for
 //! `benches/reference_scale.py --families`.
