@@ -141,12 +141,24 @@ pub fn holdout_cv(
     );
     let t_hyper = Instant::now();
     let first_cal = calibrate(&first, robot, &CalibrationOptions::default())?;
-    let mut calibrated_t = Vec::new();
-    let mut kin_t = Vec::new();
-    for space in [Space::Js, Space::Ejs] {
-        calibrated_t.push(fit_calibrated(&first, space, base, &first_cal)?);
-        kin_t.push(fit_kinematic(&first, space, base, robot)?);
-    }
+    // the four searches at once: each output's search ends on one core
+    // while the others' go on
+    use rayon::prelude::*;
+    let mut fits: Vec<ErrorModel> = [(Space::Js, false), (Space::Ejs, false)]
+        .into_iter()
+        .chain([(Space::Js, true), (Space::Ejs, true)])
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|(space, kinematic)| {
+            if kinematic {
+                fit_kinematic(&first, space, base, robot)
+            } else {
+                fit_calibrated(&first, space, base, &first_cal)
+            }
+        })
+        .collect::<Result<_>>()?;
+    let kin_t = fits.split_off(2);
+    let calibrated_t = fits;
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
     let mut got: Vec<Gathered> = (0..5)
         .map(|_| Gathered {

@@ -140,6 +140,19 @@ impl std::fmt::Display for Correlation {
     }
 }
 
+/// Correlations below this are set to 0 in R ([`TrainingInputs::fill_lower`]).
+///
+/// With short length scales (large ξ, which the search visits and which a
+/// campaign of separated clusters — ISO 9283 cubes — can keep) most of R is
+/// vanishingly small, and the Cholesky factorisation's products of such
+/// entries fall below `f64::MIN_POSITIVE`: subnormal arithmetic, which x86
+/// CPUs run one to two orders of magnitude slower. On a 632-pose UR10 cube
+/// campaign the kinematic-trend JS fit spent 85 s in it, 10 s without
+/// (`cargo bench --bench xi_choice`). Entries of at least 1e-150 keep every
+/// product of two normal; what is dropped is 1e-150 of the unit diagonal,
+/// far below the last bit of anything R's factor enters.
+pub const TINY_CORRELATION: f64 = 1e-150;
+
 /// `out[k] = c · Σ_d ξ_d (x_id − x_{i+1+k,d})²` for the rows after row `i`
 /// (`c` = −1 gives the Gaussian's exponent).
 fn sq_dist_column(theta: &[f64], x: &TrainingInputs, i: usize, c: f64, out: &mut [f64]) {
@@ -364,7 +377,8 @@ impl TrainingInputs {
     }
 
     /// Fill the m × m correlation matrix (lower triangle and diagonal only:
-    /// that is all the Cholesky reads) with `1 + diag` on the diagonal.
+    /// that is all the Cholesky reads) with `1 + diag` on the diagonal, and
+    /// correlations below [`TINY_CORRELATION`] as 0.
     pub fn fill_lower(
         &self,
         corr: &dyn CorrelationModel,
@@ -381,6 +395,11 @@ impl TrainingInputs {
                 .expect("contiguous column")
                 .as_slice_mut();
             corr.fill_column(theta, self, i, &mut slice[i + 1..]);
+            for v in &mut slice[i + 1..] {
+                if v.abs() < TINY_CORRELATION {
+                    *v = 0.0;
+                }
+            }
         }
     }
 }
@@ -388,6 +407,26 @@ impl TrainingInputs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn vanishing_correlations_are_zero_in_r() {
+        // rows 0.1 apart in one input: at ξ = 4e4 neighbours correlate
+        // exp(−400) ≈ 2e−174 (below the cut), and at ξ = 2e4 exp(−200)
+        // ≈ 1.4e−87 (kept); farther rows underflow to 0 either way
+        let rows: Vec<Vec<f64>> = (0..4).map(|i| vec![0.1 * i as f64]).collect();
+        let x = TrainingInputs::new(&rows);
+        for (theta, kept) in [(4e4, false), (2e4, true)] {
+            let mut r = faer::Mat::<f64>::zeros(4, 4);
+            x.fill_lower(&Correlation::Gaussian, &[theta], 0.0, r.as_mut());
+            let neighbour = r[(1, 0)];
+            let want = (-theta * 0.01f64).exp();
+            assert_eq!(neighbour > 0.0, kept, "ξ {theta}: {neighbour:e}");
+            if kept {
+                assert!((neighbour - want).abs() <= 1e-15 * want);
+            }
+            assert!(r[(3, 0)] == 0.0 && r[(0, 0)] == 1.0);
+        }
+    }
 
     /// n rows of three inputs: two smooth ones and `third(i)`.
     fn sample_rows(n: usize, third: impl Fn(usize) -> f64) -> Vec<Vec<f64>> {
