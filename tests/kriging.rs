@@ -480,3 +480,66 @@ fn options_setters_set_what_the_getters_read() {
     );
     assert!(d.starts(0).validate().is_err());
 }
+
+/// `KrigingParams` refuses what cannot fit, with a message, before or at
+/// the data: fixed hyperparameters with the family chosen by CV, negative
+/// ξ, names or correlation inputs that do not match the columns.
+#[test]
+fn kriging_params_refuse_impossible_fits() {
+    use robokrige::kriging::{CorrChoice, Hyperparameters, KrigingParams, Tuning};
+    let x: Vec<Vec<f64>> = (0..20)
+        .map(|i| vec![(i as f64 * 0.3).sin(), (i as f64 * 0.7).cos()])
+        .collect();
+    let y: Vec<f64> = x.iter().map(|r| r[0] + 0.5 * r[1]).collect();
+    let trend = Trend::from(Monomials::constant(2));
+    let fixed = Tuning::Fixed(Hyperparameters::new(vec![1.0, 1.0], 1e-3));
+    let by_cv = KrigingParams::new(trend.clone())
+        .corr(CorrChoice::ByCv { folds: 5 })
+        .tuning(fixed.clone())
+        .check()
+        .unwrap_err();
+    assert!(
+        by_cv.to_string().contains("fixed correlation family"),
+        "{by_cv}"
+    );
+    let negative = KrigingParams::new(trend.clone())
+        .tuning(Tuning::Warm(Hyperparameters::new(vec![-1.0, 1.0], 0.0)))
+        .check()
+        .unwrap_err();
+    assert!(negative.to_string().contains("ξ ≥ 0"), "{negative}");
+    let names = KrigingParams::new(trend.clone())
+        .names(vec!["a".into()])
+        .check()
+        .and_then(|p| p.fit(&x, &y))
+        .unwrap_err();
+    assert!(names.to_string().contains("1 input names for 2"), "{names}");
+    let dims = KrigingParams::new(trend.clone())
+        .correlation_inputs(3)
+        .check()
+        .and_then(|p| p.fit(&x, &y))
+        .unwrap_err();
+    assert!(dims.to_string().contains("3 correlation inputs"), "{dims}");
+    let short = KrigingParams::new(trend.clone())
+        .tuning(Tuning::Fixed(Hyperparameters::new(vec![1.0], 1e-3)))
+        .check()
+        .and_then(|p| p.fit(&x, &y))
+        .unwrap_err();
+    assert!(
+        short.to_string().contains("1 correlation parameters for 2"),
+        "{short}"
+    );
+    // and what can fit does: fixed, warm and searched
+    for tuning in [
+        fixed,
+        Tuning::Warm(Hyperparameters::new(vec![1.0, 1.0], 1e-3)),
+        Tuning::Search,
+    ] {
+        let (model, report) = KrigingParams::new(trend.clone())
+            .tuning(tuning)
+            .check()
+            .and_then(|p| p.fit(&x, &y))
+            .unwrap();
+        assert_eq!(model.corr(), robokrige::kriging::Correlation::Gaussian);
+        assert_eq!(report.theta.len(), 2);
+    }
+}

@@ -214,6 +214,12 @@ impl ValidKrigingParams {
             .names
             .clone()
             .unwrap_or_else(|| (1..=width).map(|k| format!("s{k}")).collect());
+        if names.len() != width {
+            return Err(Error::InvalidParameter(format!(
+                "{} input names for {width} input columns",
+                names.len()
+            )));
+        }
         let job = super::fit::Job {
             x,
             inputs: &inputs,
