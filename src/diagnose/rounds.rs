@@ -3,12 +3,14 @@
 //! effect added last round its "after" check, and add the best candidate
 //! the refit CV confirms.
 
-use super::scan::{self, Family, Tested};
-use super::{
-    AfterCheck, CONFIRMATIONS, CvStats, DiagnoseOptions, Diagnosis, EffectKind, EffectReport,
-    ScanRows, Worth, after_check, alike, coefficients, cross_validated, gls, min_resamples,
-    place_steps, prefer_simpler, support_interval,
-};
+use super::accept::{CONFIRMATIONS, Worth, after_check};
+use super::fit::cross_validated;
+use super::gls;
+use super::options::{DiagnoseOptions, min_resamples};
+use super::rank::{mark_confounded, prefer_simpler, rank};
+use super::report::{AfterCheck, CvStats, Diagnosis, EffectReport, coefficients, support_interval};
+use super::rows::{ScanRows, place_steps};
+use super::scan::{self, EffectKind, Family, Tested};
 use crate::Result;
 use crate::dataset::Dataset;
 use crate::features::Feature;
@@ -326,30 +328,6 @@ impl Rounds {
     }
 }
 
-/// Significant candidates first: kinds of effect not in the model yet
-/// (`seen` false) before more of a kind already added (so that a cap of a
-/// few effects is not spent on harmonic after harmonic while a drift the
-/// data shows clearly waits), each by evidence (what the data shows most
-/// clearly, not the largest share of a large misfit); the others by score.
-fn rank(
-    tested: &mut [Tested],
-    significant: &dyn Fn(&Tested) -> bool,
-    seen: &dyn Fn(&Tested) -> bool,
-) {
-    tested.sort_by(|a, b| match (significant(a), significant(b)) {
-        (true, false) => std::cmp::Ordering::Less,
-        (false, true) => std::cmp::Ordering::Greater,
-        (true, true) => seen(a)
-            .cmp(&seen(b))
-            .then(b.evidence.total_cmp(&a.evidence))
-            .then(b.score.total_cmp(&a.score)),
-        (false, false) => b
-            .score
-            .total_cmp(&a.score)
-            .then(a.p_value.total_cmp(&b.p_value)),
-    });
-}
-
 /// One report per tested candidate of round `round`, in the order of
 /// `tested`: nothing accepted yet.
 fn report_candidates(
@@ -390,25 +368,6 @@ fn report_candidates(
             }
         })
         .collect()
-}
-
-/// The candidates the first one to be added cannot be told apart from
-/// ([`alike`]), in its report.
-fn mark_confounded(
-    reports: &mut [EffectReport],
-    tested: &[Tested],
-    fams: &[Family],
-    residuals: &[[f64; 3]],
-    significant: &dyn Fn(&Tested) -> bool,
-) {
-    let Some(k) = reports.iter().position(|r| r.significant && r.score > 0.0) else {
-        return;
-    };
-    // `reports` is in the order of `tested`
-    reports[k].confounded_with = alike(tested, fams, residuals, k, significant)
-        .into_iter()
-        .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
-        .collect();
 }
 
 /// The note of a significant candidate the refit CV did not confirm (CV

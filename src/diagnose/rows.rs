@@ -17,7 +17,11 @@
 //! rows; the CV figures, the "after" check and the sizes of what is added
 //! are of all rows. A step or block edge shows first at the scanned row after
 //! it and is then placed among the campaign rows since the scanned row
-//! before ([`ScanRows::gap`]) by the CV residuals of all rows.
+//! before ([`ScanRows::gap`]) by the CV residuals of all rows
+//! ([`place_steps`]).
+
+use super::report::EffectReport;
+use crate::features::Feature;
 
 /// The rows of a campaign a candidate scan runs on: all of them, or an
 /// evenly spread subset in measurement order (the first and the last row
@@ -101,6 +105,65 @@ impl ScanRows {
         self.rows.iter().map(|&i| v[i]).collect()
     }
 }
+
+/// A step or block edge found on scanned rows ([`ScanRows`]) is at its
+/// scanned row or at one of the campaign rows just before it
+/// ([`ScanRows::gap`]): each is placed at the row of its gap that best
+/// splits the CV residuals of all rows — least squares, the levels on either
+/// side the mean residual of the [`PLACE_WINDOW`] spacings of rows before
+/// and after the gap — and the support interval is widened to the gaps.
+pub(super) fn place_steps(report: &mut EffectReport, rows: &ScanRows, residuals: &[[f64; 3]]) {
+    let window = PLACE_WINDOW * rows.total().div_ceil(rows.len().max(1));
+    let mut moved = Vec::new();
+    for f in report.add.iter_mut() {
+        let Feature::Step { row } = f else { continue };
+        let gap = rows.gap(*row);
+        let (a, b) = (*gap.start(), *gap.end());
+        let before = a.saturating_sub(window)..a;
+        let after = b..(b + window).min(residuals.len());
+        if a == b || before.is_empty() || after.is_empty() {
+            continue;
+        }
+        let mean = |r: std::ops::Range<usize>| -> [f64; 3] {
+            let n = r.len() as f64;
+            std::array::from_fn(|x| r.clone().map(|i| residuals[i][x]).sum::<f64>() / n)
+        };
+        let (lo, hi) = (mean(before), mean(after));
+        let d2 = |e: &[f64; 3], l: &[f64; 3]| (0..3).map(|x| (e[x] - l[x]).powi(2)).sum::<f64>();
+        // rows a..b are ambiguous: before the step at lo, from it on at hi
+        let cost = |c: usize| -> f64 {
+            (a..b)
+                .map(|i| d2(&residuals[i], if i < c { &lo } else { &hi }))
+                .sum()
+        };
+        let best = (a..=b)
+            .min_by(|&x, &y| cost(x).total_cmp(&cost(y)))
+            .unwrap_or(b);
+        for v in report.params.values_mut() {
+            if *v == *row as f64 {
+                *v = best as f64;
+            }
+        }
+        moved.push(format!("{} → {best} (rows {a}–{b})", *row));
+        *row = best;
+    }
+    for (key, ci) in report.params_ci.iter_mut() {
+        if key.ends_with("row") {
+            ci[0] = *rows.gap(ci[0] as usize).start() as f64;
+        }
+    }
+    if !moved.is_empty() {
+        report.add_note(format!(
+            "found on {} scanned rows, placed between them by the CV residuals of all rows: {}",
+            rows.len(),
+            moved.join(", ")
+        ));
+    }
+}
+
+/// Rows on either side of a gap that set the levels [`place_steps`] splits
+/// it between, in spacings of the scanned rows.
+const PLACE_WINDOW: usize = 8;
 
 #[cfg(test)]
 mod tests {

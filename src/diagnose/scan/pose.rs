@@ -1,0 +1,110 @@
+//! Candidates that are functions of the pose alone (the kinds the GP can
+//! soak up by shortening its length scales, [`EffectKind::pose_function`]),
+//! added as trend terms:
+//! - a harmonic of joint j, `sin(2π θ_j / P)` and `cos(2π θ_j / P)`, with the
+//!   period P scanned from half the joint's range down to 2° in steps of a
+//!   tenth of a cycle over the range ([`Feature::Harmonic`]);
+//! - the product of two z-scored joint angles, `u_a · u_b`
+//!   ([`Feature::Interaction`]);
+//! - with a robot, joint j deviating with `sin θ_k` and `cos θ_k`, mapped
+//!   to the TCP through the Jacobian ([`Feature::Crosstalk`]).
+
+use super::{EffectKind, Family, GridPoint, Sink, params, single, zscore};
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use crate::kinematics::Robot;
+use std::collections::BTreeMap;
+
+/// Harmonics of each joint, periods from 2° to half its range.
+pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
+    for j in 0..data.n_joints() {
+        let (lo, hi) = data
+            .q
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r[j]), b.max(r[j]))
+            });
+        let range = hi - lo;
+        let mut grid = Vec::new();
+        let mut cycles = 2.0;
+        while range / cycles >= 2.0 && grid.len() < 480 {
+            let period = range / cycles;
+            let w = std::f64::consts::TAU / period;
+            let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
+            let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
+            grid.push(GridPoint {
+                params: params(&[("period_deg", period)]),
+                columns: vec![zscore(&s), zscore(&c)],
+                add: vec![Feature::Harmonic {
+                    joint: j + 1,
+                    period_deg: period,
+                }],
+            });
+            cycles += 0.1;
+        }
+        if !grid.is_empty() {
+            out.push(Family {
+                kind: EffectKind::Harmonic,
+                source: vec![format!("q{}", j + 1)],
+                label: format!("harmonic of q{}", j + 1),
+                grid,
+                zoom: None,
+            });
+        }
+    }
+}
+
+/// Products of two joint angles `u` (z-scored).
+pub(super) fn interaction_families(u: &[Vec<f64>], out: &mut Sink) {
+    let n = u.len();
+    for a in 0..n {
+        for b in a + 1..n {
+            let col = zscore(
+                &u[a]
+                    .iter()
+                    .zip(&u[b])
+                    .map(|(x, y)| x * y)
+                    .collect::<Vec<_>>(),
+            );
+            out.push(Family {
+                kind: EffectKind::Interaction,
+                source: vec![format!("q{}", a + 1), format!("q{}", b + 1)],
+                label: format!("q{} × q{}", a + 1, b + 1),
+                grid: vec![single(
+                    BTreeMap::new(),
+                    col,
+                    Feature::Interaction { a: a + 1, b: b + 1 },
+                )],
+                zoom: None,
+            });
+        }
+    }
+}
+
+/// Joint cross-talk mapped through `robot`'s Jacobian.
+pub(super) fn crosstalk_families(data: &Dataset, robot: &Robot, out: &mut Sink) {
+    let n = data.n_joints();
+    for j in 1..=n {
+        for k in (1..=n).filter(|&k| k != j) {
+            let f = Feature::Crosstalk {
+                robot: Box::new(robot.clone()),
+                joint: j,
+                from: k,
+            };
+            let Ok(cols) = f.columns_from_poses(&data.q, &data.dir) else {
+                continue;
+            };
+            out.push(Family {
+                kind: EffectKind::Interaction,
+                source: vec![format!("q{j}"), format!("q{k}")],
+                label: format!("q{j} deviating with sin/cos q{k} (via the Jacobian)"),
+                grid: vec![GridPoint {
+                    params: BTreeMap::new(),
+                    columns: cols.iter().map(|c| zscore(c)).collect(),
+                    add: vec![f],
+                }],
+                zoom: None,
+            });
+        }
+    }
+}
