@@ -140,25 +140,7 @@ pub fn holdout_cv(
         &format!("hyperparameters on the first {} rows", first.len()),
     );
     let t_hyper = Instant::now();
-    let first_cal = calibrate(&first, robot, &CalibrationOptions::default())?;
-    // the four searches at once: each output's search ends on one core
-    // while the others' go on
-    use rayon::prelude::*;
-    let mut fits: Vec<ErrorModel> = [(Space::Js, false), (Space::Ejs, false)]
-        .into_iter()
-        .chain([(Space::Js, true), (Space::Ejs, true)])
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|(space, kinematic)| {
-            if kinematic {
-                fit_kinematic(&first, space, base, robot)
-            } else {
-                fit_calibrated(&first, space, base, &first_cal)
-            }
-        })
-        .collect::<Result<_>>()?;
-    let kin_t = fits.split_off(2);
-    let calibrated_t = fits;
+    let (calibrated_t, kin_t) = hyperparameter_models(&first, robot, base)?;
     let hyper_seconds = t_hyper.elapsed().as_secs_f64();
     let mut got: Vec<Gathered> = (0..5)
         .map(|_| Gathered {
@@ -385,6 +367,36 @@ fn fit_calibrated(
         .check()?
         .fit(&cal.residual(data)?)?;
     Ok(model.with_calibration(cal.clone()))
+}
+
+/// The Kriging models whose hyperparameters the folds keep, fitted on
+/// `first`: the calibrated models (JS, EJS) on one D-H calibration, and the
+/// kinematic-trend models (JS, EJS). The four searches run at once: each
+/// output's search ends on one core while the others' go on.
+fn hyperparameter_models(
+    first: &Dataset,
+    robot: &Robot,
+    base: &ErrorModelParams,
+) -> Result<(Vec<ErrorModel>, Vec<ErrorModel>)> {
+    use rayon::prelude::*;
+    let first_cal = calibrate(first, robot, &CalibrationOptions::default())?;
+    let mut fits: Vec<ErrorModel> = [
+        (Space::Js, false),
+        (Space::Ejs, false),
+        (Space::Js, true),
+        (Space::Ejs, true),
+    ]
+    .into_par_iter()
+    .map(|(space, kinematic)| {
+        if kinematic {
+            fit_kinematic(first, space, base, robot)
+        } else {
+            fit_calibrated(first, space, base, &first_cal)
+        }
+    })
+    .collect::<Result<_>>()?;
+    let kinematic = fits.split_off(2);
+    Ok((fits, kinematic))
 }
 
 /// Universal Kriging with the kinematic trend of `robot`, from `base`, on `data`.
