@@ -6,6 +6,19 @@
 //! ξ (and ν) by minimising ln ψ (seed 003 eq 14), a local search from a
 //! warm start, and the solve at given hyperparameters (CV folds, refits,
 //! the GA's fitness), each with a fixed family or the family chosen by CV.
+//!
+//! With `R = R(ξ) + νI` (correlation family of the options, eq 8 for the
+//! Gaussian), trend matrix `F` and response `y` z-scored:
+//!
+//! ```text
+//! β̂ = (FᵀR⁻¹F)⁻¹ FᵀR⁻¹y                      (eq 11, by Cholesky + QR)
+//! σ̂² = (y − Fβ̂)ᵀ R⁻¹ (y − Fβ̂) / m            (eq 13)
+//! ln ψ(ξ, ν) = ln|R| / m + ln σ̂²              (eq 14, minimised over log10 ξ, ν)
+//! ŷ(s) = f(s)ᵀβ̂ + r(s)ᵀ R⁻¹ (y − Fβ̂)          (eq 10)
+//! ```
+//!
+//! `kriging/problem.rs` holds those steps; `fit.rs` prepares the data and
+//! runs the search; `family.rs` chooses the family.
 
 use super::{CorrChoice, FitReport, KrigingModel, KrigingOptions, TrainingInputs, Trend};
 use crate::{Error, Result};
