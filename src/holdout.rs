@@ -152,20 +152,12 @@ pub fn holdout_cv(
     let mut secs = [0.0; 5];
     let mut fold_max_mm = Vec::with_capacity(k);
     let mut fold_max_covered_mm = Vec::with_capacity(k);
-    for f in 0..k {
-        progress(f + 1, &format!("fold {}", f + 1));
-        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
-        let (tr, held) = (data.select(&train), data.select(&test));
-        let t = Instant::now();
-        let dh = calibrate(&tr, robot, &CalibrationOptions::default())?;
-        let dh_secs = t.elapsed().as_secs_f64();
-        secs[0] += dh_secs;
+    // a fold's predictions into the gathered ones, and its worst errors
+    let mut merge = |out: FoldOut| {
         let mut worst = [0.0f64; 5];
         let mut worst_covered = [0.0f64; 5];
-        // a model's predictions on the held-out rows, with the std of a new
-        // measurement and the rows it flags as outside its coverage
-        let mut put = |slot: usize, p: Held| {
-            for (j, &i) in test.iter().enumerate() {
+        for (slot, p) in out.held.iter().enumerate() {
+            for (j, &i) in out.test.iter().enumerate() {
                 let err = errors[i].minus(&p.mean[j]).norm();
                 let flagged = p.flags.contains(&j);
                 worst[slot] = worst[slot].max(err);
@@ -177,32 +169,26 @@ pub fn holdout_cv(
                 g.std[i] = p.std[j];
                 g.flagged[i] = flagged;
             }
-        };
-        let s = dh.identifiability().noise_mm;
-        put(
-            0,
-            Held {
-                mean: dh.predict(&held.q)?,
-                std: dh
-                    .predict_variance(&held.q)?
-                    .iter()
-                    .map(|v| v.map(|x| (x + s * s).sqrt()))
-                    .collect(),
-                flags: Vec::new(),
-            },
-        );
-        for sp in 0..2 {
-            let t = Instant::now();
-            let c = calibrated_t[sp].refit_with_calibration(&tr, dh.clone())?;
-            secs[1 + sp] += dh_secs + t.elapsed().as_secs_f64();
-            put(1 + sp, predicted(&c, &held)?);
-            let t = Instant::now();
-            let uk = kin_t[sp].refit(&tr)?;
-            secs[3 + sp] += t.elapsed().as_secs_f64();
-            put(3 + sp, predicted(&uk, &held)?);
+            secs[slot] += out.secs[slot];
         }
         fold_max_mm.push(worst);
         fold_max_covered_mm.push(worst_covered);
+    };
+    let run = |f: usize| fold_out(data, fold, f, robot, &calibrated_t, &kin_t);
+    if m <= crate::kriging::SEARCH_ROWS {
+        // small folds at once: each fold's calibration and refits leave a
+        // core idle part of the time, and their memory is small
+        use rayon::prelude::*;
+        progress(1, &format!("{k} folds"));
+        let outs: Vec<Result<FoldOut>> = (0..k).into_par_iter().map(run).collect();
+        for out in outs {
+            merge(out?);
+        }
+    } else {
+        for f in 0..k {
+            progress(f + 1, &format!("fold {}", f + 1));
+            merge(run(f)?);
+        }
     }
     let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];
     for (i, n) in CV_MODELS.iter().enumerate() {
@@ -224,6 +210,63 @@ pub fn holdout_cv(
         folds: k,
         hyper_rows: first.len(),
         hyper_seconds,
+    })
+}
+
+/// One fold's held-out rows and, per model (the D-H calibration, then
+/// [`CV_MODELS`]), its predictions there and its wall time.
+struct FoldOut {
+    test: Vec<usize>,
+    held: [Held; 5],
+    secs: [f64; 5],
+}
+
+/// Fold `f`: the D-H calibration identified on its training rows, the
+/// calibrated models refitted on that calibration and the kinematic-trend
+/// models refitted, each at the hyperparameters of `calibrated` / `kinematic`
+/// (JS, EJS), and their predictions on the held-out rows.
+fn fold_out(
+    data: &Dataset,
+    fold: &[usize],
+    f: usize,
+    robot: &Robot,
+    calibrated: &[ErrorModel],
+    kinematic: &[ErrorModel],
+) -> Result<FoldOut> {
+    let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| fold[i] == f);
+    let (tr, held) = (data.select(&train), data.select(&test));
+    let t = Instant::now();
+    let dh = calibrate(&tr, robot, &CalibrationOptions::default())?;
+    let dh_secs = t.elapsed().as_secs_f64();
+    let s = dh.identifiability().noise_mm;
+    let dh_held = Held {
+        mean: dh.predict(&held.q)?,
+        std: dh
+            .predict_variance(&held.q)?
+            .iter()
+            .map(|v| v.map(|x| (x + s * s).sqrt()))
+            .collect(),
+        flags: Vec::new(),
+    };
+    // space `sp` (JS, EJS): the calibrated and the kinematic-trend model's
+    // predictions and times
+    let pair = |sp: usize| -> Result<(Held, Held, f64, f64)> {
+        let t = Instant::now();
+        let c = calibrated[sp].refit_with_calibration(&tr, dh.clone())?;
+        let c_secs = dh_secs + t.elapsed().as_secs_f64();
+        let c_held = predicted(&c, &held)?;
+        let t = Instant::now();
+        let uk = kinematic[sp].refit(&tr)?;
+        let k_secs = t.elapsed().as_secs_f64();
+        Ok((c_held, predicted(&uk, &held)?, c_secs, k_secs))
+    };
+    let (c_js, k_js, cs_js, ks_js) = pair(0)?;
+    let (c_ejs, k_ejs, cs_ejs, ks_ejs) = pair(1)?;
+    let secs = [dh_secs, cs_js, cs_ejs, ks_js, ks_ejs];
+    Ok(FoldOut {
+        test,
+        held: [dh_held, c_js, c_ejs, k_js, k_ejs],
+        secs,
     })
 }
 
