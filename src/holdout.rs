@@ -107,6 +107,12 @@ struct Gathered {
     flagged: Vec<bool>,
 }
 
+/// Campaigns up to this many rows cross-validate their folds at once: a
+/// fold's D-H calibration and refits leave a core idle part of the time,
+/// and two folds' models (m × m factors per output) stay small. Larger
+/// campaigns run one fold at a time, which also keeps their peak memory.
+pub const PARALLEL_FOLD_ROWS: usize = 1000;
+
 /// Cross-validation of the five models on all rows, `fold[i]` being the
 /// fold of row `i` (0..k: a seeded random partition,
 /// [`crate::stats::kfold_partition`], or one fold per group,
@@ -175,7 +181,7 @@ pub fn holdout_cv(
         fold_max_covered_mm.push(worst_covered);
     };
     let run = |f: usize| fold_out(data, fold, f, robot, &calibrated_t, &kin_t);
-    if m <= crate::kriging::SEARCH_ROWS {
+    if m <= PARALLEL_FOLD_ROWS {
         // small folds at once: each fold's calibration and refits leave a
         // core idle part of the time, and their memory is small
         use rayon::prelude::*;

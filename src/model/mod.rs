@@ -109,16 +109,7 @@ impl ErrorModel {
     /// # Ok::<(), robokrige::Error>(())
     /// ```
     pub fn fit(data: &Dataset, space: Space, opts: &KrigingOptions) -> Result<Self> {
-        let (map, x) = InputMap::fit(data, space, &[], &[])?;
-        let trend: Trend = opts.trend.trend(map.dim());
-        fit_outputs(
-            data,
-            &map,
-            &x,
-            opts,
-            &[trend.clone(), trend.clone(), trend],
-            None,
-        )
+        ErrorModel::fit_with_extras(data, space, &[], opts, &[], None)
     }
 
     /// File format tag, [`MODEL_FORMAT`].
