@@ -237,9 +237,15 @@ impl ErrorModel {
     /// search is too slow (ξ on a subset, then one factorisation on
     /// everything), and what refit-mode CV folds use.
     pub fn refit(&self, data: &Dataset) -> Result<Self> {
-        if let Some(c) = &self.calibration {
-            return self.refit_with_calibration(data, c.reidentify(data)?);
+        match &self.calibration {
+            Some(c) => self.refit_with_calibration(data, c.reidentify(data)?),
+            None => self.refit_outputs(data),
         }
+    }
+
+    /// The Kriging outputs of [`ErrorModel::refit`] on `data` as it is
+    /// (the calibration, if any, is kept as it was).
+    fn refit_outputs(&self, data: &Dataset) -> Result<Self> {
         if !self.extras().is_empty() {
             return Err(Error::InvalidParameter(
                 "refit at fixed hyperparameters does not support extra inputs".into(),
@@ -278,13 +284,32 @@ impl ErrorModel {
                 ..r.clone()
             })
             .collect();
-        Ok(ErrorModel {
-            inputs: map,
+        Ok(self.with_outputs(map, outputs, reports, joint_range(&data.q)))
+    }
+
+    /// This model's settings, robot and calibration with other outputs (and
+    /// their input map, reports and joint range): without cloning the old
+    /// outputs, whose kept factors are m² numbers each.
+    fn with_outputs(
+        &self,
+        inputs: InputMap,
+        outputs: Vec<KrigingModel>,
+        reports: Vec<FitReport>,
+        joint_range: Vec<(f64, f64)>,
+    ) -> Self {
+        ErrorModel {
+            format: self.format.clone(),
+            version: self.version,
+            inputs,
+            options: self.options.clone(),
             outputs,
             reports,
-            joint_range: joint_range(&data.q),
-            ..self.clone()
-        })
+            selection: self.selection.clone(),
+            joint_range,
+            robot: self.robot.clone(),
+            software: self.software.clone(),
+            calibration: self.calibration.clone(),
+        }
     }
 
     /// Each output's correlation family.
@@ -305,11 +330,9 @@ impl ErrorModel {
     /// `cal` (identified on `data` by the caller): the Kriging outputs are
     /// refitted to what `cal` leaves, and the model holds `cal`.
     pub(crate) fn refit_with_calibration(&self, data: &Dataset, cal: Calibration) -> Result<Self> {
-        let plain = ErrorModel {
-            calibration: None,
-            ..self.clone()
-        };
-        Ok(plain.refit(&cal.residual(data)?)?.with_calibration(cal))
+        Ok(self
+            .refit_outputs(&cal.residual(data)?)?
+            .with_calibration(cal))
     }
 
     /// Drop every output's factors kept in memory (recomputed when next
@@ -346,19 +369,12 @@ impl ErrorModel {
             self.hyperparameters(),
             &self.options,
         )?;
-        Ok(ErrorModel {
-            format: self.format.clone(),
-            version: self.version,
-            inputs: self.inputs.clone(),
-            options: self.options.clone(),
+        Ok(self.with_outputs(
+            self.inputs.clone(),
             outputs,
-            reports: self.reports.clone(),
-            selection: self.selection.clone(),
-            joint_range: self.joint_range.clone(),
-            robot: self.robot.clone(),
-            software: self.software.clone(),
-            calibration: self.calibration.clone(),
-        })
+            self.reports.clone(),
+            self.joint_range.clone(),
+        ))
     }
 }
 
