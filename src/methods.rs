@@ -340,10 +340,7 @@ impl Overrides {
         let optimizer = self.optimizer.unwrap_or(OptimizerKind::Bfgs);
         let opts = KrigingOptions::default()
             .trend(self.trend.unwrap_or(TrendKind::Constant))
-            .corr(
-                self.corr
-                    .unwrap_or_else(|| KrigingOptions::recommended().get_corr()),
-            )
+            .corr(self.corr.unwrap_or(CorrChoice::AUTO))
             .optimizer(optimizer)
             .nugget(self.nugget.unwrap_or(true))
             .starts(self.starts.unwrap_or(optimizer.default_starts()))

@@ -34,7 +34,7 @@ impl CorrArg {
             CorrArg::Matern52 => Correlation::Matern52.into(),
             CorrArg::Matern32 => Correlation::Matern32.into(),
             CorrArg::Exponential => Correlation::Exponential.into(),
-            CorrArg::Auto => robokrige::kriging::KrigingOptions::recommended().get_corr(),
+            CorrArg::Auto => CorrChoice::AUTO,
         }
     }
 }

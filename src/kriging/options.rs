@@ -178,9 +178,7 @@ impl KrigingOptions {
     /// closed-form K-fold CV ([`CorrChoice::ByCv`]).
     pub fn recommended() -> Self {
         KrigingOptions {
-            corr: CorrChoice::ByCv {
-                folds: FAMILY_FOLDS,
-            },
+            corr: CorrChoice::AUTO,
             ..KrigingOptions::default()
         }
     }
@@ -462,6 +460,12 @@ pub enum CorrChoice {
 }
 
 impl CorrChoice {
+    /// `auto`: each output's family by closed-form CV with [`FAMILY_FOLDS`]
+    /// folds (the `recommended` method's, the command line's default).
+    pub const AUTO: CorrChoice = CorrChoice::ByCv {
+        folds: FAMILY_FOLDS,
+    };
+
     /// The family when it is fixed.
     pub fn fixed(self) -> Option<Correlation> {
         match self {
@@ -480,9 +484,7 @@ impl CorrChoice {
     /// the choices otherwise.
     pub fn from_name(name: &str) -> Result<CorrChoice> {
         match name {
-            "auto" => Ok(CorrChoice::ByCv {
-                folds: FAMILY_FOLDS,
-            }),
+            "auto" => Ok(CorrChoice::AUTO),
             _ => Correlation::parse(name).map(CorrChoice::Fixed).ok_or_else(|| {
                 Error::InvalidParameter(format!(
                     "corr '{name}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
