@@ -19,6 +19,12 @@
 //! rows (default 1200). The train/test CSVs are written to
 //! `target/bench-data/` for `benches/reference_scale.py`.
 //!
+//! `-- --user-family [sizes]` adds, after each default fit, the same fit
+//! with a user's family ([`Correlation::register`]) that forwards every call
+//! to the built-in [`robokrige::kriging::Gaussian`]: what the trait-object
+//! path of a family of one's own costs (same evaluations, same ln ψ; the
+//! time is the measure).
+//!
 //! `-- --families` prints the correlation-family table instead:
 //! simulated campaigns of 300 poses (robot seeds 931–932, not used
 //! elsewhere; three robots) and the shipped campaign (`comau_lhs.csv`, its
@@ -119,6 +125,36 @@ fn run(case: &Case, label: &str, opts: &KrigingOptions) {
         case.name,
         lp.join(" / ")
     );
+}
+
+/// The Gaussian as a user's registered family: every call forwarded,
+/// through a trait object, to the built-in vectorised one.
+fn users_gaussian() -> Correlation {
+    use robokrige::kriging::{CorrelationModel, Gaussian, TrainingInputs};
+    struct Forward;
+    impl CorrelationModel for Forward {
+        fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
+            Gaussian.corr(theta, a, b)
+        }
+        fn fill_column(&self, theta: &[f64], x: &TrainingInputs, i: usize, out: &mut [f64]) {
+            Gaussian.fill_column(theta, x, i, out)
+        }
+        fn gradient_weights(
+            &self,
+            theta: &[f64],
+            x: &TrainingInputs,
+            i: usize,
+            r: &[f64],
+            w: &mut [f64],
+        ) {
+            Gaussian.gradient_weights(theta, x, i, r, w)
+        }
+        fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
+            Gaussian.fill_row(theta, x, s, out)
+        }
+    }
+    static FORWARD: Forward = Forward;
+    Correlation::register("users-gaussian", &FORWARD).unwrap()
 }
 
 /// Peak resident memory since the last reset, bytes (Linux).
@@ -273,7 +309,8 @@ fn main() {
         scale(&args);
         return;
     }
-    let new_only = args.iter().any(|a| a == "--new-only");
+    let user_family = args.iter().any(|a| a == "--user-family");
+    let new_only = user_family || args.iter().any(|a| a == "--new-only");
     let sizes: Vec<usize> = args
         .iter()
         .find(|a| a.chars().next().is_some_and(|c| c.is_ascii_digit()))
@@ -316,6 +353,13 @@ fn main() {
             }
             let new = KrigingOptions::default().nugget(nugget);
             run(case, &format!("BFGS (gradient){n}"), &new);
+            if user_family {
+                run(
+                    case,
+                    &format!("BFGS, user's Gaussian{n}"),
+                    &new.corr(users_gaussian()),
+                );
+            }
         }
     }
 }

@@ -156,14 +156,16 @@ fn gradient_matches_central_differences_fused_trend() {
     check_model(&model, &data, "fused");
 }
 
-/// A correlation family of the user's own (ARCHITECTURE.md, "Add a
-/// correlation family"): the rational quadratic `R = 1/(1 + h²)`, whose
+/// The path of ARCHITECTURE.md's "Add a correlation family" (a family of
+/// one's own): the rational quadratic `R = 1/(1 + h²)`, whose
 /// `q = R′(h)/(2h) = −R²`, implemented as a `CorrelationModel` from its
-/// scalar `corr` and `gradient_weights` alone. The likelihood, its analytic
-/// gradient and the solve at ξ take it as they take the built-in families.
+/// scalar `corr` and `gradient_weights` alone and registered by name. The
+/// likelihood and its analytic gradient take it as they take the built-in
+/// families; `KrigingParams::fit` and `ErrorModel::fit` fit with it; the
+/// model file names it, and reads back to the same predictions.
 #[test]
-fn a_users_correlation_family_reaches_the_likelihood_and_the_solve() {
-    use robokrige::kriging::CorrelationModel;
+fn a_users_correlation_family_reaches_the_likelihood_the_fit_and_the_model_file() {
+    use robokrige::kriging::{CorrelationModel, KrigingParams, Monomials, Trend};
     struct RationalQuadratic;
     impl CorrelationModel for RationalQuadratic {
         fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
@@ -188,6 +190,22 @@ fn a_users_correlation_family_reaches_the_likelihood_and_the_solve() {
             }
         }
     }
+    static RQ: RationalQuadratic = RationalQuadratic;
+    let rq = Correlation::register("rational-quadratic", &RQ).unwrap();
+    assert_eq!(
+        Correlation::register("rational-quadratic", &RQ).unwrap(),
+        rq
+    );
+    static OTHER: RationalQuadratic = RationalQuadratic;
+    assert!(
+        Correlation::register("rational-quadratic", &OTHER).is_err() || {
+            // a zero-sized static may share RQ's address: then it is the same model
+            std::ptr::addr_eq(&RQ as *const _, &OTHER as *const _)
+        }
+    );
+    assert!(Correlation::register("matern52", &RQ).is_err());
+    assert!(Correlation::register("Auto Family", &RQ).is_err());
+
     let data = campaign(60);
     let model = ErrorModel::fit(&data, Space::Js, &quick()).unwrap();
     let out = &model.outputs()[0];
@@ -198,7 +216,7 @@ fn a_users_correlation_family_reaches_the_likelihood_and_the_solve() {
     let y: Vec<f64> = data.errors.as_ref().unwrap().iter().map(|e| e[0]).collect();
     let prob = KrigingProblem {
         min_jitter: None,
-        corr: &RationalQuadratic,
+        corr: &rq,
         inputs: &inputs,
         f: &f,
         y: &y,
@@ -222,8 +240,54 @@ fn a_users_correlation_family_reaches_the_likelihood_and_the_solve() {
         let fd = (ln_psi(&prob, &zp, d, &mut ws) - ln_psi(&prob, &zm, d, &mut ws)) / (2.0 * h);
         assert!((grad[k] - fd).abs() <= 1e-6 + 1e-5 * scale, "component {k}");
     }
-    // the solve at ξ reproduces ψ and interpolates up to the nugget
+    // the solve at ξ reproduces ψ
     let sol = prob.solve(&theta, 1e-2).unwrap();
     assert_eq!(sol.value.ln_psi, v.ln_psi);
     assert_eq!(sol.gamma.len(), x.len());
+
+    // one output's fit with the family, searched: it is the model's family,
+    // and differs from the Gaussian's fit of the same data
+    let params = KrigingParams::new(Trend::from(Monomials::constant(d)))
+        .corr(rq)
+        .options(quick().corr(rq));
+    let (fitted, report) = params.check().unwrap().fit(x, &y).unwrap();
+    assert_eq!(fitted.corr(), rq);
+    assert!(report.ln_psi.is_finite() && report.evals > 0);
+    let (gauss, _) = KrigingParams::new(Trend::from(Monomials::constant(d)))
+        .options(quick())
+        .corr(Correlation::Gaussian)
+        .check()
+        .unwrap()
+        .fit(x, &y)
+        .unwrap();
+    let probe = vec![vec![0.1; d]];
+    let (pr, pg) = (
+        fitted.predict(&probe).unwrap(),
+        gauss.predict(&probe).unwrap(),
+    );
+    assert_ne!(pr[0].mean, pg[0].mean);
+
+    // the error model: fitted with it, saved by name, read back the same
+    let em = ErrorModel::fit(&data, Space::Js, &quick().corr(rq)).unwrap();
+    assert!(em.outputs().iter().all(|o| o.corr() == rq));
+    let dir = std::env::temp_dir().join(format!("rk_custom_corr_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("rq.json");
+    em.save(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("\"rational-quadratic\""));
+    let back = ErrorModel::load(&path).unwrap();
+    let (a, b) = (
+        em.predict_dataset(&data).unwrap(),
+        back.predict_dataset(&data).unwrap(),
+    );
+    assert_eq!(a.mean, b.mean);
+    // a file naming a family nobody registered is refused with its name
+    std::fs::write(&path, text.replace("rational-quadratic", "no-such-family")).unwrap();
+    let err = ErrorModel::load(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("no-such-family") && err.contains("register"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -16,6 +16,7 @@
 //! `−R`, `−(5/6)(1 + u)·exp(−u)`, `−(3/2)·exp(−u)` and `−exp(−h)/(2h)`
 //! (0 at h = 0, where every weighted difference vanishes).
 
+use super::registry::CustomCorrelation;
 use serde::{Deserialize, Serialize};
 
 /// A stationary correlation model with one parameter per input dimension.
@@ -58,10 +59,10 @@ pub trait CorrelationModel: Send + Sync {
 }
 
 /// The correlation families, saved by name in model files (`"gaussian"`,
-/// `"matern52"`, `"matern32"`, `"exponential"`); files without one are
-/// Gaussian. See the [module docs](self) for the formulas.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
+/// `"matern52"`, `"matern32"`, `"exponential"`, or a registered family's
+/// name); files without one are Gaussian. See the [module docs](self) for
+/// the formulas.
+#[derive(Debug, Clone, Copy, Default)]
 pub enum Correlation {
     /// `exp(−h²)`, seed 003 eq 8: the papers' family.
     #[default]
@@ -72,10 +73,24 @@ pub enum Correlation {
     Matern32,
     /// `exp(−h)` (Matérn ν = 1/2): continuous, not differentiable.
     Exponential,
+    /// A family defined outside the crate, registered by name
+    /// ([`Correlation::register`]). Fits, model files and predictions take it
+    /// as they take the built-in families; the choice by CV
+    /// ([`super::CorrChoice::ByCv`]) tries the built-in ones only.
+    Custom(&'static CustomCorrelation),
 }
 
+impl PartialEq for Correlation {
+    /// Families are equal when their names are (a registered name is unique).
+    fn eq(&self, other: &Self) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl Eq for Correlation {}
+
 impl Correlation {
-    /// Every family, Gaussian first.
+    /// Every built-in family, Gaussian first.
     pub const ALL: [Correlation; 4] = [
         Correlation::Gaussian,
         Correlation::Matern52,
@@ -90,15 +105,21 @@ impl Correlation {
             Correlation::Matern52 => "matern52",
             Correlation::Matern32 => "matern32",
             Correlation::Exponential => "exponential",
+            Correlation::Custom(c) => c.name(),
         }
     }
 
-    /// The family called `name` ([`Correlation::name`]).
+    /// The family called `name` ([`Correlation::name`]): a built-in one or
+    /// one registered in this process.
     pub fn parse(name: &str) -> Option<Correlation> {
-        Self::ALL.into_iter().find(|c| c.name() == name)
+        Self::ALL
+            .into_iter()
+            .find(|c| c.name() == name)
+            .or_else(|| super::registry::find(name).map(Correlation::Custom))
     }
 
-    /// `R` from the squared scaled distance `s = h²`.
+    /// `R` from the squared scaled distance `s = h²` (built-in families;
+    /// a registered one answers through its own [`CorrelationModel`]).
     #[inline]
     fn radial(self, s: f64) -> f64 {
         match self {
@@ -112,10 +133,12 @@ impl Correlation {
                 (1.0 + u) * (-u).exp()
             }
             Correlation::Exponential => (-s.sqrt()).exp(),
+            Correlation::Custom(c) => unreachable!("{} is not radial here", c.name()),
         }
     }
 
-    /// `q(h) = R′(h)/(2h)` from `s = h²` (see the module docs).
+    /// `q(h) = R′(h)/(2h)` from `s = h²` (see the module docs; built-in
+    /// families only).
     #[inline]
     fn slope(self, s: f64) -> f64 {
         match self {
@@ -130,7 +153,27 @@ impl Correlation {
                 -(-h).exp() / (2.0 * h)
             }
             Correlation::Exponential => 0.0,
+            Correlation::Custom(c) => unreachable!("{} is not radial here", c.name()),
         }
+    }
+}
+
+impl Serialize for Correlation {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Correlation {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        Correlation::parse(&name).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "unknown correlation family \"{name}\" (built-in: gaussian, matern52, matern32, \
+                 exponential; a family of your own must be registered with \
+                 Correlation::register before its model file is read)"
+            ))
+        })
     }
 }
 
@@ -236,6 +279,9 @@ where
 
 impl CorrelationModel for Correlation {
     fn corr(&self, theta: &[f64], a: &[f64], b: &[f64]) -> f64 {
+        if let Correlation::Custom(c) = self {
+            return c.model().corr(theta, a, b);
+        }
         let s: f64 = theta
             .iter()
             .zip(a.iter().zip(b))
@@ -245,8 +291,10 @@ impl CorrelationModel for Correlation {
     }
 
     fn fill_column(&self, theta: &[f64], x: &TrainingInputs, i: usize, out: &mut [f64]) {
-        if *self == Correlation::Gaussian {
-            return Gaussian.fill_column(theta, x, i, out);
+        match self {
+            Correlation::Gaussian => return Gaussian.fill_column(theta, x, i, out),
+            Correlation::Custom(c) => return c.model().fill_column(theta, x, i, out),
+            _ => {}
         }
         sq_dist_column(theta, x, i, 1.0, out);
         for v in out.iter_mut() {
@@ -262,8 +310,10 @@ impl CorrelationModel for Correlation {
         r: &[f64],
         w: &mut [f64],
     ) {
-        if *self == Correlation::Gaussian {
-            return Gaussian.gradient_weights(theta, x, i, r, w);
+        match self {
+            Correlation::Gaussian => return Gaussian.gradient_weights(theta, x, i, r, w),
+            Correlation::Custom(c) => return c.model().gradient_weights(theta, x, i, r, w),
+            _ => {}
         }
         let mut s = vec![0.0; w.len()];
         sq_dist_column(theta, x, i, 1.0, &mut s);
@@ -273,8 +323,10 @@ impl CorrelationModel for Correlation {
     }
 
     fn fill_row(&self, theta: &[f64], x: &TrainingInputs, s: &[f64], out: &mut [f64]) {
-        if *self == Correlation::Gaussian {
-            return Gaussian.fill_row(theta, x, s, out);
+        match self {
+            Correlation::Gaussian => return Gaussian.fill_row(theta, x, s, out),
+            Correlation::Custom(c) => return c.model().fill_row(theta, x, s, out),
+            _ => {}
         }
         sq_dist_row(theta, x, s, 1.0, out);
         for v in out.iter_mut() {

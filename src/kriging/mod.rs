@@ -1,7 +1,8 @@
 //! Universal Kriging (seed 003 eqs 6–14; seed 004 eqs 6–14; DACE).
 //!
 //! - [`trend`]: trend models `f(s)` ([`TrendModel`], [`Monomials`]).
-//! - [`corr`]: correlation models ([`CorrelationModel`], [`Gaussian`], eq 8).
+//! - [`corr`]: correlation models ([`CorrelationModel`], [`Gaussian`], eq 8);
+//!   `registry`: families of one's own, by name ([`Correlation::register`]).
 //! - [`problem`]: ψ(ξ) and the solve at fixed ξ — the whole algorithm on a page.
 //! - [`model`]: the fitted predictor and its MSE (eqs 10, 12).
 //! - `options`: what a fit is asked ([`KrigingOptions`], [`CorrChoice`]) and
@@ -27,6 +28,7 @@ pub mod model;
 mod options;
 mod params;
 pub mod problem;
+mod registry;
 mod search;
 pub mod trend;
 
@@ -39,6 +41,7 @@ pub use options::{
 };
 pub use params::{Hyperparameters, KrigingParams, Tuning, ValidKrigingParams};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
+pub use registry::CustomCorrelation;
 pub use search::{FitPlan, REFINE_ROWS, SEARCH_ROWS, converge_subset};
 use search::{Search, converge_bfgs, ln_psi_objective, optimise, row_subset};
 pub use trend::{
