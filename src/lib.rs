@@ -67,6 +67,7 @@ pub mod optim;
 pub mod output;
 pub mod params;
 pub mod physics;
+pub mod plan;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod predictor;

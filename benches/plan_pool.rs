@@ -1,0 +1,254 @@
+//! Pool-based score of the campaign planner on real UR10 campaigns (the
+//! standard way to score a design): the measured campaign is the pool; a
+//! chosen pose is "measured" by revealing its recorded error; the model is
+//! trained on the chosen poses and scored (mean 3D error, mm) on all the
+//! others.
+//!
+//! - **planned**: a space-filling first batch, then batches chosen by the
+//!   integrated-MSE reduction over the pool, the hyperparameters
+//!   re-estimated (the default model, calibrated) after every batch;
+//! - **random**: uniform subsets of the pool, mean and spread over seeds;
+//! - **maximin**: a greedy space-filling subset of the pool.
+//!
+//! Run: `cargo bench --bench plan_pool -- [c|b] [--sizes 100,200,400,800]
+//! [--seeds 10] [--batch 50] [--svg FILE]`. Needs
+//! `../shared/data/ipa-ur10/` (skips cleanly without it).
+//!
+//! `-- --timing` instead times one batch of 50 from 10 000 drawn
+//! candidates with 400 simulated poses measured (UR10), fit included.
+
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::kinematics::{self, Robot};
+use robokrige::methods::{Overrides, params_with};
+use robokrige::model::ErrorModel;
+use robokrige::plan::stop::Forecast;
+use robokrige::plan::{PlanInputs, PlanParams, PoseSet, Region, candidates};
+use std::path::Path;
+use std::time::Instant;
+
+fn robot() -> Robot {
+    kinematics::load_robot_with_tool("ur10", Some("-0.14,0.30,92.82")).unwrap()
+}
+
+fn default_model(robot: &Robot, data: &Dataset) -> ErrorModel {
+    params_with(None, &Overrides::new().robot(robot.clone()), data)
+        .unwrap()
+        .check()
+        .unwrap()
+        .fit(data)
+        .unwrap()
+}
+
+/// Mean 3D error of `model` on the pool rows not in `train`.
+fn score(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
+    let mut held = vec![true; pool.len()];
+    for &i in train {
+        held[i] = false;
+    }
+    let rows: Vec<usize> = (0..pool.len()).filter(|&i| held[i]).collect();
+    let test = pool.select(&rows);
+    let p = model.predict_dataset(&test).unwrap();
+    let e = test.errors.as_ref().unwrap();
+    p.mean
+        .iter()
+        .zip(e)
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
+        .sum::<f64>()
+        / rows.len() as f64
+}
+
+fn pool_poses(pool: &Dataset) -> PoseSet {
+    PoseSet {
+        q: pool.q.clone(),
+        dir: pool.dir.clone(),
+    }
+}
+
+/// The planned sequence: scores at `sizes` (and the plan's seconds per batch).
+fn planned(robot: &Robot, pool: &Dataset, sizes: &[usize], batch: usize) -> Vec<(usize, f64)> {
+    let region = Region::Poses(pool_poses(pool));
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut out = Vec::new();
+    let max = *sizes.iter().max().unwrap();
+    // (measured, forecast at measured + batch, measured there, CV now)
+    let mut forecasts: Vec<(usize, f64, f64, f64)> = Vec::new();
+    while chosen.len() < max {
+        let campaign = (!chosen.is_empty()).then(|| pool.select(&chosen));
+        let t0 = Instant::now();
+        let params = PlanParams::new(batch).first_batch(batch).check().unwrap();
+        let plan = params
+            .plan(&PlanInputs {
+                robot,
+                campaign: campaign.as_ref(),
+                prior: None,
+                pool: Some(pool),
+                region: &region,
+            })
+            .unwrap();
+        eprintln!(
+            "  {} measured: batch of {} in {:.1} s ({:?})",
+            chosen.len(),
+            plan.chosen.len(),
+            t0.elapsed().as_secs_f64(),
+            plan.source
+        );
+        if let Some(model) = plan.model.as_ref() {
+            let now = score(model, pool, &chosen);
+            if sizes.contains(&chosen.len()) {
+                out.push((chosen.len(), now));
+            }
+            let f = Forecast::new(model, &plan.imse_curve, chosen.len()).unwrap();
+            if let Some(prev) = forecasts.last_mut() {
+                prev.2 = now;
+            }
+            forecasts.push((
+                chosen.len(),
+                f.mean_3d[plan.chosen.len()],
+                f64::NAN,
+                f.cv_mean_3d,
+            ));
+        }
+        chosen.extend(&plan.chosen);
+    }
+    let model = default_model(robot, &pool.select(&chosen));
+    let last = score(&model, pool, &chosen);
+    if sizes.contains(&chosen.len()) {
+        out.push((chosen.len(), last));
+    }
+    if let Some(prev) = forecasts.last_mut() {
+        prev.2 = last;
+    }
+    println!(
+        "| measured m | CV mean 3D at m | forecast at m + {batch} | held-out at m + {batch} | forecast / held-out |"
+    );
+    println!("|---|---|---|---|---|");
+    for (m, f, h, cv) in &forecasts {
+        println!("| {m} | {cv:.4} | {f:.4} | {h:.4} | {:.3} |", f / h);
+    }
+    out
+}
+
+fn random(robot: &Robot, pool: &Dataset, n: usize, seed: u64) -> f64 {
+    let mut rng = robokrige::stats::rng_for(seed, "plan-pool-random");
+    let mut rows: Vec<usize> = (0..pool.len()).collect();
+    for i in (1..rows.len()).rev() {
+        let j = rand::RngExt::random_range(&mut rng, 0..=i);
+        rows.swap(i, j);
+    }
+    rows.truncate(n);
+    let model = default_model(robot, &pool.select(&rows));
+    score(&model, pool, &rows)
+}
+
+fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64).sqrt();
+    (m, s)
+}
+
+fn arg<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map(String::as_str)
+}
+
+fn timing() {
+    use robokrige::sim::{CampaignKind, CampaignSpec, ErrorProfile, TrueRobot};
+    let nominal = kinematics::preset("ur10").unwrap();
+    let truth = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), 7);
+    let mut spec = CampaignSpec::new(CampaignKind::Lhs, 7);
+    spec.poses = 400;
+    let campaign = robokrige::sim::campaign::measurements(&truth, &spec).unwrap();
+    let t0 = Instant::now();
+    let plan = PlanParams::new(50)
+        .candidates(10_000)
+        .check()
+        .unwrap()
+        .plan(&PlanInputs {
+            robot: &nominal,
+            campaign: Some(&campaign),
+            prior: None,
+            pool: None,
+            region: &Region::WorkRange,
+        })
+        .unwrap();
+    println!(
+        "one batch of {} from {} candidates, 400 measured, 1000 region points: {:.2} s (fit included)",
+        plan.chosen.len(),
+        plan.candidates,
+        t0.elapsed().as_secs_f64()
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--timing") {
+        timing();
+        return;
+    }
+    let which = if args.iter().any(|a| a == "b") {
+        "b_joint_configurations"
+    } else {
+        "c_random_poses"
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("../shared/data/ipa-ur10/series_{which}.csv"));
+    if !path.exists() {
+        eprintln!("skipped: {} not found", path.display());
+        return;
+    }
+    let sizes: Vec<usize> = arg(&args, "--sizes")
+        .unwrap_or("100,200,400,800")
+        .split(',')
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let seeds: u64 = arg(&args, "--seeds").map_or(10, |s| s.parse().unwrap());
+    let batch: usize = arg(&args, "--batch").map_or(50, |s| s.parse().unwrap());
+    let pool = read_csv(&path).unwrap();
+    let robot = robot();
+    println!(
+        "pool: series {which} ({} poses), batches of {batch}",
+        pool.len()
+    );
+    let plan = planned(&robot, &pool, &sizes, batch);
+    let ranges: Vec<(f64, f64)> = (0..robot.dof())
+        .map(|j| {
+            let col = pool.q.iter().map(|q| q[j]);
+            (
+                col.clone().fold(f64::INFINITY, f64::min),
+                col.fold(f64::NEG_INFINITY, f64::max),
+            )
+        })
+        .collect();
+    let mm = candidates::maximin(
+        &pool_poses(&pool),
+        &PoseSet::default(),
+        &ranges,
+        *sizes.iter().max().unwrap(),
+    );
+    println!("| N | planned | random N (mean ± sd, {seeds} seeds) | random 2N | maximin |");
+    println!("|---|---|---|---|---|");
+    for (n, p) in plan {
+        let r: Vec<f64> = (0..seeds).map(|s| random(&robot, &pool, n, s)).collect();
+        let r2: Vec<f64> = if 2 * n < pool.len() {
+            (0..seeds)
+                .map(|s| random(&robot, &pool, 2 * n, s))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let m = default_model(&robot, &pool.select(&mm[..n]));
+        let (rm, rs) = mean_sd(&r);
+        let r2s = if r2.is_empty() {
+            "-".into()
+        } else {
+            let (a, b) = mean_sd(&r2);
+            format!("{a:.4} ± {b:.4}")
+        };
+        println!(
+            "| {n} | {p:.4} | {rm:.4} ± {rs:.4} | {r2s} | {:.4} |",
+            score(&m, &pool, &mm[..n])
+        );
+    }
+}

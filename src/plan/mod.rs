@@ -1,0 +1,436 @@
+//! Planning a measurement campaign: which poses to measure next, from which
+//! side each joint arrives, in which order, and when to stop.
+//!
+//! One call plans one stretch of a sequential design:
+//!
+//! 1. **Candidates**: poses drawn in the robot's working ranges with a λ
+//!    per joint ([`candidates::draw`]), or the poses of a pool; those the
+//!    tracker cannot see are dropped ([`TrackerView`]).
+//! 2. **Region**: the poses whose prediction error matters — a task's
+//!    poses ([`Region::Poses`], task-specific calibration), the pool's, or
+//!    by default a sample of the working ranges.
+//! 3. **Hyperparameters**: re-estimated on the measured campaign when
+//!    there is one (the default error model, calibrated when a robot is
+//!    given); else those of a prior model (a robot of the same type),
+//!    conditioned on whatever has been measured; else unknown — the first
+//!    batch covers the region ([`candidates::covering`]) and the next
+//!    call, with its measurements, plans by the model.
+//! 4. **Choice**: with hyperparameters, the budget is chosen greedily by the
+//!    largest reduction of the region's integrated MSE (`imse`), summed over
+//!    the three axes, in output units (mm²).
+//! 5. **Order** ([`order::order`]): a greedy tour from the robot's current
+//!    pose, with a pre-position move wherever the direct move would not
+//!    realise the planned λ.
+//!
+//! [`Plan::imse_curve`] records the region's integrated MSE after each
+//! chosen pose: the model's own forecast of how the error falls with the
+//! number of poses ([`stop`] turns it into a held-out error forecast).
+
+pub mod candidates;
+mod imse;
+mod io;
+pub mod order;
+pub mod stop;
+
+pub use candidates::{PoseSet, TrackerView};
+pub use order::PlannedMove;
+
+use crate::dataset::Dataset;
+use crate::kinematics::Robot;
+use crate::methods::{Overrides, params_with};
+use crate::model::ErrorModel;
+use crate::{Error, Result};
+use imse::AxisDesign;
+
+/// The region whose prediction error a plan lowers.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Region {
+    /// A sample of the robot's working ranges, both directions of every
+    /// joint equally likely.
+    WorkRange,
+    /// These poses (a task, a trajectory's joint solutions, a pool).
+    Poses(PoseSet),
+}
+
+/// Rows of a measured campaign from which the hyperparameters are
+/// re-estimated; below it a prior model's are used (or the batch is
+/// space-filling).
+pub const MIN_FIT_ROWS: usize = 30;
+
+/// What to plan, set by builder methods; [`PlanParams::check`] validates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanParams {
+    budget: usize,
+    first_batch: usize,
+    candidates: usize,
+    region_points: usize,
+    via_step: f64,
+    tracker: Option<TrackerView>,
+    seed: u64,
+}
+
+impl PlanParams {
+    /// Plan `budget` poses: 5 000 candidates drawn, 1 000 region points, a
+    /// first space-filling batch of at most 50, via-points 5° (5 mm) back,
+    /// no tracker constraint, seed 1.
+    pub fn new(budget: usize) -> Self {
+        PlanParams {
+            budget,
+            first_batch: 50,
+            candidates: 5000,
+            region_points: 1000,
+            via_step: 5.0,
+            tracker: None,
+            seed: 1,
+        }
+    }
+
+    /// Poses of the first, space-filling batch when no hyperparameter is
+    /// known yet.
+    pub fn first_batch(mut self, n: usize) -> Self {
+        self.first_batch = n;
+        self
+    }
+
+    /// Candidates drawn in the working ranges (without a pool).
+    pub fn candidates(mut self, n: usize) -> Self {
+        self.candidates = n;
+        self
+    }
+
+    /// Points of the region the integrated MSE averages over (a larger
+    /// region is thinned evenly to this many).
+    pub fn region_points(mut self, n: usize) -> Self {
+        self.region_points = n;
+        self
+    }
+
+    /// How far back a pre-position move starts, degrees (mm for prismatic
+    /// joints).
+    pub fn via_step(mut self, step: f64) -> Self {
+        self.via_step = step;
+        self
+    }
+
+    /// Plan only poses this tracker sees.
+    pub fn tracker(mut self, view: TrackerView) -> Self {
+        self.tracker = Some(view);
+        self
+    }
+
+    /// Seed of the candidates and of the region sample.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Check the parameters.
+    pub fn check(self) -> Result<ValidPlanParams> {
+        let bad = |what: &str| Err(Error::InvalidParameter(what.into()));
+        if self.budget == 0 {
+            return bad("the budget must be at least one pose");
+        }
+        if self.first_batch == 0 || self.candidates == 0 || self.region_points == 0 {
+            return bad("the first batch, the candidates and the region points must be positive");
+        }
+        if !(self.via_step.is_finite() && self.via_step > 0.0) {
+            return bad("the via-point step must be a positive angle (degrees) or length (mm)");
+        }
+        Ok(ValidPlanParams(self))
+    }
+}
+
+/// [`PlanParams`] that passed [`PlanParams::check`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidPlanParams(PlanParams);
+
+/// Where the hyperparameters of a plan came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HyperSource {
+    /// Estimated on the measured campaign.
+    Campaign,
+    /// A prior model's (conditioned on the campaign's poses, if any).
+    Prior,
+    /// None yet: a space-filling batch.
+    SpaceFilling,
+}
+
+/// A planned stretch of a campaign.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// The moves in order: measured poses and via-points.
+    pub moves: Vec<PlannedMove>,
+    /// The chosen candidates in the order chosen (indices into the
+    /// candidates: the pool's rows with a pool).
+    pub chosen: Vec<usize>,
+    /// The chosen poses with their planned λ, in the order chosen.
+    pub poses: PoseSet,
+    /// Where the hyperparameters came from.
+    pub source: HyperSource,
+    /// The region's integrated MSE (mm², summed over x, y, z) before the
+    /// plan and after each chosen pose (empty for a space-filling batch).
+    pub imse_curve: Vec<f64>,
+    /// Candidates considered (after the tracker's line of sight).
+    pub candidates: usize,
+    /// Measured poses whose planned λ the order could not realise (a joint
+    /// at its limit).
+    pub unrealised: usize,
+    /// The model the plan used (re-estimated, or the prior refitted).
+    pub model: Option<ErrorModel>,
+    /// What the user should know.
+    pub notes: Vec<String>,
+}
+
+/// What a plan starts from.
+#[derive(Debug, Clone, Copy)]
+pub struct PlanInputs<'a> {
+    /// The robot: working ranges, limits, home pose, nominal kinematics.
+    pub robot: &'a Robot,
+    /// What has been measured (errors needed for the hyperparameters).
+    pub campaign: Option<&'a Dataset>,
+    /// A prior model (e.g. of a robot of the same type).
+    pub prior: Option<&'a ErrorModel>,
+    /// Choose among these poses only (their errors, if any, are ignored).
+    pub pool: Option<&'a Dataset>,
+    /// The region that matters.
+    pub region: &'a Region,
+}
+
+impl ValidPlanParams {
+    /// The parameters.
+    pub fn params(&self) -> &PlanParams {
+        &self.0
+    }
+
+    /// Plan the next poses.
+    pub fn plan(&self, inputs: &PlanInputs) -> Result<Plan> {
+        let p = &self.0;
+        let robot = inputs.robot;
+        let n = robot.dof();
+        let ranges = working_ranges(robot);
+        let step = vec![p.via_step; n];
+        let measured = measured_poses(robot, inputs.campaign)?;
+        let (cand, cand_rows) = self.candidate_set(inputs, &ranges, &step, &measured)?;
+        if cand.is_empty() {
+            return Err(Error::InvalidParameter(
+                "no candidate pose is left to plan (all measured, or none the tracker sees)".into(),
+            ));
+        }
+        let mut notes = Vec::new();
+        let (model, source) = self.hyperparameters(inputs, &mut notes)?;
+        let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
+        let (chosen, imse_curve) = match &model {
+            Some(m) => choose_by_imse(m, &cand, &region, p.budget.min(cand.len()))?,
+            None => {
+                let k = p.budget.min(p.first_batch);
+                if k < p.budget {
+                    notes.push(format!(
+                        "no hyperparameters yet: planned a space-filling first batch of {k} of the \
+                         {} poses; measure it, then plan the rest with --campaign",
+                        p.budget
+                    ));
+                }
+                let chosen = candidates::covering(&cand, &region, &measured, &ranges, k);
+                (chosen, Vec::new())
+            }
+        };
+        if chosen.len() < p.budget && model.is_some() {
+            notes.push(format!(
+                "only {} candidates: planned {} of {} poses",
+                cand.len(),
+                chosen.len(),
+                p.budget
+            ));
+        }
+        let poses = cand.select(&chosen);
+        let (start, start_dir) = match measured.q.last() {
+            Some(q) => (
+                q.clone(),
+                measured.dir.last().cloned().unwrap_or(vec![1.0; n]),
+            ),
+            None => (robot.home.clone(), vec![1.0; n]),
+        };
+        let (moves, unrealised) =
+            order::order(&poses, &start, &start_dir, &ranges, &robot.limits, &step);
+        Ok(Plan {
+            moves,
+            chosen: chosen.iter().map(|&i| cand_rows[i]).collect(),
+            poses,
+            source,
+            imse_curve,
+            candidates: cand.len(),
+            unrealised,
+            model,
+            notes,
+        })
+    }
+
+    /// The candidates (and the row each came from): the pool's rows not
+    /// measured, or poses drawn in the working ranges; only those the
+    /// tracker sees.
+    fn candidate_set(
+        &self,
+        inputs: &PlanInputs,
+        ranges: &[(f64, f64)],
+        step: &[f64],
+        measured: &PoseSet,
+    ) -> Result<(PoseSet, Vec<usize>)> {
+        let p = &self.0;
+        let robot = inputs.robot;
+        let all = match inputs.pool {
+            Some(pool) => {
+                robot.check_dataset(pool)?;
+                PoseSet {
+                    q: pool.q.clone(),
+                    dir: pool.dir.clone(),
+                }
+            }
+            None => candidates::draw(ranges, &robot.limits, step, p.candidates, p.seed),
+        };
+        let key =
+            |q: &[f64], d: &[f64]| -> Vec<u64> { q.iter().chain(d).map(|v| v.to_bits()).collect() };
+        let done: std::collections::HashSet<Vec<u64>> = measured
+            .q
+            .iter()
+            .zip(&measured.dir)
+            .map(|(q, d)| key(q, d))
+            .collect();
+        let rows: Vec<usize> = (0..all.len())
+            .filter(|&i| !done.contains(&key(&all.q[i], &all.dir[i])))
+            .filter(|&i| robot.within_limits(&all.q[i]))
+            .filter(|&i| p.tracker.as_ref().is_none_or(|t| t.sees(robot, &all.q[i])))
+            .collect();
+        Ok((all.select(&rows), rows))
+    }
+
+    /// The model whose hyperparameters the plan uses, and where they came
+    /// from.
+    fn hyperparameters(
+        &self,
+        inputs: &PlanInputs,
+        notes: &mut Vec<String>,
+    ) -> Result<(Option<ErrorModel>, HyperSource)> {
+        let measured = inputs
+            .campaign
+            .filter(|c| c.errors.is_some() && !c.is_empty());
+        if let Some(c) = measured.filter(|c| c.len() >= MIN_FIT_ROWS) {
+            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?;
+            return Ok((Some(params.check()?.fit(c)?), HyperSource::Campaign));
+        }
+        if let Some(prior) = inputs.prior {
+            let model = match measured {
+                Some(c) => prior.refit(c)?,
+                None => prior.clone(),
+            };
+            if measured.is_none() {
+                notes.push(
+                    "the prior model's hyperparameters, with nothing of this robot measured yet"
+                        .into(),
+                );
+            }
+            return Ok((Some(model), HyperSource::Prior));
+        }
+        if let Some(c) = measured {
+            notes.push(format!(
+                "{} measured poses are too few to estimate hyperparameters (at least {MIN_FIT_ROWS})",
+                c.len()
+            ));
+        }
+        Ok((None, HyperSource::SpaceFilling))
+    }
+
+    /// The region's points: the given poses thinned, or a sample of the
+    /// working ranges.
+    fn region_set(
+        &self,
+        region: &Region,
+        ranges: &[(f64, f64)],
+        limits: &[(f64, f64)],
+        step: &[f64],
+        n: usize,
+    ) -> Result<PoseSet> {
+        let p = &self.0;
+        let set = match region {
+            Region::Poses(set) => set.thinned(p.region_points),
+            Region::WorkRange => {
+                candidates::draw(ranges, limits, step, p.region_points, p.seed ^ 0x5eed)
+            }
+        };
+        if set.is_empty() || set.q.iter().any(|q| q.len() != n) {
+            return Err(Error::InvalidParameter(format!(
+                "the region needs at least one pose of {n} joints"
+            )));
+        }
+        Ok(set)
+    }
+}
+
+/// The working ranges of `robot` (its joint limits where a range is empty).
+fn working_ranges(robot: &Robot) -> Vec<(f64, f64)> {
+    robot
+        .work_ranges
+        .iter()
+        .zip(&robot.limits)
+        .map(|(w, l)| if w.1 > w.0 { *w } else { *l })
+        .collect()
+}
+
+/// The measured poses of a campaign (none without one).
+fn measured_poses(robot: &Robot, campaign: Option<&Dataset>) -> Result<PoseSet> {
+    match campaign {
+        Some(c) => {
+            robot.check_dataset(c)?;
+            Ok(PoseSet {
+                q: c.q.clone(),
+                dir: c.dir.clone(),
+            })
+        }
+        None => Ok(PoseSet::default()),
+    }
+}
+
+/// Choose `k` candidates greedily by the largest reduction of the region's
+/// integrated MSE summed over the model's outputs; the IMSE before and
+/// after each choice.
+fn choose_by_imse(
+    model: &ErrorModel,
+    cand: &PoseSet,
+    region: &PoseSet,
+    k: usize,
+) -> Result<(Vec<usize>, Vec<f64>)> {
+    let map = model.input_map();
+    if !map.extras().is_empty() {
+        return Err(Error::InvalidParameter(
+            "planning needs a model of the joints and directions only (this one has extra inputs)"
+                .into(),
+        ));
+    }
+    let sc = map.encode(&cand.q, &cand.dir)?;
+    let sz = map.encode(&region.q, &region.dir)?;
+    let mut axes: Vec<AxisDesign> = model
+        .outputs()
+        .iter()
+        .map(|o| AxisDesign::new(o, &sc, &sz))
+        .collect::<Result<_>>()?;
+    let mut curve = vec![axes.iter().map(AxisDesign::imse).sum::<f64>()];
+    let mut chosen = Vec::with_capacity(k);
+    let mut taken = vec![false; cand.len()];
+    let mut gain = vec![0.0; cand.len()];
+    for _ in 0..k {
+        gain.iter_mut().for_each(|g| *g = 0.0);
+        for a in &axes {
+            a.gains(&mut gain);
+        }
+        let best = (0..cand.len())
+            .filter(|&i| !taken[i])
+            .max_by(|&a, &b| gain[a].total_cmp(&gain[b]))
+            .expect("a candidate left");
+        taken[best] = true;
+        chosen.push(best);
+        for a in &mut axes {
+            a.choose(best);
+        }
+        curve.push(axes.iter().map(AxisDesign::imse).sum::<f64>());
+    }
+    Ok((chosen, curve))
+}

@@ -1,0 +1,113 @@
+//! When to stop measuring: the held-out error forecast as a function of the
+//! number of poses.
+//!
+//! Two measurements of the same model meet here. The planner's curve
+//! `IMSE(m + k)` ([`super::Plan::imse_curve`]) is the model's own MSE of
+//! the latent error over the region, after k more planned poses; a
+//! closed-form 10-fold CV of the fitted model gives the held-out error *now*
+//! (`RMS_cv`, 3D, which includes the measurement noise). The forecast
+//!
+//! ```text
+//! RMS(m + k) = √(a · IMSE(m + k) + ν²),   a = (RMS_cv² − ν²) / IMSE(m)
+//! ```
+//!
+//! (ν²: the model's noise variance summed over x, y, z, the repeatability
+//! floor) scales the model's MSE so that it meets the CV error at the
+//! campaign measured, and falls with the planned poses as the MSE does; the
+//! mean 3D error is that RMS times the ratio mean/RMS of the CV residuals.
+//! A target below the floor `√ν²·ratio` is unreachable by more poses.
+
+use crate::model::ErrorModel;
+use crate::stats::{fold_blocks, kfold_partition};
+use crate::{Error, Result};
+
+/// Folds of the CV that anchors the forecast.
+pub const FORECAST_FOLDS: usize = 10;
+
+/// The forecast of the held-out mean 3D error with the number of poses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Forecast {
+    /// Poses measured when the forecast was made.
+    pub measured: usize,
+    /// Closed-form CV mean 3D error at `measured`, mm.
+    pub cv_mean_3d: f64,
+    /// The repeatability floor: the mean 3D error with infinitely many
+    /// poses (the model's noise), mm.
+    pub floor_mean_3d: f64,
+    /// Forecast mean 3D error after `k` more planned poses (`k` = 0, 1, …,
+    /// the plan's length), mm.
+    pub mean_3d: Vec<f64>,
+}
+
+/// What the forecast says of a target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Verdict {
+    /// Already met by the campaign measured.
+    Met,
+    /// Met after this many more poses of the plan.
+    After(usize),
+    /// Not within the plan's poses, though above the floor: plan more.
+    BeyondPlan,
+    /// Below the repeatability floor: no number of poses reaches it.
+    Unreachable,
+}
+
+impl Forecast {
+    /// The forecast for `model` (fitted on `measured` poses) and the
+    /// planner's `imse_curve` (mm², from the campaign measured on).
+    pub fn new(model: &ErrorModel, imse_curve: &[f64], measured: usize) -> Result<Self> {
+        let Some(&imse0) = imse_curve.first() else {
+            return Err(Error::InvalidParameter(
+                "a forecast needs the planner's IMSE curve (a plan by the model)".into(),
+            ));
+        };
+        let (rms, ratio) = cv_error(model)?;
+        let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
+        let a = ((rms * rms - noise2) / imse0.max(f64::MIN_POSITIVE)).max(0.0);
+        let mean_3d = imse_curve
+            .iter()
+            .map(|i| (a * i + noise2).sqrt() * ratio)
+            .collect();
+        Ok(Forecast {
+            measured,
+            cv_mean_3d: rms * ratio,
+            floor_mean_3d: noise2.sqrt() * ratio,
+            mean_3d,
+        })
+    }
+
+    /// When the target mean 3D error `target_mm` is met.
+    pub fn verdict(&self, target_mm: f64) -> Verdict {
+        if self.cv_mean_3d <= target_mm {
+            return Verdict::Met;
+        }
+        if let Some(k) = self.mean_3d.iter().position(|e| *e <= target_mm) {
+            return Verdict::After(k);
+        }
+        if target_mm <= self.floor_mean_3d {
+            Verdict::Unreachable
+        } else {
+            Verdict::BeyondPlan
+        }
+    }
+}
+
+/// The closed-form 10-fold CV RMS 3D error of `model` and the ratio of its
+/// mean 3D error to it (the Kriging parts' residuals with ξ, ν and the
+/// calibration held; β re-estimated per fold).
+fn cv_error(model: &ErrorModel) -> Result<(f64, f64)> {
+    let m = model.n_train();
+    let k = FORECAST_FOLDS.min(m);
+    let blocks = fold_blocks(&kfold_partition(m, k, 1)?);
+    let axes: Vec<Vec<f64>> = model
+        .outputs()
+        .iter()
+        .map(|o| o.held_out_residuals(&blocks))
+        .collect::<Result<_>>()?;
+    let norms: Vec<f64> = (0..m)
+        .map(|i| axes.iter().map(|a| a[i] * a[i]).sum::<f64>().sqrt())
+        .collect();
+    let rms = (norms.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
+    let mean = norms.iter().sum::<f64>() / m as f64;
+    Ok((rms, if rms > 0.0 { mean / rms } else { 1.0 }))
+}
