@@ -2,10 +2,15 @@
 //! (angles in the format's units, order, measure/via marks, waits), and
 //! the inputs and options the writers refuse.
 
+use robokrige::compensate::{CommandsOutput, CompensationOptions, compensate};
+use robokrige::kinematics;
+use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::model::ErrorModel;
 use robokrige::program::{
     ProgramFormat, ProgramOptions, ProgramPose, check_robot, program_name, render, write,
 };
-use robokrige::trajectory::{TargetFile, read_target_file};
+use robokrige::space::Space;
+use robokrige::trajectory::{TargetFile, Trajectory, read_target_file};
 use std::path::Path;
 
 const TOL: f64 = 1e-9;
@@ -483,4 +488,53 @@ fn a_refused_program_writes_nothing() {
     p[0].q[0] = f64::NAN;
     assert!(write(&path, &p, ProgramFormat::Krl, &ProgramOptions::default()).is_err());
     assert!(!path.exists());
+}
+
+/// The compensated commands as a KRL program: the compensator's joints,
+/// every move a path point, and the joints' nominal TCP at the commands.
+#[test]
+fn compensated_commands_write_as_a_program_of_their_joints() {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let data =
+        robokrige::dataset::read_csv(format!("{dir}/datasets/comau_lhs.csv").as_ref()).unwrap();
+    let data = data.select(&(0..60).collect::<Vec<_>>());
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(200)
+        .starts(1);
+    let model = ErrorModel::fit(&data, Space::Ejs, &opts).unwrap();
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let circle = Trajectory::read_csv(format!("{dir}/datasets/comau_circle.csv").as_ref()).unwrap();
+    let res = compensate(&robot, &model, &circle, &CompensationOptions::default()).unwrap();
+
+    let out = tempfile::tempdir().unwrap();
+    let path = out.path().join("circle_comp.src");
+    let target = CommandsOutput::new(&path, Some(ProgramFormat::Krl), &robot).unwrap();
+    target.write(&res).unwrap();
+    let (name, moves) = parse_krl(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!(name, "circle_comp");
+    assert_eq!(moves.len(), circle.len());
+    for (i, (m, q)) in moves.iter().zip(&res.joints).enumerate() {
+        assert_eq!(
+            (m.measure, m.label.as_deref(), m.wait_s),
+            (None, Some("path"), None)
+        );
+        for (a, b) in m.q.iter().zip(q) {
+            assert!((a - b).abs() < TOL, "move {i}: {a} vs {b}");
+        }
+        let tcp = robot.position(&m.q).unwrap();
+        let cmd = res.commands.poses[i].translation.vector;
+        assert!(
+            (tcp - cmd).norm() < 1e-3,
+            "move {i}: {}",
+            (tcp - cmd).norm()
+        );
+    }
+    // refused before any work: a KRL name that is not the file's, a SCARA in URScript
+    let bad = out.path().join("circle-comp.src");
+    assert!(CommandsOutput::new(&bad, Some(ProgramFormat::Krl), &robot).is_err());
+    let scara = kinematics::preset("scara-rh3frh5515").unwrap();
+    let e = CommandsOutput::new(&path, Some(ProgramFormat::Urscript), &scara).unwrap_err();
+    assert!(e.to_string().contains("movej takes the 6 joints"), "{e}");
+    assert!(CommandsOutput::new(&path, Some(ProgramFormat::Csv), &scara).is_ok());
 }
