@@ -392,9 +392,13 @@ fn controllers_refuse_robots_they_cannot_program() {
     };
     let e = err(&poses(), ProgramFormat::Urscript, &with_slide);
     assert!(e.contains("joint q3 is prismatic"), "{e}");
-    // KRL and RAPID take a linear axis in mm
-    assert!(render(&poses(), ProgramFormat::Krl, &with_slide).is_ok());
-    assert!(render(&poses(), ProgramFormat::Rapid, &with_slide).is_ok());
+    // KRL and RAPID take a linear axis in mm, and say so
+    for f in [ProgramFormat::Krl, ProgramFormat::Rapid] {
+        let text = render(&poses(), f, &with_slide).unwrap();
+        assert!(text.contains("joints in deg (mm for q3)\n"), "{text}");
+        let text = render(&poses(), f, &ProgramOptions::default()).unwrap();
+        assert!(text.contains("joints in deg\n"), "{text}");
+    }
     let e = err(
         &poses(),
         ProgramFormat::Krl,

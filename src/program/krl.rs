@@ -20,7 +20,7 @@
 //! linear axis. The axis speeds are set once, at the top, as a percentage of
 //! each axis's maximum ([`ProgramOptions::krl_percent`]).
 
-use super::{DEG_DECIMALS, ProgramOptions, ProgramPose, fixed, marks, summary};
+use super::{DEG_DECIMALS, ProgramOptions, ProgramPose, deg_units, fixed, marks, summary};
 use std::fmt::Write;
 
 /// The KRL text of checked `poses` (six joints each).
@@ -31,7 +31,7 @@ pub(super) fn render(poses: &[ProgramPose], opts: &ProgramOptions) -> String {
     let settle = fixed(opts.settle_s, 6);
     // writing to a String cannot fail
     let _ = writeln!(s, "DEF {}( )", opts.name);
-    let _ = writeln!(s, "  ; {}", summary(poses, "deg (mm for a linear axis)"));
+    let _ = writeln!(s, "  ; {}", summary(poses, &deg_units(opts)));
     for var in ["$VEL_AXIS", "$ACC_AXIS"] {
         for k in 1..=n {
             let _ = writeln!(s, "  {var}[{k}] = {pct}");

@@ -456,6 +456,20 @@ fn summary(poses: &[ProgramPose], units: &str) -> String {
     )
 }
 
+/// The units of KRL and RAPID joint values: `deg`, or `deg (mm for q3)`
+/// with prismatic joints.
+fn deg_units(opts: &ProgramOptions) -> String {
+    let linear: Vec<String> = (opts.prismatic.iter().enumerate())
+        .filter(|(_, p)| **p)
+        .map(|(j, _)| format!("q{}", j + 1))
+        .collect();
+    if linear.is_empty() {
+        "deg".into()
+    } else {
+        format!("deg (mm for {})", linear.join(", "))
+    }
+}
+
 /// `v` with `decimals` decimals, trailing zeros dropped but one kept
 /// (`90.0`, `-1.5707963268`); never `-0.0`.
 fn fixed(v: f64, decimals: usize) -> String {

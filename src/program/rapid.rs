@@ -19,7 +19,7 @@
 //! ([`ProgramOptions::rapid_speed`]). The moves use `tool0` (the flange):
 //! a joint target does not depend on the tool.
 
-use super::{DEG_DECIMALS, ProgramOptions, ProgramPose, fixed, marks, summary};
+use super::{DEG_DECIMALS, ProgramOptions, ProgramPose, deg_units, fixed, marks, summary};
 use std::fmt::Write;
 
 /// The external axes of every joint target: none connected.
@@ -31,7 +31,7 @@ pub(super) fn render(poses: &[ProgramPose], opts: &ProgramOptions) -> String {
     let settle = fixed(opts.settle_s, 6);
     // writing to a String cannot fail
     let _ = writeln!(s, "MODULE {}", opts.name);
-    let _ = writeln!(s, "  ! {}", summary(poses, "deg (mm for a linear axis)"));
+    let _ = writeln!(s, "  ! {}", summary(poses, &deg_units(opts)));
     s.push_str("  PROC main()\n");
     for (p, mark) in poses.iter().zip(marks(poses)) {
         let q: Vec<String> = p.q.iter().map(|v| fixed(*v, DEG_DECIMALS)).collect();
