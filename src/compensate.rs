@@ -40,15 +40,24 @@
 //! Only positions are corrected; each command keeps its target's orientation.
 //! Points the IK cannot reach are reported by index ([`Error::Unreachable`]),
 //! never passed through uncorrected.
+//!
+//! **Output.** The commands go to the controller as a trajectory CSV (TCP
+//! poses, [`Trajectory::write_csv`]) or as a robot program of joint moves
+//! ([`CommandsOutput`], [`crate::program`]): the joints of each command are
+//! the nominal IK solutions the loop ends with ([`Compensated::joints`]),
+//! seeded along the path, so the program makes the moves the controller's
+//! own IK would.
 
 use crate::kinematics::{IkOptions, Robot, all_reached, first_pass_joints, path_target};
 use crate::predictor::ErrorPredictor;
+use crate::program::{self, ProgramFormat, ProgramOptions, ProgramPose};
 use crate::space::derive_directions;
 use crate::trajectory::Trajectory;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// Options of [`compensate`]; `Default` is iterative, 1 µm, 10 iterations,
 /// starting from the robot's home pose.
@@ -145,6 +154,62 @@ pub struct Compensated {
     /// Points whose λ changed in the last iteration (direction reversals the
     /// feed-forward loop cannot settle), in order.
     pub unsettled: Vec<usize>,
+}
+
+impl Compensated {
+    /// The commands as program moves, in order: the joints of each command
+    /// ([`Compensated::joints`]), every one a point of the path — a motion
+    /// target, not a measurement (`measure = false`, label `path`).
+    pub fn program_poses(&self) -> Vec<ProgramPose> {
+        self.joints
+            .iter()
+            .map(|q| ProgramPose::via(q.clone()).with_label("path"))
+            .collect()
+    }
+}
+
+/// Where the compensated commands go: a trajectory CSV, or a robot program
+/// of their joints ([`Compensated::program_poses`]). Made before the
+/// compensation, so that a program the robot cannot run (a KRL file name
+/// that is not a KRL name, a SCARA in URScript) is refused before any work.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandsOutput {
+    path: PathBuf,
+    program: Option<(ProgramFormat, ProgramOptions)>,
+}
+
+impl CommandsOutput {
+    /// The output `path` for `robot`'s commands: a trajectory CSV when
+    /// `format` is `None`, else a program in `format` named after the file
+    /// ([`program::program_name`]), with the default speeds and settle time.
+    pub fn new(path: &Path, format: Option<ProgramFormat>, robot: &Robot) -> Result<Self> {
+        let program = match format {
+            None => None,
+            Some(f) => {
+                let prismatic = robot.prismatic_joints();
+                program::check_robot(f, &prismatic)?;
+                let opts = ProgramOptions {
+                    name: program::program_name(path, f)?,
+                    prismatic,
+                    ..ProgramOptions::default()
+                };
+                opts.validate()?;
+                Some((f, opts))
+            }
+        };
+        Ok(CommandsOutput {
+            path: path.to_path_buf(),
+            program,
+        })
+    }
+
+    /// Write `res`'s commands (atomically).
+    pub fn write(&self, res: &Compensated) -> Result<()> {
+        match &self.program {
+            None => res.commands.write_csv(&self.path),
+            Some((f, opts)) => program::write(&self.path, &res.program_poses(), *f, opts),
+        }
+    }
 }
 
 /// Nominal IK of every command (see [`first_pass_joints`] for the first

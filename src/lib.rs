@@ -13,6 +13,7 @@
 //! | data | [`error`] | the crate's one error type |
 //! | data | [`dataset`] | the measurement CSV: read, validate, write |
 //! | data | [`trajectory`] | commanded TCP paths (CSV) |
+//! | data | [`program`] | joint moves as a robot program: joint CSV, URScript, KUKA KRL, ABB RAPID |
 //! | data | [`space`] | direction coefficients λ (seed 003 eq 5), JS/EJS encoding, input normalisation |
 //! | data | [`stats`] | summaries of error sets, seeded RNG streams, fold partitions |
 //! | data | [`memory`], [`output`] | memory estimates before large allocations; checked, atomic output files |
@@ -71,6 +72,7 @@ pub mod plan;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod predictor;
+pub mod program;
 pub mod report;
 pub mod selection;
 pub mod sim;

@@ -153,6 +153,81 @@ fn compensate_and_evaluate_report_before_and_after() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `compensate --format`: the commands' joints as a robot program, read
+/// back (URScript in radians against the joint CSV in degrees); a KRL file
+/// whose name cannot be its program's is refused before any work.
+#[test]
+fn compensate_writes_the_commands_as_a_robot_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let (c, _, err) = rk(&[
+        "fit",
+        &ds("comau_lhs.csv"),
+        "--optimizer",
+        "hj",
+        "-o",
+        &p("m.json"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let comp = |out: &str, format: &str| {
+        rk(&[
+            "compensate",
+            "--model",
+            &p("m.json"),
+            "--robot",
+            "comau-nj220",
+            &ds("comau_circle.csv"),
+            "-o",
+            &p(out),
+            "--format",
+            format,
+        ])
+    };
+    let (c, out, err) = comp("circle.script", "urscript");
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("circle.script"), "{out}");
+    let script = std::fs::read_to_string(dir.path().join("circle.script")).unwrap();
+    let lines: Vec<&str> = script.lines().map(str::trim).collect();
+    assert_eq!(lines[0], "def circle():");
+    assert_eq!(*lines.last().unwrap(), "end");
+    let moves: Vec<Vec<f64>> = lines
+        .iter()
+        .filter_map(|l| l.strip_prefix("movej([")?.split_once(']'))
+        .map(|(list, _)| list.split(", ").map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(moves.len(), 72, "one move per point of the circle");
+    assert!(moves.iter().all(|q| q.len() == 6));
+    assert_eq!(lines.iter().filter(|l| **l == "# via (path)").count(), 72);
+    assert!(!script.contains("sleep("), "a path has no measured poses");
+    let (c, _, err) = comp("circle_joints.csv", "csv");
+    assert_eq!(c, 0, "{err}");
+    let csv = std::fs::read_to_string(dir.path().join("circle_joints.csv")).unwrap();
+    let mut rows = csv.lines();
+    assert_eq!(rows.next().unwrap(), "id,q1,q2,q3,q4,q5,q6,measure,label");
+    for (k, (row, rad)) in rows.zip(&moves).enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(
+            (cells[0], cells[7], cells[8]),
+            (k.to_string().as_str(), "0", "path")
+        );
+        for (deg, r) in cells[1..7].iter().zip(rad) {
+            let d: f64 = deg.parse().unwrap();
+            assert!(
+                (d.to_radians() - r).abs() < 1e-9,
+                "row {k}: {d} deg vs {r} rad"
+            );
+        }
+    }
+    let (c, _, err) = comp("circle-comp.src", "krl");
+    assert_eq!(c, 1);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("a KRL program is called as its file"), "{err}");
+    assert!(!dir.path().join("circle-comp.src").exists());
+    let (c, _, err) = comp("circle.gcode", "gcode");
+    assert_eq!(c, 2, "{err}");
+}
+
 #[test]
 fn diagnose_writes_json_report_and_plots() {
     let dir = std::env::temp_dir().join(format!("robokrige-cli-diag-{}", std::process::id()));

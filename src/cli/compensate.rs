@@ -3,10 +3,11 @@
 use super::progress::spinner;
 use clap::Args;
 use robokrige::Result;
-use robokrige::compensate::{Compensated, CompensationOptions, compensate};
+use robokrige::compensate::{CommandsOutput, Compensated, CompensationOptions, compensate};
 use robokrige::kinematics::{self, Robot};
 use robokrige::physics::AnyModel;
 use robokrige::plot::{Labels, error_along_path};
+use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
@@ -21,7 +22,9 @@ list with q1..qN columns, whose nominal TCP poses become the targets.
 Example:
   robokrige fit datasets/comau_lhs.csv --method ejs-gps -o ejs.json
   robokrige compensate --model ejs.json --robot comau-nj220 datasets/comau_circle.csv \\
-      -o circle_comp.csv --iterative --truth datasets/comau_circle.truth.json --plot circle.svg")]
+      -o circle_comp.csv --iterative --truth datasets/comau_circle.truth.json --plot circle.svg
+  robokrige compensate --model ejs.json --robot comau-nj220 datasets/comau_circle.csv \\
+      -o circle_comp.src --iterative --format krl")]
 pub struct CompensateArgs {
     /// Target trajectory CSV, in visiting order.
     traj: PathBuf,
@@ -35,9 +38,14 @@ pub struct CompensateArgs {
     /// TCP offset in the flange frame, mm ("x,y,z"), replacing the robot's tool.
     #[arg(long)]
     tool: Option<String>,
-    /// Output: the corrected commands as a trajectory CSV.
+    /// Output: the corrected commands as a trajectory CSV, or with
+    /// --format a robot program of their joints.
     #[arg(short, long)]
     output: PathBuf,
+    /// Write the commands' joints (nominal IK) as a program of joint moves
+    /// instead of a trajectory CSV; every move is a path point ("via").
+    #[arg(long, value_enum)]
+    format: Option<ProgramFormat>,
     /// Iterate (seed 004) instead of the single step (seed 003).
     #[arg(long)]
     iterative: bool,
@@ -135,6 +143,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     outputs.extend(a.json.as_deref());
     robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let commands_out = CommandsOutput::new(&a.output, a.format, &robot)?;
     let model = AnyModel::load(&a.model)?;
     model.check_robot(&robot, &a.model.display().to_string())?;
     let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
@@ -160,7 +169,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         let coverage = m.coverage(&res.joints, &res.dir, &res.predicted, None)?;
         super::print_coverage(&coverage, res.joints.len(), None);
     }
-    res.commands.write_csv(&a.output)?;
+    commands_out.write(&res)?;
     let output = a.output.display().to_string();
     let text = report::iterations(&res, a.iterative, &model.describe(), secs, &output);
     say_part!("{text}");
