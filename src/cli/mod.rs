@@ -33,6 +33,7 @@ mod fit;
 mod holdout;
 mod import;
 mod physics;
+mod plan;
 mod progress;
 mod robot;
 mod run;
@@ -87,6 +88,9 @@ pub enum Command {
     Batch(batch::BatchArgs),
     /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
     Robot(robot::RobotArgs),
+    /// Plan a campaign: which poses to measure next (IMSE), from which side, in
+    /// which order, and when to stop.
+    Plan(plan::PlanArgs),
 }
 
 static TEXT_TO_STDERR: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
@@ -125,6 +129,7 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Physics(a) => physics::run(a),
         Command::Holdout(a) => holdout::run(a),
+        Command::Plan(a) => plan::run(a),
     }
 }
 

@@ -280,3 +280,51 @@ pub fn covering(
     }
     chosen
 }
+
+/// `n` candidates around the region's poses: a region pose (cycled, in
+/// order) moved by a uniform offset of at most `spread` of each joint's
+/// range, clamped into `ranges`, with λ drawn as in [`draw`]. Poses drawn
+/// in the whole working range rarely come near a task, a curve in joint
+/// space; these do.
+pub fn around(
+    region: &PoseSet,
+    ranges: &[(f64, f64)],
+    limits: &[(f64, f64)],
+    step: &[f64],
+    spread: f64,
+    n: usize,
+    seed: u64,
+) -> PoseSet {
+    if region.is_empty() {
+        return PoseSet::default();
+    }
+    let mut rng = rng_for(seed, "plan-candidates-around");
+    let mut out = PoseSet::default();
+    for k in 0..n {
+        let base = &region.q[k % region.len()];
+        let q: Vec<f64> = base
+            .iter()
+            .zip(ranges)
+            .map(|(v, (lo, hi))| {
+                let w = spread * (hi - lo);
+                (v + w * (2.0 * rng.random::<f64>() - 1.0)).clamp(*lo, *hi)
+            })
+            .collect();
+        let dir = q
+            .iter()
+            .enumerate()
+            .map(|(j, v)| {
+                let (lo, hi) = limits[j];
+                match (v - step[j] >= lo, v + step[j] <= hi) {
+                    (true, true) if rng.random::<bool>() => 1.0,
+                    (true, true) => -1.0,
+                    (false, _) => -1.0,
+                    (true, false) => 1.0,
+                }
+            })
+            .collect();
+        out.q.push(q);
+        out.dir.push(dir);
+    }
+    out
+}

@@ -4,6 +4,7 @@
 use super::{Plan, PoseSet, Region};
 use crate::Result;
 use crate::kinematics::{IkOptions, Robot, all_reached, first_pass_joints};
+use crate::program::{self, ProgramFormat, ProgramOptions, ProgramPose};
 use crate::space::derive_directions;
 use crate::trajectory::{TargetFile, read_target_file};
 use std::path::Path;
@@ -62,6 +63,33 @@ impl Plan {
             }
             w.flush()
         })
+    }
+
+    /// Write the plan in `format`: [`Plan::write_csv`] for CSV, else a
+    /// program of joint moves for `robot`'s controller
+    /// ([`crate::program`]), measured poses and via-points marked, each
+    /// measured pose labelled with its source row.
+    pub fn write(&self, path: &Path, format: ProgramFormat, robot: &Robot) -> Result<()> {
+        if format == ProgramFormat::Csv {
+            return self.write_csv(path);
+        }
+        let prismatic = robot.prismatic_joints();
+        program::check_robot(format, &prismatic)?;
+        let opts = ProgramOptions {
+            name: program::program_name(path, format)?,
+            prismatic,
+            ..ProgramOptions::default()
+        };
+        let poses: Vec<ProgramPose> = self
+            .moves
+            .iter()
+            .map(|m| match m.pose {
+                Some(i) if m.measure => ProgramPose::measured(m.q.clone())
+                    .with_label(format!("source {}", self.chosen[i])),
+                _ => ProgramPose::via(m.q.clone()),
+            })
+            .collect();
+        program::write(path, &poses, format, &opts)
     }
 
     /// The poses to measure, in the order they are visited.

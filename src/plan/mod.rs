@@ -4,8 +4,9 @@
 //! One call plans one stretch of a sequential design:
 //!
 //! 1. **Candidates**: poses drawn in the robot's working ranges with a λ
-//!    per joint ([`candidates::draw`]), or the poses of a pool; those the
-//!    tracker cannot see are dropped ([`TrackerView`]).
+//!    per joint ([`candidates::draw`]) — and as many around a task's poses
+//!    ([`candidates::around`]) — or the poses of a pool; those the tracker
+//!    cannot see are dropped ([`TrackerView`]).
 //! 2. **Region**: the poses whose prediction error matters — a task's
 //!    poses ([`Region::Poses`], task-specific calibration), the pool's, or
 //!    by default a sample of the working ranges.
@@ -56,6 +57,10 @@ pub enum Region {
 /// re-estimated; below it a prior model's are used (or the batch is
 /// space-filling).
 pub const MIN_FIT_ROWS: usize = 30;
+
+/// Candidates around a task's poses move each joint by at most this
+/// fraction of its range ([`candidates::around`]).
+pub const AROUND_SPREAD: f64 = 0.05;
 
 /// What to plan, set by builder methods; [`PlanParams::check`] validates.
 #[derive(Debug, Clone, PartialEq)]
@@ -285,7 +290,24 @@ impl ValidPlanParams {
                     dir: pool.dir.clone(),
                 }
             }
-            None => candidates::draw(ranges, &robot.limits, step, p.candidates, p.seed),
+            None => {
+                let mut all = candidates::draw(ranges, &robot.limits, step, p.candidates, p.seed);
+                // a task's poses: as many candidates again around them
+                if let Region::Poses(task) = inputs.region {
+                    let near = candidates::around(
+                        task,
+                        ranges,
+                        &robot.limits,
+                        step,
+                        AROUND_SPREAD,
+                        p.candidates,
+                        p.seed,
+                    );
+                    all.q.extend(near.q);
+                    all.dir.extend(near.dir);
+                }
+                all
+            }
         };
         let key =
             |q: &[f64], d: &[f64]| -> Vec<u64> { q.iter().chain(d).map(|v| v.to_bits()).collect() };

@@ -16,6 +16,7 @@ pub mod fit;
 pub mod holdout;
 pub mod import;
 pub mod physics;
+pub mod plan;
 pub mod predict;
 pub mod simulate;
 

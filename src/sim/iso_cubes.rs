@@ -413,9 +413,32 @@ pub fn iso_cubes(robot: &Robot, spec: &IsoCubeSpec, seed: u64) -> Result<IsoCube
 /// error (geometry, angular deviation with backlash, compliance) plus its
 /// per-axis noise (repeatability and tracker), drawn from `seed`.
 pub fn measure_cubes(truth: &TrueRobot, q: Vec<Vec<f64>>, seed: u64) -> Result<Dataset> {
+    let measure = vec![true; q.len()];
+    measure_sequence(truth, &q, &measure, "<ISO 9283 cubes>", seed)
+}
+
+/// Run the robot through the poses `q` in order from the nominal home pose
+/// and measure those flagged in `measure` (a plan's measured poses between
+/// its via-points): each measured row gets the directions λ the whole
+/// sequence realises, the true robot's error and its per-axis noise drawn
+/// from `seed`.
+pub fn measure_sequence(
+    truth: &TrueRobot,
+    q: &[Vec<f64>],
+    measure: &[bool],
+    source: &str,
+    seed: u64,
+) -> Result<Dataset> {
     let home = truth.nominal.home.clone();
-    let dir = crate::space::derive_directions(&q, Some(&home));
-    let mut data = Dataset::from_poses("<ISO 9283 cubes>", q, Some(dir))?;
+    let dir = crate::space::derive_directions(q, Some(&home));
+    let rows: Vec<usize> = (0..q.len())
+        .filter(|&i| measure.get(i) == Some(&true))
+        .collect();
+    let mut data = Dataset::from_poses(
+        source,
+        rows.iter().map(|&i| q[i].clone()).collect(),
+        Some(rows.iter().map(|&i| dir[i].clone()).collect()),
+    )?;
     truth.nominal.check_dataset(&data)?;
     let ctx = PoseContext::default();
     let mut rng = rng_for(seed, "iso-cubes-noise");

@@ -1,0 +1,151 @@
+//! `robokrige plan`: which poses to measure next, in which order.
+
+use super::read_data;
+use clap::Args;
+use robokrige::Result;
+use robokrige::model::ErrorModel;
+use robokrige::plan::stop::Forecast;
+use robokrige::plan::{HyperSource, PlanInputs, PlanParams, Region, TrackerView};
+use robokrige::program::ProgramFormat;
+use std::path::PathBuf;
+
+/// Plan a measurement campaign.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Poses are chosen to lower the integrated prediction variance (IMSE) of the
+error model over the region that matters, each joint's approach direction
+planned too; the order realises the directions, with pre-position moves
+(measure = 0) where needed. Without measurements or a prior model the first
+batch covers the region; measure it and plan again with --campaign.
+
+Examples:
+  robokrige plan --robot ur10 --budget 50 -o batch1.csv
+  robokrige plan --robot ur10 --budget 50 --campaign measured.csv -o batch2.csv --target-mm 0.2
+  robokrige plan --robot ur10 --budget 100 --region task.csv --format urscript -o plan.script")]
+pub struct PlanArgs {
+    /// The robot: a preset name or a robot file (TOML/JSON).
+    #[arg(long)]
+    robot: String,
+    /// TCP offset in the flange frame, mm ("x,y,z"), replacing the robot's tool.
+    #[arg(long)]
+    tool: Option<String>,
+    /// Poses to plan.
+    #[arg(long)]
+    budget: usize,
+    /// Output: the plan (CSV: id, q, dir, measure, source; or a robot program).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "csv")]
+    format: ProgramFormat,
+    /// What has been measured so far (measurement CSV with ex,ey,ez):
+    /// the hyperparameters are re-estimated on it, and the plan continues it.
+    #[arg(long)]
+    campaign: Option<PathBuf>,
+    /// A prior model file (e.g. a robot of the same type): its
+    /// hyperparameters until enough of this robot is measured.
+    #[arg(long)]
+    prior: Option<PathBuf>,
+    /// Choose among the poses of this file only (their errors are ignored).
+    #[arg(long)]
+    pool: Option<PathBuf>,
+    /// The region that matters: a task's poses (q1..qN) or TCP path
+    /// (x,y,z[,roll_deg,...]) [default: the pool, else the robot's working ranges].
+    #[arg(long)]
+    region: Option<PathBuf>,
+    /// Poses of the first batch when no hyperparameters are known yet.
+    #[arg(long, default_value_t = 50)]
+    first_batch: usize,
+    /// Candidates drawn in the working ranges (without --pool).
+    #[arg(long, default_value_t = 5000)]
+    candidates: usize,
+    /// Region points the integrated MSE averages over.
+    #[arg(long, default_value_t = 1000)]
+    region_points: usize,
+    /// How far back a pre-position move starts, degrees (mm for prismatic joints).
+    #[arg(long, default_value_t = 5.0)]
+    via_step: f64,
+    /// Tracker position in the robot base frame, mm ("x,y,z"): plan only poses it sees.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
+    tracker: Option<Vec<f64>>,
+    /// Largest tracker–reflector distance, mm (with --tracker).
+    #[arg(long, requires = "tracker")]
+    max_range: Option<f64>,
+    /// Largest angle between the reflector's axis (tool z) and the line to
+    /// the tracker, degrees (with --tracker).
+    #[arg(long, requires = "tracker")]
+    max_incidence: Option<f64>,
+    /// The held-out mean 3D error wanted, mm: say how many more poses it
+    /// needs, or that it is below the repeatability floor.
+    #[arg(long)]
+    target_mm: Option<f64>,
+    /// Seed of the candidates and the region sample.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+fn tracker(a: &PlanArgs) -> Result<Option<TrackerView>> {
+    let Some(t) = &a.tracker else {
+        return Ok(None);
+    };
+    let pos: [f64; 3] = t.as_slice().try_into().map_err(|_| {
+        robokrige::Error::InvalidParameter(format!(
+            "--tracker needs x,y,z (three numbers, mm), got {} values",
+            t.len()
+        ))
+    })?;
+    let mut view = TrackerView::new(pos)?;
+    if let Some(r) = a.max_range {
+        view = view.max_range(r)?;
+    }
+    if let Some(i) = a.max_incidence {
+        view = view.max_incidence(i)?;
+    }
+    Ok(Some(view))
+}
+
+pub fn run(a: PlanArgs) -> Result<()> {
+    let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
+    let campaign = a.campaign.as_deref().map(read_data).transpose()?;
+    let pool = a.pool.as_deref().map(read_data).transpose()?;
+    let prior = a.prior.as_deref().map(ErrorModel::load).transpose()?;
+    let region = match (&a.region, &pool) {
+        (Some(path), _) => Region::from_file(path, &robot)?,
+        (None, Some(p)) => Region::Poses(robokrige::plan::PoseSet {
+            q: p.q.clone(),
+            dir: p.dir.clone(),
+        }),
+        (None, None) => Region::WorkRange,
+    };
+    let mut params = PlanParams::new(a.budget)
+        .first_batch(a.first_batch)
+        .candidates(a.candidates)
+        .region_points(a.region_points)
+        .via_step(a.via_step)
+        .seed(a.seed);
+    if let Some(view) = tracker(&a)? {
+        params = params.tracker(view);
+    }
+    let plan = params.check()?.plan(&PlanInputs {
+        robot: &robot,
+        campaign: campaign.as_ref(),
+        prior: prior.as_ref(),
+        pool: pool.as_ref(),
+        region: &region,
+    })?;
+    let forecast = match (&plan.model, plan.source) {
+        (Some(m), HyperSource::Campaign) => Some(Forecast::new(
+            m,
+            &plan.imse_curve,
+            campaign.as_ref().map_or(0, |c| c.len()),
+        )?),
+        _ => None,
+    };
+    plan.write(&a.output, a.format, &robot)?;
+    print!(
+        "{}",
+        robokrige::report::plan::text(&plan, forecast.as_ref(), a.target_mm)
+    );
+    println!("wrote {}", a.output.display());
+    Ok(())
+}

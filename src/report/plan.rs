@@ -1,0 +1,69 @@
+//! The text report of `plan`.
+
+use crate::plan::stop::{Forecast, Verdict};
+use crate::plan::{HyperSource, Plan};
+
+/// What was planned, from which hyperparameters, the region's integrated
+/// MSE before and after, and, with a target, the forecast and its verdict.
+pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) -> String {
+    let measured = plan.moves.iter().filter(|m| m.measure).count();
+    let vias = plan.moves.len() - measured;
+    let source = match plan.source {
+        HyperSource::Campaign => "re-estimated on the measured campaign",
+        HyperSource::Prior => "the prior model's",
+        HyperSource::SpaceFilling => "none yet (a batch covering the region)",
+    };
+    let mut s = format!(
+        "planned {measured} poses to measure and {vias} pre-position moves, from {} candidates\n\
+         hyperparameters: {source}\n",
+        plan.candidates
+    );
+    if let (Some(first), Some(last)) = (plan.imse_curve.first(), plan.imse_curve.last()) {
+        s += &format!(
+            "region's integrated MSE (x+y+z): {:.5} → {:.5} mm² (RMS {:.4} → {:.4} mm)\n",
+            first,
+            last,
+            first.sqrt(),
+            last.sqrt()
+        );
+    }
+    if plan.unrealised > 0 {
+        s += &format!(
+            "{} poses cannot arrive from their planned side (a joint at its limit)\n",
+            plan.unrealised
+        );
+    }
+    if let Some(f) = forecast {
+        s += &format!(
+            "held-out mean 3D error: {:.4} mm now ({} poses, closed-form 10-fold CV), \
+             forecast {:.4} mm after the plan; floor (repeatability) {:.4} mm\n",
+            f.cv_mean_3d,
+            f.measured,
+            f.mean_3d.last().copied().unwrap_or(f.cv_mean_3d),
+            f.floor_mean_3d
+        );
+        if let Some(t) = target_mm {
+            s += &match f.verdict(t) {
+                Verdict::Met => format!("target {t} mm: already met\n"),
+                Verdict::After(k) => format!(
+                    "target {t} mm: expected after {k} more poses ({} in all)\n",
+                    f.measured + k
+                ),
+                Verdict::BeyondPlan => format!(
+                    "target {t} mm: not within these {measured} poses; plan a larger budget\n"
+                ),
+                Verdict::Unreachable => format!(
+                    "target {t} mm: unreachable — below the repeatability floor of {:.4} mm; \
+                     more poses will not get there\n",
+                    f.floor_mean_3d
+                ),
+            };
+        }
+    } else if target_mm.is_some() {
+        s += "target: no forecast without a measured campaign (measure the first batch)\n";
+    }
+    for n in &plan.notes {
+        s += &format!("note: {n}\n");
+    }
+    s
+}
