@@ -147,6 +147,15 @@ pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<
     robokrige::output::write_text(path, &text)
 }
 
+/// Check a command's files before any work
+/// ([`robokrige::output::check_outputs`]); `None`s are options not given.
+pub fn check_files(inputs: &[Option<&Path>], outputs: &[Option<&Path>]) -> Result<()> {
+    fn given<'a>(v: &[Option<&'a Path>]) -> Vec<&'a Path> {
+        v.iter().flatten().copied().collect()
+    }
+    robokrige::output::check_outputs(&given(inputs), &given(outputs))
+}
+
 /// Whether an output path is `-` (standard output).
 pub fn is_stdout(path: &Path) -> bool {
     path == Path::new("-")

@@ -5,12 +5,15 @@
 
 use super::{Labels, Series, box_plot, xy_plot};
 use crate::Result;
+use crate::cv::CvResult;
 use crate::dataset::Dataset;
 use crate::demo::Demo;
 use crate::diagnose::{CvStats, Diagnosis};
+use crate::methods::Method;
 use crate::model::AXES;
 use crate::physics::Comparison;
 use crate::report::demo::Figures;
+use crate::space::Space;
 use crate::vec3::{Vec3, norms};
 use std::path::{Path, PathBuf};
 
@@ -34,6 +37,34 @@ pub fn error_along_path(
         })
         .collect();
     xy_plot(path, labels, &series, false)
+}
+
+/// Box plots of a CV's out-of-fold errors (|ex|, |ey|, |ez|, 3D) of a
+/// model over `space`.
+pub fn cv_errors(path: &Path, res: &CvResult, space: Space) -> Result<()> {
+    let axis = |k: usize| res.residuals.iter().map(|e| e[k].abs()).collect();
+    let groups = vec![
+        ("|ex|".to_string(), axis(0)),
+        ("|ey|".to_string(), axis(1)),
+        ("|ez|".to_string(), axis(2)),
+        ("3D".to_string(), norms(&res.residuals)),
+    ];
+    let title = format!(
+        "{}-fold CV ({}) out-of-fold errors, {space:?}",
+        res.folds, res.mode
+    );
+    box_plot(path, &title, "error (mm)", &groups)
+}
+
+/// Box plots of the out-of-fold 3D errors of each method's `folds`-fold
+/// refit CV.
+pub fn methods_errors(path: &Path, folds: usize, results: &[(Method, CvResult)]) -> Result<()> {
+    let groups: Vec<(String, Vec<f64>)> = results
+        .iter()
+        .map(|(m, res)| (m.name().to_string(), norms(&res.residuals)))
+        .collect();
+    let title = format!("{folds}-fold CV (refit) 3D error by method");
+    box_plot(path, &title, "out-of-fold 3D error (mm)", &groups)
 }
 
 /// One SVG per effect the diagnosis added, in the existing folder `dir`
