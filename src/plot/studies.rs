@@ -67,13 +67,14 @@ pub fn methods_errors(path: &Path, folds: usize, results: &[(Method, CvResult)])
     box_plot(path, &title, "out-of-fold 3D error (mm)", &groups)
 }
 
-/// One SVG per effect the diagnosis added, in the existing folder `dir`
-/// (`effect{k}_{kind}.svg`): the out-of-fold residual before and after the
+/// One SVG per effect the diagnosis added, in the folder `dir` (created;
+/// `effect{k}_{kind}.svg`): the out-of-fold residual before and after the
 /// effect against its traced variable
 /// ([`EffectReport::traced_variable`](crate::diagnose::EffectReport::traced_variable)),
 /// on the axis whose residual it reduced most. `data` is the diagnosed
 /// campaign. Returns the files written.
 pub fn effect_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let mut out = Vec::new();
     let mut prev: &CvStats = &d.before;
     for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
@@ -116,10 +117,11 @@ pub fn effect_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<Pat
 }
 
 /// Seed 000 Figs 9–11, one SVG per model of the comparison but the nominal
-/// one, in the existing folder `dir` (`path_{model}.svg`): the nominal path,
+/// one, in the folder `dir` (created; `path_{model}.svg`): the nominal path,
 /// the measured path and the model's predicted path in XY, errors magnified
 /// ×1000. Returns the files written.
 pub fn path_plots(c: &Comparison, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let k = 1000.0;
     let shifted = |e: &[[f64; 3]]| -> Vec<(f64, f64)> {
         c.path_nominal

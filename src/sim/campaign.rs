@@ -21,20 +21,22 @@ use crate::{Error, Result};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
-/// What to simulate.
+/// What to simulate (`simulate --kind`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum CampaignKind {
-    /// Latin-hypercube poses in the joint ranges, visited in the order drawn.
+    /// Latin-hypercube poses in the joint ranges, visited in order (the training campaign).
     Lhs,
-    /// Independent uniformly random poses (a verification set).
+    /// Independent random verification poses.
     Verify,
-    /// Single-axis indexing tests of every revolute joint (seed 000 §2.3).
+    /// Single-axis indexing tests, each grid point approached from both sides (seed 000 §2.3).
     Indexing,
-    /// Seed 000 §5.2: J1 indexed (eq 21) with J2 held at several angles.
+    /// J1 indexed with J2 held at 0°, 20°, 40°, 60° (seed 000 §5.2, cross-talk).
     Crosstalk,
-    /// A circle of commanded TCP points around the home TCP (a trajectory, not measured).
+    /// A circle of commanded TCP points (a trajectory to compensate; not measured).
     Circle,
 }
 
@@ -184,6 +186,23 @@ pub enum SimOutput {
     Measurements(Dataset),
     /// A commanded trajectory (`circle`).
     Trajectory(Trajectory),
+}
+
+impl SimOutput {
+    /// Write it: a measurement CSV ([`crate::dataset::write_csv`]) or a
+    /// trajectory CSV.
+    pub fn write_csv(&self, path: &Path) -> Result<()> {
+        match self {
+            SimOutput::Measurements(d) => crate::dataset::write_csv(path, d),
+            SimOutput::Trajectory(t) => t.write_csv(path),
+        }
+    }
+}
+
+/// Where a campaign written to `output` keeps its simulator truth by
+/// default: `a.csv` → `a.truth.json`.
+pub fn truth_path_for(output: &Path) -> PathBuf {
+    output.with_extension("truth.json")
 }
 
 /// Simulate `spec` on a true robot drawn around `nominal`.

@@ -24,7 +24,9 @@ pub mod iso_cubes;
 mod scara_truth;
 mod true_robot;
 
-pub use campaign::{CampaignKind, CampaignSpec, SimOutput, Truth, parse_ranges, simulate};
+pub use campaign::{
+    CampaignKind, CampaignSpec, SimOutput, Truth, parse_ranges, simulate, truth_path_for,
+};
 pub use effects::{EFFECT_NAMES, Effect, MEASUREMENT_EFFECTS};
 pub use execute::{Execution, execute};
 pub use scara_truth::ScaraTruth;
