@@ -81,8 +81,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
     }
     write_summary(&summary_csv, &files, &results)?;
     say!("summary -> {}", summary_csv.display());
-    if let Some(p) = &a.json {
-        super::write_json(p, &report::json(&files, &results), "batch summary")?;
-    }
+    let v = report::json(&files, &results);
+    super::json_to(a.json.as_deref(), &v, "batch summary")?;
     check_failures(&results, &summary_csv)
 }

@@ -9,7 +9,6 @@ use robokrige::kriging::OptimizerKind;
 use robokrige::report::cv as report;
 use std::path::PathBuf;
 
-/// K-fold cross-validation of a model choice (refit on every training fold).
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -99,10 +98,8 @@ pub fn run(a: CvArgs) -> Result<()> {
     let settings = params.params().settings_line();
     let text = report::summary(&res, &how, (&data_name, data.len()), &settings);
     say_part!("{text}");
-    if let Some(path) = &a.json {
-        let v = report::json(&res, &a.data, params.params())?;
-        super::write_json(path, &v, "cv result")?;
-    }
+    let v = report::json(&res, &a.data, params.params())?;
+    super::json_to(a.json.as_deref(), &v, "cv result")?;
     if let Some(path) = &a.plot {
         robokrige::plot::cv_errors(path, &res, params.params().get_space())?;
         say!("plot: {}", path.display());
@@ -128,10 +125,8 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
         say!("{}", report::methods_row(m.name(), &res));
         results.push((m, res));
     }
-    if let Some(path) = &a.json {
-        let v = report::methods_json(&a.data, a.folds, a.cv_seed, &results);
-        super::write_json(path, &v, "cv result")?;
-    }
+    let v = report::methods_json(&a.data, a.folds, a.cv_seed, &results);
+    super::json_to(a.json.as_deref(), &v, "cv result")?;
     if let Some(path) = &a.plot {
         robokrige::plot::methods_errors(path, a.folds, &results)?;
         say!("plot: {}", path.display());

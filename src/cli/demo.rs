@@ -13,7 +13,6 @@ use robokrige::report::demo as report;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Run the main job on the shipped COMAU campaign and write a report.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 The campaigns are simulated in-process with the same commands as
@@ -50,9 +49,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
     pb.inc(1);
     pb.finish_and_clear();
     say_part!("{}", report::summary(&demo, secs));
-    if let Some(path) = &a.json {
-        super::write_json(path, &report::json(&demo, out, secs), "demo summary")?;
-    }
+    let v = report::json(&demo, out, secs);
+    super::json_to(a.json.as_deref(), &v, "demo summary")?;
     say!(
         "\nwrote {} (report.md, plots/, models/, data/)",
         out.display()

@@ -13,7 +13,6 @@ use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase, compare
 use robokrige::study::load_truth;
 use std::path::PathBuf;
 
-/// Find what the model still gets wrong, trace it to a missing effect, add it.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Candidates: every numeric covariate column not in the model (alone, × joint
@@ -196,10 +195,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         say!("no plots in {}: no effect was added", dir.display());
     }
     let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
-    if let Some(path) = &a.json {
-        let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
-        super::write_json(path, &v, "diagnosis")?;
-    }
+    let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
+    super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
         let traj = a.traj.as_ref().map(|p| p.display().to_string());
         let extras = Extras {

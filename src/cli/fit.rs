@@ -1,43 +1,16 @@
 //! `robokrige fit` and `robokrige predict`.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
 use robokrige::kinematics::load_robot_with_tool;
-use robokrige::kriging::{CorrChoice, Correlation, OptimizerKind, TrendKind};
+use robokrige::kriging::{CorrChoice, OptimizerKind, TrendKind};
 use robokrige::methods::{Method, Overrides, params_with};
 use robokrige::model::ErrorModel;
 use robokrige::params::ErrorModelParams;
 use robokrige::report::{fit as report, predict};
 use robokrige::space::Space;
 use std::path::PathBuf;
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum CorrArg {
-    /// exp(−h²), seed 003 eq 8 (the papers').
-    Gaussian,
-    /// Matérn ν = 5/2.
-    Matern52,
-    /// Matérn ν = 3/2.
-    Matern32,
-    /// exp(−h) (Matérn ν = 1/2).
-    Exponential,
-    /// Each output's family chosen by closed-form 10-fold CV among the four.
-    Auto,
-}
-
-impl CorrArg {
-    /// The options' correlation choice.
-    pub fn choice(self) -> CorrChoice {
-        match self {
-            CorrArg::Gaussian => Correlation::Gaussian.into(),
-            CorrArg::Matern52 => Correlation::Matern52.into(),
-            CorrArg::Matern32 => Correlation::Matern32.into(),
-            CorrArg::Exponential => Correlation::Exponential.into(),
-            CorrArg::Auto => CorrChoice::AUTO,
-        }
-    }
-}
 
 /// Model choices shared by `fit` and `cv`. An option not given keeps the
 /// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
@@ -54,7 +27,7 @@ pub struct ModelArgs {
     /// by default each output's family is chosen by closed-form 10-fold CV
     /// (the `recommended` method). `gaussian` is the papers' [default: auto].
     #[arg(long, value_enum)]
-    corr: Option<CorrArg>,
+    corr: Option<CorrChoice>,
     /// Hyperparameter search [default: bfgs].
     #[arg(long, value_enum)]
     optimizer: Option<OptimizerKind>,
@@ -133,7 +106,7 @@ impl ModelArgs {
             }))
             .with(self.space, Overrides::space)
             .with(self.trend, Overrides::trend)
-            .with(self.corr.map(CorrArg::choice), Overrides::corr)
+            .with(self.corr, Overrides::corr)
             .with(self.optimizer, Overrides::optimizer)
             .with(nugget, Overrides::nugget)
             .with(self.starts, Overrides::starts)
@@ -142,7 +115,6 @@ impl ModelArgs {
     }
 }
 
-/// Fit a universal-Kriging error model (one per axis ex, ey, ez) to a campaign.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -198,7 +170,6 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     Ok(())
 }
 
-/// Predict TCP errors (mean and standard deviation per axis) at poses.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -239,9 +210,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     let noise = model.noise_std();
     robokrige::dataset::write_predictions(output, &data, &pred.mean, &pred.std, noise)?;
     let (v, line) = predict::summary(&data, &pred.mean, &coverage, output);
-    if let Some(path) = &a.json {
-        super::write_json(path, &v, "prediction summary")?;
-    }
+    super::json_to(a.json.as_deref(), &v, "prediction summary")?;
     if let Some(line) = line {
         say!("{line}");
     }

@@ -10,13 +10,12 @@ use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split, split_rows};
 use robokrige::kinematics::Robot;
-use robokrige::kriging::OptimizerKind;
+use robokrige::kriging::{CorrChoice, OptimizerKind};
 use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
 use robokrige::report::holdout as report;
 use std::path::PathBuf;
 
-/// Hold-out comparison of calibration models on a measured campaign.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Rows 1..TRAIN train every model; rows TRAIN+1..TRAIN+TEST are predicted.
@@ -63,7 +62,7 @@ pub struct HoldoutArgs {
     /// exponential, or auto (each output's family by closed-form 10-fold CV,
     /// the default).
     #[arg(long, value_enum, default_value = "auto")]
-    corr: super::fit::CorrArg,
+    corr: CorrChoice,
     /// Interpolate exactly (no nugget) in the Kriging fits. By default a
     /// nugget is estimated: real data has noise.
     #[arg(long, conflicts_with = "nugget")]
@@ -103,7 +102,7 @@ pub struct HoldoutArgs {
 fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
     let o = Overrides::new()
         .optimizer(a.optimizer)
-        .corr(a.corr.choice())
+        .corr(a.corr)
         .nugget(!a.no_nugget)
         .seed(a.seed)
         .periodic(a.periodic.as_str());
@@ -122,9 +121,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Resu
     pb.finish_and_clear();
     let name = a.data.display().to_string();
     say_part!("{}", report::cv(&name, (folds, data.len()), &base, &cv));
-    if let Some(p) = &a.json {
-        super::write_json(p, &cv, "cv table")?;
-    }
+    super::json_to(a.json.as_deref(), &cv, "cv table")?;
     Ok(())
 }
 
@@ -154,8 +151,6 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     pb.finish_and_clear();
     let (name, sizes) = (a.data.display().to_string(), (train.len(), test.len()));
     say_part!("{}", report::split(&name, sizes, &base, &split));
-    if let Some(p) = &a.json {
-        super::write_json(p, &split.rows, "hold-out table")?;
-    }
+    super::json_to(a.json.as_deref(), &split.rows, "hold-out table")?;
     Ok(())
 }

@@ -39,6 +39,7 @@ mod run;
 mod simulate;
 
 use clap::{Parser, Subcommand};
+use robokrige::model::CoverageWarning;
 use robokrige::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -72,7 +73,8 @@ pub enum Command {
     /// Find what the model misses, trace it to an effect, add it, report before/after.
     Diagnose(diagnose::DiagnoseArgs),
     /// Physics-based models (seeds 000, 002): identify from indexing tests, compare with Kriging.
-    Physics(physics::PhysicsArgs),
+    #[command(subcommand)]
+    Physics(physics::PhysicsCommand),
     /// Train on the first rows of a campaign, score on the next: nominal, D-H
     /// calibration, hybrid, Kriging with the kinematic trend (JS and EJS).
     Holdout(holdout::HoldoutArgs),
@@ -128,23 +130,25 @@ fn dispatch(command: Command) -> Result<()> {
     }
 }
 
-/// Pretty JSON of `value`; `context` names it in the error.
-pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
-    serde_json::to_string_pretty(value).map_err(|e| Error::Json {
+/// Write `value` as pretty JSON (with a final newline) to `path`
+/// (`context` names it in an error). Every `--json FILE` option: `-` is
+/// standard output.
+pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| Error::Json {
         context: context.into(),
         source: e,
-    })
-}
-
-/// Write `value` as pretty JSON (with a final newline) to `path`.
-/// Every `--json FILE` option: `-` is standard output.
-pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
-    let text = to_json(value, context)? + "\n";
+    });
+    let text = json? + "\n";
     if is_stdout(path) {
         print!("{text}");
         return Ok(());
     }
     robokrige::output::write_text(path, &text)
+}
+
+/// [`write_json`] to the file of a `--json` option, if given.
+pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
+    path.map_or(Ok(()), |p| write_json(p, value, context))
 }
 
 /// Check a command's files before any work
@@ -196,11 +200,7 @@ pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
 }
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).
-pub fn print_coverage(
-    warnings: &[robokrige::model::CoverageWarning],
-    total: usize,
-    ids: Option<&[String]>,
-) {
+pub fn print_coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String]>) {
     eprint!(
         "{}",
         robokrige::report::predict::coverage(warnings, total, ids)

@@ -12,14 +12,8 @@ use std::path::PathBuf;
 
 /// Physics-based models of seeds 000 and 002 (lookup tables of angular
 /// positioning deviation per direction), and their comparison with Kriging.
-#[derive(Debug, Args)]
-pub struct PhysicsArgs {
-    #[command(subcommand)]
-    command: PhysicsCommand,
-}
-
 #[derive(Debug, Subcommand)]
-enum PhysicsCommand {
+pub enum PhysicsCommand {
     /// Identify a physics model from indexing tests (and, for a six-axis
     /// robot, a measurement campaign for the D-H errors).
     Identify(IdentifyArgs),
@@ -185,8 +179,8 @@ pub struct CompareArgs {
     plots: Option<PathBuf>,
 }
 
-pub fn run(a: PhysicsArgs) -> Result<()> {
-    match a.command {
+pub fn run(command: PhysicsCommand) -> Result<()> {
+    match command {
         PhysicsCommand::Identify(a) => run_identify(a),
         PhysicsCommand::Compare(a) => run_compare(a),
         PhysicsCommand::Probing(a) => run_probing(a),
@@ -231,9 +225,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         say_part!("{}", report::against_truth(&id, &truth));
     }
     say!("model: {}", a.output.display());
-    if let Some(p) = &a.json {
-        super::write_json(p, &id, "identification report")?;
-    }
+    super::json_to(a.json.as_deref(), &id, "identification report")?;
     Ok(())
 }
 
@@ -283,9 +275,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     if let Some(p) = &a.report {
         robokrige::output::write_text(p, &text)?;
     }
-    if let Some(p) = &a.json {
-        super::write_json(p, &res, "comparison")?;
-    }
+    super::json_to(a.json.as_deref(), &res, "comparison")?;
     if let Some(dir) = &a.plots {
         for f in robokrige::plot::path_plots(&res, dir)? {
             say!("plot: {}", f.display());
@@ -299,9 +289,7 @@ fn run_probing(a: ProbingArgs) -> Result<()> {
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
     let setup = (a.robot.as_str(), a.seed, !a.noise_free);
     say_part!("{}", report::probing(&rows, &how, setup));
-    if let Some(p) = &a.json {
-        super::write_json(p, &rows, "probing table")?;
-    }
+    super::json_to(a.json.as_deref(), &rows, "probing table")?;
     Ok(())
 }
 
@@ -312,9 +300,7 @@ fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;
     say_part!("{}", report::crosstalk(&r));
-    if let Some(p) = &a.json {
-        super::write_json(p, &r, "cross-talk report")?;
-    }
+    super::json_to(a.json.as_deref(), &r, "cross-talk report")?;
     Ok(())
 }
 
@@ -328,9 +314,7 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     robokrige::dataset::write_csv(output, &out)?;
     let name = output.display().to_string();
     say_part!("{}", report::registration(&reg, out.len(), &name));
-    if let Some(p) = &a.json {
-        let v = report::registration_json((data_path, output), &robot.name, out.len(), &reg);
-        super::write_json(p, &v, "registration")?;
-    }
+    let v = report::registration_json((data_path, output), &robot.name, out.len(), &reg);
+    super::json_to(a.json.as_deref(), &v, "registration")?;
     Ok(())
 }

@@ -75,9 +75,10 @@ pub fn run(a: RobotArgs) -> Result<()> {
 }
 
 fn calibrated(a: CalibratedArgs) -> Result<()> {
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[&a.model], &outputs)?;
+    super::check_files(
+        &[Some(a.model.as_path())],
+        &[Some(a.output.as_path()), a.json.as_deref()],
+    )?;
     let model = robokrige::model::ErrorModel::load(&a.model)?;
     let cal = model.calibration().ok_or_else(|| robokrige::Error::Input {
         source_name: a.model.display().to_string(),
@@ -86,9 +87,8 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
     let robot = cal.calibrated_robot();
     let text = RobotFile::text_of(&robot)?;
     robokrige::output::write_text(&a.output, &text)?;
-    if let Some(path) = &a.json {
-        super::write_json(path, cal.identifiability(), "identifiability report")?;
-    }
+    let report = cal.identifiability();
+    super::json_to(a.json.as_deref(), report, "identifiability report")?;
     say!("{}: {}", robot.name, cal.summary_line());
     say!("calibrated robot file -> {}", a.output.display());
     Ok(())
@@ -97,9 +97,7 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
 fn show(a: ShowArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     let digest = kinematics::table_digest(&robot);
-    if let Some(path) = &a.json {
-        super::write_json(path, &RobotFile::of(&robot), "robot file")?;
-    }
+    super::json_to(a.json.as_deref(), &RobotFile::of(&robot), "robot file")?;
     let text = RobotFile::text_of(&robot)?;
     match &a.output {
         Some(path) => {

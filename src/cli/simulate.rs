@@ -96,8 +96,6 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     out.write_csv(&a.output)?;
     let summary = report::json(&out, &truth, (&a.output, &truth_path));
     say_part!("{}", report::summary(&summary));
-    if let Some(path) = &a.json {
-        super::write_json(path, &summary, "summary")?;
-    }
+    super::json_to(a.json.as_deref(), &summary, "summary")?;
     Ok(())
 }

@@ -459,6 +459,41 @@ pub enum CorrChoice {
     },
 }
 
+/// `--corr`: a family by its name, or `auto`, the choice by CV with
+/// [`FAMILY_FOLDS`] folds ([`CorrChoice::from_name`]'s names).
+#[cfg(feature = "cli")]
+impl clap::ValueEnum for CorrChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[
+            CorrChoice::Fixed(Correlation::Gaussian),
+            CorrChoice::Fixed(Correlation::Matern52),
+            CorrChoice::Fixed(Correlation::Matern32),
+            CorrChoice::Fixed(Correlation::Exponential),
+            CorrChoice::AUTO,
+        ]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let (name, help) = match *self {
+            CorrChoice::Fixed(c) => (
+                c.name(),
+                match c {
+                    Correlation::Gaussian => "exp(−h²), seed 003 eq 8 (the papers')",
+                    Correlation::Matern52 => "Matérn ν = 5/2",
+                    Correlation::Matern32 => "Matérn ν = 3/2",
+                    Correlation::Exponential => "exp(−h) (Matérn ν = 1/2)",
+                },
+            ),
+            CorrChoice::AUTO => (
+                "auto",
+                "Each output's family chosen by closed-form 10-fold CV among the four",
+            ),
+            CorrChoice::ByCv { .. } => return None,
+        };
+        Some(clap::builder::PossibleValue::new(name).help(help))
+    }
+}
+
 impl CorrChoice {
     /// `auto`: each output's family by closed-form CV with [`FAMILY_FOLDS`]
     /// folds (the `recommended` method's, the command line's default).
