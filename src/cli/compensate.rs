@@ -128,17 +128,12 @@ fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()
 }
 
 pub fn run_compensate(a: CompensateArgs) -> Result<()> {
-    let inputs = [
-        Some(a.traj.as_path()),
-        Some(a.model.as_path()),
-        a.truth.as_deref(),
-    ];
-    let outputs = [
-        Some(a.output.as_path()),
-        a.plot.as_deref(),
-        a.json.as_deref(),
-    ];
-    super::check_files(&inputs, &outputs)?;
+    let mut inputs = vec![a.traj.as_path(), a.model.as_path()];
+    inputs.extend(a.truth.as_deref());
+    let mut outputs = vec![a.output.as_path()];
+    outputs.extend(a.plot.as_deref());
+    outputs.extend(a.json.as_deref());
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let model = AnyModel::load(&a.model)?;
     model.check_robot(&robot, &a.model.display().to_string())?;
@@ -213,9 +208,10 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
-    let mut inputs = vec![Some(a.traj.as_path()), Some(a.truth.as_path())];
-    inputs.extend(a.compensated.iter().map(|p| Some(p.as_path())));
-    super::check_files(&inputs, &[a.plot.as_deref(), a.json.as_deref()])?;
+    let mut inputs = vec![a.traj.as_path(), a.truth.as_path()];
+    inputs.extend(a.compensated.iter().map(PathBuf::as_path));
+    let outputs: Vec<&Path> = a.plot.iter().chain(&a.json).map(PathBuf::as_path).collect();
+    robokrige::output::check_outputs(&inputs, &outputs)?;
     let truth = load_truth(&a.truth)?;
     let robot = match &a.robot {
         Some(name) => {

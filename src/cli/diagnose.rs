@@ -9,7 +9,7 @@ use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use robokrige::kinematics;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
-use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase, compare_compensation};
+use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
 use robokrige::study::load_truth;
 use std::path::PathBuf;
 
@@ -148,11 +148,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
-    let inputs = [
-        Some(a.data.as_path()),
-        a.traj.as_deref(),
-        a.truth.as_deref(),
-    ];
+    let inputs = [Some(&*a.data), a.traj.as_deref(), a.truth.as_deref()];
     let outputs = [
         a.json.as_deref(),
         a.report.as_deref(),
@@ -230,20 +226,12 @@ fn write_and_compare_models(
     let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let before = base.model(opts, &[])?;
     let robot = kinematics::load_robot(robot)?;
     let truth = load_truth(truth_path)?;
     let targets = read_targets(traj, &robot, None, &robot.home)?;
-    let c = compare_compensation(
-        &robot,
-        &targets,
-        (truth_path, &truth),
-        [&before, &after],
-        a.seed,
-    )?;
-    say!(
-        "{}",
-        report::compensation_line(&traj.display().to_string(), &c)
-    );
+    let on = (&robot, &targets);
+    let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
+    let traj = traj.display().to_string();
+    say!("{}", report::compensation_line(&traj, &c));
     Ok(Some(c))
 }

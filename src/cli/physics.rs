@@ -190,16 +190,8 @@ pub fn run(command: PhysicsCommand) -> Result<()> {
 }
 
 fn run_identify(a: IdentifyArgs) -> Result<()> {
-    let inputs = [
-        Some(a.indexing.as_path()),
-        a.train.as_deref(),
-        a.truth.as_deref(),
-    ];
-    let outputs = [
-        Some(a.output.as_path()),
-        a.dh_output.as_deref(),
-        a.json.as_deref(),
-    ];
+    let inputs = [Some(&*a.indexing), a.train.as_deref(), a.truth.as_deref()];
+    let outputs = [Some(&*a.output), a.dh_output.as_deref(), a.json.as_deref()];
     super::check_files(&inputs, &outputs)?;
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them

@@ -85,11 +85,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
-    let outputs = [
-        Some(a.output.as_path()),
-        Some(truth_path.as_path()),
-        a.json.as_deref(),
-    ];
+    let outputs = [Some(&*a.output), Some(&*truth_path), a.json.as_deref()];
     super::check_files(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;

@@ -21,7 +21,6 @@ use crate::{Error, Result};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
 
 /// What to simulate (`simulate --kind`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -186,23 +185,6 @@ pub enum SimOutput {
     Measurements(Dataset),
     /// A commanded trajectory (`circle`).
     Trajectory(Trajectory),
-}
-
-impl SimOutput {
-    /// Write it: a measurement CSV ([`crate::dataset::write_csv`]) or a
-    /// trajectory CSV.
-    pub fn write_csv(&self, path: &Path) -> Result<()> {
-        match self {
-            SimOutput::Measurements(d) => crate::dataset::write_csv(path, d),
-            SimOutput::Trajectory(t) => t.write_csv(path),
-        }
-    }
-}
-
-/// Where a campaign written to `output` keeps its simulator truth by
-/// default: `a.csv` → `a.truth.json`.
-pub fn truth_path_for(output: &Path) -> PathBuf {
-    output.with_extension("truth.json")
 }
 
 /// Simulate `spec` on a true robot drawn around `nominal`.
