@@ -88,7 +88,8 @@ pub enum Command {
     /// parallel: a report per campaign and a summary table.
     Batch(batch::BatchArgs),
     /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
-    Robot(robot::RobotArgs),
+    #[command(subcommand)]
+    Robot(robot::RobotCommand),
 }
 
 static TEXT_TO_STDERR: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);

@@ -5,7 +5,7 @@ use robokrige::Result;
 use robokrige::kinematics::{self, RobotFile};
 use std::path::PathBuf;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Subcommand)]
 #[command(after_help = "\
 A robot file describes a serial robot for every --robot option: its MD-H
 table (one [[joints]] entry per axis: kind, theta_offset_deg, d_mm, a_mm,
@@ -16,13 +16,7 @@ Examples:
   robokrige robot show ur10 -o myrobot.toml     # start from a preset
   robokrige robot show examples/robots/abb-irb2600.toml
   robokrige simulate --robot examples/robots/abb-irb2600.toml -o abb.csv")]
-pub struct RobotArgs {
-    #[command(subcommand)]
-    command: RobotCommand,
-}
-
-#[derive(Debug, Subcommand)]
-enum RobotCommand {
+pub enum RobotCommand {
     /// Check a robot (preset name or file) and print it as a robot file,
     /// every default written out, with its kinematic-table digest.
     Show(ShowArgs),
@@ -37,7 +31,7 @@ enum RobotCommand {
 Example:
   robokrige fit campaign.csv --robot ur10 -o model.json
   robokrige robot calibrated model.json -o ur10-calibrated.toml")]
-struct CalibratedArgs {
+pub struct CalibratedArgs {
     /// A model file fitted with a calibration (`fit --robot R`).
     model: PathBuf,
     /// The robot file to write (TOML).
@@ -55,7 +49,7 @@ struct CalibratedArgs {
 Examples:
   robokrige robot show comau-nj220
   robokrige robot show myrobot.toml --json -")]
-struct ShowArgs {
+pub struct ShowArgs {
     /// A preset name (comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515) or a
     /// robot file.
     robot: String,
@@ -67,8 +61,8 @@ struct ShowArgs {
     json: Option<PathBuf>,
 }
 
-pub fn run(a: RobotArgs) -> Result<()> {
-    match a.command {
+pub fn run(command: RobotCommand) -> Result<()> {
+    match command {
         RobotCommand::Show(s) => show(s),
         RobotCommand::Calibrated(c) => calibrated(c),
     }
