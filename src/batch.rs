@@ -159,6 +159,44 @@ pub fn run_batch(
         .collect()
 }
 
+/// Refuse an output folder that is the campaign folder `folder` (its files
+/// would be read as campaigns next time), and create it.
+pub fn prepare_output(folder: &Path, output: &Path) -> Result<()> {
+    if let (Ok(x), Ok(y)) = (folder.canonicalize(), output.canonicalize())
+        && x == y
+    {
+        return Err(Error::InvalidParameter(
+            "the output folder is the campaign folder: its files would be read as campaigns next time; choose another".into(),
+        ));
+    }
+    std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))
+}
+
+/// Write campaign `name`'s model and report into the folder `out`:
+/// `NAME.model.json` and `NAME.report.json` (pretty JSON).
+pub fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
+    rep.model.save(&out.join(format!("{name}.model.json")))?;
+    let text = serde_json::to_string_pretty(rep).map_err(|e| Error::Json {
+        context: "campaign report".into(),
+        source: e,
+    })?;
+    crate::output::write_text(&out.join(format!("{name}.report.json")), &(text + "\n"))
+}
+
+/// An error that counts the failed campaigns of `results` (listed in the
+/// summary CSV `summary`), if any failed.
+pub fn check_failures(results: &[Result<CampaignReport>], summary: &Path) -> Result<()> {
+    let failed = results.iter().filter(|r| r.is_err()).count();
+    if failed == 0 {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter(format!(
+        "{failed} of {} campaign(s) failed (listed above and in {})",
+        results.len(),
+        summary.display()
+    )))
+}
+
 /// A campaign's name: its file stem (`campaign` when it has none).
 pub fn campaign_name(file: &Path) -> String {
     file.file_stem()

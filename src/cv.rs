@@ -285,6 +285,110 @@ pub fn closed_form_model(
     Ok((model, Some(subset)))
 }
 
+/// How a cross-validation partitions the rows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Folds {
+    /// `k` folds of a seeded random partition ([`kfold_partition`]).
+    Random {
+        /// Number of folds K.
+        k: usize,
+        /// Seed of the partition.
+        seed: u64,
+    },
+    /// Leave-one-group-out: one fold per value of this column of the
+    /// campaign ([`Dataset::group_labels`], [`group_partition`]).
+    Groups(String),
+}
+
+impl Folds {
+    /// The fold of every row of `data`.
+    pub fn partition(&self, data: &Dataset) -> Result<Vec<usize>> {
+        match self {
+            Folds::Random { k, seed } => kfold_partition(data.len(), *k, *seed),
+            Folds::Groups(column) => group_partition(&data.group_labels(column)?),
+        }
+    }
+}
+
+/// A cross-validation of one model choice, as `robokrige cv` runs it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CvPlan {
+    /// Refit in every fold, or closed form at one fit's hyperparameters.
+    pub mode: CvMode,
+    /// The partition (random folds only in closed form).
+    pub folds: Folds,
+    /// Closed form only: ξ and the nugget chosen on the first N rows
+    /// ([`closed_form_model`]).
+    pub hyper_rows: Option<usize>,
+}
+
+impl CvPlan {
+    /// Refuse a plan that does not suit a campaign of `rows` rows: rows
+    /// for the hyperparameters outside the closed form, or not fewer than
+    /// the campaign's, and groups in closed form.
+    pub fn validate(&self, rows: usize) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidParameter(m));
+        if self.hyper_rows.is_some() && self.mode != CvMode::ClosedForm {
+            return bad(
+                "--hyper-rows is for --mode closed-form (refit mode searches ξ in every fold)"
+                    .into(),
+            );
+        }
+        if let Some(n) = self.hyper_rows.filter(|&n| n >= rows) {
+            return bad(format!(
+                "--hyper-rows {n}: the campaign has only {rows} rows; give fewer, or leave it out to choose ξ on all rows"
+            ));
+        }
+        if self.mode == CvMode::ClosedForm && matches!(self.folds, Folds::Groups(_)) {
+            return bad("leave-one-group-out CV refits in every fold: not in closed form".into());
+        }
+        Ok(())
+    }
+
+    /// Cross-validate `params` on `data`: refitted on every training fold
+    /// ([`cross_validate_folds`]; `progress(done, k)` after each fold), or
+    /// in closed form at the hyperparameters of one fit
+    /// ([`closed_form_model`], [`cross_validate_closed_form`]), whose
+    /// subset's figures come with the result. The result's time covers the
+    /// whole run, that fit included; its seed is the partition's (0 for
+    /// groups).
+    pub fn run(
+        &self,
+        data: &Dataset,
+        params: &ValidErrorModelParams,
+        progress: &dyn Fn(usize, usize),
+    ) -> Result<(CvResult, Option<HyperSubset>)> {
+        self.validate(data.len())?;
+        let t0 = Instant::now();
+        let (mut res, subset) = match (self.mode, &self.folds) {
+            (CvMode::ClosedForm, Folds::Random { k, seed }) => {
+                let (model, subset) = closed_form_model(data, params, self.hyper_rows)?;
+                (cross_validate_closed_form(data, &model, *k, *seed)?, subset)
+            }
+            // refit (validate refuses groups in closed form)
+            (_, folds) => {
+                data.errors_or_err()?;
+                let fold = folds.partition(data)?;
+                let k = fold.iter().max().map_or(0, |f| f + 1);
+                let done = std::cell::Cell::new(0);
+                progress(0, k);
+                let mut res = cross_validate_folds(data, &fold, |train| {
+                    let m = params.fit(train);
+                    done.set(done.get() + 1);
+                    progress(done.get(), k);
+                    m
+                })?;
+                if let Folds::Random { seed, .. } = folds {
+                    res.seed = *seed;
+                }
+                (res, None)
+            }
+        };
+        res.seconds = t0.elapsed().as_secs_f64();
+        Ok((res, subset))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,7 +6,7 @@
 //! and returns a [`Demo`]; the CLI writes its files, plots and report.
 
 use crate::cv::{CvResult, cross_validate_closed_form, cross_validate_method};
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, write_csv};
 use crate::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use crate::kinematics::{self, Robot};
 use crate::methods::Method;
@@ -144,6 +144,31 @@ pub struct Demo {
     pub circle_runs: Vec<(String, Vec<[f64; 3]>)>,
     /// The diagnosis of [`tracker_step`](Self::tracker_step).
     pub diagnosis: Diagnosis,
+}
+
+impl Demo {
+    /// The folders of a demo written to `out`: `data`, `models`, `plots`
+    /// (created).
+    pub fn create_folders(out: &Path) -> Result<()> {
+        for sub in ["data", "models", "plots"] {
+            let d = out.join(sub);
+            std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
+        }
+        Ok(())
+    }
+
+    /// Write the campaigns to `out/data` (as `datasets/generate.sh` names
+    /// them) and the models to `out/models` (`js.json`, `ejs.json`,
+    /// `ejs_ga.json`).
+    pub fn write_files(&self, out: &Path) -> Result<()> {
+        write_csv(&out.join("data/comau_lhs.csv"), &self.lhs)?;
+        write_csv(&out.join("data/comau_verify.csv"), &self.verify)?;
+        self.circle.write_csv(&out.join("data/comau_circle.csv"))?;
+        write_csv(&out.join("data/comau_tracker_step.csv"), &self.tracker_step)?;
+        self.js.save(&out.join("models/js.json"))?;
+        self.ejs.save(&out.join("models/ejs.json"))?;
+        self.ejs_ga.save(&out.join("models/ejs_ga.json"))
+    }
 }
 
 /// One campaign of the demo's robot with `effect`, if any.

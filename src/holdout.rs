@@ -297,6 +297,30 @@ fn predicted(model: &ErrorModel, held: &Dataset) -> Result<Held> {
     })
 }
 
+/// Training rows of a hold-out split when none are given.
+pub const DEFAULT_TRAIN: usize = 600;
+/// Held-out rows after the training ones when none are given.
+pub const DEFAULT_TEST: usize = 300;
+
+/// The first `train` rows of `data` ([`DEFAULT_TRAIN`] if not given) and
+/// the `test` rows after them ([`DEFAULT_TEST`]): at least 10 and 1 rows,
+/// within the campaign.
+pub fn split_rows(
+    data: &Dataset,
+    train: Option<usize>,
+    test: Option<usize>,
+) -> Result<(Dataset, Dataset)> {
+    let (n_train, n_test) = (train.unwrap_or(DEFAULT_TRAIN), test.unwrap_or(DEFAULT_TEST));
+    if n_train < 10 || n_test < 1 || n_train + n_test > data.len() {
+        return Err(Error::InvalidParameter(format!(
+            "--train {n_train} --test {n_test} need at least 10 + 1 and at most {} rows",
+            data.len()
+        )));
+    }
+    let rows = |r: std::ops::Range<usize>| data.select(&r.collect::<Vec<_>>());
+    Ok((rows(0..n_train), rows(n_train..n_train + n_test)))
+}
+
 /// What [`holdout_split`] scores beyond the five models.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SplitExtras {

@@ -294,6 +294,15 @@ impl Overrides {
         self
     }
 
+    /// `set` with `value` when one is given (a front end's optional option),
+    /// e.g. `.with(space, Overrides::space)`.
+    pub fn with<T>(self, value: Option<T>, set: impl FnOnce(Self, T) -> Self) -> Self {
+        match value {
+            Some(v) => set(self, v),
+            None => self,
+        }
+    }
+
     /// The rules between the names, before anything is built.
     fn check(&self, method: Option<Method>) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidParameter(m));

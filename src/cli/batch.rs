@@ -1,12 +1,14 @@
 //! `batch`: every campaign of a folder, one robot each, in parallel.
 
 use clap::Args;
+use robokrige::Result;
 use robokrige::batch::{
-    BatchOptions, CampaignReport, campaign_name, campaigns, run_batch, write_summary,
+    BatchOptions, campaign_name, campaigns, check_failures, prepare_output, run_batch,
+    write_campaign, write_summary,
 };
+use robokrige::kinematics::load_robot;
 use robokrige::report::batch as report;
-use robokrige::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 #[command(after_help = "\
@@ -50,35 +52,17 @@ pub struct BatchArgs {
 
 pub fn run(a: BatchArgs) -> Result<()> {
     let files = campaigns(&a.folder)?;
-    let same = |x: &Path, y: &Path| match (x.canonicalize(), y.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    };
-    if same(&a.folder, &a.output) {
-        return Err(Error::InvalidParameter(
-            "the output folder is the campaign folder: its files would be read as campaigns next time; choose another".into(),
-        ));
-    }
-    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(&a.output, e))?;
+    prepare_output(&a.folder, &a.output)?;
     let summary_csv = a.output.join("summary.csv");
-    let mut outputs = vec![summary_csv.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[], &outputs)?;
+    super::check_files(&[], &[Some(summary_csv.as_path()), a.json.as_deref()])?;
     let opts = BatchOptions {
         folds: a.folds,
         seed: a.seed,
-        robot: a
-            .robot
-            .as_deref()
-            .map(robokrige::kinematics::load_robot)
-            .transpose()?,
+        robot: a.robot.as_deref().map(load_robot).transpose()?,
         calibrate: !a.no_calibrate,
     };
-    eprintln!(
-        "batch: {} campaign(s) in {}, in parallel",
-        files.len(),
-        a.folder.display()
-    );
+    let (n, folder) = (files.len(), a.folder.display());
+    eprintln!("batch: {n} campaign(s) in {folder}, in parallel");
     let pb = super::progress::bar(files.len() as u64, "campaigns");
     let results = run_batch(&files, &opts, &|c, r| {
         pb.inc(1);
@@ -88,39 +72,16 @@ pub fn run(a: BatchArgs) -> Result<()> {
     });
     pb.finish_and_clear();
     say!("{}", report::header());
-    let mut reports = Vec::new();
     for (file, r) in files.iter().zip(&results) {
         let name = campaign_name(file);
         if let Ok(rep) = r {
             write_campaign(&a.output, &name, rep)?;
         }
         say!("{}", report::row(&name, r));
-        reports.push(match r {
-            Ok(rep) => serde_json::json!({"campaign": name, "report": rep}),
-            Err(e) => serde_json::json!({"campaign": name, "error": e.to_string()}),
-        });
     }
     write_summary(&summary_csv, &files, &results)?;
     say!("summary -> {}", summary_csv.display());
-    if let Some(p) = &a.json {
-        super::write_json(p, &reports, "batch summary")?;
-    }
-    let failed = results.iter().filter(|r| r.is_err()).count();
-    if failed > 0 {
-        return Err(Error::InvalidParameter(format!(
-            "{failed} of {} campaign(s) failed (listed above and in {})",
-            files.len(),
-            summary_csv.display()
-        )));
-    }
-    Ok(())
-}
-
-fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
-    rep.model.save(&out.join(format!("{name}.model.json")))?;
-    super::write_json(
-        &out.join(format!("{name}.report.json")),
-        rep,
-        "campaign report",
-    )
+    let v = report::json(&files, &results);
+    super::json_to(a.json.as_deref(), &v, "batch summary")?;
+    check_failures(&results, &summary_csv)
 }

@@ -4,17 +4,15 @@
 //! simulated robot, and diagnose a campaign with an undeclared effect.
 //! Writes the data, models, SVG plots and a Markdown report to a folder.
 
-use super::progress::bar;
+use super::progress::{self, bar};
 use clap::Args;
-use robokrige::dataset::write_csv;
-use robokrige::demo::run_demo;
+use robokrige::Result;
+use robokrige::demo::{Demo, run_demo};
 use robokrige::plot::demo_plots;
 use robokrige::report::demo as report;
-use robokrige::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-/// Run the main job on the shipped COMAU campaign and write a report.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 The campaigns are simulated in-process with the same commands as
@@ -34,29 +32,14 @@ pub struct DemoArgs {
 pub fn run(a: DemoArgs) -> Result<()> {
     let t0 = Instant::now();
     let out = &a.output;
-    for sub in ["data", "models", "plots"] {
-        let d = out.join(sub);
-        std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
-    }
+    Demo::create_folders(out)?;
     let report_md = out.join("report.md");
-    let outputs: Vec<&Path> = std::iter::once(report_md.as_path())
-        .chain(a.json.as_deref())
-        .collect();
-    robokrige::output::check_outputs(&[], &outputs)?;
+    super::check_files(&[], &[Some(report_md.as_path()), a.json.as_deref()])?;
     let pb = bar(robokrige::demo::STEPS as u64 + 2, "demo");
-    let demo = run_demo(&Default::default(), &|done, what| {
-        pb.set_position(done as u64);
-        pb.set_message(what.to_string());
-    });
+    let demo = run_demo(&Default::default(), &progress::steps(&pb));
     let demo = demo.inspect_err(|_| pb.finish_and_clear())?;
     pb.set_message("writing the data, models and plots");
-    write_csv(&out.join("data/comau_lhs.csv"), &demo.lhs)?;
-    write_csv(&out.join("data/comau_verify.csv"), &demo.verify)?;
-    demo.circle.write_csv(&out.join("data/comau_circle.csv"))?;
-    write_csv(&out.join("data/comau_tracker_step.csv"), &demo.tracker_step)?;
-    demo.js.save(&out.join("models/js.json"))?;
-    demo.ejs.save(&out.join("models/ejs.json"))?;
-    demo.ejs_ga.save(&out.join("models/ejs_ga.json"))?;
+    demo.write_files(out)?;
     let figures = demo_plots(&demo, &out.join("plots"))?;
     pb.inc(1);
     pb.set_message("writing the report");
@@ -66,9 +49,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
     pb.inc(1);
     pb.finish_and_clear();
     say_part!("{}", report::summary(&demo, secs));
-    if let Some(path) = &a.json {
-        super::write_json(path, &report::json(&demo, out, secs), "demo summary")?;
-    }
+    let v = report::json(&demo, out, secs);
+    super::json_to(a.json.as_deref(), &v, "demo summary")?;
     say!(
         "\nwrote {} (report.md, plots/, models/, data/)",
         out.display()

@@ -3,17 +3,16 @@
 use super::compensate::read_targets;
 use super::progress::spinner;
 use clap::Args;
+use robokrige::Result;
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use robokrige::kinematics;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
-use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase, compare_compensation};
+use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
 use robokrige::study::load_truth;
-use robokrige::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-/// Find what the model still gets wrong, trace it to a missing effect, add it.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Candidates: every numeric covariate column not in the model (alone, × joint
@@ -149,34 +148,19 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
-    let inputs: Vec<&Path> = [
-        Some(a.data.as_path()),
-        a.traj.as_deref(),
-        a.truth.as_deref(),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    let outputs: Vec<&Path> = [
+    let inputs = [Some(&*a.data), a.traj.as_deref(), a.truth.as_deref()];
+    let outputs = [
         a.json.as_deref(),
         a.report.as_deref(),
         a.model_out.as_deref(),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    robokrige::output::check_outputs(&inputs, &outputs)?;
-    let mut data = super::read_data(&a.data)?;
-    if let Some(n) = a.rows.filter(|&n| n < data.len()) {
-        data = data.select(&(0..n).collect::<Vec<_>>());
-    }
+    ];
+    super::check_files(&inputs, &outputs)?;
+    let data = super::read_data(&a.data)?.head(a.rows.unwrap_or(usize::MAX));
     let opts = options(&a, &data)?;
     let base = DiagnosisBase::new(data, &opts, a.calibrate)?;
     if let Some(cal) = &base.calibration {
-        say!(
-            "calibrated base: {}; diagnosing its residual",
-            cal.summary_line()
-        );
+        let line = cal.summary_line();
+        say!("calibrated base: {line}; diagnosing its residual");
     }
     let plan = robokrige::diagnose::DiagnosePlan::new(&base.data, &opts);
     plan.check(
@@ -190,54 +174,35 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let d = diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()));
     pb.finish_and_clear();
     let d = d?;
-    let (data_name, traj_name) = (
-        a.data.display().to_string(),
-        a.traj.as_ref().map(|p| p.display().to_string()),
-    );
+    let data_name = a.data.display().to_string();
     let names = Names {
         data: &data_name,
         method: &a.method,
     };
     say_part!("{}", report::summary(&d, names));
-    let plots = draw_plots(a.plots.as_deref(), &base.data, &d)?;
-    let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
-    if let Some(path) = &a.json {
-        let mut v = serde_json::to_value(&d).map_err(|e| Error::Json {
-            context: "diagnosis".into(),
-            source: e,
-        })?;
-        v["data"] = serde_json::json!(a.data);
-        v["method"] = serde_json::json!(a.method);
-        if let Some(c) = &compensation {
-            v["compensation"] = serde_json::json!(c);
-        }
-        super::write_json(path, &v, "diagnosis")?;
+    let plots = match &a.plots {
+        Some(dir) => effect_plots(dir, &base.data, &d)?,
+        None => Vec::new(),
+    };
+    for p in &plots {
+        say!("plot: {}", p.display());
     }
+    if let Some(dir) = a.plots.as_ref().filter(|_| plots.is_empty()) {
+        say!("no plots in {}: no effect was added", dir.display());
+    }
+    let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
+    let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
+    super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
+        let traj = a.traj.as_ref().map(|p| p.display().to_string());
         let extras = Extras {
-            compensation: traj_name.as_deref().zip(compensation.as_ref()),
+            compensation: traj.as_deref().zip(compensation.as_ref()),
             plots: &plots,
         };
         robokrige::output::write_text(path, &report::markdown(&d, names, extras))?;
         say!("report: {}", path.display());
     }
     Ok(())
-}
-
-/// With `--plots DIR`: the residual-vs-effect plots of the added effects.
-fn draw_plots(dir: Option<&Path>, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
-    let Some(dir) = dir else {
-        return Ok(Vec::new());
-    };
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let plots = effect_plots(dir, data, d)?;
-    for p in &plots {
-        say!("plot: {}", p.display());
-    }
-    if plots.is_empty() {
-        say!("no plots in {}: no effect was added", dir.display());
-    }
-    Ok(plots)
 }
 
 /// With `--model-out`: save the model with the added effects; with
@@ -261,20 +226,12 @@ fn write_and_compare_models(
     let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let before = base.model(opts, &[])?;
     let robot = kinematics::load_robot(robot)?;
     let truth = load_truth(truth_path)?;
     let targets = read_targets(traj, &robot, None, &robot.home)?;
-    let c = compare_compensation(
-        &robot,
-        &targets,
-        (truth_path, &truth),
-        [&before, &after],
-        a.seed,
-    )?;
-    say!(
-        "{}",
-        report::compensation_line(&traj.display().to_string(), &c)
-    );
+    let on = (&robot, &targets);
+    let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
+    let traj = traj.display().to_string();
+    say!("{}", report::compensation_line(&traj, &c));
     Ok(Some(c))
 }

@@ -1,43 +1,16 @@
 //! `robokrige fit` and `robokrige predict`.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
+use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
-use robokrige::kriging::CorrChoice;
-use robokrige::kriging::{Correlation, OptimizerKind, TrendKind};
+use robokrige::kinematics::load_robot_with_tool;
+use robokrige::kriging::{CorrChoice, OptimizerKind, TrendKind};
 use robokrige::methods::{Method, Overrides, params_with};
-use robokrige::model::{AXES, ErrorModel};
+use robokrige::model::ErrorModel;
 use robokrige::params::ErrorModelParams;
-use robokrige::report::fit as report;
+use robokrige::report::{fit as report, predict};
 use robokrige::space::Space;
-use robokrige::{Error, Result};
 use std::path::PathBuf;
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum CorrArg {
-    /// exp(−h²), seed 003 eq 8 (the papers').
-    Gaussian,
-    /// Matérn ν = 5/2.
-    Matern52,
-    /// Matérn ν = 3/2.
-    Matern32,
-    /// exp(−h) (Matérn ν = 1/2).
-    Exponential,
-    /// Each output's family chosen by closed-form 10-fold CV among the four.
-    Auto,
-}
-
-impl CorrArg {
-    /// The options' correlation choice.
-    pub fn choice(self) -> CorrChoice {
-        match self {
-            CorrArg::Gaussian => Correlation::Gaussian.into(),
-            CorrArg::Matern52 => Correlation::Matern52.into(),
-            CorrArg::Matern32 => Correlation::Matern32.into(),
-            CorrArg::Exponential => Correlation::Exponential.into(),
-            CorrArg::Auto => CorrChoice::AUTO,
-        }
-    }
-}
 
 /// Model choices shared by `fit` and `cv`. An option not given keeps the
 /// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
@@ -54,7 +27,7 @@ pub struct ModelArgs {
     /// by default each output's family is chosen by closed-form 10-fold CV
     /// (the `recommended` method). `gaussian` is the papers' [default: auto].
     #[arg(long, value_enum)]
-    corr: Option<CorrArg>,
+    corr: Option<CorrChoice>,
     /// Hyperparameter search [default: bfgs].
     #[arg(long, value_enum)]
     optimizer: Option<OptimizerKind>,
@@ -121,45 +94,27 @@ impl ModelArgs {
 
     /// The flags given, as the library's overrides.
     fn overrides(&self) -> Result<Overrides> {
-        let mut o = Overrides::new()
+        let robot = self.robot.as_deref();
+        let robot = robot.map(|r| load_robot_with_tool(r, self.tool.as_deref()));
+        let nugget = (self.no_nugget || self.nugget).then_some(self.nugget);
+        Ok(Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
             .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
                 noise_mm: self.calibration_noise,
                 ..CalibrationOptions::default()
-            }));
-        if let Some(v) = self.space {
-            o = o.space(v);
-        }
-        if let Some(v) = self.trend {
-            o = o.trend(v);
-        }
-        if let Some(v) = self.corr {
-            o = o.corr(v.choice());
-        }
-        if let Some(v) = self.optimizer {
-            o = o.optimizer(v);
-        }
-        if self.no_nugget || self.nugget {
-            o = o.nugget(self.nugget);
-        }
-        if let Some(v) = self.starts {
-            o = o.starts(v);
-        }
-        if let Some(v) = &self.periodic {
-            o = o.periodic(v.as_str());
-        }
-        if let Some(r) = &self.robot {
-            o = o.robot(robokrige::kinematics::load_robot_with_tool(
-                r,
-                self.tool.as_deref(),
-            )?);
-        }
-        Ok(o)
+            }))
+            .with(self.space, Overrides::space)
+            .with(self.trend, Overrides::trend)
+            .with(self.corr, Overrides::corr)
+            .with(self.optimizer, Overrides::optimizer)
+            .with(nugget, Overrides::nugget)
+            .with(self.starts, Overrides::starts)
+            .with(self.periodic.as_deref(), Overrides::periodic)
+            .with(robot.transpose()?, Overrides::robot))
     }
 }
 
-/// Fit a universal-Kriging error model (one per axis ex, ey, ez) to a campaign.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -184,58 +139,37 @@ pub struct FitArgs {
 }
 
 pub fn run_fit(a: FitArgs) -> Result<()> {
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[&a.data], &outputs)?;
-    let data = super::read_data(&a.data)?;
+    let (data_path, output) = (a.data.as_path(), a.output.as_path());
+    super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
+    let data = super::read_data(data_path)?;
     let params = a.model.resolve(a.method.as_deref(), &data)?.check()?;
-    super::plan_fit(
-        "fit",
-        data.len(),
-        params.params().get_kriging().get_optimizer(),
-        None,
-    )?;
+    let optimizer = params.params().get_kriging().get_optimizer();
+    super::plan_fit("fit", data.len(), optimizer, None)?;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => {
             let pb = super::progress::spinner(name);
-            let progress = |axis: usize, generation: usize, best: f64| {
-                pb.set_message(format!(
-                    "GA {} generation {generation}: best CV RMSE {best:.4} mm",
-                    AXES[axis]
-                ));
-            };
-            let model = params.fit_with_progress(&data, &progress);
+            let model = params.fit_with_progress(&data, &super::progress::ga(&pb));
             pb.finish_and_clear();
             model?
         }
         None => params.fit(&data)?,
     };
-    let settings = params.params().settings();
     let secs = t0.elapsed().as_secs_f64();
     for w in model.conditioning_warnings() {
         eprintln!("warning: {w}");
     }
-    model.save(&a.output)?;
+    model.save(output)?;
     if let Some(path) = &a.json {
-        let settings: serde_json::Map<String, serde_json::Value> = settings
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), v.into()))
-            .collect();
-        let v = serde_json::json!({"data": a.data, "model": a.output, "rows": data.len(),
-            "settings": settings, "method": a.method, "robot": model.robot(),
-            "seconds": secs, "outputs": model.reports(), "selection": model.selection(),
-            "calibration": model.calibration().map(|c| c.identifiability())});
+        let fit = (params.params(), a.method.as_deref());
+        let v = report::json((data_path, output), &model, fit, (data.len(), secs));
         super::write_json(path, &v, "fit report")?;
     }
-    say_part!(
-        "{}",
-        report::summary(&model, data.len(), secs, &a.output.display().to_string())
-    );
+    let output = output.display().to_string();
+    say_part!("{}", report::summary(&model, data.len(), secs, &output));
     Ok(())
 }
 
-/// Predict TCP errors (mean and standard deviation per axis) at poses.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -257,48 +191,29 @@ pub struct PredictArgs {
 }
 
 pub fn run_predict(a: PredictArgs) -> Result<()> {
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[&a.model, &a.poses], &outputs)?;
-    let model = ErrorModel::load(&a.model)?;
-    let data = super::read_data(&a.poses)?;
-    if data.n_joints() != model.n_joints() {
-        return Err(Error::Input {
-            source_name: a.poses.display().to_string(),
-            message: format!(
-                "has {} joints but the model was fitted on {}",
-                data.n_joints(),
-                model.n_joints()
-            ),
-        });
-    }
+    let (model_path, poses, output) = (a.model.as_path(), a.poses.as_path(), a.output.as_path());
+    super::check_files(
+        &[Some(model_path), Some(poses)],
+        &[Some(output), a.json.as_deref()],
+    )?;
+    let model = ErrorModel::load(model_path)?;
+    let data = super::read_data(poses)?;
+    model.check_dataset(&data)?;
     let pred = model.predict_dataset(&data)?;
-    let derived = data.dir_source == robokrige::dataset::DirSource::Derived;
-    let assumed = match data.q.first() {
-        Some(q0) if derived => model.direction_sensitivity(q0, &data.dir[0])?,
-        _ => 0.0,
-    };
+    let assumed = model.assumed_direction_sensitivity(&data)?;
     if assumed > 0.0 {
-        let warning =
-            robokrige::report::predict::direction_warning(&a.poses, data.n_joints(), assumed);
-        eprintln!("{warning}");
+        let n = data.n_joints();
+        eprintln!("{}", predict::direction_warning(poses, n, assumed));
     }
     let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    robokrige::dataset::write_predictions(
-        &a.output,
-        &data,
-        &pred.mean,
-        &pred.std,
-        model.noise_std(),
-    )?;
-    let (v, line) = robokrige::report::predict::summary(&data, &pred.mean, &coverage, &a.output);
-    if let Some(path) = &a.json {
-        super::write_json(path, &v, "prediction summary")?;
-    }
+    let noise = model.noise_std();
+    robokrige::dataset::write_predictions(output, &data, &pred.mean, &pred.std, noise)?;
+    let (v, line) = predict::summary(&data, &pred.mean, &coverage, output);
+    super::json_to(a.json.as_deref(), &v, "prediction summary")?;
     if let Some(line) = line {
         say!("{line}");
     }
-    say!("wrote {}", a.output.display());
+    say!("wrote {}", output.display());
     Ok(())
 }

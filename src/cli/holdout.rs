@@ -2,20 +2,20 @@
 //! next ones (or cross-validate) — nominal, D-H calibration, the calibrated
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
-use super::progress::bar;
+use super::progress::{self, bar};
 use super::read_data;
 use clap::Args;
+use robokrige::Result;
+use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split};
+use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split, split_rows};
 use robokrige::kinematics::Robot;
-use robokrige::kriging::OptimizerKind;
+use robokrige::kriging::{CorrChoice, OptimizerKind};
 use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
 use robokrige::report::holdout as report;
-use robokrige::{Error, Result};
 use std::path::PathBuf;
 
-/// Hold-out comparison of calibration models on a measured campaign.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Rows 1..TRAIN train every model; rows TRAIN+1..TRAIN+TEST are predicted.
@@ -62,7 +62,7 @@ pub struct HoldoutArgs {
     /// exponential, or auto (each output's family by closed-form 10-fold CV,
     /// the default).
     #[arg(long, value_enum, default_value = "auto")]
-    corr: super::fit::CorrArg,
+    corr: CorrChoice,
     /// Interpolate exactly (no nugget) in the Kriging fits. By default a
     /// nugget is estimated: real data has noise.
     #[arg(long, conflicts_with = "nugget")]
@@ -102,7 +102,7 @@ pub struct HoldoutArgs {
 fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
     let o = Overrides::new()
         .optimizer(a.optimizer)
-        .corr(a.corr.choice())
+        .corr(a.corr)
         .nugget(!a.no_nugget)
         .seed(a.seed)
         .periodic(a.periodic.as_str());
@@ -113,86 +113,30 @@ fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
     let base = base_params(a, data)?;
     super::plan_fit("holdout", data.len(), a.optimizer, None)?;
-    let (fold, how) = match folds {
-        Folds::Random(k) => (
-            robokrige::cv::kfold_partition(data.len(), *k, a.seed)?,
-            format!("{k}-fold CV (fold seed {})", a.seed),
-        ),
-        Folds::Groups(col) => {
-            let f = robokrige::cv::group_partition(&data.group_labels(col)?)?;
-            let k = f.iter().max().map_or(0, |x| x + 1);
-            (
-                f,
-                format!("leave-one-group-out CV over the {k} groups of '{col}'"),
-            )
-        }
-    };
+    let fold = folds.partition(data)?;
     let k = fold.iter().max().map_or(0, |x| x + 1);
     let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
-    let cv = holdout_cv(data, robot, &base, &fold, hyper_rows, &|done, msg| {
-        pb.set_position(done as u64);
-        pb.set_message(msg.to_string());
-    })?;
+    let cv = holdout_cv(data, robot, &base, &fold, hyper_rows, &progress::steps(&pb))?;
     pb.finish_and_clear();
-    say!(
-        "{}: {how} on all {} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}",
-        a.data.display(),
-        data.len(),
-        if a.no_nugget { "" } else { " and nugget" },
-        cv.hyper_rows,
-        cv.hyper_seconds,
-        report::joint_list(base.get_periodic())
-    );
-    say_part!(
-        "{}{}{}",
-        report::rows(&cv.rows),
-        report::scores(&cv.scores),
-        report::cv_tail(&cv)
-    );
-    if let Some(p) = &a.json {
-        super::write_json(p, &cv, "cv table")?;
-    }
+    let name = a.data.display().to_string();
+    say_part!("{}", report::cv(&name, (folds, data.len()), &base, &cv));
+    super::json_to(a.json.as_deref(), &cv, "cv table")?;
     Ok(())
 }
 
-/// How `holdout` cross-validates.
-enum Folds {
-    /// A seeded random partition into K folds.
-    Random(usize),
-    /// One fold per value of a column.
-    Groups(String),
-}
-
-/// Training rows of a hold-out split when `--train` is not given.
-const DEFAULT_TRAIN: usize = 600;
-/// Held-out rows after the training ones.
-const DEFAULT_TEST: usize = 300;
-
 pub fn run(a: HoldoutArgs) -> Result<()> {
-    let outputs: Vec<&std::path::Path> = a.json.as_deref().into_iter().collect();
-    robokrige::output::check_outputs(&[&a.data], &outputs)?;
+    super::check_files(&[Some(a.data.as_path())], &[a.json.as_deref()])?;
     let data = read_data(&a.data)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
     if let Some(k) = a.cv {
-        return run_cv(&a, &data, &robot, &Folds::Random(k));
+        return run_cv(&a, &data, &robot, &Folds::Random { k, seed: a.seed });
     }
     if let Some(col) = &a.groups {
         return run_cv(&a, &data, &robot, &Folds::Groups(col.clone()));
     }
-    let n_train = a.train.unwrap_or(DEFAULT_TRAIN);
-    let n_test = a.test.unwrap_or(DEFAULT_TEST);
-    if n_train < 10 || n_test < 1 || n_train + n_test > data.len() {
-        return Err(Error::InvalidParameter(format!(
-            "--train {} --test {} need at least 10 + 1 and at most {} rows",
-            n_train,
-            n_test,
-            data.len()
-        )));
-    }
-    let train = data.select(&(0..n_train).collect::<Vec<_>>());
-    let test = data.select(&(n_train..n_train + n_test).collect::<Vec<_>>());
+    let (train, test) = split_rows(&data, a.train, a.test)?;
     let base = base_params(&a, &train)?;
     super::plan_fit("holdout", train.len(), a.optimizer, Some("--train"))?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
@@ -204,30 +148,9 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         pb.inc(1);
         pb.set_message(what.to_string());
     })?;
-    let (rows, cal) = (split.rows, split.calibration);
     pb.finish_and_clear();
-    say!(
-        "{}: train rows 1–{}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}",
-        a.data.display(),
-        n_train,
-        n_train + 1,
-        n_train + n_test,
-        match a.optimizer {
-            OptimizerKind::Gps => "GPS",
-            OptimizerKind::HookeJeeves => "Hooke–Jeeves",
-            OptimizerKind::Bfgs => "BFGS (analytic gradient)",
-        },
-        if a.no_nugget {
-            ""
-        } else {
-            ", nugget estimated"
-        },
-        report::joint_list(base.get_periodic())
-    );
-    say_part!("{}", robokrige::report::fit::calibration(&cal));
-    say_part!("{}", report::rows(&rows));
-    if let Some(p) = &a.json {
-        super::write_json(p, &rows, "hold-out table")?;
-    }
+    let (name, sizes) = (a.data.display().to_string(), (train.len(), test.len()));
+    say_part!("{}", report::split(&name, sizes, &base, &split));
+    super::json_to(a.json.as_deref(), &split.rows, "hold-out table")?;
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `import`: a tracker or controller export → a measurement CSV.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
 use robokrige::dataset::write_csv;
 use robokrige::kinematics::{self, Robot, errors_from_positions};
@@ -51,10 +51,10 @@ pub struct ImportArgs {
     decimal: Option<char>,
     /// Unit of revolute joint values [default: the mapping file's, else deg].
     #[arg(long, value_enum)]
-    angles: Option<AngleArg>,
+    angles: Option<AngleUnit>,
     /// Unit of lengths: positions, errors, prismatic joints [default: the mapping file's, else mm].
     #[arg(long, value_enum)]
-    lengths: Option<LengthArg>,
+    lengths: Option<LengthUnit>,
     /// The measured robot (preset or robot file): gives prismatic joints their
     /// unit and, with x,y,z, turns positions into errors.
     #[arg(long)]
@@ -65,24 +65,9 @@ pub struct ImportArgs {
     json: Option<PathBuf>,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum AngleArg {
-    Deg,
-    Rad,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum LengthArg {
-    Mm,
-    M,
-}
-
 pub fn run(a: ImportArgs) -> Result<()> {
-    let mut inputs = vec![a.export.as_path()];
-    inputs.extend(a.map_file.as_deref());
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&inputs, &outputs)?;
+    let inputs = [Some(a.export.as_path()), a.map_file.as_deref()];
+    super::check_files(&inputs, &[Some(a.output.as_path()), a.json.as_deref()])?;
     let mut spec = match &a.map_file {
         Some(p) => ImportSpec::from_file(p)?,
         None => ImportSpec::default(),
@@ -91,24 +76,10 @@ pub fn run(a: ImportArgs) -> Result<()> {
     for m in &a.map {
         spec.map(m, &mut given)?;
     }
-    if a.delimiter.is_some() {
-        spec.delimiter = a.delimiter;
-    }
-    if a.decimal.is_some() {
-        spec.decimal = a.decimal;
-    }
-    if let Some(u) = a.angles {
-        spec.angles = match u {
-            AngleArg::Deg => AngleUnit::Deg,
-            AngleArg::Rad => AngleUnit::Rad,
-        };
-    }
-    if let Some(u) = a.lengths {
-        spec.lengths = match u {
-            LengthArg::Mm => LengthUnit::Mm,
-            LengthArg::M => LengthUnit::M,
-        };
-    }
+    spec.delimiter = a.delimiter.or(spec.delimiter);
+    spec.decimal = a.decimal.or(spec.decimal);
+    spec.angles = a.angles.unwrap_or(spec.angles);
+    spec.lengths = a.lengths.unwrap_or(spec.lengths);
     let robot = a.robot.as_deref().map(kinematics::load_robot).transpose()?;
     let prismatic = robot
         .as_ref()

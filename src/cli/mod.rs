@@ -40,6 +40,7 @@ mod run;
 mod simulate;
 
 use clap::{Parser, Subcommand};
+use robokrige::model::CoverageWarning;
 use robokrige::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -73,7 +74,8 @@ pub enum Command {
     /// Find what the model misses, trace it to an effect, add it, report before/after.
     Diagnose(diagnose::DiagnoseArgs),
     /// Physics-based models (seeds 000, 002): identify from indexing tests, compare with Kriging.
-    Physics(physics::PhysicsArgs),
+    #[command(subcommand)]
+    Physics(physics::PhysicsCommand),
     /// Train on the first rows of a campaign, score on the next: nominal, D-H
     /// calibration, hybrid, Kriging with the kinematic trend (JS and EJS).
     Holdout(holdout::HoldoutArgs),
@@ -87,7 +89,8 @@ pub enum Command {
     /// parallel: a report per campaign and a summary table.
     Batch(batch::BatchArgs),
     /// Robot files: show a preset or check your own (MD-H table, limits, tool, base).
-    Robot(robot::RobotArgs),
+    #[command(subcommand)]
+    Robot(robot::RobotCommand),
     /// Plan a campaign: which poses to measure next (IMSE), from which side, in
     /// which order, and when to stop.
     Plan(plan::PlanArgs),
@@ -133,23 +136,34 @@ fn dispatch(command: Command) -> Result<()> {
     }
 }
 
-/// Pretty JSON of `value`; `context` names it in the error.
-pub fn to_json(value: &impl Serialize, context: &str) -> Result<String> {
-    serde_json::to_string_pretty(value).map_err(|e| Error::Json {
+/// Write `value` as pretty JSON (with a final newline) to `path`
+/// (`context` names it in an error). Every `--json FILE` option: `-` is
+/// standard output.
+pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| Error::Json {
         context: context.into(),
         source: e,
-    })
-}
-
-/// Write `value` as pretty JSON (with a final newline) to `path`.
-/// Every `--json FILE` option: `-` is standard output.
-pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
-    let text = to_json(value, context)? + "\n";
+    });
+    let text = json? + "\n";
     if is_stdout(path) {
         print!("{text}");
         return Ok(());
     }
     robokrige::output::write_text(path, &text)
+}
+
+/// [`write_json`] to the file of a `--json` option, if given.
+pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
+    path.map_or(Ok(()), |p| write_json(p, value, context))
+}
+
+/// Check a command's files before any work
+/// ([`robokrige::output::check_outputs`]); `None`s are options not given.
+pub fn check_files(inputs: &[Option<&Path>], outputs: &[Option<&Path>]) -> Result<()> {
+    fn given<'a>(v: &[Option<&'a Path>]) -> Vec<&'a Path> {
+        v.iter().flatten().copied().collect()
+    }
+    robokrige::output::check_outputs(&given(inputs), &given(outputs))
 }
 
 /// Whether an output path is `-` (standard output).
@@ -192,11 +206,7 @@ pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
 }
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).
-pub fn print_coverage(
-    warnings: &[robokrige::model::CoverageWarning],
-    total: usize,
-    ids: Option<&[String]>,
-) {
+pub fn print_coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String]>) {
     eprint!(
         "{}",
         robokrige::report::predict::coverage(warnings, total, ids)

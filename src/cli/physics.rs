@@ -8,18 +8,12 @@ use robokrige::methods::Method;
 use robokrige::physics::{CompareOptions, check_training_campaign, compare, identify_physics};
 use robokrige::report::physics as report;
 use robokrige::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Physics-based models of seeds 000 and 002 (lookup tables of angular
 /// positioning deviation per direction), and their comparison with Kriging.
-#[derive(Debug, Args)]
-pub struct PhysicsArgs {
-    #[command(subcommand)]
-    command: PhysicsCommand,
-}
-
 #[derive(Debug, Subcommand)]
-enum PhysicsCommand {
+pub enum PhysicsCommand {
     /// Identify a physics model from indexing tests (and, for a six-axis
     /// robot, a measurement campaign for the D-H errors).
     Identify(IdentifyArgs),
@@ -185,8 +179,8 @@ pub struct CompareArgs {
     plots: Option<PathBuf>,
 }
 
-pub fn run(a: PhysicsArgs) -> Result<()> {
-    match a.command {
+pub fn run(command: PhysicsCommand) -> Result<()> {
+    match command {
         PhysicsCommand::Identify(a) => run_identify(a),
         PhysicsCommand::Compare(a) => run_compare(a),
         PhysicsCommand::Probing(a) => run_probing(a),
@@ -195,22 +189,10 @@ pub fn run(a: PhysicsArgs) -> Result<()> {
     }
 }
 
-fn write(path: &Path, text: &str) -> Result<()> {
-    robokrige::output::write_text(path, text)
-}
-
 fn run_identify(a: IdentifyArgs) -> Result<()> {
-    let inputs: Vec<&Path> = std::iter::once(&a.indexing)
-        .chain(&a.train)
-        .chain(&a.truth)
-        .map(PathBuf::as_path)
-        .collect();
-    let outputs: Vec<&Path> = std::iter::once(&a.output)
-        .chain(&a.dh_output)
-        .chain(&a.json)
-        .map(PathBuf::as_path)
-        .collect();
-    robokrige::output::check_outputs(&inputs, &outputs)?;
+    let inputs = [Some(&*a.indexing), a.train.as_deref(), a.truth.as_deref()];
+    let outputs = [Some(&*a.output), a.dh_output.as_deref(), a.json.as_deref()];
+    super::check_files(&inputs, &outputs)?;
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
@@ -235,9 +217,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         say_part!("{}", report::against_truth(&id, &truth));
     }
     say!("model: {}", a.output.display());
-    if let Some(p) = &a.json {
-        super::write_json(p, &id, "identification report")?;
-    }
+    super::json_to(a.json.as_deref(), &id, "identification report")?;
     Ok(())
 }
 
@@ -260,13 +240,7 @@ fn default_robot_hint(e: Error, robot: &str) -> Error {
 const DEFAULT_ROBOT: &str = "scara-rh3frh5515";
 
 fn run_compare(a: CompareArgs) -> Result<()> {
-    let outputs: Vec<&Path> = a
-        .json
-        .iter()
-        .chain(&a.report)
-        .map(PathBuf::as_path)
-        .collect();
-    robokrige::output::check_outputs(&[], &outputs)?;
+    super::check_files(&[], &[a.json.as_deref(), a.report.as_deref()])?;
     let opts = CompareOptions {
         robot: a.robot.clone(),
         seed: a.seed,
@@ -291,13 +265,10 @@ fn run_compare(a: CompareArgs) -> Result<()> {
     let text = report::comparison(&res, t0.elapsed().as_secs_f64());
     say_part!("{text}");
     if let Some(p) = &a.report {
-        write(p, &text)?;
+        robokrige::output::write_text(p, &text)?;
     }
-    if let Some(p) = &a.json {
-        super::write_json(p, &res, "comparison")?;
-    }
+    super::json_to(a.json.as_deref(), &res, "comparison")?;
     if let Some(dir) = &a.plots {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for f in robokrige::plot::path_plots(&res, dir)? {
             say!("plot: {}", f.display());
         }
@@ -306,52 +277,36 @@ fn run_compare(a: CompareArgs) -> Result<()> {
 }
 
 fn run_probing(a: ProbingArgs) -> Result<()> {
-    let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
-    robokrige::output::check_outputs(&[], &outputs)?;
+    super::check_files(&[], &[a.json.as_deref()])?;
     let (rows, how) = robokrige::physics::probing_example(&a.robot, a.seed, !a.noise_free)?;
-    say_part!(
-        "{}",
-        report::probing(&rows, &how, (&a.robot, a.seed, !a.noise_free))
-    );
-    if let Some(p) = &a.json {
-        super::write_json(p, &rows, "probing table")?;
-    }
+    let setup = (a.robot.as_str(), a.seed, !a.noise_free);
+    say_part!("{}", report::probing(&rows, &how, setup));
+    super::json_to(a.json.as_deref(), &rows, "probing table")?;
     Ok(())
 }
 
 fn run_crosstalk(a: CrosstalkArgs) -> Result<()> {
-    let outputs: Vec<&Path> = a.json.iter().map(PathBuf::as_path).collect();
-    robokrige::output::check_outputs(&[&a.data, &a.model], &outputs)?;
+    let inputs = [Some(a.data.as_path()), Some(a.model.as_path())];
+    super::check_files(&inputs, &[a.json.as_deref()])?;
     let model = robokrige::physics::PhysicsModel::load(&a.model)?;
     let data = robokrige::dataset::read_csv(&a.data)?;
     let r = robokrige::physics::identify_crosstalk(&data, &model)?;
     say_part!("{}", report::crosstalk(&r));
-    if let Some(p) = &a.json {
-        super::write_json(p, &r, "cross-talk report")?;
-    }
+    super::json_to(a.json.as_deref(), &r, "cross-talk report")?;
     Ok(())
 }
 
 fn run_register(a: RegisterArgs) -> Result<()> {
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[&a.data], &outputs)?;
+    let (data_path, output) = (a.data.as_path(), a.output.as_path());
+    super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let robot = kinematics::load_robot(&a.robot)?;
-    let data = read_data(&a.data)?;
+    let data = read_data(data_path)?;
     robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
-    robokrige::dataset::write_csv(&a.output, &out)?;
-    let output = a.output.display().to_string();
-    say_part!("{}", report::registration(&reg, out.len(), &output));
-    let (axis, angle) = report::axis_angle(&reg);
-    if let Some(p) = &a.json {
-        let v = serde_json::json!({
-            "data": a.data, "output": a.output, "robot": robot.name, "rows": out.len(),
-            "base_from_tracker": reg.transform, "rotation_axis": axis,
-            "rotation_deg": angle.to_degrees(), "reflection_guarded": reg.reflection_guarded,
-            "rms_mm": reg.rms, "max_mm": reg.max,
-        });
-        super::write_json(p, &v, "registration")?;
-    }
+    robokrige::dataset::write_csv(output, &out)?;
+    let name = output.display().to_string();
+    say_part!("{}", report::registration(&reg, out.len(), &name));
+    let v = report::registration_json((data_path, output), &robot.name, out.len(), &reg);
+    super::json_to(a.json.as_deref(), &v, "registration")?;
     Ok(())
 }

@@ -105,6 +105,15 @@ fn tracker(a: &PlanArgs) -> Result<Option<TrackerView>> {
 }
 
 pub fn run(a: PlanArgs) -> Result<()> {
+    super::check_files(
+        &[
+            a.campaign.as_deref(),
+            a.pool.as_deref(),
+            a.region.as_deref(),
+            a.prior.as_deref(),
+        ],
+        &[Some(a.output.as_path())],
+    )?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;
     let pool = a.pool.as_deref().map(read_data).transpose()?;

@@ -26,3 +26,29 @@ pub fn spinner(prefix: &str) -> ProgressBar {
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
     pb
 }
+
+/// A library's progress `(done, total)` drawn on `pb`.
+pub fn of_total(pb: &ProgressBar) -> impl Fn(usize, usize) + Sync + '_ {
+    |done, total| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    }
+}
+
+/// A library's progress `(done, what)` drawn on `pb`.
+pub fn steps(pb: &ProgressBar) -> impl Fn(usize, &str) + Sync + '_ {
+    |done, what| {
+        pb.set_position(done as u64);
+        pb.set_message(what.to_string());
+    }
+}
+
+/// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message.
+pub fn ga(pb: &ProgressBar) -> impl Fn(usize, usize, f64) + Sync + '_ {
+    |axis, generation, best| {
+        pb.set_message(format!(
+            "GA {} generation {generation}: best CV RMSE {best:.4} mm",
+            robokrige::model::AXES[axis]
+        ))
+    }
+}

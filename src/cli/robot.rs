@@ -5,7 +5,7 @@ use robokrige::Result;
 use robokrige::kinematics::{self, RobotFile};
 use std::path::PathBuf;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Subcommand)]
 #[command(after_help = "\
 A robot file describes a serial robot for every --robot option: its MD-H
 table (one [[joints]] entry per axis: kind, theta_offset_deg, d_mm, a_mm,
@@ -16,13 +16,7 @@ Examples:
   robokrige robot show ur10 -o myrobot.toml     # start from a preset
   robokrige robot show examples/robots/abb-irb2600.toml
   robokrige simulate --robot examples/robots/abb-irb2600.toml -o abb.csv")]
-pub struct RobotArgs {
-    #[command(subcommand)]
-    command: RobotCommand,
-}
-
-#[derive(Debug, Subcommand)]
-enum RobotCommand {
+pub enum RobotCommand {
     /// Check a robot (preset name or file) and print it as a robot file,
     /// every default written out, with its kinematic-table digest.
     Show(ShowArgs),
@@ -37,7 +31,7 @@ enum RobotCommand {
 Example:
   robokrige fit campaign.csv --robot ur10 -o model.json
   robokrige robot calibrated model.json -o ur10-calibrated.toml")]
-struct CalibratedArgs {
+pub struct CalibratedArgs {
     /// A model file fitted with a calibration (`fit --robot R`).
     model: PathBuf,
     /// The robot file to write (TOML).
@@ -55,7 +49,7 @@ struct CalibratedArgs {
 Examples:
   robokrige robot show comau-nj220
   robokrige robot show myrobot.toml --json -")]
-struct ShowArgs {
+pub struct ShowArgs {
     /// A preset name (comau-nj220, kuka-kr30ha, ur10, scara-rh3frh5515) or a
     /// robot file.
     robot: String,
@@ -67,17 +61,18 @@ struct ShowArgs {
     json: Option<PathBuf>,
 }
 
-pub fn run(a: RobotArgs) -> Result<()> {
-    match a.command {
+pub fn run(command: RobotCommand) -> Result<()> {
+    match command {
         RobotCommand::Show(s) => show(s),
         RobotCommand::Calibrated(c) => calibrated(c),
     }
 }
 
 fn calibrated(a: CalibratedArgs) -> Result<()> {
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[&a.model], &outputs)?;
+    super::check_files(
+        &[Some(a.model.as_path())],
+        &[Some(a.output.as_path()), a.json.as_deref()],
+    )?;
     let model = robokrige::model::ErrorModel::load(&a.model)?;
     let cal = model.calibration().ok_or_else(|| robokrige::Error::Input {
         source_name: a.model.display().to_string(),
@@ -86,9 +81,8 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
     let robot = cal.calibrated_robot();
     let text = RobotFile::text_of(&robot)?;
     robokrige::output::write_text(&a.output, &text)?;
-    if let Some(path) = &a.json {
-        super::write_json(path, cal.identifiability(), "identifiability report")?;
-    }
+    let report = cal.identifiability();
+    super::json_to(a.json.as_deref(), report, "identifiability report")?;
     say!("{}: {}", robot.name, cal.summary_line());
     say!("calibrated robot file -> {}", a.output.display());
     Ok(())
@@ -97,9 +91,7 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
 fn show(a: ShowArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     let digest = kinematics::table_digest(&robot);
-    if let Some(path) = &a.json {
-        super::write_json(path, &RobotFile::of(&robot), "robot file")?;
-    }
+    super::json_to(a.json.as_deref(), &RobotFile::of(&robot), "robot file")?;
     let text = RobotFile::text_of(&robot)?;
     match &a.output {
         Some(path) => {

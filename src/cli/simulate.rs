@@ -1,36 +1,10 @@
 //! `robokrige simulate`.
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use robokrige::report::simulate as report;
-use robokrige::sim::{CampaignKind, CampaignSpec, Effect, SimOutput, parse_ranges, simulate};
-use robokrige::{Error, Result, dataset, kinematics};
-use std::path::{Path, PathBuf};
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum Kind {
-    /// Latin-hypercube poses in the joint ranges, visited in order (the training campaign).
-    Lhs,
-    /// Independent random verification poses.
-    Verify,
-    /// Single-axis indexing tests, each grid point approached from both sides (seed 000 §2.3).
-    Indexing,
-    /// J1 indexed with J2 held at 0°, 20°, 40°, 60° (seed 000 §5.2, cross-talk).
-    Crosstalk,
-    /// A circle of commanded TCP points (a trajectory to compensate; not measured).
-    Circle,
-}
-
-impl From<Kind> for CampaignKind {
-    fn from(k: Kind) -> Self {
-        match k {
-            Kind::Lhs => CampaignKind::Lhs,
-            Kind::Verify => CampaignKind::Verify,
-            Kind::Indexing => CampaignKind::Indexing,
-            Kind::Crosstalk => CampaignKind::Crosstalk,
-            Kind::Circle => CampaignKind::Circle,
-        }
-    }
-}
+use robokrige::sim::{CampaignKind, CampaignSpec, Effect, parse_ranges, simulate, truth_path_for};
+use robokrige::{Error, Result, kinematics};
+use std::path::PathBuf;
 
 /// Simulate a measurement campaign and write it in the measurement CSV format.
 ///
@@ -64,7 +38,7 @@ pub struct SimulateArgs {
     robot: String,
     /// Campaign kind.
     #[arg(long, value_enum, default_value = "lhs")]
-    kind: Kind,
+    kind: CampaignKind,
     /// Number of poses (lhs 300, verify 30) or circle points (72); not for indexing or crosstalk.
     #[arg(long)]
     poses: Option<usize>,
@@ -95,46 +69,29 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let mut spec = CampaignSpec::new(a.kind.into(), a.seed);
-    if let Some(p) = a.poses {
-        spec.poses = p;
-    }
+    let mut spec = CampaignSpec::new(a.kind, a.seed);
+    spec.poses = a.poses.unwrap_or(spec.poses);
     spec.effects = a
         .effects
         .iter()
         .map(|s| Effect::parse(s))
         .collect::<Result<_>>()?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
-    if let Some(d) = a.diameter {
-        spec.circle_diameter_mm = d;
-    }
-    if let Some(c) = a.cycles {
-        spec.indexing_cycles = c;
-    }
+    spec.circle_diameter_mm = a.diameter.unwrap_or(spec.circle_diameter_mm);
+    spec.indexing_cycles = a.cycles.unwrap_or(spec.indexing_cycles);
     spec.validate()?;
     let robot = kinematics::load_robot(&a.robot)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
-    let mut outputs = vec![a.output.as_path(), truth_path.as_path()];
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&[], &outputs)?;
+    let outputs = [Some(&*a.output), Some(&*truth_path), a.json.as_deref()];
+    super::check_files(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
     super::write_json(&truth_path, &truth, "truth")?;
-    match &out {
-        SimOutput::Measurements(d) => dataset::write_csv(&a.output, d)?,
-        SimOutput::Trajectory(t) => t.write_csv(&a.output)?,
-    }
+    out.write_csv(&a.output)?;
     let summary = report::json(&out, &truth, (&a.output, &truth_path));
     say_part!("{}", report::summary(&summary));
-    if let Some(path) = &a.json {
-        super::write_json(path, &summary, "summary")?;
-    }
+    super::json_to(a.json.as_deref(), &summary, "summary")?;
     Ok(())
-}
-
-/// `a.csv` → `a.truth.json`.
-pub fn truth_path_for(output: &Path) -> PathBuf {
-    output.with_extension("truth.json")
 }

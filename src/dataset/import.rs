@@ -19,22 +19,28 @@ use std::path::Path;
 /// Unit of the export's joint angles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum AngleUnit {
     /// Degrees (the format's unit).
     #[default]
+    #[cfg_attr(feature = "cli", value(help = None::<&str>))]
     Deg,
     /// Radians.
+    #[cfg_attr(feature = "cli", value(help = None::<&str>))]
     Rad,
 }
 
 /// Unit of the export's lengths (positions, errors, prismatic joints).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum LengthUnit {
     /// Millimetres (the format's unit).
     #[default]
+    #[cfg_attr(feature = "cli", value(help = None::<&str>))]
     Mm,
     /// Metres.
+    #[cfg_attr(feature = "cli", value(help = None::<&str>))]
     M,
 }
 

@@ -335,6 +335,14 @@ impl Dataset {
             .ok_or_else(|| self.input_err("has no ex,ey,ez columns; add the measured TCP errors"))
     }
 
+    /// The first `n` rows (all of them if there are no more).
+    pub fn head(self, n: usize) -> Dataset {
+        if n >= self.len() {
+            return self;
+        }
+        self.select(&(0..n).collect::<Vec<_>>())
+    }
+
     /// The rows at `rows` (in that order), every column kept. Directions are
     /// copied, not re-derived: a row keeps the λ it was measured with.
     pub fn select(&self, rows: &[usize]) -> Dataset {

@@ -1,5 +1,6 @@
-//! Choosing the correlation family of one output by closed-form K-fold
-//! cross-validation ([`super::CorrChoice::ByCv`]).
+//! The correlation family of a fit ([`CorrChoice`]: fixed, or chosen per
+//! output), and its choice by closed-form K-fold cross-validation
+//! ([`CorrChoice::ByCv`]).
 //!
 //! The families of [`Correlation::ALL`] are tried from the smoothest to the
 //! roughest (Gaussian, Matérn 5/2, Matérn 3/2, exponential). Each is fitted
@@ -37,11 +38,114 @@ use super::fit::Job;
 use super::{
     Correlation, FitReport, Hyperparameters, KrigingModel, OptimizerKind, SEARCH_ROWS, row_subset,
 };
-use crate::Result;
+use crate::{Error, Result};
 
-/// Folds of the family choice by default ([`super::CorrChoice::ByCv`];
+/// Folds of the family choice by default ([`CorrChoice::ByCv`];
 /// fewer when there are fewer rows).
 pub const FAMILY_FOLDS: usize = 10;
+
+/// The correlation family of a fit, or how it is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum CorrChoice {
+    /// This family on every output.
+    Fixed(Correlation),
+    /// Each output's family chosen by closed-form `folds`-fold
+    /// cross-validation among [`Correlation::ALL`] (smoothest first; the
+    /// `family` module docs give the rule and its early stop).
+    ByCv {
+        /// CV folds of the choice (fewer when there are fewer rows).
+        folds: usize,
+    },
+}
+
+/// `--corr`: a family by its name, or `auto`, the choice by CV with
+/// [`FAMILY_FOLDS`] folds ([`CorrChoice::from_name`]'s names).
+#[cfg(feature = "cli")]
+impl clap::ValueEnum for CorrChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[
+            CorrChoice::Fixed(Correlation::Gaussian),
+            CorrChoice::Fixed(Correlation::Matern52),
+            CorrChoice::Fixed(Correlation::Matern32),
+            CorrChoice::Fixed(Correlation::Exponential),
+            CorrChoice::AUTO,
+        ]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let (name, help) = match *self {
+            CorrChoice::Fixed(c) => (
+                c.name(),
+                match c {
+                    Correlation::Gaussian => "exp(−h²), seed 003 eq 8 (the papers')",
+                    Correlation::Matern52 => "Matérn ν = 5/2",
+                    Correlation::Matern32 => "Matérn ν = 3/2",
+                    Correlation::Exponential => "exp(−h) (Matérn ν = 1/2)",
+                    // a registered family is the library's, not a --corr value
+                    Correlation::Custom(_) => return None,
+                },
+            ),
+            CorrChoice::AUTO => (
+                "auto",
+                "Each output's family chosen by closed-form 10-fold CV among the four",
+            ),
+            CorrChoice::ByCv { .. } => return None,
+        };
+        Some(clap::builder::PossibleValue::new(name).help(help))
+    }
+}
+
+impl CorrChoice {
+    /// `auto`: each output's family by closed-form CV with [`FAMILY_FOLDS`]
+    /// folds (the `recommended` method's, the command line's default).
+    pub const AUTO: CorrChoice = CorrChoice::ByCv {
+        folds: FAMILY_FOLDS,
+    };
+
+    /// The family when it is fixed.
+    pub fn fixed(self) -> Option<Correlation> {
+        match self {
+            CorrChoice::Fixed(c) => Some(c),
+            CorrChoice::ByCv { .. } => None,
+        }
+    }
+
+    /// Whether the family is chosen by CV.
+    pub fn is_by_cv(self) -> bool {
+        matches!(self, CorrChoice::ByCv { .. })
+    }
+
+    /// `auto` (the choice by CV with [`FAMILY_FOLDS`] folds) or a family's
+    /// name ([`Correlation::name`]), as on the command line; an error naming
+    /// the choices otherwise.
+    pub fn from_name(name: &str) -> Result<CorrChoice> {
+        match name {
+            "auto" => Ok(CorrChoice::AUTO),
+            _ => Correlation::parse(name).map(CorrChoice::Fixed).ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "corr '{name}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
+                ))
+            }),
+        }
+    }
+}
+
+impl From<Correlation> for CorrChoice {
+    fn from(c: Correlation) -> Self {
+        CorrChoice::Fixed(c)
+    }
+}
+
+impl std::fmt::Display for CorrChoice {
+    /// `auto` or the family's name.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CorrChoice::Fixed(c) => c.fmt(f),
+            CorrChoice::ByCv { .. } => f.write_str("auto"),
+        }
+    }
+}
 
 /// One family's score in a choice.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -5,11 +5,12 @@
 //!   `registry`: families of one's own, by name ([`Correlation::register`]).
 //! - [`problem`]: ψ(ξ) and the solve at fixed ξ — the whole algorithm on a page.
 //! - [`model`]: the fitted predictor and its MSE (eqs 10, 12).
-//! - `options`: what a fit is asked ([`KrigingOptions`], [`CorrChoice`]) and
-//!   reports ([`FitReport`]).
+//! - `options`: what a fit is asked ([`KrigingOptions`]) and reports
+//!   ([`FitReport`]).
 //! - `params`: one output's fit, [`KrigingParams`] → `check` →
 //!   [`ValidKrigingParams::fit`], with its [`Tuning`].
-//! - `fit`: the steps of that fit; `family`: the family chosen by CV.
+//! - `fit`: the steps of that fit; `family`: the family fixed or chosen by
+//!   CV ([`CorrChoice`]).
 //! - `search`: the hyperparameter search sized to the campaign ([`FitPlan`]).
 //!
 //! A fit drops linearly dependent trend columns, minimises ln ψ over
@@ -33,12 +34,10 @@ mod search;
 pub mod trend;
 
 pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
-pub use family::{FAMILY_FOLDS, FamilyScore};
+pub use family::{CorrChoice, FAMILY_FOLDS, FamilyScore};
 pub use fused::FusedBasis;
 pub use model::{HeldOut, KrigingModel, KrigingModelData, Pred};
-pub use options::{
-    CorrChoice, FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind,
-};
+pub use options::{FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind};
 pub use params::{Hyperparameters, KrigingParams, Tuning, ValidKrigingParams};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};
 pub use registry::CustomCorrelation;

@@ -1,7 +1,7 @@
 //! What a fit is asked to do (`KrigingOptions`: trend kind, correlation
 //! choice, optimiser, nugget, box, seed) and what it reports (`FitReport`).
 
-use super::{Correlation, FAMILY_FOLDS, FamilyScore, Monomials, Trend};
+use super::{CorrChoice, Correlation, FAMILY_FOLDS, FamilyScore, Monomials, Trend};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -441,72 +441,6 @@ impl PartialEq for FitReport {
             && self.evals == o.evals
             && self.search_rows == o.search_rows
             && self.families == o.families
-    }
-}
-
-/// The correlation family of a fit, or how it is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum CorrChoice {
-    /// This family on every output.
-    Fixed(Correlation),
-    /// Each output's family chosen by closed-form `folds`-fold
-    /// cross-validation among [`Correlation::ALL`] (smoothest first; the
-    /// `family` module docs give the rule and its early stop).
-    ByCv {
-        /// CV folds of the choice (fewer when there are fewer rows).
-        folds: usize,
-    },
-}
-
-impl CorrChoice {
-    /// `auto`: each output's family by closed-form CV with [`FAMILY_FOLDS`]
-    /// folds (the `recommended` method's, the command line's default).
-    pub const AUTO: CorrChoice = CorrChoice::ByCv {
-        folds: FAMILY_FOLDS,
-    };
-
-    /// The family when it is fixed.
-    pub fn fixed(self) -> Option<Correlation> {
-        match self {
-            CorrChoice::Fixed(c) => Some(c),
-            CorrChoice::ByCv { .. } => None,
-        }
-    }
-
-    /// Whether the family is chosen by CV.
-    pub fn is_by_cv(self) -> bool {
-        matches!(self, CorrChoice::ByCv { .. })
-    }
-
-    /// `auto` (the choice by CV with [`FAMILY_FOLDS`] folds) or a family's
-    /// name ([`Correlation::name`]), as on the command line; an error naming
-    /// the choices otherwise.
-    pub fn from_name(name: &str) -> Result<CorrChoice> {
-        match name {
-            "auto" => Ok(CorrChoice::AUTO),
-            _ => Correlation::parse(name).map(CorrChoice::Fixed).ok_or_else(|| {
-                Error::InvalidParameter(format!(
-                    "corr '{name}': expected 'auto', 'gaussian', 'matern52', 'matern32' or 'exponential'"
-                ))
-            }),
-        }
-    }
-}
-
-impl From<Correlation> for CorrChoice {
-    fn from(c: Correlation) -> Self {
-        CorrChoice::Fixed(c)
-    }
-}
-
-impl std::fmt::Display for CorrChoice {
-    /// `auto` or the family's name.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CorrChoice::Fixed(c) => c.fmt(f),
-            CorrChoice::ByCv { .. } => f.write_str("auto"),
-        }
     }
 }
 

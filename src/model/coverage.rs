@@ -123,6 +123,33 @@ pub struct CheckedPrediction {
 }
 
 impl ErrorModel {
+    /// Error unless the poses of `data` have this model's joints.
+    pub fn check_dataset(&self, data: &crate::dataset::Dataset) -> Result<()> {
+        if data.n_joints() == self.n_joints() {
+            return Ok(());
+        }
+        Err(crate::Error::Input {
+            source_name: data.source.clone(),
+            message: format!(
+                "has {} joints but the model was fitted on {}",
+                data.n_joints(),
+                self.n_joints()
+            ),
+        })
+    }
+
+    /// What the assumed direction λ of `data`'s first pose is worth
+    /// ([`ErrorModel::direction_sensitivity`], mm) when its directions were
+    /// derived from the row order (no dir columns); 0 when they were given.
+    pub fn assumed_direction_sensitivity(&self, data: &crate::dataset::Dataset) -> Result<f64> {
+        match data.q.first() {
+            Some(q0) if data.dir_source == crate::dataset::DirSource::Derived => {
+                self.direction_sensitivity(q0, &data.dir[0])
+            }
+            _ => Ok(0.0),
+        }
+    }
+
     /// Predict every row of `data` with the standard deviation of a new
     /// measurement and the rows outside the model's coverage: what the
     /// held-out scores of `cv` and `holdout` are computed from.

@@ -7,7 +7,9 @@
 
 mod studies;
 
-pub use studies::{demo_plots, effect_plots, error_along_path, path_plots};
+pub use studies::{
+    cv_errors, demo_plots, effect_plots, error_along_path, methods_errors, path_plots,
+};
 
 use crate::stats::box_stats;
 use crate::{Error, Result};

@@ -5,12 +5,15 @@
 
 use super::{Labels, Series, box_plot, xy_plot};
 use crate::Result;
+use crate::cv::CvResult;
 use crate::dataset::Dataset;
 use crate::demo::Demo;
 use crate::diagnose::{CvStats, Diagnosis};
+use crate::methods::Method;
 use crate::model::AXES;
 use crate::physics::Comparison;
 use crate::report::demo::Figures;
+use crate::space::Space;
 use crate::vec3::{Vec3, norms};
 use std::path::{Path, PathBuf};
 
@@ -36,13 +39,42 @@ pub fn error_along_path(
     xy_plot(path, labels, &series, false)
 }
 
-/// One SVG per effect the diagnosis added, in the existing folder `dir`
-/// (`effect{k}_{kind}.svg`): the out-of-fold residual before and after the
+/// Box plots of a CV's out-of-fold errors (|ex|, |ey|, |ez|, 3D) of a
+/// model over `space`.
+pub fn cv_errors(path: &Path, res: &CvResult, space: Space) -> Result<()> {
+    let axis = |k: usize| res.residuals.iter().map(|e| e[k].abs()).collect();
+    let groups = vec![
+        ("|ex|".to_string(), axis(0)),
+        ("|ey|".to_string(), axis(1)),
+        ("|ez|".to_string(), axis(2)),
+        ("3D".to_string(), norms(&res.residuals)),
+    ];
+    let title = format!(
+        "{}-fold CV ({}) out-of-fold errors, {space:?}",
+        res.folds, res.mode
+    );
+    box_plot(path, &title, "error (mm)", &groups)
+}
+
+/// Box plots of the out-of-fold 3D errors of each method's `folds`-fold
+/// refit CV.
+pub fn methods_errors(path: &Path, folds: usize, results: &[(Method, CvResult)]) -> Result<()> {
+    let groups: Vec<(String, Vec<f64>)> = results
+        .iter()
+        .map(|(m, res)| (m.name().to_string(), norms(&res.residuals)))
+        .collect();
+    let title = format!("{folds}-fold CV (refit) 3D error by method");
+    box_plot(path, &title, "out-of-fold 3D error (mm)", &groups)
+}
+
+/// One SVG per effect the diagnosis added, in the folder `dir` (created;
+/// `effect{k}_{kind}.svg`): the out-of-fold residual before and after the
 /// effect against its traced variable
 /// ([`EffectReport::traced_variable`](crate::diagnose::EffectReport::traced_variable)),
 /// on the axis whose residual it reduced most. `data` is the diagnosed
 /// campaign. Returns the files written.
 pub fn effect_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let mut out = Vec::new();
     let mut prev: &CvStats = &d.before;
     for (k, e) in d.effects.iter().filter(|e| e.accepted).enumerate() {
@@ -85,10 +117,11 @@ pub fn effect_plots(dir: &Path, data: &Dataset, d: &Diagnosis) -> Result<Vec<Pat
 }
 
 /// Seed 000 Figs 9–11, one SVG per model of the comparison but the nominal
-/// one, in the existing folder `dir` (`path_{model}.svg`): the nominal path,
+/// one, in the folder `dir` (created; `path_{model}.svg`): the nominal path,
 /// the measured path and the model's predicted path in XY, errors magnified
 /// ×1000. Returns the files written.
 pub fn path_plots(c: &Comparison, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let k = 1000.0;
     let shifted = |e: &[[f64; 3]]| -> Vec<(f64, f64)> {
         c.path_nominal

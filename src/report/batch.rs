@@ -1,7 +1,22 @@
 //! `batch`: the fleet's table, one line per campaign.
 
 use crate::Result;
-use crate::batch::CampaignReport;
+use crate::batch::{CampaignReport, campaign_name};
+use std::path::PathBuf;
+
+/// The JSON of `batch --json`: each campaign of `files` with its report
+/// or its error (`results`, the same order).
+pub fn json(files: &[PathBuf], results: &[Result<CampaignReport>]) -> serde_json::Value {
+    let reports: Vec<serde_json::Value> = files
+        .iter()
+        .zip(results)
+        .map(|(file, r)| match r {
+            Ok(rep) => serde_json::json!({"campaign": campaign_name(file), "report": rep}),
+            Err(e) => serde_json::json!({"campaign": campaign_name(file), "error": e.to_string()}),
+        })
+        .collect();
+    serde_json::Value::Array(reports)
+}
 
 /// The header of the fleet table.
 pub fn header() -> String {

@@ -4,7 +4,27 @@ use super::xyz;
 use crate::diagnose::{CvStats, Diagnosis, EffectReport};
 use crate::study::diagnosis::CompensationComparison;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// The JSON of `diagnose --json`: the diagnosis with the campaign file
+/// `data`, the base `method` and the compensation before and after, if
+/// there was one.
+pub fn json(
+    d: &Diagnosis,
+    (data, method): (&Path, &str),
+    compensation: Option<&CompensationComparison>,
+) -> crate::Result<serde_json::Value> {
+    let mut v = serde_json::to_value(d).map_err(|e| crate::Error::Json {
+        context: "diagnosis".into(),
+        source: e,
+    })?;
+    v["data"] = serde_json::json!(data);
+    v["method"] = serde_json::json!(method);
+    if let Some(c) = compensation {
+        v["compensation"] = serde_json::json!(c);
+    }
+    Ok(v)
+}
 
 /// What the diagnosis ran on, by name: the campaign file and the base
 /// method.

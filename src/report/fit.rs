@@ -2,8 +2,26 @@
 
 use crate::calibration::Calibration;
 use crate::model::{AXES, ErrorModel};
+use crate::params::ErrorModelParams;
 use crate::selection::Selection;
 use std::fmt::Write as _;
+use std::path::Path;
+
+/// The JSON of `fit --json`: the files (`data`, `output`), the rows, the
+/// settings ([`ErrorModelParams::settings`]), the method if one was named,
+/// the robot, the wall time `secs`, each output's fit report, the trend
+/// selection and the calibration's identifiability.
+pub fn json(
+    (data, output): (&Path, &Path),
+    model: &ErrorModel,
+    (params, method): (&ErrorModelParams, Option<&str>),
+    (rows, secs): (usize, f64),
+) -> serde_json::Value {
+    serde_json::json!({"data": data, "model": output, "rows": rows,
+        "settings": super::settings(params), "method": method, "robot": model.robot(),
+        "seconds": secs, "outputs": model.reports(), "selection": model.selection(),
+        "calibration": model.calibration().map(|c| c.identifiability())})
+}
 
 /// What `fit` prints after fitting `rows` rows in `secs` s into the file
 /// `output`: the space, correlation and nugget; per axis the family CV (if

@@ -1,9 +1,73 @@
 //! `holdout`: the table of models, and with `--cv` their predictive scores,
 //! worst folds and flagged rows.
 
-use crate::holdout::{CV_MODELS, HoldoutCv, HoldoutRow};
+use crate::cv::Folds;
+use crate::holdout::{CV_MODELS, HoldoutCv, HoldoutRow, HoldoutSplit};
+use crate::kriging::OptimizerKind;
+use crate::params::ErrorModelParams;
 use crate::stats::PredictiveScores;
 use std::fmt::Write as _;
+
+/// What `holdout` prints for a split of the campaign `data` into
+/// `n_train` training and `n_test` test rows, fitted from `base`: the
+/// rows, the Kriging search and nugget, the periodic joints, then the
+/// calibration and the table ([`rows`]).
+pub fn split(
+    data: &str,
+    (n_train, n_test): (usize, usize),
+    base: &ErrorModelParams,
+    split: &HoldoutSplit,
+) -> String {
+    let k = base.get_kriging();
+    format!(
+        "{data}: train rows 1–{n_train}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}\n{}{}",
+        n_train + 1,
+        n_train + n_test,
+        match k.get_optimizer() {
+            OptimizerKind::Gps => "GPS",
+            OptimizerKind::HookeJeeves => "Hooke–Jeeves",
+            OptimizerKind::Bfgs => "BFGS (analytic gradient)",
+        },
+        if k.get_nugget() {
+            ", nugget estimated"
+        } else {
+            ""
+        },
+        joint_list(base.get_periodic()),
+        super::fit::calibration(&split.calibration),
+        rows(&split.rows)
+    )
+}
+
+/// What `holdout --cv` (or `--groups`) prints for the `rows` rows of the
+/// campaign `data` partitioned by `folds`, fitted from `base`: how, the
+/// hyperparameters' rows and time, the periodic joints, then the tables
+/// ([`rows`], [`scores`]) and [`cv_tail`].
+pub fn cv(
+    data: &str,
+    (folds, rows_all): (&Folds, usize),
+    base: &ErrorModelParams,
+    cv: &HoldoutCv,
+) -> String {
+    let how = match folds {
+        Folds::Random { k, seed } => format!("{k}-fold CV (fold seed {seed})"),
+        Folds::Groups(_) => super::cv::how(folds, cv.folds),
+    };
+    format!(
+        "{data}: {how} on all {rows_all} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}\n{}{}{}",
+        if base.get_kriging().get_nugget() {
+            " and nugget"
+        } else {
+            ""
+        },
+        cv.hyper_rows,
+        cv.hyper_seconds,
+        joint_list(base.get_periodic()),
+        rows(&cv.rows),
+        scores(&cv.scores),
+        cv_tail(cv)
+    )
+}
 
 /// The Markdown table of the models' held-out errors: mean and max 3D,
 /// RMS per axis, wall time.

@@ -30,3 +30,14 @@ fn coverage3(sc: &crate::stats::PredictiveScores) -> String {
     let c = &sc.coverage_95;
     format!("{:.3} / {:.3} / {:.3}", c[0], c[1], c[2])
 }
+
+/// The settings of a fit ([`ErrorModelParams::settings`](crate::params::ErrorModelParams::settings))
+/// as a JSON object of strings.
+fn settings(params: &crate::params::ErrorModelParams) -> serde_json::Value {
+    let map: serde_json::Map<String, serde_json::Value> = params
+        .settings()
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), serde_json::Value::String(v)))
+        .collect();
+    serde_json::Value::Object(map)
+}

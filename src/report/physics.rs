@@ -7,6 +7,7 @@ use crate::physics::{
 };
 use crate::sim::Truth;
 use std::fmt::Write as _;
+use std::path::Path;
 
 /// What `physics identify` prints: per axis what the indexing tests saw,
 /// the SCARA geometry, the Levenberg–Marquardt fits and the notes.
@@ -219,6 +220,24 @@ pub fn axis_angle(reg: &Registration) -> ([f64; 3], f64) {
         .rotation
         .axis_angle()
         .map_or(([0.0, 0.0, 1.0], 0.0), |(ax, an)| ([ax.x, ax.y, ax.z], an))
+}
+
+/// The JSON of `physics register --json`: the files (`data`, `output`),
+/// the robot, the rows, the transform (also as axis and angle), the
+/// residual.
+pub fn registration_json(
+    (data, output): (&Path, &Path),
+    robot: &str,
+    rows: usize,
+    reg: &Registration,
+) -> serde_json::Value {
+    let (axis, angle) = axis_angle(reg);
+    serde_json::json!({
+        "data": data, "output": output, "robot": robot, "rows": rows,
+        "base_from_tracker": reg.transform, "rotation_axis": axis,
+        "rotation_deg": angle.to_degrees(), "reflection_guarded": reg.reflection_guarded,
+        "rms_mm": reg.rms, "max_mm": reg.max,
+    })
 }
 
 /// The registration of a campaign into the base frame (`physics

@@ -22,19 +22,20 @@ use nalgebra::{Isometry3, Translation3, Vector3};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-/// What to simulate.
+/// What to simulate (`simulate --kind`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum CampaignKind {
-    /// Latin-hypercube poses in the joint ranges, visited in the order drawn.
+    /// Latin-hypercube poses in the joint ranges, visited in order (the training campaign).
     Lhs,
-    /// Independent uniformly random poses (a verification set).
+    /// Independent random verification poses.
     Verify,
-    /// Single-axis indexing tests of every revolute joint (seed 000 §2.3).
+    /// Single-axis indexing tests, each grid point approached from both sides (seed 000 §2.3).
     Indexing,
-    /// Seed 000 §5.2: J1 indexed (eq 21) with J2 held at several angles.
+    /// J1 indexed with J2 held at 0°, 20°, 40°, 60° (seed 000 §5.2, cross-talk).
     Crosstalk,
-    /// A circle of commanded TCP points around the home TCP (a trajectory, not measured).
+    /// A circle of commanded TCP points (a trajectory to compensate; not measured).
     Circle,
 }
 

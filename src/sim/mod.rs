@@ -33,6 +33,7 @@ pub use true_robot::{
 };
 
 use rand_distr::{Distribution, Normal};
+use std::path::{Path, PathBuf};
 
 pub use crate::stats::rng_for;
 
@@ -43,4 +44,21 @@ pub fn gaussian(rng: &mut impl rand::Rng, sigma: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+impl SimOutput {
+    /// Write it: a measurement CSV ([`crate::dataset::write_csv`]) or a
+    /// trajectory CSV.
+    pub fn write_csv(&self, path: &Path) -> crate::Result<()> {
+        match self {
+            SimOutput::Measurements(d) => crate::dataset::write_csv(path, d),
+            SimOutput::Trajectory(t) => t.write_csv(path),
+        }
+    }
+}
+
+/// Where a campaign written to `output` keeps its simulator truth by
+/// default: `a.csv` → `a.truth.json`.
+pub fn truth_path_for(output: &Path) -> PathBuf {
+    output.with_extension("truth.json")
 }

@@ -56,6 +56,21 @@ impl DiagnosisBase {
         })
     }
 
+    /// The models before the diagnosis ([`DiagnosisBase::model`] without
+    /// extras) and `after` it compared on `targets`
+    /// ([`compare_compensation`]).
+    pub fn compare_compensation(
+        &self,
+        opts: &DiagnoseOptions,
+        after: &ErrorModel,
+        (robot, targets): (&Robot, &Targets),
+        truth: (&Path, &Truth),
+        seed: u64,
+    ) -> Result<CompensationComparison> {
+        let before = self.model(opts, &[])?;
+        compare_compensation(robot, targets, truth, [&before, after], seed)
+    }
+
     /// The model of the diagnosed rows with `extras` as inputs
     /// ([`fit_with_effects`]: none gives the model before the diagnosis,
     /// [`Diagnosis::extras`](crate::diagnose::Diagnosis::extras) the one
