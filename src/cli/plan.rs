@@ -79,6 +79,9 @@ pub struct PlanArgs {
     /// needs, or that it is below the repeatability floor.
     #[arg(long)]
     target_mm: Option<f64>,
+    /// Write the plan's summary (chosen rows, IMSE curve, forecast) as JSON to FILE ("-": standard output).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
     /// Seed of the candidates and the region sample.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -112,7 +115,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             a.region.as_deref(),
             a.prior.as_deref(),
         ],
-        &[Some(a.output.as_path())],
+        &[Some(a.output.as_path()), a.json.as_deref()],
     )?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;
@@ -151,6 +154,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
         _ => None,
     };
     plan.write(&a.output, a.format, &robot)?;
+    super::json_to(
+        a.json.as_deref(),
+        &robokrige::report::plan::json(&plan, forecast.as_ref()),
+        "plan",
+    )?;
     print!(
         "{}",
         robokrige::report::plan::text(&plan, forecast.as_ref(), a.target_mm)

@@ -67,3 +67,25 @@ pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) ->
     }
     s
 }
+
+/// The plan's summary as JSON: where the hyperparameters came from, the
+/// candidates, the chosen rows in the order chosen, the moves' measure
+/// flags, the IMSE curve (mm²), the unrealised directions, the notes and,
+/// with a measured campaign, the forecast.
+pub fn json(plan: &Plan, forecast: Option<&Forecast>) -> serde_json::Value {
+    serde_json::json!({
+        "source": format!("{:?}", plan.source).to_lowercase(),
+        "candidates": plan.candidates,
+        "chosen": plan.chosen,
+        "measure": plan.moves.iter().map(|m| m.measure).collect::<Vec<_>>(),
+        "imse_curve_mm2": plan.imse_curve,
+        "unrealised": plan.unrealised,
+        "notes": plan.notes,
+        "forecast": forecast.map(|f| serde_json::json!({
+            "measured": f.measured,
+            "cv_mean_3d_mm": f.cv_mean_3d,
+            "floor_mean_3d_mm": f.floor_mean_3d,
+            "mean_3d_mm": f.mean_3d,
+        })),
+    })
+}
