@@ -58,10 +58,7 @@ fn score(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
 }
 
 fn pool_poses(pool: &Dataset) -> PoseSet {
-    PoseSet {
-        q: pool.q.clone(),
-        dir: pool.dir.clone(),
-    }
+    PoseSet::from(pool)
 }
 
 /// The planned sequence: scores at `sizes` (and the plan's seconds per batch).
@@ -97,7 +94,7 @@ fn planned(robot: &Robot, pool: &Dataset, sizes: &[usize], batch: usize) -> Vec<
             if sizes.contains(&chosen.len()) {
                 out.push((chosen.len(), now));
             }
-            let f = Forecast::new(model, &plan.imse_curve, chosen.len()).unwrap();
+            let f = Forecast::new(model, campaign.as_ref().unwrap(), &plan.imse_curve).unwrap();
             if let Some(prev) = forecasts.last_mut() {
                 prev.2 = now;
             }

@@ -185,17 +185,10 @@ impl CommandsOutput {
     pub fn new(path: &Path, format: Option<ProgramFormat>, robot: &Robot) -> Result<Self> {
         let program = match format {
             None => None,
-            Some(f) => {
-                let prismatic = robot.prismatic_joints();
-                program::check_robot(f, &prismatic)?;
-                let opts = ProgramOptions {
-                    name: program::program_name(path, f)?,
-                    prismatic,
-                    ..ProgramOptions::default()
-                };
-                opts.validate()?;
-                Some((f, opts))
-            }
+            Some(f) => Some((
+                f,
+                ProgramOptions::for_file(path, f, robot.prismatic_joints())?,
+            )),
         };
         Ok(CommandsOutput {
             path: path.to_path_buf(),

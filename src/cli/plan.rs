@@ -123,10 +123,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let prior = a.prior.as_deref().map(ErrorModel::load).transpose()?;
     let region = match (&a.region, &pool) {
         (Some(path), _) => Region::from_file(path, &robot)?,
-        (None, Some(p)) => Region::Poses(robokrige::plan::PoseSet {
-            q: p.q.clone(),
-            dir: p.dir.clone(),
-        }),
+        (None, Some(p)) => Region::Poses(p.into()),
         (None, None) => Region::WorkRange,
     };
     let mut params = PlanParams::new(a.budget)
@@ -145,12 +142,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
         pool: pool.as_ref(),
         region: &region,
     })?;
-    let forecast = match (&plan.model, plan.source) {
-        (Some(m), HyperSource::Campaign) => Some(Forecast::new(
-            m,
-            &plan.imse_curve,
-            campaign.as_ref().map_or(0, |c| c.len()),
-        )?),
+    let forecast = match (&plan.model, plan.source, &campaign) {
+        (Some(m), HyperSource::Campaign, Some(c)) => Some(Forecast::new(m, c, &plan.imse_curve)?),
         _ => None,
     };
     plan.write(&a.output, a.format, &robot)?;

@@ -18,6 +18,16 @@ pub struct PoseSet {
     pub dir: Vec<Vec<f64>>,
 }
 
+impl From<&crate::dataset::Dataset> for PoseSet {
+    /// A campaign's poses and directions (its errors, if any, left out).
+    fn from(d: &crate::dataset::Dataset) -> Self {
+        PoseSet {
+            q: d.q.clone(),
+            dir: d.dir.clone(),
+        }
+    }
+}
+
 impl PoseSet {
     /// The number of poses.
     pub fn len(&self) -> usize {
@@ -64,29 +74,36 @@ pub fn draw(
     let q = crate::sim::campaign::lhs(ranges, n, &mut rng);
     let dir = q
         .iter()
-        .map(|row| {
-            row.iter()
-                .enumerate()
-                .map(|(j, v)| {
-                    let (lo, hi) = limits[j];
-                    let up_ok = v - step[j] >= lo;
-                    let down_ok = v + step[j] <= hi;
-                    match (up_ok, down_ok) {
-                        (true, true) => {
-                            if rng.random::<bool>() {
-                                1.0
-                            } else {
-                                -1.0
-                            }
-                        }
-                        (false, _) => -1.0,
-                        (true, false) => 1.0,
-                    }
-                })
-                .collect()
-        })
+        .map(|row| directions(row, limits, step, &mut rng))
         .collect();
     PoseSet { q, dir }
+}
+
+/// λ for the joints of pose `q`: ±1 with equal odds where a pre-position
+/// move `step` back on either side stays within `limits`, else the one
+/// side that does (−1 within `step` of the lower limit).
+fn directions(
+    q: &[f64],
+    limits: &[(f64, f64)],
+    step: &[f64],
+    rng: &mut impl rand::Rng,
+) -> Vec<f64> {
+    q.iter()
+        .zip(limits.iter().zip(step))
+        .map(|(v, ((lo, hi), s))| match (v - s >= *lo, v + s <= *hi) {
+            (true, true) if rng.random::<bool>() => 1.0,
+            (true, true) | (false, _) => -1.0,
+            (true, false) => 1.0,
+        })
+        .collect()
+}
+
+/// The index of the largest `score` among the entries not `taken`
+/// (the greedy step of every choice here).
+pub(super) fn best_untaken(score: &[f64], taken: &[bool]) -> Option<usize> {
+    (0..score.len())
+        .filter(|&i| !taken[i])
+        .max_by(|&a, &b| score[a].total_cmp(&score[b]))
 }
 
 /// A laser tracker's line of sight: its position (robot base frame, mm),
@@ -204,10 +221,7 @@ pub fn maximin(cand: &PoseSet, measured: &PoseSet, ranges: &[(f64, f64)], k: usi
     let mut taken = vec![false; pts.len()];
     let mut from_centre = measured.is_empty();
     for _ in 0..k.min(pts.len()) {
-        let best = (0..pts.len())
-            .filter(|&i| !taken[i])
-            .max_by(|&a, &b| nearest[a].total_cmp(&nearest[b]))
-            .expect("a candidate left");
+        let best = best_untaken(&nearest, &taken).expect("a candidate left");
         chosen.push(best);
         taken[best] = true;
         if from_centre {
@@ -268,10 +282,7 @@ pub fn covering(
                     .sum()
             })
             .collect();
-        let best = (0..pts.len())
-            .filter(|&i| !taken[i])
-            .max_by(|&a, &b| gain[a].total_cmp(&gain[b]))
-            .expect("a candidate left");
+        let best = best_untaken(&gain, &taken).expect("a candidate left");
         taken[best] = true;
         chosen.push(best);
         for (n, z) in nearest.iter_mut().zip(&zs) {
@@ -310,19 +321,7 @@ pub fn around(
                 (v + w * (2.0 * rng.random::<f64>() - 1.0)).clamp(*lo, *hi)
             })
             .collect();
-        let dir = q
-            .iter()
-            .enumerate()
-            .map(|(j, v)| {
-                let (lo, hi) = limits[j];
-                match (v - step[j] >= lo, v + step[j] <= hi) {
-                    (true, true) if rng.random::<bool>() => 1.0,
-                    (true, true) => -1.0,
-                    (false, _) => -1.0,
-                    (true, false) => 1.0,
-                }
-            })
-            .collect();
+        let dir = directions(&q, limits, step, &mut rng);
         out.q.push(q);
         out.dir.push(dir);
     }

@@ -93,9 +93,6 @@ impl AxisDesign {
         let d = model.dim();
         let theta = data.theta().to_vec();
         let corr = data.corr();
-        let trim = |rows: &[Vec<f64>]| -> Vec<Vec<f64>> {
-            rows.iter().map(|r| r[..d.min(r.len())].to_vec()).collect()
-        };
         if cand.iter().chain(region).any(|r| r.len() != d) {
             return Err(Error::InvalidParameter(format!(
                 "candidates and region need the model's {d} inputs"
@@ -115,7 +112,7 @@ impl AxisDesign {
             vz.as_mut(),
             Par::rayon(0),
         );
-        let region_in = TrainingInputs::new(&trim(region));
+        let region_in = TrainingInputs::new(region);
         let mut kzc = cross(&corr, &theta, &region_in, cand);
         faer::linalg::matmul::matmul(
             kzc.as_mut(),
@@ -149,7 +146,7 @@ impl AxisDesign {
             v: (0..vc.nrows())
                 .map(|i| (0..vc.ncols()).map(|j| vc[(i, j)]).collect())
                 .collect(),
-            cand: TrainingInputs::new(&trim(cand)),
+            cand: TrainingInputs::new(cand),
             corr,
             theta,
         })

@@ -19,7 +19,7 @@ impl Region {
         match read_target_file(path)? {
             TargetFile::Joints(d) => {
                 robot.check_dataset(&d)?;
-                Ok(Region::Poses(PoseSet { q: d.q, dir: d.dir }))
+                Ok(Region::Poses(PoseSet::from(&d)))
             }
             TargetFile::Tcp(traj) => {
                 let q = all_reached(first_pass_joints(
@@ -73,13 +73,7 @@ impl Plan {
         if format == ProgramFormat::Csv {
             return self.write_csv(path);
         }
-        let prismatic = robot.prismatic_joints();
-        program::check_robot(format, &prismatic)?;
-        let opts = ProgramOptions {
-            name: program::program_name(path, format)?,
-            prismatic,
-            ..ProgramOptions::default()
-        };
+        let opts = ProgramOptions::for_file(path, format, robot.prismatic_joints())?;
         let poses: Vec<ProgramPose> = self
             .moves
             .iter()

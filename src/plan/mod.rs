@@ -285,10 +285,7 @@ impl ValidPlanParams {
         let all = match inputs.pool {
             Some(pool) => {
                 robot.check_dataset(pool)?;
-                PoseSet {
-                    q: pool.q.clone(),
-                    dir: pool.dir.clone(),
-                }
+                PoseSet::from(pool)
             }
             None => {
                 let mut all = candidates::draw(ranges, &robot.limits, step, p.candidates, p.seed);
@@ -402,10 +399,7 @@ fn measured_poses(robot: &Robot, campaign: Option<&Dataset>) -> Result<PoseSet> 
     match campaign {
         Some(c) => {
             robot.check_dataset(c)?;
-            Ok(PoseSet {
-                q: c.q.clone(),
-                dir: c.dir.clone(),
-            })
+            Ok(PoseSet::from(c))
         }
         None => Ok(PoseSet::default()),
     }
@@ -443,10 +437,7 @@ fn choose_by_imse(
         for a in &axes {
             a.gains(&mut gain);
         }
-        let best = (0..cand.len())
-            .filter(|&i| !taken[i])
-            .max_by(|&a, &b| gain[a].total_cmp(&gain[b]))
-            .expect("a candidate left");
+        let best = candidates::best_untaken(&gain, &taken).expect("a candidate left");
         taken[best] = true;
         chosen.push(best);
         for a in &mut axes {

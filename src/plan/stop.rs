@@ -17,8 +17,9 @@
 //! mean 3D error is that RMS times the ratio mean/RMS of the CV residuals.
 //! A target below the floor `√ν²·ratio` is unreachable by more poses.
 
+use crate::cv::cross_validate_closed_form;
+use crate::dataset::Dataset;
 use crate::model::ErrorModel;
-use crate::stats::{fold_blocks, kfold_partition};
 use crate::{Error, Result};
 
 /// Folds of the CV that anchors the forecast.
@@ -53,15 +54,15 @@ pub enum Verdict {
 }
 
 impl Forecast {
-    /// The forecast for `model` (fitted on `measured` poses) and the
-    /// planner's `imse_curve` (mm², from the campaign measured on).
-    pub fn new(model: &ErrorModel, imse_curve: &[f64], measured: usize) -> Result<Self> {
+    /// The forecast for `model`, fitted on exactly the rows of `campaign`,
+    /// and the planner's `imse_curve` (mm², from that campaign on).
+    pub fn new(model: &ErrorModel, campaign: &Dataset, imse_curve: &[f64]) -> Result<Self> {
         let Some(&imse0) = imse_curve.first() else {
             return Err(Error::InvalidParameter(
                 "a forecast needs the planner's IMSE curve (a plan by the model)".into(),
             ));
         };
-        let (rms, ratio) = cv_error(model)?;
+        let (rms, ratio) = cv_error(model, campaign)?;
         let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         let a = ((rms * rms - noise2) / imse0.max(f64::MIN_POSITIVE)).max(0.0);
         let mean_3d = imse_curve
@@ -69,7 +70,7 @@ impl Forecast {
             .map(|i| (a * i + noise2).sqrt() * ratio)
             .collect();
         Ok(Forecast {
-            measured,
+            measured: campaign.len(),
             cv_mean_3d: rms * ratio,
             floor_mean_3d: noise2.sqrt() * ratio,
             mean_3d,
@@ -92,22 +93,13 @@ impl Forecast {
     }
 }
 
-/// The closed-form 10-fold CV RMS 3D error of `model` and the ratio of its
-/// mean 3D error to it (the Kriging parts' residuals with ξ, ν and the
-/// calibration held; β re-estimated per fold).
-fn cv_error(model: &ErrorModel) -> Result<(f64, f64)> {
-    let m = model.n_train();
-    let k = FORECAST_FOLDS.min(m);
-    let blocks = fold_blocks(&kfold_partition(m, k, 1)?);
-    let axes: Vec<Vec<f64>> = model
-        .outputs()
-        .iter()
-        .map(|o| o.held_out_residuals(&blocks))
-        .collect::<Result<_>>()?;
-    let norms: Vec<f64> = (0..m)
-        .map(|i| axes.iter().map(|a| a[i] * a[i]).sum::<f64>().sqrt())
-        .collect();
-    let rms = (norms.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-    let mean = norms.iter().sum::<f64>() / m as f64;
-    Ok((rms, if rms > 0.0 { mean / rms } else { 1.0 }))
+/// The closed-form 10-fold CV ([`cross_validate_closed_form`]: the Kriging
+/// parts' residuals with ξ, ν and the calibration held, β re-estimated per
+/// fold) of `model` on its campaign: the RMS 3D error and the ratio of the
+/// mean 3D error to it.
+fn cv_error(model: &ErrorModel, campaign: &Dataset) -> Result<(f64, f64)> {
+    let k = FORECAST_FOLDS.min(campaign.len());
+    let s = cross_validate_closed_form(campaign, model, k, 1)?.summary;
+    let rms = s.rms_mm.iter().map(|r| r * r).sum::<f64>().sqrt();
+    Ok((rms, if rms > 0.0 { s.mean_3d_mm / rms } else { 1.0 }))
 }

@@ -221,6 +221,21 @@ impl Default for ProgramOptions {
 }
 
 impl ProgramOptions {
+    /// The default options for a program in `format` written at `path`, of
+    /// a robot whose joints are `prismatic`: named after the file
+    /// ([`program_name`]), after checking that the format can program the
+    /// robot ([`check_robot`]).
+    pub fn for_file(path: &Path, format: ProgramFormat, prismatic: Vec<bool>) -> Result<Self> {
+        check_robot(format, &prismatic)?;
+        let opts = ProgramOptions {
+            name: program_name(path, format)?,
+            prismatic,
+            ..ProgramOptions::default()
+        };
+        opts.validate()?;
+        Ok(opts)
+    }
+
     /// Error unless every option is in its range (see the fields).
     pub fn validate(&self) -> Result<()> {
         check_name(&self.name)?;
