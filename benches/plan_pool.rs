@@ -62,7 +62,13 @@ fn pool_poses(pool: &Dataset) -> PoseSet {
 }
 
 /// The planned sequence: scores at `sizes` (and the plan's seconds per batch).
-fn planned(robot: &Robot, pool: &Dataset, sizes: &[usize], batch: usize) -> Vec<(usize, f64)> {
+fn planned(
+    robot: &Robot,
+    pool: &Dataset,
+    sizes: &[usize],
+    batch: usize,
+    share: bool,
+) -> Vec<(usize, f64)> {
     let region = Region::Poses(pool_poses(pool));
     let mut chosen: Vec<usize> = Vec::new();
     let mut out = Vec::new();
@@ -72,7 +78,11 @@ fn planned(robot: &Robot, pool: &Dataset, sizes: &[usize], batch: usize) -> Vec<
     while chosen.len() < max {
         let campaign = (!chosen.is_empty()).then(|| pool.select(&chosen));
         let t0 = Instant::now();
-        let params = PlanParams::new(batch).first_batch(batch).check().unwrap();
+        let params = PlanParams::new(batch)
+            .first_batch(batch)
+            .calibration_share(share)
+            .check()
+            .unwrap();
         let plan = params
             .plan(&PlanInputs {
                 robot,
@@ -115,6 +125,12 @@ fn planned(robot: &Robot, pool: &Dataset, sizes: &[usize], batch: usize) -> Vec<
     if let Some(prev) = forecasts.last_mut() {
         prev.2 = last;
     }
+    let what = if share {
+        "IMSE of the Kriging outputs and the calibration"
+    } else {
+        "IMSE of the Kriging outputs alone"
+    };
+    println!("\nplanned by the {what}:\n");
     println!(
         "| measured m | CV mean 3D at m | forecast at m + {batch} | held-out at m + {batch} | forecast / held-out |"
     );
@@ -208,7 +224,8 @@ fn main() {
         "pool: series {which} ({} poses), batches of {batch}",
         pool.len()
     );
-    let plan = planned(&robot, &pool, &sizes, batch);
+    let plan = planned(&robot, &pool, &sizes, batch, true);
+    let plan_k = planned(&robot, &pool, &sizes, batch, false);
     let ranges: Vec<(f64, f64)> = (0..robot.dof())
         .map(|j| {
             let col = pool.q.iter().map(|q| q[j]);
@@ -224,9 +241,12 @@ fn main() {
         &ranges,
         *sizes.iter().max().unwrap(),
     );
-    println!("| N | planned | random N (mean ± sd, {seeds} seeds) | random 2N | maximin |");
-    println!("|---|---|---|---|---|");
-    for (n, p) in plan {
+    println!(
+        "\n| N | planned | planned, Kriging IMSE alone | random N (mean ± sd, {seeds} seeds) | random 2N | maximin |"
+    );
+    println!("|---|---|---|---|---|---|");
+    let mut curves: [Vec<(f64, f64)>; 5] = Default::default();
+    for ((n, p), (_, pk)) in plan.into_iter().zip(plan_k) {
         let r: Vec<f64> = (0..seeds).map(|s| random(&robot, &pool, n, s)).collect();
         let r2: Vec<f64> = if 2 * n < pool.len() {
             (0..seeds)
@@ -241,11 +261,44 @@ fn main() {
             "-".into()
         } else {
             let (a, b) = mean_sd(&r2);
+            curves[3].push(((2 * n) as f64, a));
             format!("{a:.4} ± {b:.4}")
         };
-        println!(
-            "| {n} | {p:.4} | {rm:.4} ± {rs:.4} | {r2s} | {:.4} |",
-            score(&m, &pool, &mm[..n])
-        );
+        let mx = score(&m, &pool, &mm[..n]);
+        println!("| {n} | {p:.4} | {pk:.4} | {rm:.4} ± {rs:.4} | {r2s} | {mx:.4} |");
+        curves[0].push((n as f64, p));
+        curves[1].push((n as f64, pk));
+        curves[2].push((n as f64, rm));
+        curves[4].push((n as f64, mx));
     }
+    if let Some(svg) = arg(&args, "--svg") {
+        learning_curves(Path::new(svg), which, curves);
+    }
+}
+
+/// The learning curves as an SVG: held-out error against poses measured.
+fn learning_curves(path: &Path, which: &str, curves: [Vec<(f64, f64)>; 5]) {
+    use robokrige::plot::{Labels, Series, xy_plot};
+    let [planned, kriging, random, random2, maximin] = curves;
+    let mut random_all = random;
+    random_all.extend(random2);
+    random_all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    random_all.dedup_by(|a, b| a.0 == b.0);
+    let series = [
+        Series::line("planned (IMSE, Kriging + calibration)", planned),
+        Series::line("planned (IMSE, Kriging alone)", kriging),
+        Series::line("random subsets (mean over seeds)", random_all),
+        Series::line("maximin subset", maximin),
+    ];
+    let title = format!(
+        "UR10 series {}: held-out error of the calibrated model",
+        &which[..1].to_uppercase()
+    );
+    let labels = Labels {
+        title: &title,
+        x: "poses measured",
+        y: "mean 3D error on the rest of the pool (mm)",
+    };
+    xy_plot(path, &labels, &series, false).unwrap();
+    eprintln!("learning curves: {}", path.display());
 }

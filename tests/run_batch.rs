@@ -48,6 +48,47 @@ fn a_config_step_gives_the_same_model_as_its_flags() {
 }
 
 #[test]
+fn a_config_plan_step_plans_what_its_flags_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let config = format!(
+        "robot = \"comau-nj220\"\n\n[[step]]\ncommand = \"plan\"\ncampaign = \"{}\"\nbudget = 6\ncandidates = 400\nregion-points = 200\noutput = \"a.csv\"\n",
+        ds("comau_lhs.csv")
+    );
+    std::fs::write(p("robokrige.toml"), config).unwrap();
+    let (c, out, err) = rk(&["run", &p("robokrige.toml")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("robokrige plan"), "{out}");
+    let (c, _, err) = rk(&[
+        "plan",
+        "--robot",
+        "comau-nj220",
+        "--campaign",
+        &ds("comau_lhs.csv"),
+        "--budget",
+        "6",
+        "--candidates",
+        "400",
+        "--region-points",
+        "200",
+        "-o",
+        &p("b.csv"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let a = std::fs::read_to_string(p("a.csv")).unwrap();
+    assert_eq!(a, std::fs::read_to_string(p("b.csv")).unwrap());
+    // six measured poses (measure = 1), and their pre-position moves
+    let header: Vec<&str> = a.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "measure").unwrap();
+    let measured = a
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(col) == Some("1"))
+        .count();
+    assert_eq!(measured, 6, "{a}");
+}
+
+#[test]
 fn a_config_with_an_unknown_option_names_the_step_and_the_options() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("c.toml");

@@ -396,6 +396,26 @@ impl Calibration {
             .collect())
     }
 
+    /// The posterior covariance of the parameter errors (P × P, degrees and
+    /// mm as the parameters), from the directions `D v_i` of the scaled
+    /// Jacobian and their posterior variances:
+    ///
+    /// ```text
+    /// Σ_p = Σ_i var_i · (D v_i)(D v_i)ᵀ,   var_i = 1 / (1 + σ_i²/s²),
+    /// ```
+    ///
+    /// so that [`Calibration::predict_variance`] at `q` is the diagonal of
+    /// `J(q) Σ_p J(q)ᵀ`. What a campaign planner conditions on a new pose.
+    pub fn parameter_covariance(&self) -> DMatrix<f64> {
+        let np = self.parameters.len();
+        let mut c = DMatrix::zeros(np, np);
+        for (dir, var) in &self.uncertainty {
+            let d = DVector::from_column_slice(dir);
+            c.ger(*var, &d, &d, 1.0);
+        }
+        c
+    }
+
     /// Largest [`Calibration::predict_variance`] over the poses it was
     /// identified on, mm² per axis: what a prediction's calibration
     /// variance is compared with to tell an extrapolation.

@@ -18,7 +18,10 @@
 //!    call, with its measurements, plans by the model.
 //! 4. **Choice**: with hyperparameters, the budget is chosen greedily by the
 //!    largest reduction of the region's integrated MSE (`imse`), summed over
-//!    the three axes, in output units (mm²).
+//!    the three axes, in output units (mm²). A calibrated model adds its
+//!    calibration's share (`calibration`): the parameters' posterior
+//!    covariance, conditioned on each chosen pose like the Kriging
+//!    outputs.
 //! 5. **Order** ([`order::order`]): a greedy tour from the robot's current
 //!    pose, with a pre-position move wherever the direct move would not
 //!    realise the planned λ.
@@ -27,6 +30,7 @@
 //! chosen pose: the model's own forecast of how the error falls with the
 //! number of poses ([`stop`] turns it into a held-out error forecast).
 
+mod calibration;
 pub mod candidates;
 mod imse;
 mod io;
@@ -41,6 +45,7 @@ use crate::kinematics::Robot;
 use crate::methods::{Overrides, params_with};
 use crate::model::ErrorModel;
 use crate::{Error, Result};
+use calibration::CalibrationDesign;
 use imse::AxisDesign;
 
 /// The region whose prediction error a plan lowers.
@@ -72,6 +77,7 @@ pub struct PlanParams {
     via_step: f64,
     tracker: Option<TrackerView>,
     seed: u64,
+    calibration_share: bool,
 }
 
 impl PlanParams {
@@ -87,7 +93,16 @@ impl PlanParams {
             via_step: 5.0,
             tracker: None,
             seed: 1,
+            calibration_share: true,
         }
+    }
+
+    /// Whether a calibrated model's IMSE counts the calibration's parameter
+    /// uncertainty as well as its Kriging outputs' (default: yes; without
+    /// it the design sees the Kriging part alone).
+    pub fn calibration_share(mut self, on: bool) -> Self {
+        self.calibration_share = on;
+        self
     }
 
     /// Poses of the first, space-filling batch when no hyperparameter is
@@ -225,7 +240,10 @@ impl ValidPlanParams {
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
         let (chosen, imse_curve) = match &model {
-            Some(m) => choose_by_imse(m, &cand, &region, p.budget.min(cand.len()))?,
+            Some(m) => {
+                let k = p.budget.min(cand.len());
+                choose_by_imse(m, &cand, &region, k, p.calibration_share)?
+            }
             None => {
                 let k = p.budget.min(p.first_batch);
                 if k < p.budget {
@@ -413,6 +431,7 @@ fn choose_by_imse(
     cand: &PoseSet,
     region: &PoseSet,
     k: usize,
+    calibration_share: bool,
 ) -> Result<(Vec<usize>, Vec<f64>)> {
     let map = model.input_map();
     if !map.extras().is_empty() {
@@ -428,7 +447,14 @@ fn choose_by_imse(
         .iter()
         .map(|o| AxisDesign::new(o, &sc, &sz))
         .collect::<Result<_>>()?;
-    let mut curve = vec![axes.iter().map(AxisDesign::imse).sum::<f64>()];
+    let mut cal = match model.calibration().filter(|_| calibration_share) {
+        Some(c) => Some(CalibrationDesign::new(c, &cand.q, &region.q)?),
+        None => None,
+    };
+    let imse = |axes: &[AxisDesign], cal: &Option<CalibrationDesign>| {
+        axes.iter().map(AxisDesign::imse).sum::<f64>() + cal.as_ref().map_or(0.0, |c| c.imse())
+    };
+    let mut curve = vec![imse(&axes, &cal)];
     let mut chosen = Vec::with_capacity(k);
     let mut taken = vec![false; cand.len()];
     let mut gain = vec![0.0; cand.len()];
@@ -437,13 +463,19 @@ fn choose_by_imse(
         for a in &axes {
             a.gains(&mut gain);
         }
+        if let Some(c) = &cal {
+            c.gains(&mut gain);
+        }
         let best = candidates::best_untaken(&gain, &taken).expect("a candidate left");
         taken[best] = true;
         chosen.push(best);
         for a in &mut axes {
             a.choose(best);
         }
-        curve.push(axes.iter().map(AxisDesign::imse).sum::<f64>());
+        if let Some(c) = &mut cal {
+            c.choose(best);
+        }
+        curve.push(imse(&axes, &cal));
     }
     Ok((chosen, curve))
 }
