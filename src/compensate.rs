@@ -285,8 +285,7 @@ pub fn compensate<M: ErrorPredictor + ?Sized>(
             got: model.n_joints(),
         });
     }
-    let start = opts.start.clone().unwrap_or_else(|| robot.home.clone());
-    robot.check_len(&start)?;
+    let start = robot.start_or_home(opts.start.as_deref())?;
     let n = targets.len();
     if let Some(h) = &opts.hints {
         if h.len() != n {

@@ -35,6 +35,16 @@ pub fn folder(path: &Path) -> PathBuf {
         .to_path_buf()
 }
 
+/// An output path of `run` made absolute against the current folder, as
+/// the run then moves into the config's folder; `-` (standard output) and
+/// an absolute path stay as they are.
+pub fn output_path(path: &Path) -> PathBuf {
+    if path == Path::new("-") || path.is_absolute() {
+        return path.to_path_buf();
+    }
+    std::env::current_dir().map_or_else(|_| path.to_path_buf(), |d| d.join(path))
+}
+
 /// An argument list as one shell line, each argument quoted when it needs
 /// it.
 pub fn command_line(argv: &[String]) -> String {

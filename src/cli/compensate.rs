@@ -4,16 +4,15 @@ use super::progress::spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::compensate::{CommandsOutput, Compensated, CompensationOptions, compensate};
-use robokrige::kinematics::{self, Robot};
+use robokrige::kinematics::Robot;
 use robokrige::physics::AnyModel;
-use robokrige::plot::{Labels, error_along_path};
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
-use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
-use robokrige::trajectory::Trajectory;
+use robokrige::study::{
+    Targets, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
+};
 use std::path::{Path, PathBuf};
 
-/// Pre-compensate a trajectory with a fitted error model (feed-forward).
 #[derive(Debug, Args)]
 #[command(after_help = "\
 TRAJ.csv is either a trajectory (x,y,z[,roll_deg,pitch_deg,yaw_deg]) or a pose
@@ -77,7 +76,6 @@ pub struct CompensateArgs {
     json: Option<PathBuf>,
 }
 
-/// Run target and compensated trajectories on a simulated robot and compare.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Example:
@@ -125,37 +123,26 @@ pub(super) fn read_targets(
 
 /// The measured 3D error along the trajectory, one line per run.
 fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()> {
-    let labels = Labels {
-        title,
-        x: "trajectory point",
-        y: "measured 3D position error (mm)",
-    };
-    error_along_path(path, &labels, runs)?;
+    robokrige::plot::measured_errors(path, title, runs)?;
     say!("plot: {}", path.display());
     Ok(())
 }
 
 pub fn run_compensate(a: CompensateArgs) -> Result<()> {
-    let mut inputs = vec![a.traj.as_path(), a.model.as_path()];
-    inputs.extend(a.truth.as_deref());
-    let mut outputs = vec![a.output.as_path()];
-    outputs.extend(a.plot.as_deref());
-    outputs.extend(a.json.as_deref());
-    robokrige::output::check_outputs(&inputs, &outputs)?;
+    let inputs = [Some(&*a.traj), Some(&*a.model), a.truth.as_deref()];
+    let outputs = [Some(&*a.output), a.plot.as_deref(), a.json.as_deref()];
+    super::check_files(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let commands_out = CommandsOutput::new(&a.output, a.format, &robot)?;
     let model = AnyModel::load(&a.model)?;
     model.check_robot(&robot, &a.model.display().to_string())?;
-    let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
-    robot.check_len(&start)?;
+    let start = robot.start_or_home(a.start.as_deref())?;
     let targets = read_targets(&a.traj, &robot, a.orientation.as_deref(), &start)?;
     let opts = CompensationOptions {
         iterative: a.iterative,
         tol_mm: a.tol,
         max_iter: a.max_iter,
-        start: Some(start.clone()),
-        hints: targets.hints.clone(),
-        ..CompensationOptions::default()
+        ..targets.compensation_options(&start)
     };
     let pb = spinner("compensate");
     let t0 = std::time::Instant::now();
@@ -163,12 +150,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     pb.finish_and_clear();
     let res: Compensated = res?;
     let secs = t0.elapsed().as_secs_f64();
-    if let AnyModel::Kriging(m) = &model {
-        // the means the compensation used; no standard deviations (they
-        // would need the m × m factor)
-        let coverage = m.coverage(&res.joints, &res.dir, &res.predicted, None)?;
-        super::print_coverage(&coverage, res.joints.len(), None);
-    }
+    super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;
     let output = a.output.display().to_string();
     let text = report::iterations(&res, a.iterative, &model.describe(), secs, &output);
@@ -178,23 +160,11 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     }
     let mut eval = None;
     if let Some(tp) = &a.truth {
-        let truth = load_truth(tp)?;
-        check_truth_robot(&truth, &robot, tp)?;
-        let (ev, (before, after)) = evaluate(tp, &truth, &targets, &res.commands, &start, a.seed)?;
+        let (ev, (before, after)) =
+            evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
         say_part!("{}", report::evaluation(&tp.display().to_string(), &ev));
         if let Some(p) = &a.plot {
-            let name = a
-                .traj
-                .file_stem()
-                .and_then(|s| s.to_str())
-                .unwrap_or("trajectory");
-            let mode = if a.iterative {
-                "iterative"
-            } else {
-                "single-step"
-            };
-            let space = model.label();
-            let title = format!("{name}: {mode} compensation, {space} model");
+            let title = report::plot_title(&a.traj, a.iterative, &model);
             plot(
                 p,
                 &title,
@@ -217,54 +187,24 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
-    let mut inputs = vec![a.traj.as_path(), a.truth.as_path()];
-    inputs.extend(a.compensated.iter().map(PathBuf::as_path));
-    let outputs: Vec<&Path> = a.plot.iter().chain(&a.json).map(PathBuf::as_path).collect();
-    robokrige::output::check_outputs(&inputs, &outputs)?;
+    let mut inputs = vec![Some(&*a.traj), Some(&*a.truth)];
+    inputs.extend(a.compensated.iter().map(|p| Some(p.as_path())));
+    super::check_files(&inputs, &[a.plot.as_deref(), a.json.as_deref()])?;
     let truth = load_truth(&a.truth)?;
-    let robot = match &a.robot {
-        Some(name) => {
-            let robot = kinematics::load_robot(name)?;
-            check_truth_robot(&truth, &robot, &a.truth)?;
-            robot
-        }
-        None => truth.robot.nominal.clone(),
-    };
-    let start = a.start.clone().unwrap_or_else(|| robot.home.clone());
-    robot.check_len(&start)?;
+    let robot = truth_robot(&truth, a.robot.as_deref(), &a.truth)?;
+    let start = robot.start_or_home(a.start.as_deref())?;
     let targets = read_targets(&a.traj, &robot, None, &start)?;
-    let mut runs = Vec::new();
-    let mut reports = Vec::new();
+    let mut evals = Vec::new();
     say!("measured error vs target on the simulated robot (mm):");
-    for (k, path) in a.compensated.iter().enumerate() {
-        let commands = Trajectory::read_csv(path)?;
-        targets.check_commands(&commands, path)?;
-        let (ev, (before, after)) =
-            evaluate(&a.truth, &truth, &targets, &commands, &start, a.seed)?;
-        if k == 0 {
-            say!("{}", report::table_line("before (nominal)", &ev.before));
-            runs.push(("before".to_string(), before));
-        }
-        let name = path
-            .file_name()
-            .and_then(|s| s.to_str())
-            .unwrap_or("compensated")
-            .to_string();
-        say!("{}", report::table_line(&name, &ev.after));
-        say!("{}", report::reduction_line(&format!("{:<22} ", ""), &ev));
-        runs.push((name.clone(), after));
-        reports.push(serde_json::json!({"file": path, "evaluation": ev}));
+    for path in &a.compensated {
+        let e = evaluate_file((&a.truth, &truth), &targets, path, &start, a.seed)?;
+        say_part!("{}", report::file_evaluation(&e, evals.is_empty()));
+        evals.push(e);
     }
     if let Some(p) = &a.plot {
-        plot(p, "measured error before and after compensation", &runs)?;
+        let title = "measured error before and after compensation";
+        plot(p, title, &named_runs(&evals))?;
     }
-    if let Some(path) = &a.json {
-        let first = &reports[0]["evaluation"];
-        let v = serde_json::json!({
-            "truth": a.truth, "targets": a.traj, "seed": a.seed,
-            "before": first["before"], "after": first["after"], "compensated": reports,
-        });
-        super::write_json(path, &v, "evaluation")?;
-    }
-    Ok(())
+    let v = report::evaluations_json(&a.truth, &a.traj, a.seed, &evals);
+    super::json_to(a.json.as_deref(), &v, "evaluation")
 }

@@ -12,17 +12,10 @@ use robokrige::report::{fit as report, predict};
 use robokrige::space::Space;
 use std::path::PathBuf;
 
-/// Model choices shared by `fit` and `cv`. An option not given keeps the
-/// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
-/// the model options (the library's rule and message).
+/// The Kriging options of `fit`, `cv` and `holdout`. An option not given
+/// keeps the library's default ([`robokrige::methods::Overrides`]).
 #[derive(Debug, Args)]
-pub struct ModelArgs {
-    /// Input space [default: ejs].
-    #[arg(long, value_enum)]
-    space: Option<Space>,
-    /// Trend of every output [default: constant].
-    #[arg(long, value_enum)]
-    trend: Option<TrendKind>,
+pub struct KrigingArgs {
     /// Correlation family, one length scale per input (h² = Σ ξ_k Δs_k²);
     /// by default each output's family is chosen by closed-form 10-fold CV
     /// (the `recommended` method). `gaussian` is the papers' [default: auto].
@@ -39,6 +32,31 @@ pub struct ModelArgs {
     /// Estimate a nugget: the default; kept so that older scripts still run.
     #[arg(long, hide = true)]
     nugget: bool,
+}
+
+impl KrigingArgs {
+    /// `o` with the options given.
+    pub fn apply(&self, o: Overrides) -> Overrides {
+        let nugget = (self.no_nugget || self.nugget).then_some(self.nugget);
+        o.with(self.corr, Overrides::corr)
+            .with(self.optimizer, Overrides::optimizer)
+            .with(nugget, Overrides::nugget)
+    }
+}
+
+/// Model choices shared by `fit` and `cv`. An option not given keeps the
+/// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
+/// the model options (the library's rule and message).
+#[derive(Debug, Args)]
+pub struct ModelArgs {
+    /// Input space [default: ejs].
+    #[arg(long, value_enum)]
+    space: Option<Space>,
+    /// Trend of every output [default: constant].
+    #[arg(long, value_enum)]
+    trend: Option<TrendKind>,
+    #[command(flatten)]
+    kriging: KrigingArgs,
     /// Starting points (centre + LHS points) [default: 8 for bfgs, 4 for gps].
     #[arg(long)]
     starts: Option<usize>,
@@ -96,8 +114,7 @@ impl ModelArgs {
     fn overrides(&self) -> Result<Overrides> {
         let robot = self.robot.as_deref();
         let robot = robot.map(|r| load_robot_with_tool(r, self.tool.as_deref()));
-        let nugget = (self.no_nugget || self.nugget).then_some(self.nugget);
-        Ok(Overrides::new()
+        let o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
             .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
@@ -106,12 +123,10 @@ impl ModelArgs {
             }))
             .with(self.space, Overrides::space)
             .with(self.trend, Overrides::trend)
-            .with(self.corr, Overrides::corr)
-            .with(self.optimizer, Overrides::optimizer)
-            .with(nugget, Overrides::nugget)
             .with(self.starts, Overrides::starts)
             .with(self.periodic.as_deref(), Overrides::periodic)
-            .with(robot.transpose()?, Overrides::robot))
+            .with(robot.transpose()?, Overrides::robot);
+        Ok(self.kriging.apply(o))
     }
 }
 

@@ -2,6 +2,7 @@
 //! next ones (or cross-validate) — nominal, D-H calibration, the calibrated
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
+use super::fit::KrigingArgs;
 use super::progress::{self, bar};
 use super::read_data;
 use clap::Args;
@@ -10,7 +11,6 @@ use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split, split_rows};
 use robokrige::kinematics::Robot;
-use robokrige::kriging::{CorrChoice, OptimizerKind};
 use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
 use robokrige::report::holdout as report;
@@ -54,22 +54,8 @@ pub struct HoldoutArgs {
     /// Seed of the hyperparameter starts and, with --cv, of the fold partition.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Kriging hyperparameter search: bfgs (analytic gradient, 8 starts),
-    /// hj (Hooke–Jeeves) or gps (4 starts).
-    #[arg(long, value_enum, default_value = "bfgs")]
-    optimizer: OptimizerKind,
-    /// Correlation family of the Kriging fits: gaussian, matern52, matern32,
-    /// exponential, or auto (each output's family by closed-form 10-fold CV,
-    /// the default).
-    #[arg(long, value_enum, default_value = "auto")]
-    corr: CorrChoice,
-    /// Interpolate exactly (no nugget) in the Kriging fits. By default a
-    /// nugget is estimated: real data has noise.
-    #[arg(long, conflicts_with = "nugget")]
-    no_nugget: bool,
-    /// Estimate a nugget: the default; kept so that older scripts still run.
-    #[arg(long, hide = true)]
-    nugget: bool,
+    #[command(flatten)]
+    kriging: KrigingArgs,
     /// Joints entered as (sin θ, cos θ): "auto" (range > 180° in the training
     /// rows), "none", or a list like "1,4,6".
     #[arg(long, default_value = "auto")]
@@ -100,19 +86,15 @@ pub struct HoldoutArgs {
 /// The base parameters of the Kriging fits of `a` (options and the
 /// periodic joints it gives for the training rows `rows`).
 fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
-    let o = Overrides::new()
-        .optimizer(a.optimizer)
-        .corr(a.corr)
-        .nugget(!a.no_nugget)
-        .seed(a.seed)
-        .periodic(a.periodic.as_str());
-    params_with(None, &o, rows)
+    let o = Overrides::new().seed(a.seed).periodic(a.periodic.as_str());
+    params_with(None, &a.kriging.apply(o), rows)
 }
 
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
     let base = base_params(a, data)?;
-    super::plan_fit("holdout", data.len(), a.optimizer, None)?;
+    let optimizer = base.get_kriging().get_optimizer();
+    super::plan_fit("holdout", data.len(), optimizer, None)?;
     let fold = folds.partition(data)?;
     let k = fold.iter().max().map_or(0, |x| x + 1);
     let pb = bar(k as u64 + 1, "cv");
@@ -138,7 +120,8 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     }
     let (train, test) = split_rows(&data, a.train, a.test)?;
     let base = base_params(&a, &train)?;
-    super::plan_fit("holdout", train.len(), a.optimizer, Some("--train"))?;
+    let optimizer = base.get_kriging().get_optimizer();
+    super::plan_fit("holdout", train.len(), optimizer, Some("--train"))?;
     let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,

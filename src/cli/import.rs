@@ -1,11 +1,11 @@
 //! `import`: a tracker or controller export → a measurement CSV.
 
 use clap::Args;
+use robokrige::Result;
 use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
 use robokrige::dataset::write_csv;
-use robokrige::kinematics::{self, Robot, errors_from_positions};
+use robokrige::kinematics::{self, Robot, locate_imported};
 use robokrige::report::import as report;
-use robokrige::{Error, Result};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -72,10 +72,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         Some(p) => ImportSpec::from_file(p)?,
         None => ImportSpec::default(),
     };
-    let mut given = Vec::new();
-    for m in &a.map {
-        spec.map(m, &mut given)?;
-    }
+    spec.map_all(&a.map)?;
     spec.delimiter = a.delimiter.or(spec.delimiter);
     spec.decimal = a.decimal.or(spec.decimal);
     spec.angles = a.angles.unwrap_or(spec.angles);
@@ -90,16 +87,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         r.check_dataset(&imported.data)?;
     }
     say_part!("{}", report::read(&imported, &spec, &a.export));
-    if robot.is_some() && imported.data.errors.is_some() && imported.data.positions.is_some() {
-        return Err(Error::InvalidParameter(
-            "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one"
-                .into(),
-        ));
-    }
-    let located = match &robot {
-        Some(r) => errors_from_positions(r, &mut imported.data)?,
-        None => None,
-    };
+    let located = locate_imported(robot.as_ref(), &mut imported.data)?;
     if let (Some(r), Some(fit)) = (&robot, &located) {
         say_part!("{}", report::located(&r.name, imported.data.len(), fit));
     }

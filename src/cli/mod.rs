@@ -1,19 +1,8 @@
 //! Subcommands. Exit codes: 0 ok, 1 failed (bad data, numerical failure),
 //! 2 bad usage (clap).
 
-/// A line of the text report: standard output, or standard error when a
+/// Text of the report: standard output, or standard error when a
 /// `--json -` has claimed standard output for the JSON.
-macro_rules! say {
-    ($($t:tt)*) => {
-        if $crate::cli::text_to_stderr() {
-            eprintln!($($t)*)
-        } else {
-            println!($($t)*)
-        }
-    };
-}
-
-/// [`say!`] without the newline.
 macro_rules! say_part {
     ($($t:tt)*) => {
         if $crate::cli::text_to_stderr() {
@@ -21,6 +10,13 @@ macro_rules! say_part {
         } else {
             print!($($t)*)
         }
+    };
+}
+
+/// A line of the text report ([`say_part!`] with a newline).
+macro_rules! say {
+    ($($t:tt)*) => {
+        say_part!("{}\n", format_args!($($t)*))
     };
 }
 

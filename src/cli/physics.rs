@@ -3,15 +3,16 @@
 use super::progress::bar;
 use super::read_data;
 use clap::{Args, Subcommand};
+use robokrige::Result;
 use robokrige::kinematics;
 use robokrige::methods::Method;
-use robokrige::physics::{CompareOptions, check_training_campaign, compare, identify_physics};
+use robokrige::physics::{
+    CompareOptions, DEFAULT_ROBOT, check_campaigns, check_training_campaign, compare,
+    identify_physics,
+};
 use robokrige::report::physics as report;
-use robokrige::{Error, Result};
 use std::path::PathBuf;
 
-/// Physics-based models of seeds 000 and 002 (lookup tables of angular
-/// positioning deviation per direction), and their comparison with Kriging.
 #[derive(Debug, Subcommand)]
 pub enum PhysicsCommand {
     /// Identify a physics model from indexing tests (and, for a six-axis
@@ -201,11 +202,7 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
         Some(p) => read_data(p)?,
         None => indexing.clone(),
     };
-    for d in [&indexing, &train] {
-        robot
-            .check_dataset(d)
-            .map_err(|e| default_robot_hint(e, &a.robot))?;
-    }
+    check_campaigns(&robot, &a.robot, &[&indexing, &train])?;
     let id = identify_physics(&indexing, &train, &robot)?;
     id.full.save(&a.output)?;
     if let Some(p) = &a.dh_output {
@@ -220,24 +217,6 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     super::json_to(a.json.as_deref(), &id, "identification report")?;
     Ok(())
 }
-
-/// The SCARA is the default robot of `physics identify`: say so when a
-/// six-axis campaign meets it.
-fn default_robot_hint(e: Error, robot: &str) -> Error {
-    match e {
-        Error::Input {
-            source_name,
-            message,
-        } if robot == DEFAULT_ROBOT => Error::Input {
-            source_name,
-            message: format!("{message} (the default robot is {DEFAULT_ROBOT})"),
-        },
-        e => e,
-    }
-}
-
-/// `physics identify`'s robot when `--robot` is not given.
-const DEFAULT_ROBOT: &str = "scara-rh3frh5515";
 
 fn run_compare(a: CompareArgs) -> Result<()> {
     super::check_files(&[], &[a.json.as_deref(), a.report.as_deref()])?;

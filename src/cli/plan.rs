@@ -5,11 +5,10 @@ use clap::Args;
 use robokrige::Result;
 use robokrige::model::ErrorModel;
 use robokrige::plan::stop::Forecast;
-use robokrige::plan::{HyperSource, PlanInputs, PlanParams, Region, TrackerView};
+use robokrige::plan::{PlanInputs, PlanParams, Region, TrackerView};
 use robokrige::program::{ProgramFormat, ProgramOptions};
 use std::path::PathBuf;
 
-/// Plan a measurement campaign.
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Poses are chosen to lower the integrated prediction variance (IMSE) of the
@@ -87,26 +86,6 @@ pub struct PlanArgs {
     seed: u64,
 }
 
-fn tracker(a: &PlanArgs) -> Result<Option<TrackerView>> {
-    let Some(t) = &a.tracker else {
-        return Ok(None);
-    };
-    let pos: [f64; 3] = t.as_slice().try_into().map_err(|_| {
-        robokrige::Error::InvalidParameter(format!(
-            "--tracker needs x,y,z (three numbers, mm), got {} values",
-            t.len()
-        ))
-    })?;
-    let mut view = TrackerView::new(pos)?;
-    if let Some(r) = a.max_range {
-        view = view.max_range(r)?;
-    }
-    if let Some(i) = a.max_incidence {
-        view = view.max_incidence(i)?;
-    }
-    Ok(Some(view))
-}
-
 pub fn run(a: PlanArgs) -> Result<()> {
     super::check_files(
         &[
@@ -125,18 +104,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;
     let pool = a.pool.as_deref().map(read_data).transpose()?;
     let prior = a.prior.as_deref().map(ErrorModel::load).transpose()?;
-    let region = match (&a.region, &pool) {
-        (Some(path), _) => Region::from_file(path, &robot)?,
-        (None, Some(p)) => Region::Poses(p.into()),
-        (None, None) => Region::WorkRange,
-    };
+    let region = Region::from_options(a.region.as_deref(), pool.as_ref(), &robot)?;
     let mut params = PlanParams::new(a.budget)
         .first_batch(a.first_batch)
         .candidates(a.candidates)
         .region_points(a.region_points)
         .via_step(a.via_step)
         .seed(a.seed);
-    if let Some(view) = tracker(&a)? {
+    let tracker = a.tracker.as_deref();
+    if let Some(view) = TrackerView::from_options(tracker, a.max_range, a.max_incidence)? {
         params = params.tracker(view);
     }
     let plan = params.check()?.plan(&PlanInputs {
@@ -146,10 +122,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         pool: pool.as_ref(),
         region: &region,
     })?;
-    let forecast = match (&plan.model, plan.source, &campaign) {
-        (Some(m), HyperSource::Campaign, Some(c)) => Some(Forecast::new(m, c, &plan.imse_curve)?),
-        _ => None,
-    };
+    let forecast = Forecast::of_plan(&plan, campaign.as_ref())?;
     plan.write(&a.output, a.format, &robot)?;
     super::json_to(
         a.json.as_deref(),

@@ -4,6 +4,7 @@
 //! parser, so a step does exactly what the flags do.
 
 use clap::{Args, CommandFactory, Parser};
+use robokrige::report::run as report;
 use robokrige::{Error, Result, config};
 use std::path::PathBuf;
 
@@ -54,33 +55,25 @@ pub fn run(a: RunArgs) -> Result<()> {
     let source = a.config.display().to_string();
     let steps = config::read_steps(&a.config, &super::Cli::command())?;
     let folder = config::folder(&a.config);
-    let json_out = a.json.as_ref().map(|p| {
-        if super::is_stdout(p) || p.is_absolute() {
-            p.clone()
-        } else {
-            std::env::current_dir()
-                .map(|d| d.join(p))
-                .unwrap_or_else(|_| p.clone())
-        }
-    });
+    let json_out = a.json.as_deref().map(config::output_path);
     std::env::set_current_dir(&folder).map_err(|e| Error::io(&folder, e))?;
     let mut log = Vec::new();
     for (k, argv) in steps.iter().enumerate() {
         let line = config::command_line(argv);
         say!("step {} of {}: {line}", k + 1, steps.len());
         if a.dry_run {
-            log.push(serde_json::json!({"step": k + 1, "command": argv}));
+            log.push(report::step(k + 1, argv, None));
             continue;
         }
         let cli = super::Cli::try_parse_from(argv)
             .map_err(|e| config::parse_error(&source, k + 1, &e))?;
         let t0 = std::time::Instant::now();
         let r = super::dispatch(cli.command);
-        let secs = t0.elapsed().as_secs_f64();
-        log.push(serde_json::json!({
-            "step": k + 1, "command": argv, "seconds": secs,
-            "error": r.as_ref().err().map(ToString::to_string),
-        }));
+        let ran = (
+            t0.elapsed().as_secs_f64(),
+            r.as_ref().err().map(ToString::to_string),
+        );
+        log.push(report::step(k + 1, argv, Some(ran)));
         if let Err(e) = r {
             return Err(Error::Input {
                 source_name: source.clone(),
@@ -88,9 +81,6 @@ pub fn run(a: RunArgs) -> Result<()> {
             });
         }
     }
-    if let Some(p) = &json_out {
-        let v = serde_json::json!({"config": a.config, "folder": folder, "steps": log});
-        super::write_json(p, &v, "run log")?;
-    }
-    Ok(())
+    let v = report::json(&a.config, &folder, &log);
+    super::json_to(json_out.as_deref(), &v, "run log")
 }

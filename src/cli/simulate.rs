@@ -6,14 +6,13 @@ use robokrige::sim::{CampaignKind, CampaignSpec, Effect, parse_ranges, simulate,
 use robokrige::{Error, Result, kinematics};
 use std::path::PathBuf;
 
-/// Simulate a measurement campaign and write it in the measurement CSV format.
-///
-/// The same --robot and --seed always give the same true robot, whatever the
-/// --kind, so a training campaign, its verification poses and a trajectory can
-/// be made separately. The simulator's truth (true parameters, effects, noise
-/// floor) goes to a JSON beside the CSV, never into it.
 #[derive(Debug, Args)]
 #[command(after_help = "\
+The same --robot and --seed always give the same true robot, whatever the
+--kind, so a training campaign, its verification poses and a trajectory can
+be made separately. The simulator's truth (true parameters, effects, noise
+floor) goes to a JSON beside the CSV, never into it.
+
 Examples:
   robokrige simulate --robot comau-nj220 --poses 300 --seed 1 -o comau_lhs.csv
   robokrige simulate --kind verify --poses 30 --seed 1 -o comau_verify.csv

@@ -109,6 +109,13 @@ impl ImportSpec {
         })
     }
 
+    /// [`ImportSpec::map`] of each list in order: a target named twice
+    /// among them all is refused.
+    pub fn map_all(&mut self, lists: &[String]) -> Result<()> {
+        let mut given = Vec::new();
+        lists.iter().try_for_each(|m| self.map(m, &mut given))
+    }
+
     /// Add `target=column` pairs (comma-separated), overriding the same
     /// targets of a mapping file. Error if one call's pairs, or
     /// `already` (targets set by earlier calls), name a target twice.

@@ -137,6 +137,22 @@ pub fn errors_from_positions(robot: &Robot, data: &mut Dataset) -> Result<Option
     Ok(Some(fit))
 }
 
+/// [`errors_from_positions`] of an imported campaign (`import`) with its
+/// robot, if one is given; an import map that gives both errors and
+/// positions is refused.
+pub fn locate_imported(robot: Option<&Robot>, data: &mut Dataset) -> Result<Option<TrackerFit>> {
+    let Some(robot) = robot else {
+        return Ok(None);
+    };
+    if data.errors.is_some() && data.positions.is_some() {
+        return Err(Error::InvalidParameter(
+            "the map gives both errors (ex,ey,ez) and positions (x,y,z) with --robot: map one"
+                .into(),
+        ));
+    }
+    errors_from_positions(robot, data)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

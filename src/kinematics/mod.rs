@@ -25,7 +25,7 @@ pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
-pub use locate::{TrackerFit, errors_from_positions, locate_tracker};
+pub use locate::{TrackerFit, errors_from_positions, locate_imported, locate_tracker};
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
 pub use robot_file::{
@@ -183,6 +183,14 @@ impl Robot {
                 got: q.len(),
             })
         }
+    }
+
+    /// The joints a run starts from: `start`, checked to have one value per
+    /// joint, or by default the home pose.
+    pub fn start_or_home(&self, start: Option<&[f64]>) -> Result<Vec<f64>> {
+        let start = start.unwrap_or(&self.home).to_vec();
+        self.check_len(&start)?;
+        Ok(start)
     }
 
     /// Frames `F_0 = base, F_1 = base·T_1, …, F_n`, then the TCP frame `F_n·tool`

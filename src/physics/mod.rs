@@ -89,6 +89,30 @@ pub fn check_training_campaign(robot: &Robot, given: bool) -> Result<()> {
     }
 }
 
+/// The robot of an identification when none is named (`physics
+/// identify`): the SCARA of seed 000.
+pub const DEFAULT_ROBOT: &str = "scara-rh3frh5515";
+
+/// Error unless each of `campaigns` fits `robot`
+/// ([`Robot::check_dataset`]); `name` is the robot as the user named it,
+/// and a campaign that does not fit the [`DEFAULT_ROBOT`] is told that it
+/// met the default.
+pub fn check_campaigns(robot: &Robot, name: &str, campaigns: &[&Dataset]) -> Result<()> {
+    let hint = |e| match e {
+        crate::Error::Input {
+            source_name,
+            message,
+        } if name == DEFAULT_ROBOT => crate::Error::Input {
+            source_name,
+            message: format!("{message} (the default robot is {DEFAULT_ROBOT})"),
+        },
+        e => e,
+    };
+    campaigns
+        .iter()
+        .try_for_each(|d| robot.check_dataset(d).map_err(hint))
+}
+
 /// Identify the physics models of `nominal`:
 /// - a SCARA (seed 000): everything from the indexing tests
 ///   ([`identify_scara`]); the D-H model is the same without tables (eq 2);

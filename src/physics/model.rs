@@ -1,8 +1,9 @@
 //! The physics-based model: identified geometry + bidirectional lookup tables.
 
 use super::BidirectionalTable;
+use crate::compensate::Compensated;
 use crate::kinematics::{JointKind, Robot};
-use crate::model::{ErrorModel, RobotRecord};
+use crate::model::{CoverageWarning, ErrorModel, RobotRecord};
 use crate::predictor::ErrorPredictor;
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -329,6 +330,17 @@ impl AnyModel {
         match self {
             AnyModel::Kriging(m) => m.check_robot(robot, source_name),
             AnyModel::Physics(m) => RobotRecord::of(&m.nominal).check(robot, source_name),
+        }
+    }
+
+    /// The points of the compensation `res` that leave a Kriging model's
+    /// coverage ([`ErrorModel::coverage`] at the means the compensation
+    /// used; no standard deviations, which would need the m × m factor);
+    /// none for a physics model.
+    pub fn coverage_of(&self, res: &Compensated) -> Result<Vec<CoverageWarning>> {
+        match self {
+            AnyModel::Kriging(m) => m.coverage(&res.joints, &res.dir, &res.predicted, None),
+            AnyModel::Physics(_) => Ok(Vec::new()),
         }
     }
 

@@ -132,6 +132,32 @@ impl TrackerView {
         })
     }
 
+    /// The tracker of a plan's options: at `position` (x, y, z, mm), with
+    /// the largest range and incidence if given; `None` without a position.
+    pub fn from_options(
+        position: Option<&[f64]>,
+        max_range: Option<f64>,
+        max_incidence: Option<f64>,
+    ) -> Result<Option<Self>> {
+        let Some(p) = position else {
+            return Ok(None);
+        };
+        let pos: [f64; 3] = p.try_into().map_err(|_| {
+            Error::InvalidParameter(format!(
+                "--tracker needs x,y,z (three numbers, mm), got {} values",
+                p.len()
+            ))
+        })?;
+        let mut view = TrackerView::new(pos)?;
+        if let Some(r) = max_range {
+            view = view.max_range(r)?;
+        }
+        if let Some(i) = max_incidence {
+            view = view.max_incidence(i)?;
+        }
+        Ok(Some(view))
+    }
+
     /// The largest tracker–reflector distance, mm (> 0).
     pub fn max_range(mut self, mm: f64) -> Result<Self> {
         if !(mm.is_finite() && mm > 0.0) {

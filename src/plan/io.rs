@@ -3,6 +3,7 @@
 
 use super::{Plan, PoseSet, Region};
 use crate::Result;
+use crate::dataset::Dataset;
 use crate::kinematics::{IkOptions, Robot, all_reached, first_pass_joints};
 use crate::program::{self, ProgramFormat, ProgramOptions, ProgramPose};
 use crate::space::derive_directions;
@@ -10,6 +11,20 @@ use crate::trajectory::{TargetFile, read_target_file};
 use std::path::Path;
 
 impl Region {
+    /// The region of a plan: the task file `path` ([`Region::from_file`]),
+    /// else the `pool`'s poses, else the robot's working ranges.
+    pub fn from_options(
+        path: Option<&Path>,
+        pool: Option<&Dataset>,
+        robot: &Robot,
+    ) -> Result<Self> {
+        match (path, pool) {
+            (Some(path), _) => Region::from_file(path, robot),
+            (None, Some(p)) => Ok(Region::Poses(p.into())),
+            (None, None) => Ok(Region::WorkRange),
+        }
+    }
+
     /// The poses of a task file: a joint-pose list (`q1..qN`, with its
     /// directions given or derived from its order), or TCP targets
     /// (`x,y,z[,roll,pitch,yaw]`) solved by the robot's nominal inverse

@@ -17,6 +17,7 @@
 //! mean 3D error is that RMS times the ratio mean/RMS of the CV residuals.
 //! A target below the floor `√ν²·ratio` is unreachable by more poses.
 
+use super::{HyperSource, Plan};
 use crate::cv::cross_validate_closed_form;
 use crate::dataset::Dataset;
 use crate::model::ErrorModel;
@@ -75,6 +76,18 @@ impl Forecast {
             floor_mean_3d: noise2.sqrt() * ratio,
             mean_3d,
         })
+    }
+
+    /// The forecast of `plan` when its hyperparameters were re-estimated on
+    /// `campaign` ([`Forecast::new`] with the plan's model and IMSE curve);
+    /// `None` otherwise.
+    pub fn of_plan(plan: &Plan, campaign: Option<&Dataset>) -> Result<Option<Self>> {
+        match (&plan.model, plan.source, campaign) {
+            (Some(m), HyperSource::Campaign, Some(c)) => {
+                Forecast::new(m, c, &plan.imse_curve).map(Some)
+            }
+            _ => Ok(None),
+        }
     }
 
     /// When the target mean 3D error `target_mm` is met.

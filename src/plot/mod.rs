@@ -8,7 +8,8 @@
 mod studies;
 
 pub use studies::{
-    cv_errors, demo_plots, effect_plots, error_along_path, methods_errors, path_plots,
+    cv_errors, demo_plots, effect_plots, error_along_path, measured_errors, methods_errors,
+    path_plots,
 };
 
 use crate::stats::box_stats;

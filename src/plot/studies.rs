@@ -39,6 +39,17 @@ pub fn error_along_path(
     xy_plot(path, labels, &series, false)
 }
 
+/// [`error_along_path`] of runs measured on the simulated robot, titled
+/// `title`: the charts of `compensate` and `evaluate`.
+pub fn measured_errors(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()> {
+    let labels = Labels {
+        title,
+        x: "trajectory point",
+        y: "measured 3D position error (mm)",
+    };
+    error_along_path(path, &labels, runs)
+}
+
 /// Box plots of a CV's out-of-fold errors (|ex|, |ey|, |ez|, 3D) of a
 /// model over `space`.
 pub fn cv_errors(path: &Path, res: &CvResult, space: Space) -> Result<()> {

@@ -4,7 +4,7 @@
 use crate::compensate::{Compensated, Stop};
 use crate::physics::AnyModel;
 use crate::stats::PositionErrorTable;
-use crate::study::Evaluation;
+use crate::study::{Evaluation, FileEvaluation};
 use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -99,6 +99,51 @@ pub fn evaluation(truth: &str, ev: &Evaluation) -> String {
         table_line("after (compensated)", &ev.after),
         reduction_line("", ev)
     )
+}
+
+/// What `evaluate` prints for one command file: its errors and their
+/// reduction, after the nominal commands' errors for the `first` file.
+pub fn file_evaluation(e: &FileEvaluation, first: bool) -> String {
+    let ev = &e.evaluation;
+    let mut s = String::new();
+    if first {
+        let _ = writeln!(s, "{}", table_line("before (nominal)", &ev.before));
+    }
+    let _ = writeln!(s, "{}", table_line(&e.name, &ev.after));
+    let _ = writeln!(s, "{}", reduction_line(&format!("{:<22} ", ""), ev));
+    s
+}
+
+/// The JSON of `evaluate --json`: the truth file, the targets, the noise
+/// seed, the nominal and first file's errors, and every file's evaluation.
+pub fn evaluations_json(
+    truth: &Path,
+    targets: &Path,
+    seed: u64,
+    evals: &[FileEvaluation],
+) -> Value {
+    let reports: Vec<Value> = evals
+        .iter()
+        .map(|e| serde_json::json!({"file": e.file, "evaluation": e.evaluation}))
+        .collect();
+    let first = reports.first().map_or(&Value::Null, |r| &r["evaluation"]);
+    serde_json::json!({
+        "truth": truth, "targets": targets, "seed": seed,
+        "before": first["before"], "after": first["after"], "compensated": reports,
+    })
+}
+
+/// The title of `compensate --plot`: the trajectory, single-step or
+/// iterative, the model's space.
+pub fn plot_title(traj: &Path, iterative: bool, model: &AnyModel) -> String {
+    let name = traj.file_stem().and_then(|s| s.to_str());
+    let mode = if iterative {
+        "iterative"
+    } else {
+        "single-step"
+    };
+    let (name, space) = (name.unwrap_or("trajectory"), model.label());
+    format!("{name}: {mode} compensation, {space} model")
 }
 
 /// The files of a compensation: targets, commands written, model.

@@ -18,6 +18,7 @@ pub mod import;
 pub mod physics;
 pub mod plan;
 pub mod predict;
+pub mod run;
 pub mod simulate;
 
 /// `x / y / z` to 4 decimals (mm).

@@ -54,6 +54,16 @@ impl Targets {
         Ok(())
     }
 
+    /// Options of a compensation of these targets from `start`: their
+    /// joints as IK hints, everything else at its default.
+    pub fn compensation_options(&self, start: &[f64]) -> CompensationOptions {
+        CompensationOptions {
+            start: Some(start.to_vec()),
+            hints: self.hints.clone(),
+            ..CompensationOptions::default()
+        }
+    }
+
     /// Targets along a trajectory (no hints).
     pub fn from_trajectory(traj: Trajectory) -> Self {
         Targets {
@@ -158,6 +168,19 @@ pub fn check_truth_robot(truth: &Truth, robot: &Robot, path: &Path) -> Result<()
     Ok(())
 }
 
+/// The robot a simulator truth's runs are compared on: `robot` (a preset
+/// name or a robot file), which must have the kinematic table of the
+/// truth's nominal robot ([`check_truth_robot`]), or by default that
+/// nominal robot.
+pub fn truth_robot(truth: &Truth, robot: Option<&str>, truth_path: &Path) -> Result<Robot> {
+    let Some(name) = robot else {
+        return Ok(truth.robot.nominal.clone());
+    };
+    let robot = crate::kinematics::load_robot(name)?;
+    check_truth_robot(truth, &robot, truth_path)?;
+    Ok(robot)
+}
+
 /// Errors `measured − target` (mm) of running `commands` on the truth's robot
 /// from `start`.
 pub fn run_on(
@@ -233,6 +256,66 @@ pub fn evaluate(
     ))
 }
 
+/// [`evaluate`] on the simulator truth file `truth_path`, checked to be
+/// for `robot` ([`check_truth_robot`]).
+pub fn evaluate_on_file(
+    truth_path: &Path,
+    robot: &Robot,
+    targets: &Targets,
+    commands: &Trajectory,
+    start: &[f64],
+    seed: u64,
+) -> Result<(Evaluation, Runs)> {
+    let truth = load_truth(truth_path)?;
+    check_truth_robot(&truth, robot, truth_path)?;
+    evaluate(truth_path, &truth, targets, commands, start, seed)
+}
+
+/// A file of compensated commands evaluated on the simulated robot
+/// ([`evaluate_file`]).
+#[derive(Debug, Clone)]
+pub struct FileEvaluation {
+    /// The command file.
+    pub file: PathBuf,
+    /// Its file name (`compensated` if it has none).
+    pub name: String,
+    /// Before / after error tables.
+    pub evaluation: Evaluation,
+    /// The measured errors of the nominal and of these commands' runs.
+    pub runs: Runs,
+}
+
+/// Read the commands of the trajectory CSV `path` (one per target) and
+/// [`evaluate`] them.
+pub fn evaluate_file(
+    truth: (&Path, &Truth),
+    targets: &Targets,
+    path: &Path,
+    start: &[f64],
+    seed: u64,
+) -> Result<FileEvaluation> {
+    let commands = Trajectory::read_csv(path)?;
+    targets.check_commands(&commands, path)?;
+    let (evaluation, runs) = evaluate(truth.0, truth.1, targets, &commands, start, seed)?;
+    let name = path.file_name().and_then(|s| s.to_str());
+    Ok(FileEvaluation {
+        file: path.to_path_buf(),
+        name: name.unwrap_or("compensated").to_string(),
+        evaluation,
+        runs,
+    })
+}
+
+/// The measured errors of `evals` as named runs: the nominal run (the
+/// same in each, taken from the first) as `before`, then each file's.
+pub fn named_runs(evals: &[FileEvaluation]) -> Vec<(String, Vec<[f64; 3]>)> {
+    let before = evals
+        .first()
+        .map(|e| ("before".to_string(), e.runs.0.clone()));
+    let after = evals.iter().map(|e| (e.name.clone(), e.runs.1.clone()));
+    before.into_iter().chain(after).collect()
+}
+
 /// A compensation and its evaluation on the simulated robot.
 #[derive(Debug, Clone)]
 pub struct CompensatedRun {
@@ -256,12 +339,7 @@ pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
     start: &[f64],
     seed: u64,
 ) -> Result<CompensatedRun> {
-    let opts = CompensationOptions {
-        iterative: true,
-        hints: targets.hints.clone(),
-        start: Some(start.to_vec()),
-        ..CompensationOptions::default()
-    };
+    let opts = targets.compensation_options(start);
     let compensation = compensate(robot, model, &targets.traj, &opts)?;
     let (evaluation, runs) = evaluate(
         truth_path,
