@@ -226,7 +226,7 @@ fn write_and_compare_models(
     let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let robot = kinematics::load_robot(robot)?;
+    let robot = kinematics::load_robot_with_tool(robot, a.tool.as_deref())?;
     let truth = load_truth(truth_path)?;
     let targets = read_targets(traj, &robot, None, &robot.home)?;
     let on = (&robot, &targets);
