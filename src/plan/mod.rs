@@ -36,6 +36,7 @@ pub mod stop;
 pub use candidates::{PoseSet, TrackerView};
 pub use order::PlannedMove;
 
+use crate::cancel::Cancel;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
 use crate::methods::{Overrides, params_with};
@@ -72,6 +73,7 @@ pub struct PlanParams {
     via_step: f64,
     tracker: Option<TrackerView>,
     seed: u64,
+    cancel: Cancel,
 }
 
 impl PlanParams {
@@ -87,6 +89,7 @@ impl PlanParams {
             via_step: 5.0,
             tracker: None,
             seed: 1,
+            cancel: Cancel::never(),
         }
     }
 
@@ -126,6 +129,15 @@ impl PlanParams {
     /// Seed of the candidates and of the region sample.
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
+        self
+    }
+
+    /// The token that stops the planning ([`crate::cancel`]): read by the
+    /// fit of the hyperparameters, between the outputs' designs and
+    /// between the poses chosen; a cancelled plan returns
+    /// [`Error::Interrupted`].
+    pub fn cancel(mut self, token: Cancel) -> Self {
+        self.cancel = token;
         self
     }
 
@@ -224,8 +236,9 @@ impl ValidPlanParams {
         let mut notes = Vec::new();
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
+        p.cancel.check()?;
         let (chosen, imse_curve) = match &model {
-            Some(m) => choose_by_imse(m, &cand, &region, p.budget.min(cand.len()))?,
+            Some(m) => choose_by_imse(m, &cand, &region, p.budget.min(cand.len()), &p.cancel)?,
             None => {
                 let k = p.budget.min(p.first_batch);
                 if k < p.budget {
@@ -333,7 +346,8 @@ impl ValidPlanParams {
             .campaign
             .filter(|c| c.errors.is_some() && !c.is_empty());
         if let Some(c) = measured.filter(|c| c.len() >= MIN_FIT_ROWS) {
-            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?;
+            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?
+                .cancel(self.0.cancel.clone());
             return Ok((Some(params.check()?.fit(c)?), HyperSource::Campaign));
         }
         if let Some(prior) = inputs.prior {
@@ -407,12 +421,14 @@ fn measured_poses(robot: &Robot, campaign: Option<&Dataset>) -> Result<PoseSet> 
 
 /// Choose `k` candidates greedily by the largest reduction of the region's
 /// integrated MSE summed over the model's outputs; the IMSE before and
-/// after each choice.
+/// after each choice. `cancel` is read after each output's design and each
+/// choice.
 fn choose_by_imse(
     model: &ErrorModel,
     cand: &PoseSet,
     region: &PoseSet,
     k: usize,
+    cancel: &Cancel,
 ) -> Result<(Vec<usize>, Vec<f64>)> {
     let map = model.input_map();
     if !map.extras().is_empty() {
@@ -426,13 +442,14 @@ fn choose_by_imse(
     let mut axes: Vec<AxisDesign> = model
         .outputs()
         .iter()
-        .map(|o| AxisDesign::new(o, &sc, &sz))
+        .map(|o| cancel.check().and_then(|()| AxisDesign::new(o, &sc, &sz)))
         .collect::<Result<_>>()?;
     let mut curve = vec![axes.iter().map(AxisDesign::imse).sum::<f64>()];
     let mut chosen = Vec::with_capacity(k);
     let mut taken = vec![false; cand.len()];
     let mut gain = vec![0.0; cand.len()];
     for _ in 0..k {
+        cancel.check()?;
         gain.iter_mut().for_each(|g| *g = 0.0);
         for a in &axes {
             a.gains(&mut gain);
