@@ -2,11 +2,9 @@
 //! keeps and sets from another thread (a Ctrl-C handler, a GUI button, the
 //! Python bindings' signal check), and that long loops read.
 //!
-//! The work carries the token in its parameters
-//! ([`KrigingOptions::cancel`](crate::kriging::KrigingOptions::cancel),
-//! [`ErrorModelParams::cancel`](crate::params::ErrorModelParams::cancel),
-//! [`DiagnoseOptions::base`](crate::diagnose::DiagnoseOptions::base) through
-//! its params, [`PlanParams::cancel`](crate::plan::PlanParams::cancel)) and
+//! The work carries the token in its parameters (`cancel` builder setters
+//! of `KrigingOptions`, `ErrorModelParams`, `DiagnoseOptions` and
+//! `PlanParams`; this module, at the bottom layer, knows none of them) and
 //! reads it between units of work: likelihood evaluations, GA generations,
 //! CV folds, the rounds and resample batches of a diagnosis, the poses a
 //! planner chooses. A requested cancellation ends the work with

@@ -136,8 +136,8 @@ pub enum Error {
     #[error("numerical failure: {0}")]
     Numerical(String),
 
-    /// The caller cancelled the work through its [`crate::cancel::Cancel`]
-    /// token (e.g. Ctrl-C in Python); nothing was produced.
+    /// The caller cancelled the work through its cancellation token (the
+    /// `cancel` module; e.g. Ctrl-C in Python); nothing was produced.
     #[error("interrupted: the work was cancelled before it finished")]
     Interrupted,
 

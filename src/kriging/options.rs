@@ -323,8 +323,8 @@ impl KrigingOptions {
 
     /// The token that stops the fit: once it is cancelled, every further
     /// likelihood evaluation returns at once and the fit ends with
-    /// [`Error::Interrupted`]. [`Cancel::never`] by default; a model keeps
-    /// no token ([`crate::model::ErrorModel::options`] has the default).
+    /// [`Error::Interrupted`]. [`Cancel::never`] by default; a fitted
+    /// model keeps no token (its options have the default).
     pub fn cancel(mut self, token: Cancel) -> Self {
         self.cancel = token;
         self
