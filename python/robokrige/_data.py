@@ -152,6 +152,18 @@ def as_data(
     return _robokrige.Data(qa, da, ea, None, cov, None, source)
 
 
+def derive_directions(q: Any) -> np.ndarray:
+    """The directions λ (m × n, ±1) the poses ``q`` (m × n joints, in the
+    order the robot visited them) are approached from, as the library
+    derives them for a campaign without direction columns: the sign of each
+    joint's last move, +1 for the first pose. Derive them once on the whole
+    campaign, before a CV splitter or a train/test split picks rows, and
+    give them to ``ErrorModel.fit(X, y)`` as the columns after the joints:
+    ``X = np.hstack([q, derive_directions(q)])``."""
+    dirs: np.ndarray = _robokrige.Data(_matrix(q, "q")).dirs
+    return dirs
+
+
 def _only(dirs: Any, errors: Any, covariates: Any, what: str) -> None:
     if dirs is not None or errors is not None or covariates is not None:
         raise _bad(f"with {what}, give dirs, errors and covariates as its columns, not as arguments")
