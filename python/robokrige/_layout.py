@@ -11,7 +11,7 @@ from typing import Any, List, Optional, Tuple
 import numpy as np
 
 from . import _robokrige
-from ._data import _DIR, _Q, _RESERVED, _bad, _columns, _is_frame, _numbered, _numeric
+from ._data import _DIR, _Q, _RESERVED, _bad, _columns, _is_frame, _numbered, _stack
 from ._robokrige import RobokrigeError
 
 #: The values of ``ErrorModel(dirs=...)``.
@@ -217,10 +217,6 @@ def _by_name(X: Any, n_joints: Any, dirs: str, cov: Optional[List[str]], estimat
                 f"X has columns {unused} that are neither joints (q1..q{n}), directions nor covariates: "
                 "drop them, or list them in covariates"
             )
-    order = qn + dn + cov
-    for name in order:
-        if _numeric(cols[name]) is None:
-            raise _bad(f"X's column '{name}' is not numeric")
-    a = np.column_stack([_numeric(cols[name]) for name in order])
+    a = _stack(cols, qn + dn + cov, "X")
     names = tuple(str(c) for c in X.columns)
     return Layout(n, dirs, tuple(cov), names), a

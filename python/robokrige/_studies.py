@@ -11,7 +11,7 @@ from typing import Any, Dict, NamedTuple, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _robokrige
-from ._data import PathLike, _bad, _columns, _is_frame, _matrix, _numbered, _numeric, _Q, as_data
+from ._data import PathLike, _bad, _columns, _is_frame, _matrix, _numbered, _Q, _stack, as_data
 from ._model import ErrorModel, RobokrigeWarning
 from ._progress import ProgressArg, progress_for
 
@@ -88,13 +88,13 @@ def _targets(targets: Any) -> Dict[str, Any]:
         cols = _columns(targets)
         qn = _numbered(cols, _Q)
         if qn:
-            return {"joints": np.column_stack([_numeric(cols[n]) for n in qn])}
+            return {"joints": _stack(cols, qn, "targets")}
         if not all(c in cols for c in ("x", "y", "z")):
             raise _bad("targets need columns x, y, z (mm) or q1..qN (joint poses)")
-        out: Dict[str, Any] = {"xyz": np.column_stack([_numeric(cols[c]) for c in ("x", "y", "z")])}
+        out: Dict[str, Any] = {"xyz": _stack(cols, ("x", "y", "z"), "targets")}
         rpy = ("roll_deg", "pitch_deg", "yaw_deg")
         if all(c in cols for c in rpy):
-            out["rpy"] = np.column_stack([_numeric(cols[c]) for c in rpy])
+            out["rpy"] = _stack(cols, rpy, "targets")
         elif any(c in cols for c in rpy):
             raise _bad("give all of roll_deg, pitch_deg, yaw_deg or none")
         return out
@@ -179,7 +179,7 @@ def compensate(
         truth_seed=int(truth_seed),
         **kw,
     )
-    res = json.loads(text)
+    res: Dict[str, Any] = json.loads(text)
     k = len(res["xyz"])
     res["xyz"] = np.asarray(res["xyz"], dtype=np.float64).reshape(k, 3)
     if res["rpy"] is not None:
