@@ -16,7 +16,6 @@ use robokrige::compensate::{CompensationOptions, Stop};
 use robokrige::cv::{CvMode, CvPlan, Folds};
 use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
-use robokrige::model::RobotRecord;
 use robokrige::physics::AnyModel;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
@@ -279,7 +278,7 @@ pub fn compensate(
     let m = any_model(&model, &mut file)?;
     match m {
         Predictor::Kriging(k) => k.check_robot(&robot, "model"),
-        Predictor::Physics(p) => RobotRecord::of(&p.nominal).check(&robot, "model"),
+        Predictor::Physics(p) => p.check_robot(&robot, "model"),
     }
     .map_err(to_py)?;
     let start = start.unwrap_or_else(|| robot.home.clone());
