@@ -23,8 +23,6 @@ if TYPE_CHECKING:  # scikit-learn ships no type information
     class _NotFittedBase(ValueError, AttributeError):
         pass
 
-    HAVE_SKLEARN: bool
-
 else:
     try:
         from sklearn.base import BaseEstimator, RegressorMixin
@@ -32,11 +30,9 @@ else:
 
         # RegressorMixin before BaseEstimator: scikit-learn's required order
         _BASES: Tuple[type, ...] = (RegressorMixin, BaseEstimator)
-        HAVE_SKLEARN = True
     except ImportError:
         _NotFittedBase = AttributeError
         _BASES = (object,)
-        HAVE_SKLEARN = False
 
     EstimatorBase = type("EstimatorBase", _BASES, {"__doc__": "The estimator's base classes.", "__module__": __name__})
 
