@@ -373,6 +373,7 @@ impl CvPlan {
                 let done = std::cell::Cell::new(0);
                 progress(0, k);
                 let mut res = cross_validate_folds(data, &fold, |train| {
+                    params.params().get_cancel().check()?;
                     let m = params.fit(train);
                     done.set(done.get() + 1);
                     progress(done.get(), k);

@@ -136,6 +136,11 @@ pub enum Error {
     #[error("numerical failure: {0}")]
     Numerical(String),
 
+    /// The caller cancelled the work through its cancellation token (the
+    /// `cancel` module; e.g. Ctrl-C in Python); nothing was produced.
+    #[error("interrupted: the work was cancelled before it finished")]
+    Interrupted,
+
     /// A failure in one output axis of a model (fit or refit); the cause
     /// keeps its own variant.
     #[error("output {axis}: {source}")]
@@ -152,6 +157,16 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// Whether this is [`Error::Interrupted`], also inside an
+    /// [`Error::Axis`].
+    pub fn is_interrupted(&self) -> bool {
+        match self {
+            Error::Interrupted => true,
+            Error::Axis { source, .. } => source.is_interrupted(),
+            _ => false,
+        }
+    }
+
     /// Wrap an I/O error with the path it concerns.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

@@ -11,6 +11,7 @@
 //! | layer | module | owns |
 //! |---|---|---|
 //! | data | [`error`] | the crate's one error type |
+//! | data | [`cancel`] | `Cancel`: a token that stops long work (fits, CV, diagnosis, planning) between its steps |
 //! | data | [`dataset`] | the measurement CSV: read, validate, write |
 //! | data | [`trajectory`] | commanded TCP paths (CSV) |
 //! | data | [`program`] | joint moves as a robot program: joint CSV, URScript, KUKA KRL, ABB RAPID |
@@ -50,6 +51,7 @@
 
 pub mod batch;
 pub mod calibration;
+pub mod cancel;
 pub mod compensate;
 #[cfg(feature = "cli")]
 pub mod config;

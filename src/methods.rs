@@ -32,6 +32,7 @@
 
 use crate::calibration::CalibrationOptions;
 use crate::dataset::Dataset;
+use crate::features::Feature;
 use crate::kinematics::Robot;
 use crate::kriging::{CorrChoice, KrigingOptions, OptimizerKind, TrendKind};
 use crate::params::{ErrorModelParams, TrendSpec};
@@ -194,6 +195,7 @@ pub struct Overrides {
     robot: Option<Robot>,
     kinematic: bool,
     calibration: Option<CalibrationOptions>,
+    covariates: Vec<String>,
 }
 
 impl Default for Overrides {
@@ -218,6 +220,7 @@ impl Overrides {
             robot: None,
             kinematic: false,
             calibration: Some(CalibrationOptions::default()),
+            covariates: Vec::new(),
         }
     }
 
@@ -291,6 +294,16 @@ impl Overrides {
     /// Kriging of the raw error. Ignored with the kinematic trend.
     pub fn calibrate(mut self, calibration: Option<CalibrationOptions>) -> Self {
         self.calibration = calibration;
+        self
+    }
+
+    /// Covariate columns of the campaign (by name) that enter the model as
+    /// inputs: each an input dimension with its own correlation length and
+    /// a linear trend term ([`Feature::Covariate`], as `diagnose` adds a
+    /// covariate), its first value the reference for predictions without
+    /// the column. Empty by default: covariates are carried, not modelled.
+    pub fn covariates(mut self, names: Vec<String>) -> Self {
+        self.covariates = names;
         self
     }
 
@@ -397,10 +410,38 @@ pub fn params_with(
             .trend(TrendSpec::Kinematic(Box::new(r.clone()))),
         (None, None) => o.options_params(data)?,
     };
-    Ok(match &o.robot {
+    let params = match &o.robot {
         Some(r) => params
             .robot(r.clone())
             .calibrate(o.calibration.clone().filter(|_| !o.kinematic)),
         None => params,
-    })
+    };
+    if o.covariates.is_empty() {
+        return Ok(params);
+    }
+    Ok(params.extras(covariate_inputs(&o.covariates, data)?))
+}
+
+/// [`Overrides::covariates`] as features of `data`: each column present,
+/// numeric and complete, named once.
+fn covariate_inputs(names: &[String], data: &Dataset) -> Result<Vec<Feature>> {
+    let mut out = Vec::with_capacity(names.len());
+    for (k, name) in names.iter().enumerate() {
+        if names[..k].contains(name) {
+            return Err(Error::InvalidParameter(format!(
+                "covariate '{name}' is named twice"
+            )));
+        }
+        let f = Feature::Covariate {
+            name: name.clone(),
+            reference: None,
+        };
+        // the library's own messages: missing, read as text, or incomplete
+        let values = f.columns(data)?.remove(0);
+        out.push(Feature::Covariate {
+            name: name.clone(),
+            reference: values.first().copied(),
+        });
+    }
+    Ok(out)
 }

@@ -21,6 +21,7 @@
 //! place.
 
 use crate::calibration::{CalibrationOptions, calibrate};
+use crate::cancel::Cancel;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
@@ -151,10 +152,26 @@ impl ErrorModelParams {
     }
 
     /// The Kriging options: trend kind, correlation, optimiser, nugget,
-    /// seed.
+    /// seed (and their cancellation token: set [`cancel`](Self::cancel)
+    /// after this).
     pub fn kriging(mut self, options: KrigingOptions) -> Self {
         self.kriging = options;
         self
+    }
+
+    /// The token that stops the fit ([`crate::cancel`]): the calibration,
+    /// a trend selection and every output's search check it, and a
+    /// cancelled fit returns [`Error::Interrupted`]. It is the Kriging
+    /// options' token ([`KrigingOptions::cancel`]); [`Cancel::never`] by
+    /// default.
+    pub fn cancel(mut self, token: Cancel) -> Self {
+        self.kriging.cancel = token;
+        self
+    }
+
+    /// The cancellation token.
+    pub fn get_cancel(&self) -> &Cancel {
+        &self.kriging.cancel
     }
 
     /// How the trend is chosen.
@@ -351,6 +368,7 @@ impl ValidErrorModelParams {
             (Some(opts), Some(robot)) => Some(calibrate(data, robot, opts)?),
             _ => None,
         };
+        p.kriging.cancel.check()?;
         let residual;
         let data = match &calibration {
             Some(c) => {

@@ -369,3 +369,42 @@ fn comau_home_wrist_centre() {
         .vector;
     assert!(tilt.z < expected.z - 100.0);
 }
+
+/// `Robot::with_tool_translation`: the one place a TCP offset replaces a
+/// robot's tool (`--tool`, Python's `tool=`): the translation set, the
+/// rotation kept, non-finite offsets refused; `load_robot_with_tool` parses
+/// `--tool` into it and keeps its own message.
+#[test]
+fn a_tool_translation_replaces_the_offset_and_keeps_the_rotation() {
+    use robokrige::kinematics::{load_robot, load_robot_with_tool};
+    let robot = load_robot("ur10").unwrap();
+    let moved = robot
+        .clone()
+        .with_tool_translation([1.5, -2.0, 250.0])
+        .unwrap();
+    assert_eq!(
+        moved.tool.translation.vector.as_slice(),
+        &[1.5, -2.0, 250.0]
+    );
+    assert_eq!(moved.tool.rotation, robot.tool.rotation);
+    assert_eq!(
+        load_robot_with_tool("ur10", Some("1.5, -2, 250")).unwrap(),
+        moved
+    );
+    let bad = robot
+        .with_tool_translation([f64::NAN, 0.0, 1.0])
+        .unwrap_err();
+    assert_eq!(
+        bad.to_string(),
+        "invalid parameter: tool (NaN, 0, 1): expected finite x, y, z in mm"
+    );
+    for t in ["1,2", "1,2,x", "1,2,inf"] {
+        let e = load_robot_with_tool("ur10", Some(t))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            format!("invalid parameter: --tool '{t}': expected x,y,z in mm")
+        );
+    }
+}

@@ -98,3 +98,60 @@ fn ga_method_selects_a_capped_deterministic_subset_with_the_constant() {
 fn fit(m: Method, data: &robokrige::dataset::Dataset, seed: u64) -> robokrige::model::ErrorModel {
     m.params(seed, false).check().unwrap().fit(data).unwrap()
 }
+
+/// `Overrides::covariates`: each named column becomes a model input (a
+/// `Feature::Covariate` with its first value as the reference), as the
+/// Python estimator's `covariates=[…]` asks; a missing column, or one
+/// named twice, is refused with the library's message.
+#[test]
+fn covariates_by_name_become_model_inputs() {
+    use robokrige::features::Feature;
+    use robokrige::methods::{Overrides, params_with};
+    let data = robokrige::dataset::read_csv(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_temperature.csv"
+    )))
+    .unwrap()
+    .select(&(0..80).collect::<Vec<_>>());
+    let temp = data.covariate("temp_c").unwrap().values.clone();
+    let o = Overrides::new().covariates(vec!["temp_c".into()]);
+    let model = params_with(None, &o, &data)
+        .unwrap()
+        .check()
+        .unwrap()
+        .fit(&data)
+        .unwrap();
+    assert_eq!(
+        model.extras(),
+        &[Feature::Covariate {
+            name: "temp_c".into(),
+            reference: Some(temp[0]),
+        }]
+    );
+    assert!(model.input_names().iter().any(|n| n == "temp_c"));
+    let plain = params_with(None, &Overrides::new(), &data)
+        .unwrap()
+        .check()
+        .unwrap()
+        .fit(&data)
+        .unwrap();
+    assert!(plain.extras().is_empty());
+    let missing = params_with(
+        None,
+        &Overrides::new().covariates(vec!["humidity".into()]),
+        &data,
+    );
+    assert!(
+        missing
+            .unwrap_err()
+            .to_string()
+            .contains("covariate column 'humidity', which is missing")
+    );
+    let twice = Overrides::new().covariates(vec!["temp_c".into(), "temp_c".into()]);
+    assert!(
+        params_with(None, &twice, &data)
+            .unwrap_err()
+            .to_string()
+            .contains("named twice")
+    );
+}

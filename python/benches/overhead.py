@@ -1,4 +1,6 @@
-"""Python against Rust: the same fit and predict, in-process times.
+"""Python against Rust: the same fit, timed two ways.
+
+Against the Rust API, in-process times:
 
     cargo build --release --manifest-path python/benches/rust_timing/Cargo.toml \
         --target-dir python/target            # with the wheel's RUSTFLAGS
@@ -9,9 +11,22 @@ Each round runs, alternately, one fresh Rust process (`ErrorModelParams`
 → `check` → `fit`, then `predict_dataset` with standard deviations) and one
 fresh Python process (`ErrorModel().fit(q, dirs, errors, covariates)`, then
 `predict(q, dirs, return_std=True)`), the data already in memory on both
-sides; each reports its own wall times. Both must fit the same model (the
-FNV-1a digest of the model file is compared). Prints the medians and the
-Python/Rust ratio.
+sides; each reports its own wall times.
+
+Against the command line, the same job end to end (read the campaign CSV,
+fit with the defaults, write the model file):
+
+    RUSTFLAGS="-C target-cpu=x86-64" cargo build --release --bin robokrige \
+        --target-dir /tmp/cli-baseline        # the wheel's build, for a like-for-like CLI
+    python python/benches/overhead.py --cli /tmp/cli-baseline/release/robokrige [--rounds 3]
+
+Each round runs, alternately, `robokrige fit CAMPAIGN -o model.json` (the
+process's wall time, measured by this script) and a fresh Python process
+timing `rk.ErrorModel().fit(CAMPAIGN).save(model.json)` (the call's wall
+time: the interpreter's start and imports are not the fit's).
+
+Either way both sides must fit the same model (the FNV-1a digest of the
+model file is compared). Prints the medians and the Python/Rust ratio.
 """
 
 import argparse
@@ -62,9 +77,51 @@ def child(train: str, poses: str) -> None:
                       "build": rk.build_target_cpu()}))
 
 
+def child_file(train: str, out: str) -> None:
+    import robokrige as rk
+
+    t0 = time.perf_counter()
+    rk.ErrorModel().fit(train).save(out)
+    seconds = time.perf_counter() - t0
+    with open(out) as f:
+        digest = fnv(f.read())
+    print(json.dumps({"fit": seconds, "model_fnv": digest, "build": rk.build_target_cpu()}))
+
+
+def against_cli(cli: str, train: str, rounds: int) -> None:
+    import tempfile
+
+    runs: dict = {"cli": [], "python": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        out = f"{tmp}/model.json"
+        for r in range(rounds):
+            t0 = time.perf_counter()
+            subprocess.run([cli, "fit", train, "-o", out], capture_output=True, text=True, check=True)
+            wall = time.perf_counter() - t0
+            with open(out) as f:
+                runs["cli"].append({"fit": wall, "model_fnv": fnv(f.read())})
+            done = subprocess.run([sys.executable, __file__, "--child-file", "--train", train, "--out", out],
+                                  capture_output=True, text=True, check=True)
+            runs["python"].append(json.loads(done.stdout.strip().splitlines()[-1]))
+            print(f"round {r + 1}: robokrige fit {runs['cli'][-1]['fit']:.3f} s, "
+                  f"ErrorModel().fit {runs['python'][-1]['fit']:.3f} s", file=sys.stderr)
+    digests = {x["model_fnv"] for v in runs.values() for x in v}
+    if len(digests) != 1:
+        sys.exit(f"the two sides fitted different models: {digests}")
+    med = {k: statistics.median(x["fit"] for x in v) for k, v in runs.items()}
+    print(json.dumps({
+        "train": train, "rounds": rounds, "wheel_build": runs["python"][0]["build"],
+        "seconds": {k: [x["fit"] for x in v] for k, v in runs.items()},
+        "median_seconds": med, "ratio_python_cli": med["python"] / med["cli"], "same_model": True,
+    }, indent=1))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rust", help="the robokrige-rust-timing binary")
+    ap.add_argument("--cli", help="a robokrige command line (built as the wheel is)")
+    ap.add_argument("--out", help=argparse.SUPPRESS)
+    ap.add_argument("--child-file", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--train", default="datasets/comau_lhs.csv")
     ap.add_argument("--poses", default="datasets/comau_verify.csv")
     ap.add_argument("--rounds", type=int, default=7)
@@ -73,6 +130,14 @@ def main() -> None:
     if a.child:
         child(a.train, a.poses)
         return
+    if a.child_file:
+        child_file(a.train, a.out)
+        return
+    if a.cli:
+        against_cli(a.cli, a.train, a.rounds)
+        return
+    if not a.rust:
+        ap.error("give --rust or --cli")
     runs = {"rust": [], "python": []}
     for r in range(a.rounds):
         out = subprocess.run([a.rust, a.train, a.poses, "1"], capture_output=True, text=True, check=True)

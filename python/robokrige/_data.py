@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 import re
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -73,6 +73,18 @@ def _numeric(col: Any) -> Optional[np.ndarray]:
     return None
 
 
+def _stack(cols: Mapping[str, Any], names: Sequence[str], source: str) -> np.ndarray:
+    """The named columns as an m × len(names) float64 array; an error
+    naming the first that is not numeric."""
+    values = []
+    for n in names:
+        v = _numeric(cols[n])
+        if v is None:
+            raise RobokrigeError(f"{source}: column '{n}' is not numeric")
+        values.append(v)
+    return np.column_stack(values)
+
+
 def _numbered(cols: Mapping[str, Any], pattern: "re.Pattern[str]") -> List[str]:
     found = sorted((int(m.group(1)), name) for name in cols for m in [pattern.match(name)] if m)
     names = [n for _, n in found]
@@ -94,15 +106,11 @@ def _from_table(table: Any, source: str) -> "_robokrige.Data":
     if dn and len(dn) != len(qn):
         raise RobokrigeError(f"{source}: {len(dn)} direction columns for {len(qn)} joints; give dir1..dir{len(qn)} or none")
 
-    def stack(names: List[str]) -> np.ndarray:
-        return np.column_stack([_numeric(cols[n]) for n in names])
+    def triple(names: Tuple[str, str, str]) -> Optional[np.ndarray]:
+        return _stack(cols, names, source) if all(n in cols for n in names) else None
 
-    for n in qn + dn + [c for c in ("ex", "ey", "ez", "x", "y", "z") if c in cols]:
-        if _numeric(cols[n]) is None:
-            raise RobokrigeError(f"{source}: column '{n}' is not numeric")
-    q = stack(qn)
-    dirs = stack(dn) if dn else None
-    triple = lambda names: stack(list(names)) if all(n in cols for n in names) else None  # noqa: E731
+    q = _stack(cols, qn, source)
+    dirs = _stack(cols, dn, source) if dn else None
     errors = triple(("ex", "ey", "ez"))
     positions = triple(("x", "y", "z"))
     ids = [str(v) for v in cols["id"]] if "id" in cols else None
@@ -150,6 +158,18 @@ def as_data(
     if covariates is not None:
         cov = [(name, _vector(v, name)) for name, v in _columns(covariates).items()]
     return _robokrige.Data(qa, da, ea, None, cov, None, source)
+
+
+def derive_directions(q: Any) -> np.ndarray:
+    """The directions λ (m × n, ±1) the poses ``q`` (m × n joints, in the
+    order the robot visited them) are approached from, as the library
+    derives them for a campaign without direction columns: the sign of each
+    joint's last move, +1 for the first pose. Derive them once on the whole
+    campaign, before a CV splitter or a train/test split picks rows, and
+    give them to ``ErrorModel.fit(X, y)`` as the columns after the joints:
+    ``X = np.hstack([q, derive_directions(q)])``."""
+    dirs: np.ndarray = _robokrige.Data(_matrix(q, "q")).dirs
+    return dirs
 
 
 def _only(dirs: Any, errors: Any, covariates: Any, what: str) -> None:

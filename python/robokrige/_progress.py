@@ -8,7 +8,9 @@ A ``progress`` argument is one of:
 - a callable ``progress(done, total, message)``: called from the worker
   threads (with the interpreter attached) after each step; ``total`` is 0
   when the number of steps is not known in advance. An exception it raises
-  does not stop the computation; it is raised when the call returns.
+  stops the computation (at the library's next check: a likelihood
+  evaluation, a CV fold, a diagnose step) and is raised when the call
+  returns.
 """
 
 from __future__ import annotations

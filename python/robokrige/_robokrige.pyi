@@ -3,7 +3,7 @@
 Use the ``robokrige`` package's functions; this module is their engine."""
 
 from os import PathLike
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -12,15 +12,29 @@ _F64 = npt.NDArray[np.float64]
 _Path = Union[str, "PathLike[str]"]
 _Progress = Optional[Callable[[int, int, str], Any]]
 
+__all__ = [
+    "Data",
+    "Model",
+    "PhysicsModel",
+    "RobokrigeError",
+    "build_target_cpu",
+    "compensate",
+    "cross_validate",
+    "diagnose",
+    "library_version",
+    "plan",
+]
+
 class RobokrigeError(ValueError):
     """A robokrige failure; the message is the library's own."""
 
+@final
 class Data:
     """A measurement campaign (poses in visiting order, directions, errors,
     covariates)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         q: _F64,
         dirs: Optional[_F64] = None,
         errors: Optional[_F64] = None,
@@ -28,7 +42,7 @@ class Data:
         covariates: Optional[Sequence[Tuple[str, _F64]]] = None,
         ids: Optional[Sequence[str]] = None,
         source: str = "<memory>",
-    ) -> None: ...
+    ) -> "Data": ...
     @staticmethod
     def read_csv(path: _Path) -> "Data": ...
     @property
@@ -49,6 +63,7 @@ class Data:
     def columns(self) -> List[Tuple[str, Union[_F64, List[str]]]]: ...
     def __len__(self) -> int: ...
 
+@final
 class Model:
     """A fitted TCP error model (one universal-Kriging model per axis)."""
 
@@ -90,6 +105,23 @@ class Model:
     def calibration_json(self) -> str: ...
     def conditioning_warnings(self) -> List[str]: ...
 
+@final
+class PhysicsModel:
+    """A physics-based TCP error model (the identified geometry and the
+    joints' lookup tables), as ``robokrige physics identify`` writes it."""
+
+    @staticmethod
+    def load(path: _Path) -> "PhysicsModel": ...
+    def save(self, path: _Path) -> None: ...
+    def predict(self, data: Data) -> _F64: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def has_tables(self) -> bool: ...
+    @property
+    def n_joints(self) -> int: ...
+    def robot_json(self) -> str: ...
+
 def library_version() -> str: ...
 def build_target_cpu() -> str: ...
 def cross_validate(
@@ -101,7 +133,7 @@ def cross_validate(
     progress: _Progress = None,
 ) -> str: ...
 def compensate(
-    model: Model,
+    model: Union[Model, PhysicsModel, str],
     robot: str,
     *,
     path: Optional[str] = None,
@@ -133,3 +165,24 @@ def diagnose(
     scan_rows: Optional[int] = None,
     calibrate: bool = False,
 ) -> Tuple[str, Model]: ...
+def plan(
+    robot: str,
+    budget: int,
+    *,
+    tool: Optional[Tuple[float, float, float]] = None,
+    campaign: Optional[Data] = None,
+    prior: Optional[Model] = None,
+    pool: Optional[Data] = None,
+    region: Union[Data, str, None] = None,
+    first_batch: int = 50,
+    candidates: int = 5000,
+    region_points: int = 1000,
+    via_step: float = 5.0,
+    tracker_at: Optional[Tuple[float, float, float]] = None,
+    max_range: Optional[float] = None,
+    max_incidence: Optional[float] = None,
+    target_mm: Optional[float] = None,
+    seed: int = 1,
+    output: Optional[str] = None,
+    format: str = "csv",
+) -> Tuple[_F64, _F64, npt.NDArray[np.bool_], npt.NDArray[np.int64], str, Optional[Model]]: ...

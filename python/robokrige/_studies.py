@@ -11,7 +11,7 @@ from typing import Any, Dict, NamedTuple, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _robokrige
-from ._data import PathLike, _bad, _columns, _is_frame, _matrix, _numbered, _numeric, _Q, as_data
+from ._data import PathLike, _bad, _columns, _is_frame, _matrix, _numbered, _Q, _stack, as_data
 from ._model import ErrorModel, RobokrigeWarning
 from ._progress import ProgressArg, progress_for
 
@@ -88,13 +88,13 @@ def _targets(targets: Any) -> Dict[str, Any]:
         cols = _columns(targets)
         qn = _numbered(cols, _Q)
         if qn:
-            return {"joints": np.column_stack([_numeric(cols[n]) for n in qn])}
+            return {"joints": _stack(cols, qn, "targets")}
         if not all(c in cols for c in ("x", "y", "z")):
             raise _bad("targets need columns x, y, z (mm) or q1..qN (joint poses)")
-        out: Dict[str, Any] = {"xyz": np.column_stack([_numeric(cols[c]) for c in ("x", "y", "z")])}
+        out: Dict[str, Any] = {"xyz": _stack(cols, ("x", "y", "z"), "targets")}
         rpy = ("roll_deg", "pitch_deg", "yaw_deg")
         if all(c in cols for c in rpy):
-            out["rpy"] = np.column_stack([_numeric(cols[c]) for c in rpy])
+            out["rpy"] = _stack(cols, rpy, "targets")
         elif any(c in cols for c in rpy):
             raise _bad("give all of roll_deg, pitch_deg, yaw_deg or none")
         return out
@@ -110,7 +110,7 @@ def _targets(targets: Any) -> Dict[str, Any]:
 
 
 def compensate(
-    model: Union[ErrorModel, "_robokrige.Model"],
+    model: Union[ErrorModel, "_robokrige.Model", "_robokrige.PhysicsModel", PathLike],
     robot: Union[str, PathLike],
     targets: Any,
     iterative: bool = True,
@@ -126,6 +126,10 @@ def compensate(
     """Pre-compensate a trajectory for ``robot`` with a fitted ``model``
     (feed-forward), as ``robokrige compensate``.
 
+    ``model`` is a fitted ``ErrorModel``, a ``PhysicsModel`` (``robokrige
+    physics identify``'s lookup-table model, ``PhysicsModel.load``), or a
+    model file of either kind (read as ``compensate --model`` reads it).
+
     ``robot`` is a preset name or a robot file; it must be the robot the
     model records. ``targets`` is a trajectory CSV or pose-list CSV path, a
     DataFrame with ``x,y,z`` (and ``roll_deg,pitch_deg,yaw_deg``) or with
@@ -137,16 +141,23 @@ def compensate(
     step of seed 003. With ``truth`` (a simulator truth file) the nominal
     and compensated commands are also run on the simulated robot.
 
-    Returns a dict: ``xyz`` and ``rpy`` (the corrected commands: k × 3 mm,
+    Returns a dict: ``model`` ("kriging" or "physics"), ``xyz`` and ``rpy``
+    (the corrected commands: k × 3 mm,
     k × 3 degrees or None), ``joints`` and ``dirs`` (their nominal IK joints
     and directions), ``predicted`` (k × 3 δ̂ there), ``history`` (one dict
     per iteration), ``converged``, ``stop``, ``unsettled``, ``coverage`` and
     ``seconds``; with ``truth``, ``evaluation`` (``summary`` and the
     measured ``before`` / ``after`` errors, k × 3).
     """
-    m = model._fitted() if isinstance(model, ErrorModel) else model
-    if not isinstance(m, _robokrige.Model):
-        raise _bad("model must be a fitted ErrorModel")
+    m: Union["_robokrige.Model", "_robokrige.PhysicsModel", str]
+    if isinstance(model, ErrorModel):
+        m = model._fitted()
+    elif isinstance(model, (_robokrige.Model, _robokrige.PhysicsModel)):
+        m = model
+    elif isinstance(model, (str, os.PathLike)):
+        m = os.fspath(model)
+    else:
+        raise _bad("model must be a fitted ErrorModel, a PhysicsModel or a model file")
     kw = _targets(targets)
     if tool is not None:
         t = np.asarray(tool, dtype=np.float64).ravel()
@@ -168,7 +179,7 @@ def compensate(
         truth_seed=int(truth_seed),
         **kw,
     )
-    res = json.loads(text)
+    res: Dict[str, Any] = json.loads(text)
     k = len(res["xyz"])
     res["xyz"] = np.asarray(res["xyz"], dtype=np.float64).reshape(k, 3)
     if res["rpy"] is not None:
@@ -283,7 +294,8 @@ def diagnose(
     report = json.loads(text)
     for key in ("before_residuals", "after_residuals"):
         report[key] = np.asarray(report[key], dtype=np.float64).reshape(-1, 3)
-    est = ErrorModel(
+    est = ErrorModel._wrap(
+        m,
         space="js" if method.startswith("js") else "ejs",
         corr="gaussian",
         nugget=bool(nugget),
@@ -291,7 +303,6 @@ def diagnose(
         seed=int(seed),
         periodic=pspec,
     )
-    est.model_ = m
     effects: Any = report["effects"]
     if as_frame is not False:
         try:

@@ -10,12 +10,19 @@
 //! - every `robokrige::Error` becomes `robokrige.RobokrigeError` with the
 //!   library's message, word for word;
 //! - every long call runs with the interpreter released (`Python::detach`);
-//!   progress callbacks attach again to call into Python.
+//!   progress callbacks attach again to call into Python;
+//! - fits, CV, diagnoses and plans run on a worker thread while the calling
+//!   thread runs Python's signal handlers every 50 ms: Ctrl-C sets the
+//!   work's cancellation token, and the call raises KeyboardInterrupt once
+//!   the library has stopped (`interrupt`).
 
 mod access;
 mod data;
+mod interrupt;
 mod model;
 mod params;
+mod physics;
+mod plan;
 mod progress;
 mod studies;
 
@@ -70,10 +77,12 @@ fn _robokrige(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RobokrigeError", m.py().get_type::<RobokrigeError>())?;
     m.add_class::<data::Data>()?;
     m.add_class::<model::Model>()?;
+    m.add_class::<physics::PhysicsModel>()?;
     m.add_function(wrap_pyfunction!(library_version, m)?)?;
     m.add_function(wrap_pyfunction!(build_target_cpu, m)?)?;
     m.add_function(wrap_pyfunction!(studies::cross_validate, m)?)?;
     m.add_function(wrap_pyfunction!(studies::compensate, m)?)?;
     m.add_function(wrap_pyfunction!(studies::diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     Ok(())
 }

@@ -3,10 +3,11 @@
 use crate::data::{Data, triplets_to_py};
 use crate::params::FitParams;
 use crate::progress::Progress;
-use crate::{access, to_py};
+use crate::{access, interrupt, to_py};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use robokrige::Error;
+use robokrige::cancel::Cancel;
 use robokrige::dataset::Dataset;
 use robokrige::kriging::OptimizerKind;
 use robokrige::model::{AXES, ErrorModel};
@@ -40,33 +41,34 @@ pub fn check_memory(rows: usize, optimizer: OptimizerKind) -> robokrige::Result<
     Ok(())
 }
 
-/// Fit `params` on `data` with the interpreter released; GA generations go
-/// to `progress` as `(generation, 0, message)`.
+/// Fit `params` on `data` on a worker thread, interruptible by Ctrl-C
+/// ([`interrupt::run`]); GA generations go to `progress` as
+/// `(generation, 0, message)`.
 pub fn fit_model(
     py: Python<'_>,
     data: &Dataset,
     params: &FitParams,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<ErrorModel> {
-    let p = Progress::new(progress);
-    let model = py
-        .detach(|| {
-            let valid = params.resolve(data)?;
-            check_memory(data.len(), access::optimizer(valid.params().get_kriging()))?;
-            valid.fit_with_progress(data, &|axis: usize, generation: usize, best: f64| {
-                p.call((
-                    generation,
-                    0usize,
-                    format!(
-                        "GA {} generation {generation}: best CV RMSE {best:.4} mm",
-                        AXES[axis.min(2)]
-                    ),
-                ))
-            })
+    let cancel = Cancel::new();
+    let p = Progress::new(progress, &cancel);
+    let model = interrupt::run(py, &cancel, || {
+        let valid = params.resolve(data, &cancel)?;
+        check_memory(data.len(), access::optimizer(valid.params().get_kriging()))?;
+        valid.fit_with_progress(data, &|axis: usize, generation: usize, best: f64| {
+            p.call((
+                generation,
+                0usize,
+                format!(
+                    "GA {} generation {generation}: best CV RMSE {best:.4} mm",
+                    AXES[axis.min(2)]
+                ),
+            ))
         })
-        .map_err(to_py)?;
+    })?;
+    // the callback's exception first: it may have cancelled the fit
     p.finish()?;
-    Ok(model)
+    model.map_err(to_py)
 }
 
 impl Model {

@@ -5,6 +5,7 @@
 
 use pyo3::prelude::*;
 use robokrige::calibration::CalibrationOptions;
+use robokrige::cancel::Cancel;
 use robokrige::dataset::Dataset;
 use robokrige::kinematics::Robot;
 use robokrige::kriging::CorrChoice;
@@ -45,6 +46,10 @@ pub struct FitParams {
     pub calibrate: bool,
     #[pyo3(item)]
     pub method: Option<String>,
+    /// Covariate columns that enter the model as inputs
+    /// ([`Overrides::covariates`]); none in the campaign form of `fit`.
+    #[pyo3(item)]
+    pub covariate_inputs: Option<Vec<String>>,
 }
 
 fn bad(message: String) -> Error {
@@ -89,21 +94,14 @@ pub fn parse_periodic(spec: &str, q: &[Vec<f64>]) -> Result<Vec<usize>> {
     robokrige::space::parse_periodic(spec, q)
 }
 
-/// A preset name or robot file, with its tool translation replaced (mm).
+/// A preset name or robot file, with its tool translation replaced (mm):
+/// the library's [`Robot::with_tool_translation`].
 pub fn robot_with_tool(spec: &str, tool: Option<(f64, f64, f64)>) -> Result<Robot> {
-    let mut robot = robokrige::kinematics::load_robot(spec)?;
-    if let Some((x, y, z)) = tool {
-        if ![x, y, z].iter().all(|v| v.is_finite()) {
-            return Err(bad(format!(
-                "tool ({x}, {y}, {z}): expected finite x, y, z in mm"
-            )));
-        }
-        robot.tool = nalgebra::Isometry3::from_parts(
-            nalgebra::Translation3::new(x, y, z),
-            robot.tool.rotation,
-        );
+    let robot = robokrige::kinematics::load_robot(spec)?;
+    match tool {
+        Some((x, y, z)) => robot.with_tool_translation([x, y, z]),
+        None => Ok(robot),
     }
-    Ok(robot)
 }
 
 impl FitParams {
@@ -146,14 +144,19 @@ impl FitParams {
         if let Some(r) = robot {
             o = o.robot(r);
         }
+        if let Some(c) = &self.covariate_inputs {
+            o = o.covariates(c.clone());
+        }
         Ok(o)
     }
 
     /// The checked fit parameters for `data` (periodic joints resolved on
-    /// its rows, the robot checked against its joint count): what
-    /// `robokrige fit` fits with the same flags.
-    pub fn resolve(&self, data: &Dataset) -> Result<ValidErrorModelParams> {
+    /// its rows, the robot checked against its joint count), stopped by
+    /// `cancel`: what `robokrige fit` fits with the same flags.
+    pub fn resolve(&self, data: &Dataset, cancel: &Cancel) -> Result<ValidErrorModelParams> {
         let method = self.method.as_deref().map(Method::from_name).transpose()?;
-        params_with(method, &self.overrides()?, data)?.check()
+        params_with(method, &self.overrides()?, data)?
+            .cancel(cancel.clone())
+            .check()
     }
 }

@@ -1,27 +1,33 @@
 //! Progress callbacks: called from the library's worker threads while the
 //! interpreter is released, each call attaching to it again. A callback that
-//! raises does not stop the computation (the library has no way to be
-//! interrupted); its first exception is raised when the call returns.
+//! raises stops the computation (its call's [`Cancel`] token is set, and the
+//! library stops at its next check); its first exception is raised when the
+//! call returns.
 
 use pyo3::prelude::*;
+use robokrige::cancel::Cancel;
 use std::sync::Mutex;
 
-/// An optional Python callable and the first exception it raised.
+/// An optional Python callable, the token of its call, and the first
+/// exception the callable raised.
 pub struct Progress {
     callback: Option<Py<PyAny>>,
+    cancel: Cancel,
     error: Mutex<Option<PyErr>>,
 }
 
 impl Progress {
-    pub fn new(callback: Option<Py<PyAny>>) -> Self {
+    pub fn new(callback: Option<Py<PyAny>>, cancel: &Cancel) -> Self {
         Progress {
             callback,
+            cancel: cancel.clone(),
             error: Mutex::new(None),
         }
     }
 
     /// Call the callback with `args` (attaching to the interpreter); keep
-    /// its first exception. After one exception it is not called again.
+    /// its first exception and cancel the call. After one exception it is
+    /// not called again.
     pub fn call<A>(&self, args: A)
     where
         A: for<'py> pyo3::call::PyCallArgs<'py>,
@@ -36,6 +42,7 @@ impl Progress {
         Python::attach(|py| {
             if let Err(e) = cb.call1(py, args) {
                 *err = Some(e);
+                self.cancel.cancel();
             }
         });
     }

@@ -5,15 +5,18 @@
 use crate::data::{Data, rows};
 use crate::model::{Model, check_memory, json};
 use crate::params::{FitParams, parse_periodic, robot_with_tool};
+use crate::physics::PhysicsModel;
 use crate::progress::Progress;
-use crate::{invalid, to_py};
+use crate::{interrupt, invalid, to_py};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use robokrige::cancel::Cancel;
 use robokrige::compensate::{CompensationOptions, Stop};
-use robokrige::cv::{CvMode, cross_validate_closed_form, cross_validate_refit};
+use robokrige::cv::{CvMode, CvPlan, Folds};
 use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
+use robokrige::physics::AnyModel;
 use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
 use robokrige::{Error, Result};
@@ -23,7 +26,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// K-fold CV of a model choice: "refit" (hyperparameters re-optimised on
 /// every training fold, as `robokrige cv`) or "closed-form" (one fit's ξ,
-/// residuals from the bordered system). Returns the `CvResult` as JSON.
+/// residuals from the bordered system): the library's [`CvPlan`], as the
+/// command line runs it, interruptible by Ctrl-C. Returns the `CvResult`
+/// as JSON.
 #[pyfunction]
 #[pyo3(signature = (data, params, folds=10, cv_seed=1, mode="refit", progress=None))]
 pub fn cross_validate(
@@ -35,35 +40,32 @@ pub fn cross_validate(
     mode: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let refit = CvMode::from_name(mode).map_err(to_py)? == CvMode::Refit;
+    let plan = CvPlan {
+        mode: CvMode::from_name(mode).map_err(to_py)?,
+        folds: Folds::Random {
+            k: folds,
+            seed: cv_seed,
+        },
+        hyper_rows: None,
+    };
     let d = &data.inner;
-    let p = Progress::new(progress);
-    let done = AtomicUsize::new(0);
-    let res = py
-        .detach(|| {
-            let valid = params.resolve(d)?;
-            check_memory(
-                d.len(),
-                crate::access::optimizer(valid.params().get_kriging()),
-            )?;
-            let t0 = std::time::Instant::now();
-            let mut res = if refit {
-                cross_validate_refit(d, folds, cv_seed, |train| {
-                    let m = valid.fit(train);
-                    let k = done.fetch_add(1, Ordering::SeqCst) + 1;
-                    p.call((k, folds, format!("fold {k} of {folds}")));
-                    m
-                })?
-            } else {
-                let model = valid.fit(d)?;
-                cross_validate_closed_form(d, &model, folds, cv_seed)?
-            };
-            res.seconds = t0.elapsed().as_secs_f64();
-            Ok::<_, Error>(res)
-        })
-        .map_err(to_py)?;
+    let cancel = Cancel::new();
+    let p = Progress::new(progress, &cancel);
+    let res = interrupt::run(py, &cancel, || {
+        let valid = params.resolve(d, &cancel)?;
+        check_memory(
+            d.len(),
+            crate::access::optimizer(valid.params().get_kriging()),
+        )?;
+        let report = |done: usize, k: usize| {
+            if done > 0 {
+                p.call((done, k, format!("fold {done} of {k}")));
+            }
+        };
+        Ok(plan.run(d, &valid, &report)?.0)
+    })?;
     p.finish()?;
-    json(&res, "cv result")
+    json(&res.map_err(to_py)?, "cv result")
 }
 
 /// The robot's targets: a file (trajectory or pose list, as the command
@@ -200,17 +202,51 @@ fn stop_name(s: Stop) -> &'static str {
     }
 }
 
-/// Pre-compensate targets for `robot` with `model` (feed-forward, single
-/// step or iterative), as `robokrige compensate`; with `truth` (a simulator
-/// truth file) also run the nominal and compensated commands on the
-/// simulated robot. Returns JSON.
+/// A model `compensate` takes: a Kriging model, a physics model, or a
+/// model file of either kind (read as the command line's `--model`).
+#[derive(FromPyObject)]
+pub enum AnyModelArg<'py> {
+    Kriging(Bound<'py, Model>),
+    Physics(Bound<'py, PhysicsModel>),
+    File(PathBuf),
+}
+
+/// The model of `arg`, borrowed, or read from its file into `file`.
+fn any_model<'a>(
+    arg: &'a AnyModelArg<'_>,
+    file: &'a mut Option<AnyModel>,
+) -> PyResult<Predictor<'a>> {
+    Ok(match arg {
+        AnyModelArg::Kriging(m) => Predictor::Kriging(&m.get().inner),
+        AnyModelArg::Physics(m) => Predictor::Physics(&m.get().inner),
+        AnyModelArg::File(path) => {
+            let m = file.insert(AnyModel::load(path).map_err(to_py)?);
+            match m {
+                AnyModel::Kriging(k) => Predictor::Kriging(k),
+                AnyModel::Physics(p) => Predictor::Physics(p),
+            }
+        }
+    })
+}
+
+/// A model to compensate with, by kind (the checks and the coverage differ).
+#[derive(Clone, Copy)]
+enum Predictor<'a> {
+    Kriging(&'a robokrige::model::ErrorModel),
+    Physics(&'a robokrige::physics::PhysicsModel),
+}
+
+/// Pre-compensate targets for `robot` with `model` (a Kriging or physics
+/// model; feed-forward, single step or iterative), as `robokrige
+/// compensate`; with `truth` (a simulator truth file) also run the nominal
+/// and compensated commands on the simulated robot. Returns JSON.
 #[pyfunction]
 #[pyo3(signature = (model, robot, *, path=None, xyz=None, rpy=None, joints=None, tool=None,
     iterative=true, tol=1e-3, max_iter=10, start=None, orientation=None, truth=None, truth_seed=1))]
 #[allow(clippy::too_many_arguments)]
 pub fn compensate(
     py: Python<'_>,
-    model: &Model,
+    model: AnyModelArg<'_>,
     robot: &str,
     path: Option<PathBuf>,
     xyz: Option<PyReadonlyArray2<'_, f64>>,
@@ -238,8 +274,13 @@ pub fn compensate(
         orientation: orientation.as_deref(),
     };
     let robot = robot_with_tool(robot, tool).map_err(to_py)?;
-    let m = &model.inner;
-    m.check_robot(&robot, "model").map_err(to_py)?;
+    let mut file = None;
+    let m = any_model(&model, &mut file)?;
+    match m {
+        Predictor::Kriging(k) => k.check_robot(&robot, "model"),
+        Predictor::Physics(p) => p.check_robot(&robot, "model"),
+    }
+    .map_err(to_py)?;
     let start = start.unwrap_or_else(|| robot.home.clone());
     robot.check_len(&start).map_err(to_py)?;
     if start.iter().any(|v| !v.is_finite()) {
@@ -257,9 +298,19 @@ pub fn compensate(
     let out = py
         .detach(|| {
             let t0 = std::time::Instant::now();
-            let res = robokrige::compensate::compensate(&robot, m, &targets.traj, &opts)?;
+            let (res, coverage) = match m {
+                Predictor::Kriging(k) => {
+                    let res = robokrige::compensate::compensate(&robot, k, &targets.traj, &opts)?;
+                    // the means the compensation used; no standard deviations
+                    let coverage = k.coverage(&res.joints, &res.dir, &res.predicted, None)?;
+                    (res, coverage)
+                }
+                Predictor::Physics(p) => (
+                    robokrige::compensate::compensate(&robot, p, &targets.traj, &opts)?,
+                    Vec::new(),
+                ),
+            };
             let seconds = t0.elapsed().as_secs_f64();
-            let coverage = m.coverage(&res.joints, &res.dir, &res.predicted, None)?;
             let evaluation = match &truth {
                 Some(tp) => {
                     let t = load_truth(tp)?;
@@ -300,7 +351,12 @@ pub fn compensate(
             j!({"index": c.index, "issues": issues})
         })
         .collect();
+    let model_kind = match m {
+        Predictor::Kriging(_) => "kriging",
+        Predictor::Physics(_) => "physics",
+    };
     let v = j!({
+        "model": model_kind,
         "xyz": xyz, "rpy": rpy, "joints": res.joints, "dir": res.dir,
         "predicted": res.predicted, "history": res.history, "converged": res.converged,
         "stop": stop_name(res.stop), "unsettled": res.unsettled, "seconds": seconds,
@@ -335,50 +391,51 @@ pub fn diagnose(
     calibrate: bool,
 ) -> PyResult<(String, Model)> {
     let d = &data.inner;
-    let p = Progress::new(progress);
+    let cancel = Cancel::new();
+    let p = Progress::new(progress, &cancel);
     let step = AtomicUsize::new(0);
-    let (v, model) = py
-        .detach(|| {
-            let base = robokrige::diagnose::base_params(method, seed, nugget)?;
-            let o = DiagnoseOptions::default()
-                .base(&base)
-                .periodic(parse_periodic(periodic, &d.q)?)
-                .folds(folds)
-                .seed(seed)
-                .permutations(permutations)
-                .fdr(fdr)
-                .max_effects(max_effects)
-                .refit_rows(refit_rows.unwrap_or(robokrige::diagnose::DEFAULT_REFIT_ROWS))
-                .scan_rows(scan_rows.unwrap_or(robokrige::diagnose::DEFAULT_SCAN_ROWS))
-                .robot(
-                    robot
-                        .as_deref()
-                        .map(robokrige::kinematics::load_robot)
-                        .transpose()?,
-                );
-            let optimizer = crate::access::optimizer(base.get_kriging());
-            robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
-                format!("e.g. the first {n} rows")
-            })?;
-            // with `calibrate`, the residual of a D-H calibration is
-            // diagnosed and the model holds that calibration (as the CLI's
-            // `diagnose --calibrate`)
-            let base = robokrige::study::diagnosis::DiagnosisBase::new(d.clone(), &o, calibrate)?;
-            let diag = robokrige::diagnose::diagnose(&base.data, &o, &|msg: &str| {
-                let k = step.fetch_add(1, Ordering::SeqCst) + 1;
-                p.call((k, 0usize, msg.to_string()));
-            })?;
-            let model = base.model(&o, &diag.extras)?;
-            let mut v = serde_json::to_value(&diag).map_err(|e| Error::Json {
-                context: "diagnosis".into(),
-                source: e,
-            })?;
-            v["before_residuals"] = j!(diag.before.residuals);
-            v["after_residuals"] = j!(diag.after.residuals);
-            v["method"] = j!(method);
-            Ok::<_, Error>((v, model))
-        })
-        .map_err(to_py)?;
+    let out = interrupt::run(py, &cancel, || {
+        let base = robokrige::diagnose::base_params(method, seed, nugget)?;
+        let o = DiagnoseOptions::default()
+            .base(&base)
+            .periodic(parse_periodic(periodic, &d.q)?)
+            .folds(folds)
+            .seed(seed)
+            .permutations(permutations)
+            .fdr(fdr)
+            .max_effects(max_effects)
+            .refit_rows(refit_rows.unwrap_or(robokrige::diagnose::DEFAULT_REFIT_ROWS))
+            .scan_rows(scan_rows.unwrap_or(robokrige::diagnose::DEFAULT_SCAN_ROWS))
+            .robot(
+                robot
+                    .as_deref()
+                    .map(robokrige::kinematics::load_robot)
+                    .transpose()?,
+            )
+            .cancel(cancel.clone());
+        let optimizer = crate::access::optimizer(base.get_kriging());
+        robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
+            format!("e.g. the first {n} rows")
+        })?;
+        // with `calibrate`, the residual of a D-H calibration is
+        // diagnosed and the model holds that calibration (as the CLI's
+        // `diagnose --calibrate`)
+        let base = robokrige::study::diagnosis::DiagnosisBase::new(d.clone(), &o, calibrate)?;
+        let diag = robokrige::diagnose::diagnose(&base.data, &o, &|msg: &str| {
+            let k = step.fetch_add(1, Ordering::SeqCst) + 1;
+            p.call((k, 0usize, msg.to_string()));
+        })?;
+        let model = base.model(&o, &diag.extras)?;
+        let mut v = serde_json::to_value(&diag).map_err(|e| Error::Json {
+            context: "diagnosis".into(),
+            source: e,
+        })?;
+        v["before_residuals"] = j!(diag.before.residuals);
+        v["after_residuals"] = j!(diag.after.residuals);
+        v["method"] = j!(method);
+        Ok::<_, Error>((v, model))
+    })?;
     p.finish()?;
+    let (v, model) = out.map_err(to_py)?;
     Ok((json(&v, "diagnosis")?, Model { inner: model }))
 }

@@ -1,5 +1,6 @@
 """Shared fixtures: the shipped campaigns and the command line, if built."""
 
+import importlib
 import os
 import pathlib
 import shutil
@@ -9,6 +10,21 @@ import pytest
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 DATASETS = REPO / "datasets"
+
+#: Set by python/ci.sh, which installs the optional packages: a test that
+#: needs one fails instead of skipping, so that CI runs every such test.
+REQUIRE_ALL = os.environ.get("ROBOKRIGE_TEST_REQUIRE_ALL") == "1"
+
+
+def need(module):
+    """Import an optional package (pandas, scikit-learn) or skip the test;
+    in CI (ROBOKRIGE_TEST_REQUIRE_ALL=1) its absence is a failure."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        if REQUIRE_ALL:
+            raise
+        pytest.skip(f"{module} is not installed")
 
 
 def cli_path():

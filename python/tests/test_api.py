@@ -10,6 +10,8 @@ import pytest
 
 import robokrige as rk
 
+from conftest import need
+
 
 @pytest.fixture(scope="module")
 def lhs(datasets):
@@ -40,7 +42,7 @@ def test_params_protocol():
 
 
 def test_sklearn_clone_works():
-    base = pytest.importorskip("sklearn.base")
+    base = need("sklearn.base")
     m = rk.ErrorModel(space="js", corr="gaussian")
     c = base.clone(m)
     assert c.get_params() == m.get_params() and c is not m
@@ -55,7 +57,7 @@ def test_predict_shapes_and_std(model, lhs):
     assert std.shape == (25, 3) and np.all(std > 0)
     # the fitted model is close to the training errors (nugget: not exact)
     assert np.mean(np.linalg.norm(mean - e, axis=1)) < 0.05
-    assert model.score(q, d, e) < 0.05
+    assert rk.mean_3d_error(model, q, d, e) < 0.05
 
 
 def test_fitted_attributes(model):
@@ -100,7 +102,7 @@ def test_cross_validate_report(lhs):
 
 
 def test_cross_validate_as_frame(lhs):
-    pytest.importorskip("pandas")
+    need("pandas")
     q, d, e = arrays(lhs, 60)
     df = rk.cross_validate({"corr": "gaussian"}, q, d, e, folds=5, mode="closed-form", as_frame=True)
     assert list(df.columns) == ["fold", "res_ex", "res_ey", "res_ez", "res_3d"]
@@ -170,7 +172,7 @@ def test_compensate_circle_on_the_simulated_robot(model, datasets):
 
 
 def test_compensate_arrays_and_frames(model, datasets):
-    pd = pytest.importorskip("pandas")
+    pd = need("pandas")
     circle = pd.read_csv(datasets / "comau_circle.csv")
     from_file = rk.compensate(model, "comau-nj220", datasets / "comau_circle.csv", iterative=False)
     from_frame = rk.compensate(model, "comau-nj220", circle, iterative=False)
@@ -189,7 +191,7 @@ def test_compensate_arrays_and_frames(model, datasets):
 
 
 def test_diagnose_finds_the_tracker_step(datasets):
-    pytest.importorskip("pandas")
+    need("pandas")
     df = rk.read_campaign(datasets / "comau_tracker_step.csv")
     lines = []
     effects, improved, report = rk.diagnose(df, permutations=199, progress=lambda *a: lines.append(a[2]))
@@ -278,3 +280,38 @@ def test_one_calibrated_model_fits_predicts_compensates_and_diagnoses(datasets, 
     assert report["before_residuals"].shape == (len(lhs["q1"]), 3)
     with pytest.raises(rk.RobokrigeError, match="robot"):
         rk.diagnose(datasets / "comau_lhs.csv", method="js-hj", calibrate=True, permutations=199)
+
+
+def test_plan_a_first_batch_and_write_a_program(tmp_path):
+    """Without measurements or a prior: a space-filling first batch; the
+    plan's table and a URScript program of it."""
+    p = rk.plan("ur10", 12, candidates=300, region_points=100, output=tmp_path / "plan.script", format="urscript")
+    assert p.summary["source"] == "spacefilling" and p.model is None
+    k = len(p.q)
+    assert p.q.shape == p.dirs.shape == (k, 6) and p.measure.dtype == bool and p.measure.sum() == 12
+    assert set(np.unique(p.dirs)) <= {-1.0, 1.0}
+    assert np.all((p.source >= 0) == p.measure)
+    text = (tmp_path / "plan.script").read_text()
+    assert text.count("movej") == k
+    if need_pandas_or_none() is not None:
+        frame = p.frame()
+        assert list(frame.columns[:2]) == ["id", "q1"] and frame["measure"].sum() == 12
+        assert frame["source"].isna().sum() == k - 12
+    with pytest.raises(rk.RobokrigeError, match="budget"):
+        rk.plan("ur10", 0)
+
+
+def test_plan_from_a_prior_model(datasets):
+    prior = rk.ErrorModel(corr="gaussian", robot="comau-nj220", calibrate=False).fit(datasets / "comau_lhs.csv")
+    p = rk.plan("comau-nj220", 5, prior=prior, candidates=200, region_points=80)
+    assert p.summary["source"] == "prior" and len(p.summary["imse_curve_mm2"]) == 6
+    curve = p.summary["imse_curve_mm2"]
+    assert all(b <= a for a, b in zip(curve, curve[1:]))  # every chosen pose lowers the region's MSE
+
+
+def need_pandas_or_none():
+    try:
+        import pandas
+    except ImportError:
+        return None
+    return pandas

@@ -54,8 +54,10 @@ def test_values():
     e2[0, 0] = np.inf
     with raises(r"errors"):
         rk.ErrorModel().fit(q, errors=e2)
-    with raises(r"has no ex,ey,ez columns"):
+    with raises(r"requires y to be passed, but the target y is None"):
         rk.ErrorModel().fit(q)
+    with raises(r"has no ex,ey,ez columns"):
+        rk.ErrorModel().fit({f"q{j}": q[:, j - 1] for j in range(1, 7)})
 
 
 def test_parameters():
@@ -93,8 +95,10 @@ def test_predict_and_files(tmp_path, datasets):
     with raises(r"not fitted yet"):
         rk.ErrorModel().predict(q)
     m = rk.ErrorModel(corr="gaussian").fit(q, errors=e)
-    with raises(r"has 5 joints but the model was fitted on 6"):
+    with raises(r"X has 5 features, but ErrorModel is expecting 12 features as input"):
         m.predict(q[:, :5])
+    with raises(r"has 5 joints but the model was fitted on 6"):
+        m.predict(q[:, :5], np.ones((40, 5)))
     with raises(r"missing.csv: No such file"):
         rk.read_campaign(tmp_path / "missing.csv")
     with raises(r"missing.json: No such file"):

@@ -132,3 +132,72 @@ def test_diagnosis_equals_cli_diagnose(cli, datasets, tmp_path):
     assert [e["accepted"] for e in effects] == [e["accepted"] for e in ref["effects"]]
     assert np.allclose([e["p_value"] for e in effects], [e["p_value"] for e in ref["effects"]], rtol=0, atol=TOL)
     assert np.allclose(report["after"]["cv_rmse_mm"], ref["after"]["cv_rmse_mm"], rtol=0, atol=TOL)
+
+
+def test_tool_is_applied_by_the_library_as_in_the_cli(cli, datasets, tmp_path):
+    """tool=(x, y, z) and --tool x,y,z both go through the library's
+    Robot::with_tool_translation: the same model file."""
+    lhs = datasets / "comau_lhs.csv"
+    cli("fit", lhs, "--robot", "comau-nj220", "--tool", "1.5,-2,250", "--corr", "gaussian", "-o", tmp_path / "cli.json")
+    py = rk.ErrorModel(robot="comau-nj220", tool=(1.5, -2, 250), corr="gaussian").fit(lhs)
+    py.save(tmp_path / "py.json")
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "cli.json").read_bytes()
+    default = rk.ErrorModel(robot="comau-nj220", corr="gaussian").fit(lhs)
+    assert py.robot_ != default.robot_  # the tool is part of the robot recorded
+    with pytest.raises(rk.RobokrigeError, match=r"tool \(NaN, 0, 250\): expected finite x, y, z in mm"):
+        rk.ErrorModel(robot="comau-nj220", tool=(np.nan, 0, 250)).fit(lhs)
+
+
+def test_compensation_with_a_physics_model_equals_cli_compensate(cli, datasets, tmp_path):
+    """A lookup-table model of `robokrige physics identify` compensates in
+    Python as `robokrige compensate --model` does, given as a PhysicsModel
+    or as its file."""
+    robot = "scara-rh3frh5515"
+    cli("physics", "identify", datasets / "scara_indexing.csv", "--robot", robot, "-o", tmp_path / "phys.json")
+    cli("simulate", "--robot", robot, "--kind", "verify", "--poses", "20", "--seed", "1",
+        "--ranges", "-165:165,20:143,50:100,-90:90", "-o", tmp_path / "v.csv")
+    cli("compensate", "--model", tmp_path / "phys.json", "--robot", robot, tmp_path / "v.csv",
+        "-o", tmp_path / "c.csv", "--truth", tmp_path / "v.truth.json", "--json", tmp_path / "c.json")
+    ref = np.genfromtxt(tmp_path / "c.csv", delimiter=",", names=True)
+    report = json.loads((tmp_path / "c.json").read_text())
+    phys = rk.PhysicsModel.load(tmp_path / "phys.json")
+    assert phys.has_tables and phys.n_joints == 4 and "physics" in repr(phys).lower()
+    for model in (phys, tmp_path / "phys.json"):
+        out = rk.compensate(model, robot, tmp_path / "v.csv", iterative=False, truth=tmp_path / "v.truth.json")
+        assert out["model"] == "physics" and out["stop"] == "single-step"
+        xyz = np.column_stack([ref["x"], ref["y"], ref["z"]])
+        assert np.max(np.abs(out["xyz"] - xyz)) <= TOL
+        ev = out["evaluation"]["summary"]
+        assert ev["after"]["mean_abs_mm"] == pytest.approx(report["after"]["mean_abs_mm"], abs=TOL)
+        assert ev["after"]["mean_abs_mm"] < ev["before"]["mean_abs_mm"]
+    # its predictions at the verification poses, from the library
+    v = rk.read_campaign(tmp_path / "v.csv", as_frame=False)
+    data = rk.as_data({k: v[k] for k in v if k.startswith(("q", "dir"))})
+    assert phys.predict(data).shape == (20, 3)
+    with pytest.raises(rk.RobokrigeError, match="robot"):
+        rk.compensate(phys, "comau-nj220", tmp_path / "v.csv")
+
+
+def test_plan_equals_cli_plan(cli, datasets, tmp_path):
+    """rk.plan gives the command line's plan: the same moves (joints,
+    directions, measure flags, sources) and summary."""
+    lhs = datasets / "comau_lhs.csv"
+    args = ["--robot", "comau-nj220", "--budget", "15", "--campaign", lhs, "--candidates", "400",
+            "--region-points", "150", "--target-mm", "0.03"]
+    cli("plan", *args, "-o", tmp_path / "plan.csv", "--json", tmp_path / "plan.json")
+    ref = np.genfromtxt(tmp_path / "plan.csv", delimiter=",", names=True)
+    summary = json.loads((tmp_path / "plan.json").read_text())
+    p = rk.plan("comau-nj220", 15, campaign=lhs, candidates=400, region_points=150, target_mm=0.03,
+                output=tmp_path / "py.csv")
+    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "plan.csv").read_bytes()
+    assert np.max(np.abs(p.q - np.column_stack([ref[f"q{j}"] for j in range(1, 7)]))) <= TOL
+    assert np.array_equal(p.dirs, np.column_stack([ref[f"dir{j}"] for j in range(1, 7)]))
+    assert np.array_equal(p.measure, ref["measure"] == 1) and p.measure.sum() == 15
+    assert np.array_equal(p.source[p.measure], ref["source"][p.measure].astype(np.int64))
+    assert np.all(p.source[~p.measure] == -1)
+    for key in ("source", "candidates", "chosen", "measure", "unrealised", "notes"):
+        assert p.summary[key] == summary[key], key
+    assert np.allclose(p.summary["imse_curve_mm2"], summary["imse_curve_mm2"], rtol=0, atol=TOL)
+    f, g = p.summary["forecast"], summary["forecast"]
+    assert np.allclose(f["mean_3d_mm"], g["mean_3d_mm"], rtol=0, atol=TOL)
+    assert "target 0.03 mm" in p.summary["text"] and p.model is not None and p.model.n_rows_ == 300

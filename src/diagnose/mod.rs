@@ -123,6 +123,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
     let (before, model) = cross_validated(data, &[], o, None)?;
     let mut state = rounds::Rounds::new(model, before, o.permutations);
     for round in 1..=o.max_effects + 1 {
+        o.kriging.cancel.check()?;
         if !state.round(&campaign, round, progress)? {
             break;
         }

@@ -150,6 +150,15 @@ impl DiagnoseOptions {
         self.space(params.get_space())
             .kriging(params.get_kriging().clone())
     }
+    /// The token that stops the diagnosis ([`crate::cancel`]; the Kriging
+    /// options' token, so set it after [`DiagnoseOptions::base`] or
+    /// [`DiagnoseOptions::kriging`]): read by every fit, between rounds,
+    /// re-estimations and batches of resamples. A cancelled diagnosis
+    /// returns [`Error::Interrupted`].
+    pub fn cancel(mut self, token: crate::cancel::Cancel) -> Self {
+        self.kriging.cancel = token;
+        self
+    }
     /// Number of CV folds K.
     pub fn folds(mut self, k: usize) -> Self {
         self.folds = k;

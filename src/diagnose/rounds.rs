@@ -211,8 +211,16 @@ impl Rounds {
             gls::refit_systems(scanned, c.scan_errors, &o.kriging, cols, c.fold).ok()
         };
         let tested = scan::test_families(
-            fams, c.rows, systems, resamples, o.seed, o.refine, &refit, progress,
-        );
+            fams,
+            c.rows,
+            systems,
+            resamples,
+            o.seed,
+            o.refine,
+            &refit,
+            &o.kriging.cancel,
+            progress,
+        )?;
         Ok((tested, level))
     }
 

@@ -173,6 +173,23 @@ impl Robot {
         })
     }
 
+    /// This robot with its TCP offset replaced: the tool's translation set
+    /// to `xyz` (mm, in the flange frame), its rotation kept. What
+    /// `--tool x,y,z` and Python's `tool=(x, y, z)` do.
+    pub fn with_tool_translation(mut self, xyz: [f64; 3]) -> Result<Robot> {
+        if !xyz.iter().all(|v| v.is_finite()) {
+            return Err(Error::InvalidParameter(format!(
+                "tool ({}, {}, {}): expected finite x, y, z in mm",
+                xyz[0], xyz[1], xyz[2]
+            )));
+        }
+        self.tool = Isometry3::from_parts(
+            Translation3::new(xyz[0], xyz[1], xyz[2]),
+            self.tool.rotation,
+        );
+        Ok(self)
+    }
+
     /// Error unless `q` has one value per joint.
     pub fn check_len(&self, q: &[f64]) -> Result<()> {
         if q.len() == self.dof() {

@@ -321,25 +321,19 @@ pub fn load_robot(spec: &str) -> Result<Robot> {
 }
 
 /// [`load_robot`], with its tool translation replaced by `tool`, "x,y,z"
-/// in mm (the flange-frame TCP offset; the tool's rotation is kept).
+/// in mm (the flange-frame TCP offset; the tool's rotation is kept:
+/// [`Robot::with_tool_translation`]).
 pub fn load_robot_with_tool(spec: &str, tool: Option<&str>) -> Result<Robot> {
-    let mut robot = load_robot(spec)?;
-    if let Some(t) = tool {
-        let bad = || Error::InvalidParameter(format!("--tool '{t}': expected x,y,z in mm"));
-        let v: Vec<f64> = t
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| bad())?;
-        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(bad());
-        }
-        robot.tool = nalgebra::Isometry3::from_parts(
-            nalgebra::Translation3::new(v[0], v[1], v[2]),
-            robot.tool.rotation,
-        );
-    }
-    Ok(robot)
+    let robot = load_robot(spec)?;
+    let Some(t) = tool else { return Ok(robot) };
+    let bad = || Error::InvalidParameter(format!("--tool '{t}': expected x,y,z in mm"));
+    let v: Vec<f64> = t
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    let xyz: [f64; 3] = v.try_into().map_err(|_| bad())?;
+    robot.with_tool_translation(xyz).map_err(|_| bad())
 }
 
 /// Serde `deserialize_with` for a robot stored in a file: its whole table, or

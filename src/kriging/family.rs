@@ -222,6 +222,8 @@ pub(super) fn choose_by_cv(
             _ => {}
         }
     }
+    // a family's search cancelled above scored ∞: the choice is not made
+    job.opts.cancel.check()?;
     // the report counts the whole choice, not only the winner's search
     best.1.families = table;
     best.1.evals = evals;

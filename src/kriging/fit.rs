@@ -155,6 +155,8 @@ impl Job<'_> {
                 Some(w) => self.local_search(&problem, w, &bounds, &unpack)?,
                 None => optimise(&problem, &bounds, &unpack, opts),
             };
+            // a cancelled search stops at +∞ points: not a numerical failure
+            opts.cancel.check()?;
             if !search.best.f.is_finite() {
                 return Err(Error::Numerical(
                     "no hyperparameter in the box gave a finite likelihood".into(),
@@ -214,7 +216,7 @@ impl Job<'_> {
                 .filter(|h| h.len() == z0.len() && h.iter().all(|r| r.len() == z0.len()));
             return Ok(converge_bfgs(problem, &z0, hinv, bounds, unpack, opts));
         }
-        let obj = ln_psi_objective(problem, unpack);
+        let obj = ln_psi_objective(problem, unpack, &opts.cancel);
         let hj = HjOptions {
             initial_step: 0.25,
             max_evals: opts.max_evals,

@@ -2,6 +2,7 @@
 //! choice, optimiser, nugget, box, seed) and what it reports (`FitReport`).
 
 use super::{CorrChoice, Correlation, FAMILY_FOLDS, FamilyScore, Monomials, Trend};
+use crate::cancel::Cancel;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -143,6 +144,10 @@ pub struct KrigingOptions {
     /// search on all rows.
     #[serde(default = "default_converge_rows")]
     pub(crate) converge_rows: usize,
+    /// Stops the fit between likelihood evaluations when cancelled
+    /// ([`crate::cancel`]); never saved, not part of equality, and not kept
+    /// by a fitted model.
+    pub(crate) cancel: Cancel,
 }
 
 /// Smallest [`KrigingOptions::converge_rows`].
@@ -164,6 +169,7 @@ impl Default for KrigingOptions {
             min_jitter: None,
             polish: true,
             converge_rows: super::REFINE_ROWS,
+            cancel: Cancel::never(),
         }
     }
 }
@@ -314,6 +320,15 @@ impl KrigingOptions {
         self.converge_rows = rows;
         self
     }
+
+    /// The token that stops the fit: once it is cancelled, every further
+    /// likelihood evaluation returns at once and the fit ends with
+    /// [`Error::Interrupted`]. [`Cancel::never`] by default; a fitted
+    /// model keeps no token (its options have the default).
+    pub fn cancel(mut self, token: Cancel) -> Self {
+        self.cancel = token;
+        self
+    }
 }
 
 /// Getters, one per field: `get_` and its name.
@@ -381,6 +396,11 @@ impl KrigingOptions {
     /// [`KrigingOptions::converge_rows`]'s value.
     pub fn get_converge_rows(&self) -> usize {
         self.converge_rows
+    }
+
+    /// [`KrigingOptions::cancel`]'s value.
+    pub fn get_cancel(&self) -> &Cancel {
+        &self.cancel
     }
 }
 
@@ -492,6 +512,7 @@ impl From<OptionsRecord> for KrigingOptions {
             min_jitter: r.min_jitter,
             polish: r.polish,
             converge_rows: r.converge_rows,
+            cancel: Cancel::never(),
         }
     }
 }

@@ -4,6 +4,7 @@
 //! or the papers' GPS / Hooke–Jeeves.
 
 use super::{KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs, Workspace};
+use crate::cancel::Cancel;
 use crate::optim::{self, Bounds, GpsOptions, HjOptions, OptimResult};
 use rayon::prelude::*;
 
@@ -11,13 +12,19 @@ use rayon::prelude::*;
 pub(super) type Unpack<'a> = dyn Fn(&[f64]) -> (Vec<f64>, f64) + Sync + 'a;
 
 /// `z ↦ ln ψ(unpack(z))` with its own workspace; +∞ where R cannot be
-/// factorised or the likelihood is degenerate.
+/// factorised or the likelihood is degenerate, and at once, without an
+/// evaluation, once `cancel` is cancelled (every minimiser stops within a
+/// few such points; the fit then returns [`crate::Error::Interrupted`]).
 pub(super) fn ln_psi_objective<'a>(
     problem: &'a KrigingProblem,
     unpack: &'a Unpack<'_>,
+    cancel: &'a Cancel,
 ) -> impl FnMut(&[f64]) -> f64 + 'a {
     let mut ws = Workspace::new(problem.m(), problem.f.ncols());
     move |z: &[f64]| {
+        if cancel.is_cancelled() {
+            return f64::INFINITY;
+        }
         let (theta, nugget) = unpack(z);
         problem
             .psi(&theta, nugget, &mut ws)
@@ -26,24 +33,31 @@ pub(super) fn ln_psi_objective<'a>(
 }
 
 /// `z ↦ (ln ψ, ∇ ln ψ)` with its own workspace; +∞ where R cannot be
-/// factorised or the likelihood is degenerate.
+/// factorised or the likelihood is degenerate, or once `cancel` is
+/// cancelled.
 fn ln_psi_grad_objective<'a>(
     problem: &'a KrigingProblem,
     unpack: &'a Unpack<'_>,
+    cancel: &'a Cancel,
 ) -> impl FnMut(&[f64], &mut [f64]) -> f64 + 'a {
     let mut ws = Workspace::new(problem.m(), problem.f.ncols());
-    move |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, &mut ws, z, g)
+    move |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, cancel, &mut ws, z, g)
 }
 
 /// `ln ψ(z)` with its gradient in `g`, in `ws`; +∞ where R cannot be
-/// factorised or the likelihood is degenerate.
+/// factorised or the likelihood is degenerate, or (without an evaluation)
+/// once `cancel` is cancelled.
 fn ln_psi_grad(
     problem: &KrigingProblem,
     unpack: &Unpack<'_>,
+    cancel: &Cancel,
     ws: &mut Workspace,
     z: &[f64],
     g: &mut [f64],
 ) -> f64 {
+    if cancel.is_cancelled() {
+        return f64::INFINITY;
+    }
     let (theta, nugget) = unpack(z);
     problem
         .psi_grad(&theta, nugget, ws, g)
@@ -326,7 +340,7 @@ pub(super) fn converge_bfgs(
     let refine_rows = m.min(opts.converge_rows);
     let refine_sub = converge_subset(m, opts).map(|rows| SubsetData::new(problem, &rows));
     let refine = refine_sub.as_ref().map(|s| s.problem(problem));
-    let obj = ln_psi_grad_objective(refine.as_ref().unwrap_or(problem), unpack);
+    let obj = ln_psi_grad_objective(refine.as_ref().unwrap_or(problem), unpack, &opts.cancel);
     let (best, h) = optim::quasi_newton_warm(obj, x0, hinv, bounds, &full);
     Search {
         best,
@@ -436,9 +450,15 @@ fn multistart_bfgs(
     while pool.len() > FINALISTS {
         // successive halving: every run continues for `iters` iterations,
         // the better half (start order breaks ties) goes on for twice as many
-        evals += run_all(&mut pool, problem, &workspaces, bounds, unpack, &|_| {
-            screen(iters)
-        });
+        evals += run_all(
+            &mut pool,
+            problem,
+            &workspaces,
+            bounds,
+            unpack,
+            opts,
+            &|_| screen(iters),
+        );
         pool.sort_by(Run::order);
         pool.truncate(pool.len().div_ceil(2));
         iters *= 2;
@@ -511,14 +531,17 @@ fn run_all(
     workspaces: &WorkspacePool,
     bounds: &Bounds,
     unpack: &Unpack<'_>,
+    opts: &KrigingOptions,
     stage: &(dyn Fn(&Run) -> optim::QuasiNewtonOptions + Sync),
 ) -> usize {
+    let cancel = &opts.cancel;
     pool.par_iter_mut()
         .filter(|r| !r.done)
         .map(|r| {
             let o = stage(r);
             let mut ws = workspaces.take();
-            let obj = |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, &mut ws, z, g);
+            let obj =
+                |z: &[f64], g: &mut [f64]| ln_psi_grad(problem, unpack, cancel, &mut ws, z, g);
             // a run that has stopped once resumes from its known ln ψ and
             // gradient instead of evaluating its point again
             let known = r.result.as_ref().map(|last| (last.f, r.grad.as_slice()));
@@ -591,7 +614,7 @@ fn converge_finalists(
         if pool.iter().all(|r| r.done) {
             break;
         }
-        evals += run_all(pool, problem, workspaces, bounds, unpack, &stage);
+        evals += run_all(pool, problem, workspaces, bounds, unpack, opts, &stage);
         let points: Vec<(usize, f64, Vec<f64>)> =
             pool.iter().map(|r| (r.start, r.f(), r.x.clone())).collect();
         for r in pool.iter_mut().filter(|r| !r.done) {
@@ -649,7 +672,7 @@ pub(super) fn optimise(
         inverse_hessian: None,
     };
     let run = |x0: &[f64], initial_mesh: f64, tol: f64| {
-        let obj = ln_psi_objective(problem, unpack);
+        let obj = ln_psi_objective(problem, unpack, &opts.cancel);
         match opts.optimizer {
             OptimizerKind::Gps => optim::gps(
                 obj,
@@ -687,7 +710,7 @@ pub(super) fn optimise(
         // stable sort: ties keep start order, so the result is deterministic
         pool.sort_by(|a, b| a.f.total_cmp(&b.f));
         pool.truncate(pool.len().div_ceil(2));
-        if pool.len() == 1 && mesh <= opts.tol {
+        if (pool.len() == 1 && mesh <= opts.tol) || opts.cancel.is_cancelled() {
             break;
         }
         let next = if pool.len() == 1 {
@@ -705,11 +728,11 @@ pub(super) fn optimise(
         mesh = next;
     }
     let mut best = pool.swap_remove(0);
-    if !opts.polish {
+    if !opts.polish || opts.cancel.is_cancelled() {
         best.evals = evals;
         return done(best, starts.len());
     }
-    let obj = ln_psi_objective(problem, unpack);
+    let obj = ln_psi_objective(problem, unpack, &opts.cancel);
     let mut polished = optim::bfgs(obj, &best.x, bounds, &optim::BfgsOptions::default());
     polished.evals += evals;
     done(polished, starts.len())

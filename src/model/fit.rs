@@ -4,6 +4,7 @@
 
 use super::{AXES, ErrorModel, MODEL_FORMAT, MODEL_VERSION_UNCALIBRATED, SOFTWARE};
 use crate::calibration::Calibration;
+use crate::cancel::Cancel;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::inputs::InputMap;
@@ -17,14 +18,17 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 
 /// The three outputs' results in [`AXES`] order, the first failure named
-/// by its axis.
+/// by its axis ([`Error::Interrupted`] as it is: no axis failed).
 fn by_axis<T>(fits: Vec<Result<T>>) -> Result<Vec<T>> {
     fits.into_iter()
         .enumerate()
         .map(|(a, f)| {
-            f.map_err(|e| Error::Axis {
-                axis: AXES[a],
-                source: Box::new(e),
+            f.map_err(|e| match e {
+                Error::Interrupted => e,
+                e => Error::Axis {
+                    axis: AXES[a],
+                    source: Box::new(e),
+                },
             })
         })
         .collect()
@@ -137,7 +141,8 @@ pub(crate) fn fit_outputs(
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION_UNCALIBRATED,
         inputs: map.clone(),
-        options: opts.clone(),
+        // the token stopped this fit; a refit of the model must not inherit it
+        options: opts.clone().cancel(Cancel::never()),
         outputs,
         reports,
         selection: None,

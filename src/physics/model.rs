@@ -228,6 +228,13 @@ impl PhysicsModel {
         m.validate()?;
         Ok(m)
     }
+
+    /// Error unless the model is for `robot`: its nominal robot's
+    /// kinematic table and tool (`source_name`: the model, for the
+    /// message), as [`ErrorModel::check_robot`] for a Kriging model.
+    pub fn check_robot(&self, robot: &Robot, source_name: &str) -> Result<()> {
+        RobotRecord::of(&self.nominal).check(robot, source_name)
+    }
 }
 
 /// Physics model first, universal Kriging on what it leaves (a hybrid):
@@ -329,7 +336,7 @@ impl AnyModel {
     pub fn check_robot(&self, robot: &Robot, source_name: &str) -> Result<()> {
         match self {
             AnyModel::Kriging(m) => m.check_robot(robot, source_name),
-            AnyModel::Physics(m) => RobotRecord::of(&m.nominal).check(robot, source_name),
+            AnyModel::Physics(m) => m.check_robot(robot, source_name),
         }
     }
 

@@ -40,6 +40,7 @@ pub mod stop;
 pub use candidates::{PoseSet, TrackerView};
 pub use order::PlannedMove;
 
+use crate::cancel::Cancel;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
 use crate::methods::{Overrides, params_with};
@@ -78,6 +79,7 @@ pub struct PlanParams {
     tracker: Option<TrackerView>,
     seed: u64,
     calibration_share: bool,
+    cancel: Cancel,
 }
 
 impl PlanParams {
@@ -94,6 +96,7 @@ impl PlanParams {
             tracker: None,
             seed: 1,
             calibration_share: true,
+            cancel: Cancel::never(),
         }
     }
 
@@ -141,6 +144,15 @@ impl PlanParams {
     /// Seed of the candidates and of the region sample.
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
+        self
+    }
+
+    /// The token that stops the planning ([`crate::cancel`]): read by the
+    /// fit of the hyperparameters, between the outputs' designs and
+    /// between the poses chosen; a cancelled plan returns
+    /// [`Error::Interrupted`].
+    pub fn cancel(mut self, token: Cancel) -> Self {
+        self.cancel = token;
         self
     }
 
@@ -239,10 +251,11 @@ impl ValidPlanParams {
         let mut notes = Vec::new();
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
+        p.cancel.check()?;
         let (chosen, imse_curve) = match &model {
             Some(m) => {
                 let k = p.budget.min(cand.len());
-                choose_by_imse(m, &cand, &region, k, p.calibration_share)?
+                choose_by_imse(m, &cand, &region, k, p.calibration_share, &p.cancel)?
             }
             None => {
                 let k = p.budget.min(p.first_batch);
@@ -351,7 +364,8 @@ impl ValidPlanParams {
             .campaign
             .filter(|c| c.errors.is_some() && !c.is_empty());
         if let Some(c) = measured.filter(|c| c.len() >= MIN_FIT_ROWS) {
-            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?;
+            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?
+                .cancel(self.0.cancel.clone());
             return Ok((Some(params.check()?.fit(c)?), HyperSource::Campaign));
         }
         if let Some(prior) = inputs.prior {
@@ -424,14 +438,17 @@ fn measured_poses(robot: &Robot, campaign: Option<&Dataset>) -> Result<PoseSet> 
 }
 
 /// Choose `k` candidates greedily by the largest reduction of the region's
-/// integrated MSE summed over the model's outputs; the IMSE before and
-/// after each choice.
+/// integrated MSE summed over the model's outputs (and, with
+/// `calibration_share`, its calibration's); the IMSE before and after each
+/// choice. `cancel` is read after each output's design and each
+/// choice.
 fn choose_by_imse(
     model: &ErrorModel,
     cand: &PoseSet,
     region: &PoseSet,
     k: usize,
     calibration_share: bool,
+    cancel: &Cancel,
 ) -> Result<(Vec<usize>, Vec<f64>)> {
     let map = model.input_map();
     if !map.extras().is_empty() {
@@ -445,7 +462,7 @@ fn choose_by_imse(
     let mut axes: Vec<AxisDesign> = model
         .outputs()
         .iter()
-        .map(|o| AxisDesign::new(o, &sc, &sz))
+        .map(|o| cancel.check().and_then(|()| AxisDesign::new(o, &sc, &sz)))
         .collect::<Result<_>>()?;
     let mut cal = match model.calibration().filter(|_| calibration_share) {
         Some(c) => Some(CalibrationDesign::new(c, &cand.q, &region.q)?),
@@ -459,6 +476,7 @@ fn choose_by_imse(
     let mut taken = vec![false; cand.len()];
     let mut gain = vec![0.0; cand.len()];
     for _ in 0..k {
+        cancel.check()?;
         gain.iter_mut().for_each(|g| *g = 0.0);
         for a in &axes {
             a.gains(&mut gain);

@@ -67,6 +67,9 @@ impl BasisSelector for Ga<'_> {
             let (_, base) = params(constant.clone(), Tuning::Search)?.fit(p.x, y)?;
             let at = Tuning::Fixed(Hyperparameters::of(&base, p.inputs.d));
             let rmse = |bits: &[bool]| {
+                if p.options.cancel.is_cancelled() {
+                    return f64::INFINITY;
+                }
                 let keep: Vec<usize> = (0..cand.len()).filter(|&j| j == 0 || bits[j]).collect();
                 params(cand.subset(&keep), at.clone())
                     .and_then(|fit| fit.fit(p.x, y))
@@ -81,6 +84,8 @@ impl BasisSelector for Ga<'_> {
                 ..GaOptions::default()
             };
             let best = ga(cand.len(), rmse, &ga_opts, |g, f| (self.progress)(a, g, f));
+            // once cancelled, every fitness is ∞ and the GA stalls out
+            p.options.cancel.check()?;
             let keep: Vec<usize> = (0..cand.len())
                 .filter(|&j| j == 0 || best.best[j])
                 .collect();

@@ -17,6 +17,8 @@
 //! times the expected leave-one-out variance of the best.
 
 use super::{Family, GridPoint, Zoom};
+use crate::Result;
+use crate::cancel::Cancel;
 use crate::diagnose::gls::{self, AxisSystem, FamilyTest};
 use crate::diagnose::rows::ScanRows;
 use crate::stats::rng_for;
@@ -153,6 +155,10 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 /// re-estimated ξ, and the GP cannot soak up an effect it has no input for.
 /// Score, the closed-form K-fold CV drop at the partition the systems were
 /// built for.
+///
+/// `cancel` is read between the re-estimations and between batches of
+/// resamples: once it is cancelled the test ends with
+/// [`Error::Interrupted`](crate::Error::Interrupted).
 #[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
@@ -162,8 +168,9 @@ pub fn test_families(
     seed: u64,
     refine: usize,
     refit: &Refit<'_>,
+    cancel: &Cancel,
     progress: &dyn Fn(&str),
-) -> Vec<Tested> {
+) -> Result<Vec<Tested>> {
     let grids: Vec<Vec<Vec<Vec<f64>>>> = families
         .iter()
         .map(|f| f.grid.iter().map(|g| g.columns.clone()).collect())
@@ -179,6 +186,8 @@ pub fn test_families(
         base.loo0,
         progress,
     );
+    // a cancelled re-estimation gave no systems: the statistics are not final
+    cancel.check()?;
     // the statistic each family's null distribution tests
     let observed: Vec<f64> = families
         .iter()
@@ -191,11 +200,12 @@ pub fn test_families(
             }
         })
         .collect();
-    let null = base.sign_flip(&trials, &observed, permutations, seed, progress);
+    let null = base.sign_flip(&trials, &observed, permutations, seed, cancel, progress);
+    cancel.check()?;
     let p = null.p_values(&trials);
     let q = benjamini_hochberg(&p);
     let within = support_width(&systems);
-    (0..families.len())
+    Ok((0..families.len())
         .into_par_iter()
         .map(|k| {
             let mut t = base.tested(k, &families[k], &trials[k], &null, within);
@@ -210,7 +220,7 @@ pub fn test_families(
             }
             t
         })
-        .collect()
+        .collect())
 }
 
 /// The model as it is, at its own ξ, that every family is tested inside:
@@ -281,6 +291,7 @@ impl<'a> Baseline<'a> {
         observed: &[f64],
         permutations: usize,
         seed: u64,
+        cancel: &Cancel,
         progress: &dyn Fn(&str),
     ) -> Null {
         let (f, m) = (trials.len(), self.systems[0].rows());
@@ -290,7 +301,7 @@ impl<'a> Baseline<'a> {
             moments: vec![[0.0; 2]; f],
         };
         let mut done = 0;
-        while done < permutations {
+        while done < permutations && !cancel.is_cancelled() {
             let active: Vec<usize> = (0..f)
                 .filter(|&k| null.exceed[k] < SETTLED && trials[k].stat.is_finite())
                 .collect();
