@@ -37,15 +37,7 @@ def check_X(X: Any, estimator: str, min_samples: int) -> np.ndarray:
     at least ``min_samples`` rows and one column. Values (NaN, inf) are the
     library's to check."""
     reject_sparse(X)
-    a = np.asarray(X)
-    if np.iscomplexobj(a):
-        raise RobokrigeError("Complex data not supported")
-    # object or text: float() of every element; a dict raises TypeError, as
-    # in NumPy's conversion (scikit-learn checks for it), a word this error
-    try:
-        a = np.asarray(a, dtype=np.float64)
-    except ValueError as e:
-        raise RobokrigeError(f"X must be numeric: {e}") from None
+    a = _numeric(X, "X")
     if a.ndim != 2:
         raise RobokrigeError(
             f"Expected a 2D array, got a {a.ndim}D array of shape {a.shape} instead. Reshape your data "
@@ -61,6 +53,19 @@ def check_X(X: Any, estimator: str, min_samples: int) -> np.ndarray:
     return a
 
 
+def _numeric(values: Any, name: str) -> np.ndarray:
+    """``values`` as float64: complex data refused; object or text converted
+    by float() of every element (a dict raises TypeError, as in NumPy's
+    conversion, which scikit-learn checks for; a word raises this error)."""
+    a = np.asarray(values)
+    if np.iscomplexobj(a):
+        raise RobokrigeError("Complex data not supported")
+    try:
+        return np.asarray(a, dtype=np.float64)
+    except ValueError as e:
+        raise RobokrigeError(f"{name} must be numeric: {e}") from None
+
+
 def _check_rows(n: int, shape: Tuple[int, ...], estimator: str, min_samples: int) -> None:
     if n < min_samples:
         raise RobokrigeError(
@@ -71,13 +76,7 @@ def _check_rows(n: int, shape: Tuple[int, ...], estimator: str, min_samples: int
 
 def check_y(y: Any, n: int) -> Tuple[np.ndarray, bool]:
     """y as an n × k float64 array, and whether it was 1-D."""
-    a = np.asarray(y)
-    if np.iscomplexobj(a):
-        raise RobokrigeError("Complex data not supported")
-    try:
-        a = np.asarray(a, dtype=np.float64)
-    except ValueError as e:
-        raise RobokrigeError(f"y must be numeric: {e}") from None
+    a = _numeric(y, "y")
     one_d = a.ndim == 1
     if one_d:
         a = a.reshape(-1, 1)

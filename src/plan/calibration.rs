@@ -88,9 +88,11 @@ impl CalibrationDesign {
         let sigma = cal.parameter_covariance();
         let np = sigma.nrows();
         let noise = cal.identifiability().noise_mm;
-        if !(noise.is_finite() && noise > 0.0) || region.is_empty() {
+        // a noise-free calibration has Σ = 0: its share is nothing, and the
+        // gains and updates below skip a singular S
+        if !(noise.is_finite() && noise >= 0.0) || region.is_empty() {
             return Err(Error::InvalidParameter(
-                "the calibration's share of the IMSE needs a positive noise and a region".into(),
+                "the calibration's share of the IMSE needs a finite noise and a region".into(),
             ));
         }
         let gz = jacobians(cal, region);
