@@ -252,7 +252,7 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | missed | row/period interval covers | coefficient intervals cover | s / diagnose |"
+            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover | s / diagnose |"
         );
         println!("|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();

@@ -17,9 +17,10 @@
 //! row (a block's two edges, a harmonic's period) covers the planted value;
 //! the 95 % intervals of the size coefficients cover the planted ones on all
 //! three axes (step: `step@row`; block: `step@from` = +offset and `step@to`
-//! = −offset; drift: the `temp_c` coefficient, mm/K). A lag's and a
-//! harmonic's coefficients are in another parametrisation (per-axis trend
-//! terms, not the joint gain): not scored.
+//! = −offset; drift: the `temp_c` coefficient, mm/K; lag: its memory τ
+//! (planted 0) and the coefficient of each axis's `J·move` column, −g·π/180).
+//! A harmonic's coefficients are per-axis sin/cos trend terms, not the
+//! joint's amplitude: only its period is scored.
 
 use crate::plant::{Planted, Shape};
 use robokrige::diagnose::{Diagnosis, EffectKind, EffectReport};
@@ -144,7 +145,23 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Opti
             (rows.map(|(x, y)| x && y), up.zip(down).map(|(x, y)| x && y))
         }
         Shape::Drift { .. } => (None, coef_covers(e, "temp_c", p.value)),
-        Shape::Lag { .. } => (None, None),
+        Shape::Lag { joint } => {
+            // the trend column of axis a is `J_a,j(q)·h` (J per radian, the
+            // move h in degrees): a planted gain g is −g·π/180 on each axis's
+            // own column; the memory τ planted is 0
+            let tau = param(e, "tau_poses").unwrap_or(f64::NAN);
+            let tau_covered = within(e.params_ci.get("tau_poses"), 0.0).or(Some(tau == 0.0));
+            let g = -p.value[0].to_radians();
+            let coef = (0..3).try_fold(true, |all, a| {
+                let axis = ["x", "y", "z"][a];
+                let c = e
+                    .size
+                    .iter()
+                    .find(|c| c.column == format!("J{axis}{joint}·move{joint}"))?;
+                Some(all && (c.estimate[a] - g).abs() <= c.ci95[a])
+            });
+            (tau_covered, coef)
+        }
         Shape::Harmonic { period_deg, .. } => {
             (within(e.params_ci.get("period_deg"), *period_deg), None)
         }
@@ -209,7 +226,7 @@ fn detail(e: &EffectReport, p: &Planted) -> String {
         })
         .collect();
     for c in e.size.iter().take(2) {
-        let f = |a: usize| format!("{:+.3}±{:.3}", c.estimate[a], c.ci95[a]);
+        let f = |a: usize| format!("{:+.3e}±{:.2e}", c.estimate[a], c.ci95[a]);
         out.push(format!("{} {}/{}/{}", c.column, f(0), f(1), f(2)));
     }
     let v = p.value;
