@@ -205,7 +205,7 @@ fn main() {
                     shape.describe(),
                     format!("{:?}", sc.outcome),
                     opt(sc.row_covered),
-                    opt(sc.coef_covered),
+                    opt(sc.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
                     d.seconds,
                     if sc.added.is_empty() {
                         "nothing".into()
@@ -252,9 +252,9 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover | s / diagnose |"
+            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | s / diagnose |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
         kinds.dedup();
         kinds.sort();
@@ -280,13 +280,22 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             };
             let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
             println!(
-                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
                 pct(count(Outcome::Right)),
                 pct(count(Outcome::ProxyNamed)),
                 pct(count(Outcome::Proxy)),
                 pct(count(Outcome::Missed)),
                 cov(|s| s.row_covered),
-                cov(|s| s.coef_covered),
+                cov(|s| s.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
+                frac(
+                    sel.iter()
+                        .flat_map(|r| r.score.coef_covered.iter().flatten())
+                        .filter(|b| **b)
+                        .count(),
+                    sel.iter()
+                        .flat_map(|r| r.score.coef_covered.iter().flatten())
+                        .count(),
+                ),
             );
         }
     }

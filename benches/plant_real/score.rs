@@ -15,8 +15,9 @@
 //!
 //! Coverage (for the right ones): the 95 % support interval of a step's
 //! row (a block's two edges, a harmonic's period) covers the planted value;
-//! the 95 % intervals of the size coefficients cover the planted ones on all
-//! three axes (step: `step@row`; block: `step@from` = +offset and `step@to`
+//! the 95 % intervals of the size coefficients cover the planted ones,
+//! counted per plant (all three axes, and both edges of a block) and per
+//! coefficient and axis (step: `step@row`; block: `step@from` = +offset and `step@to`
 //! = −offset; drift: the `temp_c` coefficient, mm/K; lag: its memory τ
 //! (planted 0) and the coefficient of each axis's `J·move` column, −g·π/180).
 //! A harmonic's coefficients are per-axis sin/cos trend terms, not the
@@ -38,8 +39,8 @@ pub struct Score {
     pub outcome: Outcome,
     /// Does the row / period interval cover the planted value (`None`: not scored).
     pub row_covered: Option<bool>,
-    /// Do the coefficient intervals cover the planted values.
-    pub coef_covered: Option<bool>,
+    /// Per coefficient and axis: does its interval cover the planted value.
+    pub coef_covered: Option<Vec<bool>>,
     /// Labels of what was added, beyond the control.
     pub added: Vec<String>,
     /// For a right one: what it found (parameters, their intervals, sizes).
@@ -113,12 +114,17 @@ fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
     ci.map(|c| c[0] <= v && v <= c[1])
 }
 
-fn coef_covers(e: &EffectReport, column: &str, value: [f64; 3]) -> Option<bool> {
+/// Per axis: does the 95 % interval of `column` cover `value`.
+fn coef_covers(e: &EffectReport, column: &str, value: [f64; 3]) -> Option<Vec<bool>> {
     let c = e.size.iter().find(|c| c.column == column)?;
-    Some((0..3).all(|a| (c.estimate[a] - value[a]).abs() <= c.ci95[a]))
+    Some(
+        (0..3)
+            .map(|a| (c.estimate[a] - value[a]).abs() <= c.ci95[a])
+            .collect(),
+    )
 }
 
-fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Option<bool>) {
+fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Option<Vec<bool>>) {
     match shape {
         Shape::Step { row, .. } => {
             let found = param(e, "row").unwrap_or(f64::NAN) as usize;
@@ -142,7 +148,10 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Opti
             let rows = within(Some(&ca), *from as f64).zip(within(Some(&cb), *to as f64));
             let up = coef_covers(e, &format!("step@{a}"), p.value);
             let down = coef_covers(e, &format!("step@{b}"), p.value.map(|v| -v));
-            (rows.map(|(x, y)| x && y), up.zip(down).map(|(x, y)| x && y))
+            (
+                rows.map(|(x, y)| x && y),
+                up.zip(down).map(|(x, y)| [x, y].concat()),
+            )
         }
         Shape::Drift { .. } => (None, coef_covers(e, "temp_c", p.value)),
         Shape::Lag { joint } => {
@@ -152,14 +161,16 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Opti
             let tau = param(e, "tau_poses").unwrap_or(f64::NAN);
             let tau_covered = within(e.params_ci.get("tau_poses"), 0.0).or(Some(tau == 0.0));
             let g = -p.value[0].to_radians();
-            let coef = (0..3).try_fold(true, |all, a| {
-                let axis = ["x", "y", "z"][a];
-                let c = e
-                    .size
-                    .iter()
-                    .find(|c| c.column == format!("J{axis}{joint}·move{joint}"))?;
-                Some(all && (c.estimate[a] - g).abs() <= c.ci95[a])
-            });
+            let coef = (0..3)
+                .map(|a| {
+                    let axis = ["x", "y", "z"][a];
+                    let c = e
+                        .size
+                        .iter()
+                        .find(|c| c.column == format!("J{axis}{joint}·move{joint}"))?;
+                    Some((c.estimate[a] - g).abs() <= c.ci95[a])
+                })
+                .collect();
             (tau_covered, coef)
         }
         Shape::Harmonic { period_deg, .. } => {
@@ -183,7 +194,7 @@ pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: 
         .into_iter()
         .filter(|e| !base.iter().any(|b| same(e, b, tol)))
         .collect();
-    let added = new.iter().map(|e| e.label.clone()).collect();
+    let added = new.iter().map(with_params).collect();
     if let Some(e) = new.iter().find(|e| is_right(e, shape, tol)) {
         let (row_covered, coef_covered) = coverage(e, shape, p);
         return Score {
@@ -212,6 +223,19 @@ pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: 
         added,
         detail: String::new(),
     }
+}
+
+/// Its label and parameters, e.g. "harmonic of q1 (period_deg 6.3)".
+fn with_params(e: &EffectReport) -> String {
+    if e.params.is_empty() {
+        return e.label.clone();
+    }
+    let p: Vec<String> = e
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.1}"))
+        .collect();
+    format!("{} ({})", e.label, p.join(", "))
 }
 
 /// The found parameters with their intervals, and the size coefficients
