@@ -117,11 +117,11 @@ fn run(data: &Dataset, o: &DiagnoseOptions) -> Diagnosis {
 }
 
 fn added(d: &Diagnosis) -> String {
-    let a: Vec<&str> = d
+    let a: Vec<String> = d
         .effects
         .iter()
         .filter(|e| e.accepted)
-        .map(|e| e.label.as_str())
+        .map(score::with_params)
         .collect();
     if a.is_empty() {
         "nothing".into()
@@ -213,6 +213,7 @@ fn main() {
                         sc.added.join("; ")
                     }
                 );
+                println!("           all added: {}", added(&d));
                 if !sc.detail.is_empty() {
                     println!("           found: {}", sc.detail);
                 }

@@ -226,7 +226,7 @@ pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: 
 }
 
 /// Its label and parameters, e.g. "harmonic of q1 (period_deg 6.3)".
-fn with_params(e: &EffectReport) -> String {
+pub fn with_params(e: &EffectReport) -> String {
     if e.params.is_empty() {
         return e.label.clone();
     }
