@@ -20,7 +20,7 @@ mod score;
 
 use plant::KINDS;
 use robokrige::dataset::{Dataset, read_csv};
-use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, diagnose};
+use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, diagnose, fit_with_effects};
 use score::Outcome;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -199,13 +199,15 @@ fn main() {
                 }
                 let p = plant::at_size(&shape, &data, &robot, k, pooled);
                 let d = run(&plant::apply(&data, &p), &o);
-                let sc = score::score(&d, &control, &shape, &p, m);
+                let own = |t: &[score::Target]| own_coefficients(&data, &o, &d, t);
+                let sc = score::score(&d, &control, (&shape, &p), m, &own);
                 println!(
-                    "plant {i:>2} {k}× {:<26} {:<10} row cov {:<5} coef cov {:<5} {:>4.0} s  new: {}",
+                    "plant {i:>2} {k}× {:<26} {:<10} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
                     shape.describe(),
                     format!("{:?}", sc.outcome),
                     opt(sc.row_covered),
                     opt(sc.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
+                    opt(sc.own_covered.as_ref().map(|v| v.iter().all(|b| *b))),
                     d.seconds,
                     if sc.added.is_empty() {
                         "nothing".into()
@@ -227,6 +229,21 @@ fn main() {
         }
         table(s, m, &a.sizes, &rows);
     }
+}
+
+/// The unplanted campaign's coefficients of `targets` when it is fitted
+/// with the planted diagnosis's final effects.
+fn own_coefficients(
+    data: &Dataset,
+    o: &DiagnoseOptions,
+    d: &Diagnosis,
+    targets: &[score::Target],
+) -> Option<Vec<f64>> {
+    let model = fit_with_effects(data, &o.for_rows(data.len()), &d.extras).ok()?;
+    targets
+        .iter()
+        .map(|(column, a, _)| model.trend_coefficient(column).map(|c| c[*a].0))
+        .collect()
 }
 
 fn opt(b: Option<bool>) -> &'static str {
@@ -253,9 +270,9 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | s / diagnose |"
+            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
         kinds.dedup();
         kinds.sort();
@@ -281,7 +298,7 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             };
             let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
             println!(
-                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
                 pct(count(Outcome::Right)),
                 pct(count(Outcome::ProxyNamed)),
                 pct(count(Outcome::Proxy)),
@@ -295,6 +312,15 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
                         .count(),
                     sel.iter()
                         .flat_map(|r| r.score.coef_covered.iter().flatten())
+                        .count(),
+                ),
+                frac(
+                    sel.iter()
+                        .flat_map(|r| r.score.own_covered.iter().flatten())
+                        .filter(|b| **b)
+                        .count(),
+                    sel.iter()
+                        .flat_map(|r| r.score.own_covered.iter().flatten())
                         .count(),
                 ),
             );

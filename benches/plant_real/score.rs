@@ -41,6 +41,12 @@ pub struct Score {
     pub row_covered: Option<bool>,
     /// Per coefficient and axis: does its interval cover the planted value.
     pub coef_covered: Option<Vec<bool>>,
+    /// The same, against the planted value plus the campaign's own: the
+    /// coefficient of the same column when the unplanted campaign is
+    /// fitted with the same final effects (a real campaign may already
+    /// hold a component of that shape: its own temperature drift, or the
+    /// projection of its order drift on a step).
+    pub own_covered: Option<Vec<bool>>,
     /// Labels of what was added, beyond the control.
     pub added: Vec<String>,
     /// For a right one: what it found (parameters, their intervals, sizes).
@@ -114,24 +120,40 @@ fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
     ci.map(|c| c[0] <= v && v <= c[1])
 }
 
-/// Per axis: does the 95 % interval of `column` cover `value`.
-fn coef_covers(e: &EffectReport, column: &str, value: [f64; 3]) -> Option<Vec<bool>> {
-    let c = e.size.iter().find(|c| c.column == column)?;
-    Some(
-        (0..3)
-            .map(|a| (c.estimate[a] - value[a]).abs() <= c.ci95[a])
-            .collect(),
-    )
+/// One planted coefficient: the model's column, the axis, the value.
+pub type Target = (String, usize, f64);
+
+/// Per axis of each of `columns`: the planted value `value` (× sign).
+fn per_axis(columns: &[(String, f64)], value: [f64; 3]) -> Vec<Target> {
+    columns
+        .iter()
+        .flat_map(|(c, sign)| (0..3).map(move |a| (c.clone(), a, sign * value[a])))
+        .collect()
 }
 
-fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Option<Vec<bool>>) {
+/// Do the 95 % intervals of `e` cover `targets`, each shifted by `own`
+/// (`None`: a column is not in its sizes).
+pub fn covers(e: &EffectReport, targets: &[Target], own: &[f64]) -> Option<Vec<bool>> {
+    targets
+        .iter()
+        .zip(own.iter().chain(std::iter::repeat(&0.0)))
+        .map(|((column, a, v), o)| {
+            let c = e.size.iter().find(|c| &c.column == column)?;
+            Some((c.estimate[*a] - v - o).abs() <= c.ci95[*a])
+        })
+        .collect()
+}
+
+/// Does the row / period / τ interval cover the planted value, and the
+/// planted coefficients to check.
+fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<Target>) {
     match shape {
         Shape::Step { row, .. } => {
             let found = param(e, "row").unwrap_or(f64::NAN) as usize;
             let ci = e.params_ci.get("row").copied().unwrap_or([found as f64; 2]);
             (
                 within(Some(&ci), *row as f64),
-                coef_covers(e, &format!("step@{found}"), p.value),
+                per_axis(&[(format!("step@{found}"), 1.0)], p.value),
             )
         }
         Shape::Block { from, to, .. } => {
@@ -146,14 +168,10 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Opti
                 .unwrap_or([a as f64; 2]);
             let cb = e.params_ci.get("to_row").copied().unwrap_or([b as f64; 2]);
             let rows = within(Some(&ca), *from as f64).zip(within(Some(&cb), *to as f64));
-            let up = coef_covers(e, &format!("step@{a}"), p.value);
-            let down = coef_covers(e, &format!("step@{b}"), p.value.map(|v| -v));
-            (
-                rows.map(|(x, y)| x && y),
-                up.zip(down).map(|(x, y)| [x, y].concat()),
-            )
+            let cols = [(format!("step@{a}"), 1.0), (format!("step@{b}"), -1.0)];
+            (rows.map(|(x, y)| x && y), per_axis(&cols, p.value))
         }
-        Shape::Drift { .. } => (None, coef_covers(e, "temp_c", p.value)),
+        Shape::Drift { .. } => (None, per_axis(&[("temp_c".into(), 1.0)], p.value)),
         Shape::Lag { joint } => {
             // the trend column of axis a is `J_a,j(q)·h` (J per radian, the
             // move h in degrees): a planted gain g is −g·π/180 on each axis's
@@ -161,26 +179,30 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Opti
             let tau = param(e, "tau_poses").unwrap_or(f64::NAN);
             let tau_covered = within(e.params_ci.get("tau_poses"), 0.0).or(Some(tau == 0.0));
             let g = -p.value[0].to_radians();
-            let coef = (0..3)
-                .map(|a| {
-                    let axis = ["x", "y", "z"][a];
-                    let c = e
-                        .size
-                        .iter()
-                        .find(|c| c.column == format!("J{axis}{joint}·move{joint}"))?;
-                    Some((c.estimate[a] - g).abs() <= c.ci95[a])
-                })
+            let targets = ["x", "y", "z"]
+                .iter()
+                .enumerate()
+                .map(|(a, axis)| (format!("J{axis}{joint}·move{joint}"), a, g))
                 .collect();
-            (tau_covered, coef)
+            (tau_covered, targets)
         }
-        Shape::Harmonic { period_deg, .. } => {
-            (within(e.params_ci.get("period_deg"), *period_deg), None)
-        }
+        Shape::Harmonic { period_deg, .. } => (
+            within(e.params_ci.get("period_deg"), *period_deg),
+            Vec::new(),
+        ),
     }
 }
 
 /// Score the diagnosis `d` of the planted campaign against `control`.
-pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: usize) -> Score {
+/// `own`: the unplanted campaign's coefficients of the planted targets
+/// (fitted with the planted diagnosis's final effects).
+pub fn score(
+    d: &Diagnosis,
+    control: &Diagnosis,
+    (shape, p): (&Shape, &Planted),
+    m: usize,
+    own: &dyn Fn(&[Target]) -> Option<Vec<f64>>,
+) -> Score {
     let tol = tolerance(m);
     let accepted = |x: &Diagnosis| {
         x.effects
@@ -196,11 +218,14 @@ pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: 
         .collect();
     let added = new.iter().map(with_params).collect();
     if let Some(e) = new.iter().find(|e| is_right(e, shape, tol)) {
-        let (row_covered, coef_covered) = coverage(e, shape, p);
+        let (row_covered, targets) = coverage(e, shape, p);
+        let own_values = own(&targets);
+        let nonempty = |v: Option<Vec<bool>>| v.filter(|v| !v.is_empty());
         return Score {
             outcome: Outcome::Right,
             row_covered,
-            coef_covered,
+            coef_covered: nonempty(covers(e, &targets, &[])),
+            own_covered: nonempty(own_values.and_then(|o| covers(e, &targets, &o))),
             added,
             detail: detail(e, p),
         };
@@ -220,6 +245,7 @@ pub fn score(d: &Diagnosis, control: &Diagnosis, shape: &Shape, p: &Planted, m: 
         outcome,
         row_covered: None,
         coef_covered: None,
+        own_covered: None,
         added,
         detail: String::new(),
     }
