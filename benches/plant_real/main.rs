@@ -1,0 +1,329 @@
+//! Bench binary: `diagnose` on real UR10 campaigns (IPA series B and C,
+//! read from `../shared/data/ipa-ur10/`, never copied into the repository)
+//! with known effects planted at seeded random rows, directions, joints,
+//! periods and sizes ([`plant`]), each scored against the diagnosis of the
+//! same campaign without it ([`score`]).
+//!
+//! Run: `cargo bench --bench plant_real -- [--series b|c|b,c] [--rows N]
+//! [--plants N] [--seed S] [--sizes 1,2] [--kinds step,block,drift,lag,harmonic]
+//! [--minutes M]`. Defaults: both series, all rows, 20 plants (the kinds in
+//! turn), seed 1, sizes 1 and 2, every kind, no time limit (`--minutes`: no
+//! plant starts after M minutes; the table has what ran).
+//!
+//! `diagnose` runs as `robokrige diagnose FILE --robot ur10 --tool
+//! -0.14,0.30,92.82` would: the library entry point with the CLI's defaults.
+//! The size unit is the pooled CV RMSE of that default model on the
+//! unplanted campaign (the control's "before"), computed once per series.
+
+mod plant;
+mod score;
+
+use plant::KINDS;
+use robokrige::dataset::{Dataset, read_csv};
+use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, diagnose, fit_with_effects};
+use score::Outcome;
+use std::path::PathBuf;
+use std::time::Instant;
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/ipa-ur10");
+const TOOL: &str = "-0.14,0.30,92.82";
+
+struct Args {
+    series: Vec<char>,
+    rows: Option<usize>,
+    plants: usize,
+    seed: u64,
+    sizes: Vec<f64>,
+    kinds: Vec<String>,
+    minutes: Option<f64>,
+}
+
+fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
+    s.split(',')
+        .map(|v| {
+            v.trim()
+                .parse()
+                .unwrap_or_else(|_| panic!("bad list item {v}"))
+        })
+        .collect()
+}
+
+fn args() -> Args {
+    let mut a = Args {
+        series: vec!['b', 'c'],
+        rows: None,
+        plants: 20,
+        seed: 1,
+        sizes: vec![1.0, 2.0],
+        kinds: KINDS.iter().map(|k| k.to_string()).collect(),
+        minutes: None,
+    };
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let mut it = argv.iter();
+    while let Some(k) = it.next() {
+        if k == "--bench" {
+            continue;
+        }
+        let mut v = || {
+            it.next()
+                .unwrap_or_else(|| panic!("{k} needs a value"))
+                .clone()
+        };
+        match k.as_str() {
+            "--series" => {
+                a.series = v()
+                    .split(',')
+                    .filter_map(|s| s.trim().chars().next())
+                    .collect()
+            }
+            "--rows" => a.rows = Some(v().parse().expect("--rows N")),
+            "--plants" => a.plants = v().parse().expect("--plants N"),
+            "--seed" => a.seed = v().parse().expect("--seed S"),
+            "--sizes" => a.sizes = list(&v()),
+            "--kinds" => a.kinds = list(&v()),
+            "--minutes" => a.minutes = Some(v().parse().expect("--minutes M")),
+            other => panic!("unknown option {other}"),
+        }
+    }
+    for k in &a.kinds {
+        assert!(
+            KINDS.contains(&k.as_str()),
+            "unknown kind {k} (one of {KINDS:?})"
+        );
+    }
+    a
+}
+
+fn file(series: char) -> PathBuf {
+    let name = match series {
+        'b' => "series_b_joint_configurations.csv",
+        'c' => "series_c_random_poses.csv",
+        s => panic!("unknown series {s} (b or c)"),
+    };
+    PathBuf::from(DATA).join(name)
+}
+
+/// What `robokrige diagnose FILE --robot ur10 --tool …` runs with.
+fn options(data: &Dataset) -> DiagnoseOptions {
+    let robot = robokrige::kinematics::load_robot_with_tool("ur10", Some(TOOL)).expect("ur10");
+    DiagnoseOptions::default()
+        .base(&base_params("ejs", 1, true).expect("ejs"))
+        .periodic(robokrige::space::parse_periodic("none", &data.q).expect("none"))
+        .robot(Some(robot))
+}
+
+fn run(data: &Dataset, o: &DiagnoseOptions) -> Diagnosis {
+    diagnose(data, o, &|_| {}).expect("diagnose")
+}
+
+fn added(d: &Diagnosis) -> String {
+    let a: Vec<String> = d
+        .effects
+        .iter()
+        .filter(|e| e.accepted)
+        .map(score::with_params)
+        .collect();
+    if a.is_empty() {
+        "nothing".into()
+    } else {
+        a.join("; ")
+    }
+}
+
+/// One scored plant.
+struct Row {
+    kind: &'static str,
+    size: f64,
+    score: score::Score,
+    seconds: f64,
+}
+
+fn main() {
+    let a = args();
+    let t0 = Instant::now();
+    for &s in &a.series {
+        let path = file(s);
+        if !path.exists() {
+            println!("series {s}: {} not found, skipped", path.display());
+            continue;
+        }
+        let data = read_csv(&path)
+            .expect("csv")
+            .head(a.rows.unwrap_or(usize::MAX));
+        let m = data.len();
+        let o = options(&data);
+        let robot = o.get_robot().expect("robot").clone();
+        let control = run(&data, &o);
+        let sigma = control.before.cv_rmse_mm;
+        let pooled = control.before.pooled_rmse_mm;
+        println!(
+            "\n## series {s}, {m} rows, seed {}: control {:.0} s, CV RMSE {:.4}/{:.4}/{:.4} mm (pooled {pooled:.4}); control added: {}",
+            a.seed,
+            control.seconds,
+            sigma[0],
+            sigma[1],
+            sigma[2],
+            added(&control)
+        );
+        let temp_varies = data.covariate("temp_c").is_some_and(|c| {
+            let (lo, hi) = c
+                .values
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                    (l.min(*v), h.max(*v))
+                });
+            hi - lo > 0.05
+        });
+        let kinds: Vec<&str> = a
+            .kinds
+            .iter()
+            .map(String::as_str)
+            .filter(|k| {
+                let keep = *k != "drift" || temp_varies;
+                if !keep {
+                    println!("drift skipped: temp_c does not vary on these rows");
+                }
+                keep
+            })
+            .collect();
+        let mut rng = robokrige::stats::rng_for(a.seed, &format!("plant-real-{s}"));
+        let mut rows: Vec<Row> = Vec::new();
+        'plants: for i in 0..a.plants {
+            let shape = plant::draw(kinds[i % kinds.len()], &data, sigma, &mut rng);
+            for &k in &a.sizes {
+                if a.minutes
+                    .is_some_and(|mm| t0.elapsed().as_secs_f64() > 60.0 * mm)
+                {
+                    println!("time limit reached after {i} plants");
+                    break 'plants;
+                }
+                let p = plant::at_size(&shape, &data, &robot, k, pooled);
+                let d = run(&plant::apply(&data, &p), &o);
+                let own = |t: &[score::Target]| own_coefficients(&data, &o, &d, t);
+                let sc = score::score(&d, &control, (&shape, &p), m, &own);
+                println!(
+                    "plant {i:>2} {k}× {:<26} {:<10} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
+                    shape.describe(),
+                    format!("{:?}", sc.outcome),
+                    opt(sc.row_covered),
+                    opt(sc.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
+                    opt(sc.own_covered.as_ref().map(|v| v.iter().all(|b| *b))),
+                    d.seconds,
+                    if sc.added.is_empty() {
+                        "nothing".into()
+                    } else {
+                        sc.added.join("; ")
+                    }
+                );
+                println!("           all added: {}", added(&d));
+                if !sc.detail.is_empty() {
+                    println!("           found: {}", sc.detail);
+                }
+                rows.push(Row {
+                    kind: shape.kind(),
+                    size: k,
+                    score: sc,
+                    seconds: d.seconds,
+                });
+            }
+        }
+        table(s, m, &a.sizes, &rows);
+    }
+}
+
+/// The unplanted campaign's coefficients of `targets` when it is fitted
+/// with the planted diagnosis's final effects.
+fn own_coefficients(
+    data: &Dataset,
+    o: &DiagnoseOptions,
+    d: &Diagnosis,
+    targets: &[score::Target],
+) -> Option<Vec<f64>> {
+    let model = fit_with_effects(data, &o.for_rows(data.len()), &d.extras).ok()?;
+    targets
+        .iter()
+        .map(|(column, a, _)| model.trend_coefficient(column).map(|c| c[*a].0))
+        .collect()
+}
+
+fn opt(b: Option<bool>) -> &'static str {
+    match b {
+        Some(true) => "yes",
+        Some(false) => "no",
+        None => "–",
+    }
+}
+
+fn frac(x: usize, n: usize) -> String {
+    if n == 0 {
+        "–".into()
+    } else {
+        format!("{x}/{n}")
+    }
+}
+
+/// Per size: one line per kind and the total, counts and rates.
+fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
+    for &k in sizes {
+        println!(
+            "\nseries {s}, {m} rows, size {k}× the CV noise (row tolerance {} rows)\n",
+            score::tolerance(m)
+        );
+        println!(
+            "| kind | plants | right | proxy, named | proxy, not named | missed | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
+        kinds.dedup();
+        kinds.sort();
+        kinds.dedup();
+        kinds.push("all");
+        for kind in kinds {
+            let sel: Vec<&Row> = rows
+                .iter()
+                .filter(|r| r.size == k && (kind == "all" || r.kind == kind))
+                .collect();
+            let n = sel.len();
+            let count = |o: Outcome| sel.iter().filter(|r| r.score.outcome == o).count();
+            let cov = |f: fn(&score::Score) -> Option<bool>| {
+                let v: Vec<bool> = sel.iter().filter_map(|r| f(&r.score)).collect();
+                frac(v.iter().filter(|b| **b).count(), v.len())
+            };
+            let pct = |x: usize| {
+                if n == 0 {
+                    "–".into()
+                } else {
+                    format!("{x} ({:.0} %)", 100.0 * x as f64 / n as f64)
+                }
+            };
+            let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
+            println!(
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                pct(count(Outcome::Right)),
+                pct(count(Outcome::ProxyNamed)),
+                pct(count(Outcome::Proxy)),
+                pct(count(Outcome::Missed)),
+                cov(|s| s.row_covered),
+                cov(|s| s.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
+                frac(
+                    sel.iter()
+                        .flat_map(|r| r.score.coef_covered.iter().flatten())
+                        .filter(|b| **b)
+                        .count(),
+                    sel.iter()
+                        .flat_map(|r| r.score.coef_covered.iter().flatten())
+                        .count(),
+                ),
+                frac(
+                    sel.iter()
+                        .flat_map(|r| r.score.own_covered.iter().flatten())
+                        .filter(|b| **b)
+                        .count(),
+                    sel.iter()
+                        .flat_map(|r| r.score.own_covered.iter().flatten())
+                        .count(),
+                ),
+            );
+        }
+    }
+}

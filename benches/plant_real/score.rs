@@ -1,0 +1,285 @@
+//! Scoring one plant against the control (the same campaign without it).
+//!
+//! - **right**: an effect added to the planted campaign is of the planted
+//!   kind, at the planted place, and is not one the control added too:
+//!   a step whose row is within `tol` rows of the planted row; a block whose
+//!   two edges are each within `tol`; `temp_c` (any covariate family of it)
+//!   for a drift; the moves of the planted joint into the pose (the lag
+//!   family) for a lag; a harmonic of the planted joint with its period
+//!   within 3 % for a harmonic. `tol` = max(5, 2 % of the rows).
+//! - **proxy**: not right, but something the control did not add was added
+//!   (an effect is "the same" as a control's when its label matches and its
+//!   parameters are within `tol` rows / 3 %). **named**: some added effect's
+//!   `confounded_with` names the planted family (the text of its label).
+//! - **missed**: nothing new added.
+//!
+//! Coverage (for the right ones): the 95 % support interval of a step's
+//! row (a block's two edges, a harmonic's period) covers the planted value;
+//! the 95 % intervals of the size coefficients cover the planted ones,
+//! counted per plant (all three axes, and both edges of a block) and per
+//! coefficient and axis (step: `step@row`; block: `step@from` = +offset and `step@to`
+//! = −offset; drift: the `temp_c` coefficient, mm/K; lag: its memory τ
+//! (planted 0) and the coefficient of each axis's `J·move` column, −g·π/180).
+//! A harmonic's coefficients are per-axis sin/cos trend terms, not the
+//! joint's amplitude: only its period is scored.
+
+use crate::plant::{Planted, Shape};
+use robokrige::diagnose::{Diagnosis, EffectKind, EffectReport};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    Right,
+    ProxyNamed,
+    Proxy,
+    Missed,
+}
+
+/// The score of one plant.
+pub struct Score {
+    pub outcome: Outcome,
+    /// Does the row / period interval cover the planted value (`None`: not scored).
+    pub row_covered: Option<bool>,
+    /// Per coefficient and axis: does its interval cover the planted value.
+    pub coef_covered: Option<Vec<bool>>,
+    /// The same, against the planted value plus the campaign's own: the
+    /// coefficient of the same column when the unplanted campaign is
+    /// fitted with the same final effects (a real campaign may already
+    /// hold a component of that shape: its own temperature drift, or the
+    /// projection of its order drift on a step).
+    pub own_covered: Option<Vec<bool>>,
+    /// Labels of what was added, beyond the control.
+    pub added: Vec<String>,
+    /// For a right one: what it found (parameters, their intervals, sizes).
+    pub detail: String,
+}
+
+pub fn tolerance(m: usize) -> usize {
+    (m / 50).max(5)
+}
+
+fn param(e: &EffectReport, k: &str) -> Option<f64> {
+    e.params.get(k).copied()
+}
+
+fn near_rows(a: Option<f64>, b: usize, tol: usize) -> bool {
+    a.is_some_and(|a| (a - b as f64).abs() <= tol as f64)
+}
+
+fn same(a: &EffectReport, b: &EffectReport, tol: usize) -> bool {
+    a.label == b.label
+        && a.params.len() == b.params.len()
+        && a.params.iter().all(|(k, v)| {
+            let w = b.params.get(k).copied().unwrap_or(f64::NAN);
+            if k.ends_with("row") {
+                (v - w).abs() <= tol as f64
+            } else {
+                (v - w).abs() <= 0.03 * v.abs().max(w.abs())
+            }
+        })
+}
+
+fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
+    match shape {
+        Shape::Step { row, .. } => {
+            e.kind == EffectKind::Order
+                && e.label.starts_with("step")
+                && near_rows(param(e, "row"), *row, tol)
+        }
+        Shape::Block { from, to, .. } => {
+            e.kind == EffectKind::Order
+                && near_rows(param(e, "from_row"), *from, tol)
+                && near_rows(param(e, "to_row"), *to, tol)
+        }
+        Shape::Drift { .. } => {
+            e.kind == EffectKind::Covariate && e.source.iter().any(|s| s == "temp_c")
+        }
+        Shape::Lag { joint } => e.label.starts_with(&format!("moves of q{joint} ")),
+        Shape::Harmonic {
+            joint, period_deg, ..
+        } => {
+            e.kind == EffectKind::Harmonic
+                && e.source == [format!("q{joint}")]
+                && param(e, "period_deg")
+                    .is_some_and(|p| (p - period_deg).abs() <= 0.03 * period_deg)
+        }
+    }
+}
+
+/// The text that names the planted family in a `confounded_with` entry.
+fn family_text(shape: &Shape) -> String {
+    match shape {
+        Shape::Step { .. } => "step in the measurement order".into(),
+        Shape::Block { .. } => "block of rows".into(),
+        Shape::Drift { .. } => "temp_c".into(),
+        Shape::Lag { joint } => format!("moves of q{joint} "),
+        Shape::Harmonic { joint, .. } => format!("harmonic of q{joint}"),
+    }
+}
+
+fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
+    ci.map(|c| c[0] <= v && v <= c[1])
+}
+
+/// One planted coefficient: the model's column, the axis, the value.
+pub type Target = (String, usize, f64);
+
+/// Per axis of each of `columns`: the planted value `value` (× sign).
+fn per_axis(columns: &[(String, f64)], value: [f64; 3]) -> Vec<Target> {
+    columns
+        .iter()
+        .flat_map(|(c, sign)| (0..3).map(move |a| (c.clone(), a, sign * value[a])))
+        .collect()
+}
+
+/// Do the 95 % intervals of `e` cover `targets`, each shifted by `own`
+/// (`None`: a column is not in its sizes).
+pub fn covers(e: &EffectReport, targets: &[Target], own: &[f64]) -> Option<Vec<bool>> {
+    targets
+        .iter()
+        .zip(own.iter().chain(std::iter::repeat(&0.0)))
+        .map(|((column, a, v), o)| {
+            let c = e.size.iter().find(|c| &c.column == column)?;
+            Some((c.estimate[*a] - v - o).abs() <= c.ci95[*a])
+        })
+        .collect()
+}
+
+/// Does the row / period / τ interval cover the planted value, and the
+/// planted coefficients to check.
+fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<Target>) {
+    match shape {
+        Shape::Step { row, .. } => {
+            let found = param(e, "row").unwrap_or(f64::NAN) as usize;
+            let ci = e.params_ci.get("row").copied().unwrap_or([found as f64; 2]);
+            (
+                within(Some(&ci), *row as f64),
+                per_axis(&[(format!("step@{found}"), 1.0)], p.value),
+            )
+        }
+        Shape::Block { from, to, .. } => {
+            let (a, b) = (
+                param(e, "from_row").unwrap_or(f64::NAN) as usize,
+                param(e, "to_row").unwrap_or(f64::NAN) as usize,
+            );
+            let ca = e
+                .params_ci
+                .get("from_row")
+                .copied()
+                .unwrap_or([a as f64; 2]);
+            let cb = e.params_ci.get("to_row").copied().unwrap_or([b as f64; 2]);
+            let rows = within(Some(&ca), *from as f64).zip(within(Some(&cb), *to as f64));
+            let cols = [(format!("step@{a}"), 1.0), (format!("step@{b}"), -1.0)];
+            (rows.map(|(x, y)| x && y), per_axis(&cols, p.value))
+        }
+        Shape::Drift { .. } => (None, per_axis(&[("temp_c".into(), 1.0)], p.value)),
+        Shape::Lag { joint } => {
+            // the trend column of axis a is `J_a,j(q)·h` (J per radian, the
+            // move h in degrees): a planted gain g is −g·π/180 on each axis's
+            // own column; the memory τ planted is 0
+            let tau = param(e, "tau_poses").unwrap_or(f64::NAN);
+            let tau_covered = within(e.params_ci.get("tau_poses"), 0.0).or(Some(tau == 0.0));
+            let g = -p.value[0].to_radians();
+            let targets = ["x", "y", "z"]
+                .iter()
+                .enumerate()
+                .map(|(a, axis)| (format!("J{axis}{joint}·move{joint}"), a, g))
+                .collect();
+            (tau_covered, targets)
+        }
+        Shape::Harmonic { period_deg, .. } => (
+            within(e.params_ci.get("period_deg"), *period_deg),
+            Vec::new(),
+        ),
+    }
+}
+
+/// Score the diagnosis `d` of the planted campaign against `control`.
+/// `own`: the unplanted campaign's coefficients of the planted targets
+/// (fitted with the planted diagnosis's final effects).
+pub fn score(
+    d: &Diagnosis,
+    control: &Diagnosis,
+    (shape, p): (&Shape, &Planted),
+    m: usize,
+    own: &dyn Fn(&[Target]) -> Option<Vec<f64>>,
+) -> Score {
+    let tol = tolerance(m);
+    let accepted = |x: &Diagnosis| {
+        x.effects
+            .iter()
+            .filter(|e| e.accepted)
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let base = accepted(control);
+    let new: Vec<EffectReport> = accepted(d)
+        .into_iter()
+        .filter(|e| !base.iter().any(|b| same(e, b, tol)))
+        .collect();
+    let added = new.iter().map(with_params).collect();
+    if let Some(e) = new.iter().find(|e| is_right(e, shape, tol)) {
+        let (row_covered, targets) = coverage(e, shape, p);
+        let own_values = own(&targets);
+        let nonempty = |v: Option<Vec<bool>>| v.filter(|v| !v.is_empty());
+        return Score {
+            outcome: Outcome::Right,
+            row_covered,
+            coef_covered: nonempty(covers(e, &targets, &[])),
+            own_covered: nonempty(own_values.and_then(|o| covers(e, &targets, &o))),
+            added,
+            detail: detail(e, p),
+        };
+    }
+    let text = family_text(shape);
+    let named = d
+        .effects
+        .iter()
+        .filter(|e| e.accepted)
+        .any(|e| e.confounded_with.iter().any(|c| c.contains(&text)));
+    let outcome = match (new.is_empty(), named) {
+        (true, _) => Outcome::Missed,
+        (false, true) => Outcome::ProxyNamed,
+        (false, false) => Outcome::Proxy,
+    };
+    Score {
+        outcome,
+        row_covered: None,
+        coef_covered: None,
+        own_covered: None,
+        added,
+        detail: String::new(),
+    }
+}
+
+/// Its label and parameters, e.g. "harmonic of q1 (period_deg 6.3)".
+pub fn with_params(e: &EffectReport) -> String {
+    if e.params.is_empty() {
+        return e.label.clone();
+    }
+    let p: Vec<String> = e
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.1}"))
+        .collect();
+    format!("{} ({})", e.label, p.join(", "))
+}
+
+/// The found parameters with their intervals, and the size coefficients
+/// against the planted value.
+fn detail(e: &EffectReport, p: &Planted) -> String {
+    let mut out: Vec<String> = e
+        .params
+        .iter()
+        .map(|(k, v)| match e.params_ci.get(k) {
+            Some(c) => format!("{k} {v:.1} [{:.1}, {:.1}]", c[0], c[1]),
+            None => format!("{k} {v:.1}"),
+        })
+        .collect();
+    for c in e.size.iter().take(2) {
+        let f = |a: usize| format!("{:+.3e}±{:.2e}", c.estimate[a], c.ci95[a]);
+        out.push(format!("{} {}/{}/{}", c.column, f(0), f(1), f(2)));
+    }
+    let v = p.value;
+    out.push(format!("planted {:+.3}/{:+.3}/{:+.3}", v[0], v[1], v[2]));
+    out.join(", ")
+}
