@@ -19,7 +19,7 @@
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kinematics::{self, Robot};
-use robokrige::methods::{Overrides, params_with};
+use robokrige::methods::default_params;
 use robokrige::model::ErrorModel;
 use robokrige::plan::stop::Forecast;
 use robokrige::plan::{PlanInputs, PlanParams, PoseSet, Region, candidates};
@@ -31,7 +31,7 @@ fn robot() -> Robot {
 }
 
 fn default_model(robot: &Robot, data: &Dataset) -> ErrorModel {
-    params_with(None, &Overrides::new().robot(robot.clone()), data)
+    default_params(robot, data)
         .unwrap()
         .check()
         .unwrap()

@@ -376,6 +376,13 @@ impl Overrides {
     }
 }
 
+/// The default error model for a campaign of `robot`: what `fit --robot R`
+/// fits (the robot calibrated first, then Kriging of what it leaves, every
+/// other choice at its default). `params_with(None, robot only, data)`.
+pub fn default_params(robot: &Robot, data: &Dataset) -> Result<ErrorModelParams> {
+    params_with(None, &Overrides::new().robot(robot.clone()), data)
+}
+
 /// The fit parameters a front end names: `method` (`None`: the model
 /// options of `overrides`, defaults where unset) with the robot of
 /// `overrides`, checked against `data` (its joint count; periodic joints

@@ -12,7 +12,7 @@ use robokrige::cv::{CvMode, CvPlan, Folds};
 use robokrige::diagnose::{DiagnoseOptions, diagnose};
 use robokrige::kinematics::load_robot;
 use robokrige::kriging::{Correlation, KrigingOptions, OptimizerKind};
-use robokrige::methods::{Method, Overrides, params_with};
+use robokrige::methods::{Method, default_params};
 use robokrige::params::ErrorModelParams;
 use robokrige::plan::{PlanInputs, PlanParams, Region};
 use std::time::{Duration, Instant};
@@ -66,9 +66,7 @@ fn a_cancelled_token_stops_every_search_at_once() {
     let ga = Method::EjsGa.params(1, false).cancel(cancelled());
     assert!(interrupted(ga.check().unwrap().fit(&data)));
     let robot = load_robot("comau-nj220").unwrap();
-    let cal = params_with(None, &Overrides::new().robot(robot), &data)
-        .unwrap()
-        .cancel(cancelled());
+    let cal = default_params(&robot, &data).unwrap().cancel(cancelled());
     assert!(interrupted(cal.check().unwrap().fit(&data)));
 }
 

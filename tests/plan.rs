@@ -5,7 +5,7 @@
 use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::dataset::Dataset;
 use robokrige::kinematics::Robot;
-use robokrige::methods::{Overrides, params_with};
+use robokrige::methods::default_params;
 use robokrige::model::ErrorModel;
 use robokrige::plan::{PlanInputs, PlanParams, Region};
 use robokrige::sim::iso_cubes::measure_sequence;
@@ -21,7 +21,7 @@ fn shipped(name: &str) -> PathBuf {
 }
 
 fn default_model(robot: &Robot, data: &Dataset) -> ErrorModel {
-    params_with(None, &Overrides::new().robot(robot.clone()), data)
+    default_params(robot, data)
         .unwrap()
         .check()
         .unwrap()

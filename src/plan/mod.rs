@@ -43,7 +43,7 @@ pub use order::PlannedMove;
 use crate::cancel::Cancel;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
-use crate::methods::{Overrides, params_with};
+use crate::methods::default_params;
 use crate::model::ErrorModel;
 use crate::{Error, Result};
 use calibration::CalibrationDesign;
@@ -364,8 +364,7 @@ impl ValidPlanParams {
             .campaign
             .filter(|c| c.errors.is_some() && !c.is_empty());
         if let Some(c) = measured.filter(|c| c.len() >= MIN_FIT_ROWS) {
-            let params = params_with(None, &Overrides::new().robot(inputs.robot.clone()), c)?
-                .cancel(self.0.cancel.clone());
+            let params = default_params(inputs.robot, c)?.cancel(self.0.cancel.clone());
             return Ok((Some(params.check()?.fit(c)?), HyperSource::Campaign));
         }
         if let Some(prior) = inputs.prior {
