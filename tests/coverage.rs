@@ -50,3 +50,63 @@ fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
     // the messages name the joint and the range
     assert!(issues[0].to_string().starts_with("q1 = 170.00°"));
 }
+
+/// A campaign whose tracker threw a few wild readings: maximum likelihood
+/// widens σ² for them, and the "95 %" interval of every other pose covers
+/// nearly all held-out rows. The leave-one-out calibration of the
+/// intervals (`ErrorModel::interval_scale`) brings held-out coverage back
+/// to 95 %, and the flag stays the exception.
+#[test]
+fn intervals_cover_95_percent_of_held_out_rows_despite_wild_readings() {
+    use rand::RngExt;
+    use robokrige::stats::{kfold_partition, predictive_scores};
+    let mut d = read_csv(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/comau_lhs.csv"
+    )))
+    .unwrap();
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(150)
+        .nugget(true);
+    let noise = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap().noise_std();
+    // 2.5 % of the rows, seeded at random, get a reading 10–20 times the
+    // noise off on every axis
+    let mut rng = robokrige::stats::rng_for(17, "wild readings");
+    let m = d.len();
+    let errors = d.errors.as_mut().unwrap();
+    for _ in 0..m / 40 {
+        let i = rng.random_range(0..m);
+        for a in 0..3 {
+            let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+            errors[i][a] += sign * noise[a] * rng.random_range(10.0..20.0);
+        }
+    }
+    let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
+    let fold = kfold_partition(m, 5, 1).unwrap();
+    let truth = d.errors.clone().unwrap();
+    let (mut mean, mut std, mut raw) = (vec![[0.0; 3]; m], vec![[0.0; 3]; m], vec![[0.0; 3]; m]);
+    let mut flagged = vec![false; m];
+    for f in 0..5 {
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
+        let fitted = model.refit(&d.select(&train)).unwrap();
+        let c = fitted.interval_scale().unwrap();
+        let p = fitted.predict_checked(&d.select(&test)).unwrap();
+        let flags = p.flagged.unwrap();
+        for (j, &i) in test.iter().enumerate() {
+            mean[i] = p.prediction.mean[j];
+            std[i] = p.std_new[j];
+            raw[i] = std::array::from_fn(|a| p.std_new[j][a] / c[a]);
+            flagged[i] = flags.contains(&j);
+        }
+    }
+    let calibrated = predictive_scores(&truth, &mean, &std, &flagged, 3.0);
+    let uncalibrated = predictive_scores(&truth, &mean, &raw, &flagged, 3.0);
+    eprintln!("noise {noise:?}\ncalibrated {calibrated:?}\nuncalibrated {uncalibrated:?}");
+    for a in 0..3 {
+        assert!(uncalibrated.coverage_95[a] > 0.97, "{uncalibrated:?}");
+        let c = calibrated.coverage_95[a];
+        assert!((0.92..=0.97).contains(&c), "axis {a}: {calibrated:?}");
+    }
+    assert!(calibrated.flag_rate <= 0.10, "{calibrated:?}");
+}

@@ -39,14 +39,20 @@ fn close(w: f64, g: f64) -> bool {
     (w - g).abs() <= REL * w.abs().max(g.abs()).max(1e-300)
 }
 
-/// Every mean and standard deviation of `p` as `expected` to [`REL`]
-/// (`{"mean": [[x, y, z], …], "std": …}`).
-fn assert_close_predictions(p: &Prediction, expected: &Value) {
+/// Every mean and standard deviation of `model`'s prediction `p` as
+/// `expected` to [`REL`] (`{"mean": [[x, y, z], …], "std": …}`). The
+/// fixture's std is the √MSE of the code that wrote it; today's is that
+/// times the model's interval scale ([`ErrorModel::interval_scale`]).
+fn assert_close_predictions(model: &ErrorModel, p: &Prediction, expected: &Value) {
+    let c = model.interval_scale().unwrap();
     for (key, got) in [("mean", &p.mean), ("std", &p.std)] {
         let want: Vec<[f64; 3]> = serde_json::from_value(expected[key].clone()).unwrap();
         assert_eq!(want.len(), got.len(), "{key}");
-        for (w, g) in want.iter().flatten().zip(got.iter().flatten()) {
-            assert!(close(*w, *g), "{key}: {w} vs {g}");
+        for (w, g) in want.iter().zip(got) {
+            for a in 0..3 {
+                let w = if key == "std" { w[a] * c[a] } else { w[a] };
+                assert!(close(w, g[a]), "{key}: {w} vs {}", g[a]);
+            }
         }
     }
 }
@@ -97,7 +103,7 @@ fn a_version_2_file_loads_and_predicts_as_it_did() {
     assert_eq!(model.input_norm().mean.len(), names.len());
     let v = verify();
     let p = model.predict(&v.q, &v.dir).unwrap();
-    assert_close_predictions(&p, &expected_predictions());
+    assert_close_predictions(&model, &p, &expected_predictions());
 
     // saved again: version 3, the map as one field, no periodic joints in
     // the options
@@ -115,6 +121,7 @@ fn a_version_2_file_loads_and_predicts_as_it_did() {
     let back = ErrorModel::from_json(&v3_text, "model_v3.json").unwrap();
     assert_eq!(back, model);
     assert_close_predictions(
+        &back,
         &back.predict(&v.q, &v.dir).unwrap(),
         &expected_predictions(),
     );
@@ -142,7 +149,11 @@ fn a_version_1_file_loads_and_predicts_as_it_did() {
     let old = ErrorModel::from_json(&v1_text, "model_v1.json").unwrap();
     assert_eq!(old.version(), MODEL_VERSION_UNCALIBRATED);
     assert_eq!(old.periodic(), &[0, 5]);
-    assert_close_predictions(&old.predict(&v.q, &v.dir).unwrap(), &expected_predictions());
+    assert_close_predictions(
+        &old,
+        &old.predict(&v.q, &v.dir).unwrap(),
+        &expected_predictions(),
+    );
 }
 
 #[test]
@@ -175,6 +186,7 @@ fn a_refit_with_todays_code_writes_the_same_model() {
     assert_same_json(&as_value(&refit), &as_value(&loaded), "model");
     let v = verify();
     assert_close_predictions(
+        &refit,
         &refit.predict(&v.q, &v.dir).unwrap(),
         &expected_predictions(),
     );

@@ -277,10 +277,11 @@ impl Model {
     }
 
     /// The measurement-noise standard deviation per axis (mm) the nugget
-    /// attributes: add it in quadrature to a predicted std for a new
+    /// attributes, times the model's interval scale (as the predicted std
+    /// is): add it in quadrature to a predicted std for a new
     /// measurement's.
-    fn noise_std(&self) -> [f64; 3] {
-        self.inner.noise_std()
+    fn noise_std(&self) -> PyResult<[f64; 3]> {
+        self.inner.predictive_noise_std().map_err(to_py)
     }
 
     /// The calibration under the model (identifiability report: directions

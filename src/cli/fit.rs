@@ -222,7 +222,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     }
     let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
     super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    let noise = model.noise_std();
+    let noise = model.predictive_noise_std()?;
     robokrige::dataset::write_predictions(output, &data, &pred.mean, &pred.std, noise)?;
     let (v, line) = predict::summary(&data, &pred.mean, &coverage, output);
     super::json_to(a.json.as_deref(), &v, "prediction summary")?;

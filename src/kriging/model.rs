@@ -16,6 +16,9 @@ use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+mod held_out;
+pub use held_out::HeldOut;
+
 /// Points per block in batched prediction.
 const BLOCK: usize = 128;
 
@@ -542,123 +545,6 @@ impl KrigingModel {
             })
             .collect()
     }
-}
-
-impl KrigingModel {
-    /// Closed-form leave-block-out residuals at fixed ξ (Dubrule 1983): for
-    /// each block I of training rows, `e_I = y_I − ŷ_I` where ŷ_I is the
-    /// universal-Kriging prediction from the other rows with ξ, the input
-    /// normalisation and the nugget held fixed and β re-estimated by GLS.
-    ///
-    /// With `B = R⁻¹ − R⁻¹F(FᵀR⁻¹F)⁻¹FᵀR⁻¹` the held-out prediction is
-    /// `ŷ_I = −B_II⁻¹ B_I,rest y_rest`, so `e_I = B_II⁻¹ (B y)_I` and
-    /// `B y = R⁻¹(y − Fβ) = γ`. With `Z_I = C⁻¹ E_I` and thin `Q = F̃ G⁻¹`,
-    /// `B_II = Z_Iᵀ Z_I − (Qᵀ Z_I)ᵀ (Qᵀ Z_I)`: one triangular solve per block
-    /// instead of a refit. Residuals in original units, training-row order.
-    pub fn held_out_residuals(&self, blocks: &[Vec<usize>]) -> Result<Vec<f64>> {
-        self.held_out(blocks).map(|h| h.residuals)
-    }
-
-    /// [`KrigingModel::held_out_residuals`] and, from the same blocks
-    /// `B_II` (their diagonals are `B_ii`), the model's own expectation of
-    /// its leave-one-out RMSE ([`HeldOut::expected_loo_rmse`]).
-    pub fn held_out(&self, blocks: &[Vec<usize>]) -> Result<HeldOut> {
-        self.with_factors(|c, ftilde, g| self.held_out_with(blocks, c, ftilde, g))
-    }
-
-    /// [`KrigingModel::held_out`] with the factors `(C, F̃, G)`.
-    fn held_out_with(
-        &self,
-        blocks: &[Vec<usize>],
-        c: &Mat<f64>,
-        ftilde: &Mat<f64>,
-        g: &Mat<f64>,
-    ) -> Result<HeldOut> {
-        let d = &self.data;
-        let m = d.x_train.len();
-        let p = d.trend.len();
-        let mut out = vec![f64::NAN; m];
-        // Σ 1/B_ii over the held-out rows, and their number
-        let (mut inv_b, mut rows) = (0.0, 0usize);
-        for block in blocks {
-            let k = block.len();
-            if k == 0 {
-                continue;
-            }
-            if block.iter().any(|&i| i >= m) || k + p > m {
-                return Err(Error::InvalidParameter(format!(
-                    "held-out block of {k} rows does not fit {m} training rows and {p} trend terms"
-                )));
-            }
-            let mut z = Mat::<f64>::zeros(m, k);
-            for (j, &i) in block.iter().enumerate() {
-                z[(i, j)] = 1.0;
-            }
-            solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
-            let mut b = Mat::<f64>::zeros(k, k);
-            matmul(
-                b.as_mut(),
-                Accum::Replace,
-                z.transpose(),
-                z.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            // Qᵀ Z = G⁻ᵀ F̃ᵀ Z
-            let mut qz = Mat::<f64>::zeros(p, k);
-            matmul(
-                qz.as_mut(),
-                Accum::Replace,
-                ftilde.transpose(),
-                z.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-                g.transpose(),
-                qz.as_mut(),
-                Par::Seq,
-            );
-            matmul(
-                b.as_mut(),
-                Accum::Add,
-                qz.transpose(),
-                qz.as_ref(),
-                -1.0,
-                Par::Seq,
-            );
-            inv_b += (0..k).map(|j| 1.0 / b[(j, j)]).sum::<f64>();
-            rows += k;
-            let rhs = Mat::<f64>::from_fn(k, 1, |j, _| d.gamma[block[j]]);
-            let e = faer::linalg::solvers::Solve::solve(&b.partial_piv_lu(), &rhs);
-            for (j, &i) in block.iter().enumerate() {
-                out[i] = e[(j, 0)] * d.y_std;
-            }
-        }
-        if out.iter().any(|v| !v.is_finite() && !v.is_nan()) {
-            return Err(Error::Numerical(
-                "closed-form CV produced non-finite residuals".into(),
-            ));
-        }
-        Ok(HeldOut {
-            residuals: out,
-            expected_loo_rmse: d.y_std * (d.sigma2 * inv_b / rows.max(1) as f64).sqrt(),
-        })
-    }
-}
-
-/// Closed-form held-out residuals of a model ([`KrigingModel::held_out`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct HeldOut {
-    /// Residuals `y_I − ŷ_I`, original units, training-row order (NaN for a
-    /// row in no block).
-    pub residuals: Vec<f64>,
-    /// The model's own expectation of its leave-one-out RMSE over the rows
-    /// of the blocks, original units: with `Var(y) = σ²R`, `Var(γ) = σ²B`,
-    /// so a held-out residual `γ_i / B_ii` has variance `σ² / B_ii` — the
-    /// nugget's noise plus the interpolation error at that row —, and this
-    /// is `y_std·√(σ² · mean 1/B_ii)`.
-    pub expected_loo_rmse: f64,
 }
 
 /// Solve `Gᵀ v = u` in place (forward substitution, G upper) and return `vᵀv`.

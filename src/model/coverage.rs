@@ -22,18 +22,20 @@ pub enum CoverageIssue {
         max_deg: f64,
     },
     /// The 95 % predictive interval of a new measurement reaches a gross
-    /// error: `1.96 √(MSE + noise²)` exceeds [`GROSS_FACTOR`] times the
-    /// model's own leave-one-out RMS on that axis (no training pose is
-    /// near enough for the model to vouch for the point). With a
-    /// calibration, its variance beyond its largest at a measured pose is
-    /// in the MSE.
+    /// error: `1.96 √(MSE + noise²)`, calibrated on the model's
+    /// leave-one-out residuals ([`ErrorModel::interval_scale`]), exceeds
+    /// [`GROSS_FACTOR`] times the RMS of those residuals on that axis (no
+    /// training pose is near enough for the model to vouch for the point).
+    /// With a calibration, its variance beyond its largest at a measured
+    /// pose is in the MSE.
     Uncertain {
         /// Output axis (0 x, 1 y, 2 z).
         axis: usize,
         /// The predictive standard deviation of a new measurement,
         /// `√(MSE + noise²)`, mm.
         std_mm: f64,
-        /// The model's expected leave-one-out RMS on that axis, mm.
+        /// The RMS of the model's leave-one-out residuals on that axis
+        /// ([`super::LooCheck::loo_rmse`]), mm.
         loo_rmse_mm: f64,
     },
     /// The Kriging correction `r(s)ᵀγ` departs from the trend-only
@@ -100,10 +102,12 @@ pub const GROSS_FACTOR: f64 = 3.0;
 /// The 97.5 % quantile of the standard normal: half-width of a 95 %
 /// interval in standard deviations.
 pub const Z95: f64 = 1.959_963_984_540_054;
-/// Training rows sampled (evenly over the campaign) to estimate the
-/// model's leave-one-out RMS for the [`CoverageIssue::Uncertain`] rule:
-/// the mean of `σ²/B_ii` over them is within a few per cent of the mean
-/// over all rows, at a cost of one m-sized triangular solve each.
+/// Training rows sampled (evenly over the campaign) for the model's
+/// leave-one-out residuals ([`ErrorModel::loo_check`]): the interval
+/// scale and the RMS of the [`CoverageIssue::Uncertain`] rule. The mean of
+/// `σ²/B_ii` over them is within a few per cent of the mean over all rows,
+/// at a cost of one m-sized triangular solve each (one multi-column solve
+/// for all of them).
 pub const LOO_SAMPLE: usize = 256;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;
@@ -114,7 +118,8 @@ pub const TREND_SIGMAS: f64 = 6.0;
 pub struct CheckedPrediction {
     /// Mean and √MSE ([`ErrorModel::predict_dataset`]).
     pub prediction: super::Prediction,
-    /// Standard deviation of a new measurement, `√(MSE + noise²)`, per axis.
+    /// Standard deviation of a new measurement, `√(MSE + noise²)` with the
+    /// noise of [`ErrorModel::predictive_noise_std`], per axis.
     pub std_new: Vec<[f64; 3]>,
     /// Indices of the points with a coverage warning
     /// ([`ErrorModel::coverage`]); `None` for a model with extra inputs,
@@ -155,7 +160,7 @@ impl ErrorModel {
     /// held-out scores of `cv` and `holdout` are computed from.
     pub fn predict_checked(&self, data: &crate::dataset::Dataset) -> Result<CheckedPrediction> {
         let prediction = self.predict_dataset(data)?;
-        let noise = self.noise_std();
+        let noise = self.predictive_noise_std()?;
         let std_new = prediction
             .std
             .iter()
@@ -178,14 +183,7 @@ impl ErrorModel {
     /// closed form on up to [`LOO_SAMPLE`] training rows spread over the
     /// campaign ([`crate::kriging::HeldOut::expected_loo_rmse`]).
     pub fn expected_loo_rmse(&self) -> Result<[f64; 3]> {
-        let m = self.n_train();
-        let n = m.min(LOO_SAMPLE);
-        let blocks: Vec<Vec<usize>> = (0..n).map(|i| vec![i * m / n]).collect();
-        let mut out = [0.0; 3];
-        for (o, k) in out.iter_mut().zip(&self.outputs) {
-            *o = k.held_out(&blocks)?.expected_loo_rmse;
-        }
-        Ok(out)
+        self.loo_check().map(|c| c.expected_loo_rmse)
     }
 
     /// The points of a prediction that leave what the training data
@@ -214,10 +212,10 @@ impl ErrorModel {
         };
         // the reference: the model's held-out error where it was trained
         let loo = match std {
-            Some(_) => self.expected_loo_rmse()?,
+            Some(_) => self.loo_check()?.loo_rmse,
             None => [f64::INFINITY; 3],
         };
-        let noise = self.noise_std();
+        let noise = self.predictive_noise_std()?;
         let mut out = Vec::new();
         for (k, qk) in q.iter().enumerate() {
             let mut issues = Vec::new();

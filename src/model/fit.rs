@@ -150,6 +150,7 @@ pub(crate) fn fit_outputs(
         robot: None,
         software: SOFTWARE.into(),
         calibration: None,
+        loo: Default::default(),
     })
 }
 
@@ -314,6 +315,7 @@ impl ErrorModel {
             robot: self.robot.clone(),
             software: self.software.clone(),
             calibration: self.calibration.clone(),
+            loo: Default::default(),
         }
     }
 

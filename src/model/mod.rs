@@ -9,11 +9,13 @@
 mod coverage;
 mod file;
 mod fit;
+mod interval;
 mod record;
 
 pub use coverage::{CoverageIssue, CoverageWarning, GROSS_FACTOR, LOO_SAMPLE, TREND_SIGMAS, Z95};
 pub use fit::check_fit_memory;
 pub(crate) use fit::{fit_outputs, solve_outputs, with_linear_columns};
+pub use interval::LooCheck;
 pub use record::RobotRecord;
 
 use crate::calibration::Calibration;
@@ -80,6 +82,10 @@ pub struct ErrorModel {
     /// fitted to `e − δ̂_cal(q)`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) calibration: Option<Box<Calibration>>,
+    /// The leave-one-out check of the intervals, computed when first
+    /// needed ([`ErrorModel::loo_check`]).
+    #[serde(skip)]
+    pub(crate) loo: interval::LooCache,
 }
 
 /// This crate's version, recorded in every model it fits.
@@ -90,7 +96,10 @@ pub const SOFTWARE: &str = concat!("robokrige ", env!("CARGO_PKG_VERSION"));
 pub struct Prediction {
     /// Predicted error `[δx, δy, δz]` per point, mm.
     pub mean: Vec<[f64; 3]>,
-    /// Its standard deviation per axis, mm.
+    /// Its standard deviation per axis (the √MSE of the mean, without the
+    /// measurement noise), mm: the Kriging part times the model's
+    /// [`ErrorModel::interval_scale`], and with a calibration its variance
+    /// away from the campaign.
     pub std: Vec<[f64; 3]>,
 }
 
@@ -356,12 +365,13 @@ impl ErrorModel {
                 .map(|o| o.predict(s))
                 .collect::<Result<_>>()?
         };
+        let c = self.interval_scale()?;
         let mut mean = vec![[0.0; 3]; s.len()];
         let mut std = vec![[0.0; 3]; s.len()];
         for (a, preds) in per_axis.iter().enumerate() {
             for (k, p) in preds.iter().enumerate() {
                 mean[k][a] = p.mean;
-                std[k][a] = p.mse.sqrt();
+                std[k][a] = c[a] * p.mse.sqrt();
             }
         }
         Ok(Prediction { mean, std })
