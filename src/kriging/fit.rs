@@ -4,9 +4,9 @@
 //! 003 eq 14) and solve at the optimum.
 
 use super::{
-    Correlation, FitReport, Hyperparameters, KrigingModel, KrigingOptions, KrigingProblem,
-    OptimizerKind, Search, TrainingInputs, Trend, TrendModel, converge_bfgs, independent_columns,
-    ln_psi_objective, optimise, storable_ln_psi, trend_matrix,
+    CoefficientPrior, Correlation, FitReport, Hyperparameters, KrigingModel, KrigingOptions,
+    KrigingProblem, OptimizerKind, Search, TrainingInputs, Trend, TrendModel, converge_bfgs,
+    independent_columns, ln_psi_objective, optimise, storable_ln_psi, trend_matrix,
 };
 use crate::optim::{self, Bounds, HjOptions};
 use crate::space::Normalizer;
@@ -30,8 +30,8 @@ pub(super) struct Job<'a> {
 /// response z-scored.
 struct Prepared {
     trend: Trend,
-    /// Which kept trend columns get the Bayesian prior ([`TrendModel::has_prior`]).
-    prior: Vec<bool>,
+    /// The Bayesian prior of each kept trend column ([`TrendModel::prior`]).
+    prior: Vec<CoefficientPrior>,
     f: faer::Mat<f64>,
     y_norm: Vec<f64>,
     y_mean: f64,
@@ -85,9 +85,7 @@ impl Job<'_> {
             (yn.mean[0], yn.std[0])
         };
         Ok(Prepared {
-            prior: (0..trend_kept.len())
-                .map(|j| trend_kept.has_prior(j))
-                .collect(),
+            prior: (0..trend_kept.len()).map(|j| trend_kept.prior(j)).collect(),
             f: trend_matrix(&trend_kept, x),
             y_norm: y.iter().map(|v| (v - y_mean) / y_std).collect(),
             y_mean,

@@ -44,6 +44,6 @@ pub use registry::CustomCorrelation;
 pub use search::{FitPlan, REFINE_ROWS, SEARCH_ROWS, converge_subset};
 use search::{Search, converge_bfgs, ln_psi_objective, optimise, row_subset};
 pub use trend::{
-    KinematicTrend, Monomials, Trend, TrendModel, independent_columns, support, supported_columns,
-    trend_matrix,
+    CoefficientPrior, KinematicTrend, Monomials, Trend, TrendModel, independent_columns, support,
+    supported_columns, trend_matrix,
 };

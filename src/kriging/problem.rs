@@ -18,6 +18,7 @@
 //! common case instead of up to nine, and ε still a function of ξ alone.
 
 use super::corr::{CorrelationModel, TrainingInputs};
+use super::trend::CoefficientPrior;
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor::{
@@ -43,12 +44,13 @@ pub struct KrigingProblem<'a> {
     pub f: &'a Mat<f64>,
     /// Normalised response, length m.
     pub y: &'a [f64],
-    /// Which trend coefficients get the Gaussian prior of Bayesian
-    /// universal Kriging (one flag per column of `f`, or empty for none):
-    /// `β_j ~ N(0, τ_j²)` with `τ_j = ‖y‖ / ‖F_j‖` — no single term may
-    /// explain more than the whole response a priori. See
+    /// The prior of each trend coefficient in Bayesian universal Kriging
+    /// (one per column of `f`, or empty for none): `β_j ~ N(0, τ_j²)` with
+    /// `τ_j = ‖y‖ / max(‖F_j‖, n_j)` for [`CoefficientPrior::Norm`]`(n_j)`
+    /// — no single term may explain more than the whole response a priori —
+    /// and no prior for [`CoefficientPrior::Flat`]. See
     /// [`KrigingProblem::solve`].
-    pub prior: &'a [bool],
+    pub prior: &'a [CoefficientPrior],
 }
 
 /// Reusable buffers for ψ evaluations (one per thread).
@@ -372,7 +374,7 @@ impl KrigingProblem<'_> {
             ln_det_r,
             jitter,
         };
-        let (g, beta) = if self.prior.iter().any(|b| *b) {
+        let (g, beta) = if self.prior.iter().any(|b| *b != CoefficientPrior::Flat) {
             self.posterior_beta(&aug, sigma2)
         } else {
             gls_beta(&aug, p)
@@ -394,7 +396,7 @@ impl KrigingProblem<'_> {
 
 impl KrigingProblem<'_> {
     /// Bayesian universal Kriging's trend at this ξ: with the prior
-    /// `β_j ~ N(0, τ_j²)` on the flagged columns (`τ_j = ‖y‖/‖F_j‖`,
+    /// `β_j ~ N(0, τ_j²)` on the columns with one (`τ_j = ‖y‖/max(‖F_j‖, n_j)`,
     /// precision `Λ = diag(1/τ_j²)`, 0 elsewhere), the posterior mean and
     /// covariance of β are
     ///
@@ -418,9 +420,19 @@ impl KrigingProblem<'_> {
         let y_norm = self.y.iter().map(|v| v * v).sum::<f64>().sqrt();
         let sigma = sigma2.sqrt();
         let rows: Vec<(usize, f64)> = (0..p)
-            .filter(|&j| self.prior.get(j).copied().unwrap_or(false))
-            .filter_map(|j| {
-                let fj = self.f.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
+            .filter_map(|j| match self.prior.get(j) {
+                Some(CoefficientPrior::Norm(n)) => Some((j, *n)),
+                _ => None,
+            })
+            .filter_map(|(j, n)| {
+                let fj = self
+                    .f
+                    .col(j)
+                    .iter()
+                    .map(|v| v * v)
+                    .sum::<f64>()
+                    .sqrt()
+                    .max(n);
                 (fj > 0.0 && y_norm > 0.0).then(|| (j, sigma * fj / y_norm))
             })
             .collect();
@@ -520,4 +532,48 @@ pub fn factor_at(
 /// infinities and a saved model must load back.
 pub fn storable_ln_psi(v: f64) -> f64 {
     if v.is_finite() { v } else { f64::MIN }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kriging::corr::Correlation;
+
+    /// The posterior β of one column of `f` under each prior, at fixed ξ and
+    /// a nugget: y = 0.5·f₁ + a smooth bump, with `f₁` small on these rows.
+    fn beta_1(prior: &[CoefficientPrior]) -> f64 {
+        let m = 40;
+        let x: Vec<Vec<f64>> = (0..m).map(|i| vec![i as f64 / m as f64]).collect();
+        let f = Mat::<f64>::from_fn(m, 2, |i, j| if j == 0 { 1.0 } else { 0.01 * x[i][0] });
+        let y: Vec<f64> = (0..m)
+            .map(|i| 0.5 * f[(i, 1)] + (6.0 * x[i][0]).sin())
+            .collect();
+        let inputs = TrainingInputs::new(&x);
+        let corr = Correlation::Gaussian;
+        let prob = KrigingProblem {
+            min_jitter: None,
+            corr: &corr,
+            inputs: &inputs,
+            f: &f,
+            y: &y,
+            prior,
+        };
+        prob.solve(&[3.0], 0.05).unwrap().beta[1]
+    }
+
+    /// A coefficient's prior is no wider than the whole response over the
+    /// larger of its column's norm and the given one: a term this axis
+    /// sees weakly (a small column) but that moves the TCP on the others
+    /// (a large given norm) is held near 0; the flat prior leaves it free.
+    #[test]
+    fn a_larger_given_norm_tightens_the_prior() {
+        use CoefficientPrior::{Flat, Norm};
+        let free = beta_1(&[Flat, Flat]);
+        let own = beta_1(&[Flat, Norm(0.0)]);
+        let wide_axis = beta_1(&[Flat, Norm(1e-6)]);
+        let tight = beta_1(&[Flat, Norm(10.0)]);
+        // a norm below the column's own changes nothing
+        assert_eq!(own, wide_axis);
+        assert!(free.abs() > own.abs() && own.abs() > 10.0 * tight.abs(), "{free} {own} {tight}");
+    }
 }

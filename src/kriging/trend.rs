@@ -21,13 +21,26 @@ pub trait TrendModel: Send + Sync {
     fn eval_into(&self, s: &[f64], out: &mut [f64]);
     /// Human-readable name of basis function j given the input names.
     fn term_name(&self, j: usize, inputs: &[String]) -> String;
-    /// Whether coefficient `j` gets the Gaussian prior of Bayesian universal
-    /// Kriging ([`super::problem::KrigingProblem::prior`]): physical terms
-    /// whose coefficient is a parameter error, not a free mean. None by
-    /// default.
-    fn has_prior(&self, _j: usize) -> bool {
-        false
+    /// The prior of coefficient `j` in Bayesian universal Kriging
+    /// ([`super::problem::KrigingProblem::prior`]): physical terms whose
+    /// coefficient is a parameter error get one, a free mean does not.
+    /// [`CoefficientPrior::Flat`] by default.
+    fn prior(&self, _j: usize) -> CoefficientPrior {
+        CoefficientPrior::Flat
     }
+}
+
+/// The prior of one trend coefficient in Bayesian universal Kriging,
+/// `β_j ~ N(0, τ_j²)` in the units of the normalised response `y`
+/// ([`super::problem::KrigingProblem::prior`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CoefficientPrior {
+    /// No prior: a free coefficient (the mean, the monomials).
+    Flat,
+    /// `τ_j = ‖y‖ / max(‖F_j‖, n)`: the term alone explains at most the
+    /// whole response, with its column's norm `‖F_j‖` on the training rows
+    /// or `n` if larger. `n = 0` is the term's own column alone.
+    Norm(f64),
 }
 
 /// Monomials `Π_k s_k^{e_k}`, one exponent vector per basis function.
@@ -174,6 +187,17 @@ pub struct KinematicTrend {
     pub periodic: Vec<usize>,
     /// Polynomial part (e.g. the constant).
     pub poly: Monomials,
+    /// Per calibration parameter (indexed as `calib_names`), the RMS over
+    /// the three axes of its Jacobian column on the training poses,
+    /// `‖∂P/∂p_j‖ / √3`: the size of the parameter's effect on the TCP,
+    /// whichever axis it shows on. Its prior (see
+    /// [`TrendModel::prior`]) is no wider than the whole response over that:
+    /// one parameter error moves all three axes, so an axis that sees it
+    /// weakly may not give it a coefficient the others would not allow.
+    /// Empty in files written before it was recorded (the axis's own column
+    /// then sets the prior).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub param_norm: Vec<f64>,
 }
 
 impl KinematicTrend {
@@ -201,13 +225,21 @@ impl KinematicTrend {
         if self.joint_mean.iter().zip(&self.joint_std).any(bad_scale) {
             return Err("kinematic trend: a joint normalisation is not finite and positive".into());
         }
-        if self.axis > 2
-            || self
-                .params
-                .iter()
-                .any(|&p| p >= crate::kinematics::calib_len(n))
-        {
+        let np = crate::kinematics::calib_len(n);
+        if self.axis > 2 || self.params.iter().any(|&p| p >= np) {
             return Err("kinematic trend: axis or calibration parameter out of range".into());
+        }
+        if !self.param_norm.is_empty()
+            && (self.param_norm.len() != np
+                || self
+                    .param_norm
+                    .iter()
+                    .any(|v| !(v.is_finite() && *v >= 0.0)))
+        {
+            return Err(format!(
+                "kinematic trend: {} parameter norms for {np} parameters, or one not finite and ≥ 0",
+                self.param_norm.len()
+            ));
         }
         self.poly.validate()
     }
@@ -243,9 +275,20 @@ impl TrendModel for KinematicTrend {
     }
 
     /// The Jacobian columns: each coefficient is a parameter error seen by
-    /// one axis, which no campaign identifies in every direction.
-    fn has_prior(&self, j: usize) -> bool {
-        j >= self.poly.len()
+    /// one axis, which no campaign identifies in every direction; its prior
+    /// is set by the parameter's effect on all three axes
+    /// ([`KinematicTrend::param_norm`]).
+    fn prior(&self, j: usize) -> CoefficientPrior {
+        let k = self.poly.len();
+        if j < k {
+            return CoefficientPrior::Flat;
+        }
+        CoefficientPrior::Norm(
+            self.param_norm
+                .get(self.params[j - k])
+                .copied()
+                .unwrap_or(0.0),
+        )
     }
 
     fn term_name(&self, j: usize, inputs: &[String]) -> String {
@@ -341,8 +384,8 @@ impl TrendModel for Trend {
         self.inner().term_name(j, inputs)
     }
 
-    fn has_prior(&self, j: usize) -> bool {
-        self.inner().has_prior(j)
+    fn prior(&self, j: usize) -> CoefficientPrior {
+        self.inner().prior(j)
     }
 }
 

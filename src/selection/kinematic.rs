@@ -159,6 +159,7 @@ pub(crate) fn kinematic_trend_set_in(
             .map(|&j| seen[j - np0])
             .collect()
     };
+    let param_norm: Vec<f64> = (0..np).map(|k| (norm2(None, k) / 3.0).sqrt()).collect();
     let make = |axis: usize| {
         Trend::Kinematic(Box::new(KinematicTrend {
             robot: robot.clone(),
@@ -168,6 +169,7 @@ pub(crate) fn kinematic_trend_set_in(
             joint_std: norm.std[..nj].to_vec(),
             periodic: map.periodic().to_vec(),
             poly: poly.clone(),
+            param_norm: param_norm.clone(),
         }))
     };
     Ok([make(0), make(1), make(2)])
