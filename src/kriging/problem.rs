@@ -574,6 +574,9 @@ mod tests {
         let tight = beta_1(&[Flat, Norm(10.0)]);
         // a norm below the column's own changes nothing
         assert_eq!(own, wide_axis);
-        assert!(free.abs() > own.abs() && own.abs() > 10.0 * tight.abs(), "{free} {own} {tight}");
+        assert!(
+            free.abs() > own.abs() && own.abs() > 10.0 * tight.abs(),
+            "{free} {own} {tight}"
+        );
     }
 }

@@ -59,11 +59,7 @@ impl KrigingModel {
                     "held-out block of {k} rows does not fit {m} training rows and {p} trend terms"
                 )));
             }
-            let mut z = Mat::<f64>::zeros(m, k);
-            for (j, &i) in block.iter().enumerate() {
-                z[(i, j)] = 1.0;
-            }
-            solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::Seq);
+            let (z, qz) = unit_columns(m, block, c, ftilde, g, Par::Seq);
             let mut b = Mat::<f64>::zeros(k, k);
             matmul(
                 b.as_mut(),
@@ -71,21 +67,6 @@ impl KrigingModel {
                 z.transpose(),
                 z.as_ref(),
                 1.0,
-                Par::Seq,
-            );
-            // Qᵀ Z = G⁻ᵀ F̃ᵀ Z
-            let mut qz = Mat::<f64>::zeros(p, k);
-            matmul(
-                qz.as_mut(),
-                Accum::Replace,
-                ftilde.transpose(),
-                z.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-                g.transpose(),
-                qz.as_mut(),
                 Par::Seq,
             );
             matmul(
@@ -139,25 +120,7 @@ impl KrigingModel {
                 "held-out rows do not fit {m} training rows and {p} trend terms"
             )));
         }
-        let mut z = Mat::<f64>::zeros(m, n);
-        for (j, &i) in rows.iter().enumerate() {
-            z[(i, j)] = 1.0;
-        }
-        solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), Par::rayon(0));
-        let mut qz = Mat::<f64>::zeros(p, n);
-        matmul(
-            qz.as_mut(),
-            Accum::Replace,
-            ftilde.transpose(),
-            z.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            g.transpose(),
-            qz.as_mut(),
-            Par::Seq,
-        );
+        let (z, qz) = unit_columns(m, rows, c, ftilde, g, Par::rayon(0));
         let mut out = vec![f64::NAN; m];
         let mut variances = vec![f64::NAN; m];
         let mut inv_b = 0.0;
@@ -180,6 +143,38 @@ impl KrigingModel {
             expected_loo_rmse: d.y_std * (d.sigma2 * inv_b / n.max(1) as f64).sqrt(),
         })
     }
+}
+
+/// `Z = C⁻¹ E_rows` (m × k, `E_rows` the unit columns of `rows`) and
+/// `Qᵀ Z = G⁻ᵀ F̃ᵀ Z` (p × k): what `B_II = ZᵀZ − (QᵀZ)ᵀ(QᵀZ)` is made of.
+fn unit_columns(
+    m: usize,
+    rows: &[usize],
+    c: &Mat<f64>,
+    ftilde: &Mat<f64>,
+    g: &Mat<f64>,
+    par: Par,
+) -> (Mat<f64>, Mat<f64>) {
+    let mut z = Mat::<f64>::zeros(m, rows.len());
+    for (j, &i) in rows.iter().enumerate() {
+        z[(i, j)] = 1.0;
+    }
+    solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), par);
+    let mut qz = Mat::<f64>::zeros(g.nrows(), rows.len());
+    matmul(
+        qz.as_mut(),
+        Accum::Replace,
+        ftilde.transpose(),
+        z.as_ref(),
+        1.0,
+        Par::Seq,
+    );
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        g.transpose(),
+        qz.as_mut(),
+        Par::Seq,
+    );
+    (z, qz)
 }
 
 /// Closed-form held-out residuals of a model ([`KrigingModel::held_out`]).
