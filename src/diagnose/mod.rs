@@ -48,11 +48,14 @@
 //! parts) and `describe.rs` (an effect in words).
 
 mod accept;
+mod choose;
+mod confound;
 mod describe;
 mod fit;
 pub mod gls;
 mod options;
 mod plan;
+mod profile;
 mod rank;
 mod report;
 mod rounds;
@@ -69,7 +72,8 @@ pub use options::{
     DEFAULT_REFIT_ROWS, DEFAULT_SCAN_ROWS, DiagnoseOptions, MIN_SCAN_ROWS, min_resamples,
 };
 pub use plan::DiagnosePlan;
-pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport};
+pub use confound::{NEIGHBOURS, SAME_RESIDUAL, region_overlap};
+pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut};
 pub use rows::ScanRows;
 pub use scan::EffectKind;
 
