@@ -2,8 +2,8 @@
 //! report says about the others.
 //!
 //! - **Compared** ([`compared`]): the best significant candidate of each
-//!   kind (the order's drift, step and block apart: they are different
-//!   explanations), at most [`COMPARED`], in their ranked order. The round
+//!   kind (the order's drift apart from its step and block: [`group`]), at
+//!   most [`COMPARED`], in their ranked order. The round
 //!   orders them by what each adds on the refitted model
 //!   ([`EffectReport::refit_gain`]), not by the scan's score, so that a
 //!   step the data shows clearly is not crowded out by a harmonic whose
@@ -25,6 +25,13 @@ use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_r
 use super::rank::alike;
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
+
+impl Family {
+    /// Whether it is the drift over the order (it adds the row as an input).
+    fn add_drift(&self) -> bool {
+        self.grid.iter().any(|g| g.add.contains(&Feature::Row))
+    }
+}
 use crate::dataset::Dataset;
 use crate::features::Feature;
 
@@ -50,13 +57,13 @@ impl Round<'_> {
     }
 }
 
-/// The kind a candidate competes within: its kind, and for the order its
-/// family (a drift, a step and a block are different explanations).
-fn group(f: &Family) -> (EffectKind, &str) {
-    match f.kind {
-        EffectKind::Order => (f.kind, f.label.as_str()),
-        k => (k, ""),
-    }
+/// The kind a candidate competes within: its kind, the order's drift
+/// apart from its change points. A step and a block of rows (two steps)
+/// are one explanation, a change of level, between which the scan's
+/// evidence decides: it weighs the block's second edge (the mean of its
+/// null over the two-edge grid), which the refitted model's CV does not.
+fn group(f: &Family) -> (EffectKind, bool) {
+    (f.kind, f.kind == EffectKind::Order && f.add_drift())
 }
 
 /// The candidates compared for adding: the first significant one (with a
