@@ -39,7 +39,10 @@ fn planted(m: usize, seed: u64) -> (Dataset, usize) {
     let step = direction(&mut rng, step_mm);
     let drift = direction(&mut rng, drift_mm);
     let tau = rng.random_range(0.2..0.6) * m as f64;
-    let errors = data.errors.as_mut().expect("a simulated campaign has errors");
+    let errors = data
+        .errors
+        .as_mut()
+        .expect("a simulated campaign has errors");
     for (i, e) in errors.iter_mut().enumerate() {
         let warm = 1.0 - (-(i as f64) / tau).exp();
         for a in 0..3 {
@@ -78,7 +81,11 @@ fn step_or_not_separable(d: &Diagnosis, row: usize) -> Result<String, String> {
         let nearest = ["row", "from_row", "to_row"]
             .into_iter()
             .filter_map(|k| Some((k, e.params.get(k)?, e.params_ci.get(k)?)))
-            .min_by(|a, b| (a.1 - row as f64).abs().total_cmp(&(b.1 - row as f64).abs()));
+            .min_by(|a, b| {
+                (a.1 - row as f64)
+                    .abs()
+                    .total_cmp(&(b.1 - row as f64).abs())
+            });
         if let Some((key, _, ci)) = nearest.filter(|_| steps)
             && ci[0] <= row as f64
             && row as f64 <= ci[1]

@@ -87,14 +87,14 @@ pub(super) fn compared(r: &Round) -> Vec<usize> {
 /// The competitors of candidate `k`: [`not_separable`] and [`alike`], as
 /// (index, correlation), most correlated first.
 fn competitors_of(r: &Round, k: usize) -> Vec<(usize, f64)> {
-    let mut out: Vec<(usize, f64)> =
-        not_separable(r.tested, r.fams, r.residuals, k, r.significant)
-            .into_iter()
-            .map(|c| (c.index, c.correlation))
-            .collect();
+    let mut out: Vec<(usize, f64)> = not_separable(r.tested, r.fams, r.residuals, k, r.significant)
+        .into_iter()
+        .map(|c| (c.index, c.correlation))
+        .collect();
     for i in alike(r.tested, r.fams, r.residuals, k, r.significant) {
         if !out.iter().any(|(j, _)| *j == i) {
-            let fit = |t: &Tested| super::rank::fitted(&t.point(&r.fams[t.family]).columns, r.residuals);
+            let fit =
+                |t: &Tested| super::rank::fitted(&t.point(&r.fams[t.family]).columns, r.residuals);
             let c = super::rank::similarity(&fit(&r.tested[k]), &fit(&r.tested[i]));
             out.push((i, c));
         }

@@ -169,9 +169,11 @@ pub(super) fn prefer_measured(
         .into_iter()
         .filter(|c| measured(&fams[tested[c.index].family]))
         .min_by(|a, b| {
-            width(a.index)
-                .cmp(&width(b.index))
-                .then(tested[b.index].evidence.total_cmp(&tested[a.index].evidence))
+            width(a.index).cmp(&width(b.index)).then(
+                tested[b.index]
+                    .evidence
+                    .total_cmp(&tested[a.index].evidence),
+            )
         })
         .map(|c| c.index)
 }
@@ -195,7 +197,9 @@ pub fn region_overlap(q: &[Vec<f64>], inside: &[bool]) -> f64 {
                     (s, j)
                 })
                 .collect();
-            d.select_nth_unstable_by(NEIGHBOURS - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            d.select_nth_unstable_by(NEIGHBOURS - 1, |a, b| {
+                a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+            });
             d[..NEIGHBOURS].iter().filter(|(_, j)| inside[*j]).count() as f64 / NEIGHBOURS as f64
         })
         .collect();

@@ -66,13 +66,13 @@ use crate::Result;
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 pub use accept::{AFTER_LEVEL_RATIO, Worth};
+pub use confound::{NEIGHBOURS, SAME_RESIDUAL, region_overlap};
 use fit::cross_validated;
 pub use fit::{base_params, fit_with_effects, with_columns};
 pub use options::{
     DEFAULT_REFIT_ROWS, DEFAULT_SCAN_ROWS, DiagnoseOptions, MIN_SCAN_ROWS, min_resamples,
 };
 pub use plan::DiagnosePlan;
-pub use confound::{NEIGHBOURS, SAME_RESIDUAL, region_overlap};
 pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut};
 pub use rows::ScanRows;
 pub use scan::EffectKind;

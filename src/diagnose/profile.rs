@@ -190,7 +190,10 @@ pub(super) fn widen_rows(
             continue;
         };
         let own = report.params.get(*key).copied().unwrap_or(steps[k] as f64);
-        let ci = report.params_ci.entry(key.to_string()).or_insert([own, own]);
+        let ci = report
+            .params_ci
+            .entry(key.to_string())
+            .or_insert([own, own]);
         let new = [ci[0].min(lo as f64), ci[1].max(hi as f64)];
         changed |= new != *ci;
         *ci = new;
@@ -201,7 +204,11 @@ pub(super) fn widen_rows(
 /// Least-squares coefficients of the centred `y` on the centred,
 /// `q`-residualised `x` columns, and the diagonal of `(XᵀX)⁻¹` (by
 /// solves); `None` when singular.
-fn least_squares(x: &[Vec<f64>], ys: &[Vec<f64>], q: &[Vec<f64>]) -> Option<(Vec<[f64; 3]>, Vec<f64>)> {
+fn least_squares(
+    x: &[Vec<f64>],
+    ys: &[Vec<f64>],
+    q: &[Vec<f64>],
+) -> Option<(Vec<[f64; 3]>, Vec<f64>)> {
     let k = x.len();
     let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q)).collect();
     let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
@@ -283,6 +290,9 @@ mod tests {
         let alone = profile_rows(&res, &[], 15..285).unwrap();
         let with = profile_rows(&res, &drift_columns(m), 15..285).unwrap();
         assert!(with[0] <= step && step <= with[1], "{with:?}");
-        assert!(with[1] - with[0] >= alone[1] - alone[0], "{alone:?} {with:?}");
+        assert!(
+            with[1] - with[0] >= alone[1] - alone[0],
+            "{alone:?} {with:?}"
+        );
     }
 }

@@ -168,7 +168,8 @@ impl Rounds {
         let compared = choose::compared(&r);
         choose::mark_competitors(&mut reports, &r, &compared);
         self.check_last_effect(&reports, level, round);
-        let added = self.add_confirmed(c, &mut reports, &r, compared, round, &judge.worth, progress)?;
+        let added =
+            self.add_confirmed(c, &mut reports, &r, compared, round, &judge.worth, progress)?;
         self.effects.extend(reports);
         Ok(added)
     }
@@ -298,7 +299,14 @@ impl Rounds {
             if worth.counts(now.powi(2), then.powi(2)) {
                 let competitors = choose::competitor_columns(c.data, r, k, reports);
                 let index = self.effects.len() + k;
-                self.accept(c, &mut reports[k], index, (trial, trial_model), after, &competitors);
+                self.accept(
+                    c,
+                    &mut reports[k],
+                    index,
+                    (trial, trial_model),
+                    after,
+                    &competitors,
+                );
                 return Ok(true);
             }
             refuse(&mut reports[k], now, then, o.min_gain, worth);

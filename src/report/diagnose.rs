@@ -208,7 +208,11 @@ fn not_separable(competitors: &[String]) -> String {
 
 /// What one candidate left by the cap would add.
 fn left_line(l: &LeftOut) -> String {
-    let params: Vec<String> = l.params.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+    let params: Vec<String> = l
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3}"))
+        .collect();
     let mut line = format!(
         "{}{}: evidence {:.3}, would lower the CV RMSE by {:.1} % (closed form){}",
         l.label,
