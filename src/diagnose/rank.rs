@@ -153,7 +153,7 @@ mod tests {
     use super::*;
     use crate::diagnose::EffectKind;
     use crate::features::Feature;
-    use scan::GridPoint;
+    use scan::{Family, GridPoint};
     use std::collections::BTreeMap;
 
     fn family(label: &str, columns: Vec<Vec<f64>>, add: Vec<Feature>) -> Family {
