@@ -34,7 +34,7 @@
 
 use super::rank::{fitted, similarity};
 use super::report::EffectReport;
-use super::scan::{EffectKind, Family, Tested};
+use super::scan::{EffectKind, Family, Tested, is_time_column};
 
 /// Correlation of two fitted contributions from which they explain the
 /// same residual (and of a step or block with its region of the joint
@@ -144,9 +144,10 @@ fn anonymous(f: &Family) -> bool {
 }
 
 /// Whether a candidate is a measured column (a covariate: `temp_c`, a
-/// payload), alone or with the joints.
+/// payload), alone or with the joints. A time column (`time_s`, …) is not:
+/// it is the measurement order in seconds, as anonymous as the row.
 fn measured(f: &Family) -> bool {
-    f.kind == EffectKind::Covariate
+    f.kind == EffectKind::Covariate && !f.source.iter().any(|s| is_time_column(s))
 }
 
 /// Between explanations that cannot be told apart, the measured column
