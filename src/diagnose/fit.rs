@@ -97,6 +97,45 @@ pub(super) fn cross_validated(
     Ok((cv_stats(res, extras, &model), model))
 }
 
+/// The pooled closed-form K-fold CV RMSE (mm) of `model`, fitted with
+/// `extras` on `data` (at its hyperparameters: no refit per fold).
+pub(super) fn closed_form_rmse(
+    data: &Dataset,
+    extras: &[Feature],
+    model: &ErrorModel,
+    o: &DiagnoseOptions,
+) -> Result<f64> {
+    let work = with_columns(data, extras)?;
+    let res = cross_validate_closed_form(&work, model, o.folds, o.seed)?;
+    Ok(cv_stats(res, extras, model).pooled_rmse_mm)
+}
+
+/// What an effect adds on the refitted model: the model with `extras`
+/// refitted on all of `data` (a local search from `from`, the model
+/// without it, [`extended_starts`]), and its pooled closed-form K-fold CV
+/// RMSE (mm). One fit and no refit per fold: the few candidates a round
+/// compares are ordered by it before the one chosen is cross-validated in
+/// full ([`cross_validated`]).
+pub(super) fn refit_closed_form(
+    data: &Dataset,
+    extras: &[Feature],
+    o: &DiagnoseOptions,
+    from: &ErrorModel,
+) -> Result<f64> {
+    let work = with_columns(data, extras)?;
+    let start = extended_starts(from, extras);
+    let model = ErrorModel::fit_with_extras(
+        &work,
+        o.space,
+        &o.periodic,
+        &o.kriging,
+        extras,
+        start.as_deref(),
+    )?;
+    let res = cross_validate_closed_form(&work, &model, o.folds, o.seed)?;
+    Ok(cv_stats(res, extras, &model).pooled_rmse_mm)
+}
+
 /// Warm starts for the model of `extras` from `from`, whose extras they
 /// extend (`None` otherwise: another feature, or a correlation input not
 /// after `from`'s): a candidate of trend terms only keeps

@@ -17,42 +17,55 @@
 //!    p-value a test against sign-flipped pseudo-campaigns of the fitted
 //!    model, Benjamini–Hochberg across families, and its score the
 //!    closed-form K-fold CV drop.
-//! 4. **Adding**: the significant family with the most evidence (its
+//! 4. **Adding**: the significant families are ranked by evidence (the
 //!    leave-one-out gain beyond the mean of its null distribution: what
 //!    scanning its grid finds by chance is taken off), kinds of effect not
-//!    yet in the model first (so that harmonic after harmonic does not
-//!    crowd out a step or a drift the data shows clearly), has its feature
-//!    join the
+//!    yet in the model first; the best of each kind are then tried in the
+//!    order of what each adds on the refitted model ([`EffectReport::refit_gain`],
+//!    `choose.rs`), a measured column before an anonymous order effect it
+//!    is not separable from (`confound.rs`). The first the refit CV
+//!    confirms has its feature join the
 //!    model the way its kind needs ([`crate::features::Feature`]): a step,
 //!    harmonic, interaction or cross-talk basis as trend terms; a covariate,
 //!    the order or direction history as an input dimension with a linear
 //!    trend term. The model is refitted and cross-validated again (refit per
 //!    fold); it is kept only if the CV RMSE drops by at least `min_gain`, or
 //!    by what that is worth at the noise floor ([`Worth`]), and
-//!    the loop repeats until nothing significant remains or `max_effects`.
+//!    the loop repeats until nothing significant remains or `max_effects`
+//!    (then the significant candidates left are reported with what each
+//!    would add, [`Diagnosis::left_by_cap`]).
 //! 5. **Report**: CV statistics before and after every accepted effect, its
 //!    size (trend coefficients with 95 % intervals) and its "after" check
 //!    ([`AfterCheck`]): did the model with it reach the level a campaign
 //!    without it would, estimated from the data (the model's own
 //!    leave-one-out expectation: its nugget's noise plus its interpolation
-//!    error), and did it deliver what its test promised?
+//!    error), and did it deliver what its test promised? The candidates it
+//!    is not separable from on this campaign are named with it
+//!    ([`EffectReport::confounded_with`]), and its row and coefficient
+//!    intervals are those with them refitted (`profile.rs`).
 //!
 //! One concept a file: `options.rs` ([`DiagnoseOptions`]), `fit.rs` (the
 //! models compared: the base model, a model with effects, their CV),
 //! `scan/` (the candidate families, one file per kind, and the test that
 //! scores them), `gls.rs` (a candidate inside the model), `rank.rs` (the
-//! order of a round's candidates: evidence, Occam's rule, confounding),
+//! order of a round's candidates: evidence, Occam's rule), `confound.rs`
+//! (what the campaign cannot separate), `choose.rs` (which candidate
+//! joins the model, the cap's list), `profile.rs` (intervals with the
+//! competing effects refitted),
 //! `accept.rs` (when a drop is worth an effect; the "after" check),
 //! `rounds.rs` (one round of the loop), `rows.rs` (the rows scanned),
 //! `plan.rs` (the memory it needs), `report.rs` ([`Diagnosis`] and its
 //! parts) and `describe.rs` (an effect in words).
 
 mod accept;
+mod choose;
+mod confound;
 mod describe;
 mod fit;
 pub mod gls;
 mod options;
 mod plan;
+mod profile;
 mod rank;
 mod report;
 mod rounds;
@@ -63,13 +76,14 @@ use crate::Result;
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 pub use accept::{AFTER_LEVEL_RATIO, Worth};
+pub use confound::{NEIGHBOURS, SAME_RESIDUAL, region_overlap};
 use fit::cross_validated;
 pub use fit::{base_params, fit_with_effects, with_columns};
 pub use options::{
     DEFAULT_REFIT_ROWS, DEFAULT_SCAN_ROWS, DiagnoseOptions, MIN_SCAN_ROWS, min_resamples,
 };
 pub use plan::DiagnosePlan;
-pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport};
+pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut};
 pub use rows::ScanRows;
 pub use scan::EffectKind;
 

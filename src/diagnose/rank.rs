@@ -2,7 +2,8 @@
 //! yet in the model before more of a kind already added, each by evidence
 //! ([`rank`]); of candidates that explain the same, the one with fewer
 //! model columns first ([`prefer_simpler`], Occam's rule); and the
-//! candidates the first cannot be told apart from ([`mark_confounded`]).
+//! candidates one explains the same as ([`alike`]; the wider "not
+//! separable" measure is [`super::confound`]'s).
 //!
 //! Two candidates explain the same when their least-squares fits to the
 //! centred CV residuals ([`fitted`]: the projection on an orthonormal basis
@@ -10,8 +11,7 @@
 //! least [`SAME_FIT`], pooled over the axes, and the other's score is at
 //! least [`SAME_SCORE`] of the first's.
 
-use super::report::EffectReport;
-use super::scan::{self, Family, Tested};
+use super::scan::{self, Tested};
 
 /// Significant candidates first: kinds of effect not in the model yet
 /// (`seen` false) before more of a kind already added (so that a cap of a
@@ -95,25 +95,6 @@ const SAME_FIT: f64 = 0.9;
 /// Share of the first candidate's score a simpler one needs to go first.
 const SAME_SCORE: f64 = 0.8;
 
-/// The candidates the first one to be added cannot be told apart from
-/// ([`alike`]), in its report.
-pub(super) fn mark_confounded(
-    reports: &mut [EffectReport],
-    tested: &[Tested],
-    fams: &[Family],
-    residuals: &[[f64; 3]],
-    significant: &dyn Fn(&Tested) -> bool,
-) {
-    let Some(k) = reports.iter().position(|r| r.significant && r.score > 0.0) else {
-        return;
-    };
-    // `reports` is in the order of `tested`
-    reports[k].confounded_with = alike(tested, fams, residuals, k, significant)
-        .into_iter()
-        .map(|i| format!("{} (score {:.3})", reports[i].label, reports[i].score))
-        .collect();
-}
-
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
 /// dependent columns are dropped.
 fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
@@ -172,7 +153,7 @@ mod tests {
     use super::*;
     use crate::diagnose::EffectKind;
     use crate::features::Feature;
-    use scan::GridPoint;
+    use scan::{Family, GridPoint};
     use std::collections::BTreeMap;
 
     fn family(label: &str, columns: Vec<Vec<f64>>, add: Vec<Feature>) -> Family {

@@ -87,11 +87,23 @@ pub struct EffectReport {
     pub significant: bool,
     /// Added to the model (significant, best of its round, and it lowered the CV RMSE).
     pub accepted: bool,
-    /// Other significant candidates of the round that explain nearly the same
-    /// residual component (cosine ≥ 0.9) with a score within 20 % of this
-    /// one: the data cannot tell them apart (e.g. payload blocks and time).
+    /// Other candidates this one is not separable from on this campaign,
+    /// each with its score, evidence and the correlation of the two fitted
+    /// contributions (a competing explanation: a step and a drift over the
+    /// order, a covariate and a step at its jump, …; the measure:
+    /// `diagnose::confound`), and for a step or block of rows the region
+    /// of the joint space its rows were measured in, when they were.
+    /// Filled for the candidates a round compares for adding, and for a
+    /// significant candidate left out by the cap.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub confounded_with: Vec<String>,
+    /// What it adds on the refitted model: the drop (share) of the pooled
+    /// closed-form K-fold CV RMSE with it in the model, its hyperparameters
+    /// re-estimated. Measured for the candidates a round compares for
+    /// adding (the best significant one of each kind, the order's drift,
+    /// step and block apart), which are tried in this order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refit_gain: Option<f64>,
     /// Why a significant best candidate was not kept, or why a candidate
     /// with q within the FDR is not counted as significant.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -233,8 +245,52 @@ pub struct Diagnosis {
     /// the rows used ([`scan::constant_covariate`]).
     #[serde(default)]
     pub dropped_covariates: Vec<scan::DroppedCovariate>,
+    /// Significant candidates left when the cap of effects
+    /// (`max_effects`) was reached, with what each would add: empty when
+    /// the loop stopped on its own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left_by_cap: Vec<LeftOut>,
     /// Wall-clock time of the whole diagnosis, seconds.
     pub seconds: f64,
+}
+
+/// A significant candidate the cap of effects left out, with what it would
+/// add.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LeftOut {
+    /// Its label (as in [`EffectReport::label`]).
+    pub label: String,
+    /// Its kind.
+    pub kind: EffectKind,
+    /// Parameters of its best grid point.
+    pub params: BTreeMap<String, f64>,
+    /// Its evidence ([`EffectReport::evidence`]).
+    pub evidence: f64,
+    /// The drop (share) of the pooled CV RMSE its closed-form test promises
+    /// at the current model's hyperparameters.
+    pub promised: f64,
+    /// The drop (share) on the refitted model ([`EffectReport::refit_gain`]),
+    /// when it was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refit_gain: Option<f64>,
+    /// The candidates it is not separable from ([`EffectReport::confounded_with`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub confounded_with: Vec<String>,
+}
+
+impl LeftOut {
+    /// The entry of a candidate's report.
+    pub(super) fn of(r: &EffectReport) -> Self {
+        LeftOut {
+            label: r.label.clone(),
+            kind: r.kind,
+            params: r.params.clone(),
+            evidence: r.evidence,
+            promised: 1.0 - (1.0 - r.score.clamp(0.0, 1.0)).sqrt(),
+            refit_gain: r.refit_gain,
+            confounded_with: r.confounded_with.clone(),
+        }
+    }
 }
 
 impl Diagnosis {

@@ -4,11 +4,14 @@
 //! the refit CV confirms.
 
 use super::accept::{CONFIRMATIONS, Worth, after_check};
-use super::fit::cross_validated;
+use super::choose::{self, Round};
+use super::fit::{closed_form_rmse, cross_validated, refit_closed_form};
 use super::gls;
 use super::options::{DiagnoseOptions, min_resamples};
-use super::rank::{mark_confounded, prefer_simpler, rank};
-use super::report::{AfterCheck, CvStats, Diagnosis, EffectReport, coefficients, support_interval};
+use super::rank::{prefer_simpler, rank};
+use super::report::{
+    AfterCheck, CvStats, Diagnosis, EffectReport, LeftOut, coefficients, support_interval,
+};
 use super::rows::{ScanRows, place_steps};
 use super::scan::{self, EffectKind, Family, Tested};
 use crate::Result;
@@ -52,6 +55,7 @@ pub(super) struct Rounds {
     candidates: [usize; 2],
     pending: Option<Pending>,
     added_kinds: Vec<EffectKind>,
+    left_by_cap: Vec<LeftOut>,
 }
 
 /// How a round judges a tested candidate: its closed-form CV mean squared
@@ -115,6 +119,7 @@ impl Rounds {
             candidates: [0; 2],
             pending: None,
             added_kinds: Vec::new(),
+            left_by_cap: Vec::new(),
         }
     }
 
@@ -154,9 +159,17 @@ impl Rounds {
                 "ranked before '{over}': it explains the same with fewer model columns"
             ));
         }
-        mark_confounded(&mut reports, &tested, &fams, &residuals, &significant);
+        let r = Round {
+            tested: &tested,
+            fams: &fams,
+            residuals: &residuals,
+            significant: &significant,
+        };
+        let compared = choose::compared(&r);
+        choose::mark_competitors(&mut reports, &r, &compared);
         self.check_last_effect(&reports, level, round);
-        let added = self.add_confirmed(c, &mut reports, round, &judge.worth, progress)?;
+        let added =
+            self.add_confirmed(c, &mut reports, &r, compared, round, &judge.worth, progress)?;
         self.effects.extend(reports);
         Ok(added)
     }
@@ -237,65 +250,120 @@ impl Rounds {
         self.effects[p.index].after_check = Some(check);
     }
 
-    /// The best significant candidates in turn, until the refit CV
-    /// confirms one (at most [`CONFIRMATIONS`] per round): it joins the
-    /// model. Returns whether one did.
+    /// The candidates `compared` (the best significant one of each kind),
+    /// ordered by what each adds on the refitted model ([`Self::refit_gains`]),
+    /// a measured column first when an order effect ahead of it is not
+    /// separable from it ([`choose::prefer_measured`]); then tried in turn
+    /// until the refit CV confirms one (at most [`CONFIRMATIONS`] per
+    /// round): it joins the model. At the cap, the significant candidates
+    /// left are recorded instead. Returns whether one joined.
+    #[allow(clippy::too_many_arguments)]
     fn add_confirmed(
         &mut self,
         c: &Campaign,
         reports: &mut [EffectReport],
+        r: &Round,
+        mut order: Vec<usize>,
         round: usize,
         worth: &Worth,
         progress: &dyn Fn(&str),
     ) -> Result<bool> {
         let o = c.o;
-        let order: Vec<usize> = (0..reports.len())
-            .filter(|&i| reports[i].significant && reports[i].score > 0.0)
-            .take(CONFIRMATIONS)
-            .collect();
-        for k in order {
-            let report = &mut reports[k];
-            if round > o.max_effects {
-                report.add_note(format!("not added: the cap of {} effects", o.max_effects));
-                break;
+        if order.is_empty() {
+            return Ok(false);
+        }
+        if !c.rows.is_all() {
+            for &k in &order {
+                place_steps(&mut reports[k], c.rows, &self.current.residuals);
             }
-            if !c.rows.is_all() {
-                place_steps(report, c.rows, &self.current.residuals);
-            }
-            let mut trial = self.extras.clone();
-            for f in &report.add {
-                if !trial.contains(f) {
-                    trial.push(f.clone());
-                }
-            }
+        }
+        if order.len() > 1 {
+            self.refit_gains(c, reports, &order, progress)?;
+            // stable: ties keep the rank
+            order.sort_by(|&a, &b| gain(&reports[b]).total_cmp(&gain(&reports[a])));
+        }
+        choose::prefer_measured(reports, r, &mut order);
+        if round > o.max_effects {
+            self.left_by_cap = choose::left_out(reports, r, &order);
+            reports[order[0]].add_note(format!("not added: the cap of {} effects", o.max_effects));
+            return Ok(false);
+        }
+        for k in order.into_iter().take(CONFIRMATIONS) {
+            let trial = self.trial(&reports[k]);
             progress(&format!(
                 "adding '{}' and cross-validating again",
-                report.label
+                reports[k].label
             ));
             let (after, trial_model) = cross_validated(c.data, &trial, o, Some(&self.model))?;
             let (now, then) = (self.current.pooled_rmse_mm, after.pooled_rmse_mm);
             if worth.counts(now.powi(2), then.powi(2)) {
-                self.accept(report, self.effects.len() + k, trial, trial_model, after);
+                let competitors = choose::competitor_columns(c.data, r, k, reports);
+                let index = self.effects.len() + k;
+                self.accept(
+                    c,
+                    &mut reports[k],
+                    index,
+                    (trial, trial_model),
+                    after,
+                    &competitors,
+                );
                 return Ok(true);
             }
-            refuse(report, now, then, o.min_gain, worth);
+            refuse(&mut reports[k], now, then, o.min_gain, worth);
         }
         Ok(false)
     }
 
+    /// The model's extras with those of `report` after them.
+    fn trial(&self, report: &EffectReport) -> Vec<Feature> {
+        let mut trial = self.extras.clone();
+        for f in &report.add {
+            if !trial.contains(f) {
+                trial.push(f.clone());
+            }
+        }
+        trial
+    }
+
+    /// [`EffectReport::refit_gain`] of each candidate `order` names: the
+    /// drop of the pooled closed-form CV RMSE with it in the model
+    /// refitted, against the current model's closed-form CV.
+    fn refit_gains(
+        &self,
+        c: &Campaign,
+        reports: &mut [EffectReport],
+        order: &[usize],
+        progress: &dyn Fn(&str),
+    ) -> Result<()> {
+        let now = closed_form_rmse(c.data, &self.extras, &self.model, c.o)?;
+        for &k in order {
+            progress(&format!(
+                "refitting with '{}' to measure what it adds",
+                reports[k].label
+            ));
+            let then = refit_closed_form(c.data, &self.trial(&reports[k]), c.o, &self.model)?;
+            reports[k].refit_gain = Some(1.0 - then / now.max(f64::MIN_POSITIVE));
+        }
+        Ok(())
+    }
+
     /// `report`, at `index` among the effects once this round's are in,
     /// joins the model: `extras` and their refit `model` with CV `after`.
+    /// Its row and coefficient intervals are those with the `competitors`
+    /// refitted ([`choose::widen_intervals`]).
     fn accept(
         &mut self,
+        c: &Campaign,
         report: &mut EffectReport,
         index: usize,
-        extras: Vec<Feature>,
-        model: ErrorModel,
+        (extras, model): (Vec<Feature>, ErrorModel),
         after: CvStats,
+        competitors: &choose::Competitors,
     ) {
         report.accepted = true;
         self.added_kinds.push(report.kind);
         report.size = coefficients(&model, &report.add);
+        choose::widen_intervals(report, c.data, &self.current.residuals, competitors);
         self.pending = Some(Pending {
             index,
             promised: 1.0 - (1.0 - report.score.clamp(0.0, 1.0)).sqrt(),
@@ -331,6 +399,7 @@ impl Rounds {
             rows: data.len(),
             scanned_rows: rows.len(),
             dropped_covariates: scan::dropped_covariates_on(data, &[], rows),
+            left_by_cap: self.left_by_cap,
             seconds,
         }
     }
@@ -367,6 +436,7 @@ fn report_candidates(
                 significant: judge.significant(t),
                 accepted: false,
                 confounded_with: Vec::new(),
+                refit_gain: None,
                 note: judge.note(t),
                 refit_xi: t.refit,
                 resamples: t.resamples,
@@ -396,4 +466,9 @@ fn refuse(report: &mut EffectReport, now: f64, then: f64, min_gain: f64, worth: 
     } else {
         report.add_note(format!("not added: {drop}"));
     }
+}
+
+/// A candidate's refit gain, or −∞ when it was not measured.
+fn gain(r: &EffectReport) -> f64 {
+    r.refit_gain.unwrap_or(f64::NEG_INFINITY)
 }

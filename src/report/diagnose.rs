@@ -1,7 +1,7 @@
 //! `diagnose`: the summary it prints and its Markdown report.
 
 use super::xyz;
-use crate::diagnose::{CvStats, Diagnosis, EffectReport};
+use crate::diagnose::{CvStats, Diagnosis, EffectReport, LeftOut};
 use crate::study::diagnosis::CompensationComparison;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -88,6 +88,9 @@ pub fn summary(d: &Diagnosis, names: Names<'_>) -> String {
             }
         }
     }
+    for line in cap_lines(d) {
+        let _ = writeln!(s, "  {line}");
+    }
     if d.steps.is_empty() {
         if d.effects.iter().any(|e| e.significant) {
             let _ = writeln!(
@@ -125,13 +128,16 @@ fn candidate_lines(s: &mut String, d: &Diagnosis) {
         if rank(d, e) < 5 || e.accepted {
             let _ = writeln!(
                 s,
-                "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}  evidence {:>6.3}{}{}",
+                "    {:<48} score {:>6.3}{} p {:.4}  q {:.4}  evidence {:>6.3}{}{}{}",
                 e.describe(),
                 e.score,
                 if e.refit_xi { " ξ" } else { "  " },
                 e.p_value,
                 e.q_value,
                 e.evidence,
+                e.refit_gain
+                    .map(|g| format!("  refit CV {:+.1} %", -100.0 * g))
+                    .unwrap_or_default(),
                 if e.accepted {
                     "  ADDED"
                 } else if e.significant {
@@ -185,6 +191,60 @@ pub fn effect_lines(e: &EffectReport) -> Vec<String> {
     if let Some(c) = &e.after_check {
         out.push(c.verdict.clone());
     }
+    if !e.confounded_with.is_empty() {
+        out.push(not_separable(&e.confounded_with));
+    }
+    out
+}
+
+/// The line that names the explanations the data cannot tell an effect
+/// from.
+fn not_separable(competitors: &[String]) -> String {
+    format!(
+        "not separable on this campaign from: {} (each explains the same residual, its evidence within noise of this one's)",
+        competitors.join("; ")
+    )
+}
+
+/// What one candidate left by the cap would add.
+fn left_line(l: &LeftOut) -> String {
+    let params: Vec<String> = l
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3}"))
+        .collect();
+    let mut line = format!(
+        "{}{}: evidence {:.3}, would lower the CV RMSE by {:.1} % (closed form){}",
+        l.label,
+        if params.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", params.join(", "))
+        },
+        l.evidence,
+        100.0 * l.promised,
+        l.refit_gain
+            .map(|g| format!(", {:.1} % refitted", 100.0 * g))
+            .unwrap_or_default()
+    );
+    if !l.confounded_with.is_empty() {
+        let _ = write!(line, "; {}", not_separable(&l.confounded_with));
+    }
+    line
+}
+
+/// The cap reached with significant candidates left: a heading and one
+/// line each (none when the loop stopped on its own).
+pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
+    if d.left_by_cap.is_empty() {
+        return Vec::new();
+    }
+    let mut out = vec![format!(
+        "the cap of {} effects was reached with {} significant candidates left (--max-effects to add more):",
+        d.steps.len(),
+        d.left_by_cap.len()
+    )];
+    out.extend(d.left_by_cap.iter().map(|l| format!("  {}", left_line(l))));
     out
 }
 
@@ -217,6 +277,14 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
         let _ = writeln!(s, "Effect {}, {}:\n", k + 1, e.describe());
         for line in effect_lines(e) {
             let _ = writeln!(s, "- {line}");
+        }
+        let _ = writeln!(s);
+    }
+    let cap = cap_lines(d);
+    if let Some((head, rest)) = cap.split_first() {
+        let _ = writeln!(s, "**{head}**\n");
+        for line in rest {
+            let _ = writeln!(s, "- {}", line.trim_start());
         }
         let _ = writeln!(s);
     }
@@ -262,7 +330,7 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
          gain over its parameter scan is as large. q: Benjamini–Hochberg adjusted p over all candidates of the round. \
          Evidence: the candidate's leave-one-out gain minus the mean of that null distribution (what scanning its \
          grid finds by chance), as a share of the model's leave-one-out error; significant candidates are ranked \
-         (and added) by it."
+         by it, and the best of each kind are tried for adding in the order of what they add on the refitted model."
     );
     s
 }
@@ -360,7 +428,7 @@ fn round_tables(s: &mut String, d: &Diagnosis) {
                 status
             } else {
                 format!(
-                    "{status}; indistinguishable here from {}",
+                    "{status}; not separable on this campaign from {}",
                     e.confounded_with.join("; ")
                 )
             };

@@ -45,6 +45,7 @@ pub use covariate::{
 };
 use direction::direction_families;
 pub use motion::MOVE_TAUS;
+pub(crate) use motion::is_time_column;
 use motion::motion_families;
 use order::order_families;
 pub use order::step_rows;

@@ -24,6 +24,12 @@ pub const MOVE_TAUS: [f64; 6] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0];
 /// candidate when one of these is present and never decreases.
 const TIME_COLUMNS: [&str; 5] = ["time_s", "time", "t_s", "timestamp", "time_ms"];
 
+/// Whether a column is named like a time column ([`TIME_COLUMNS`]): a
+/// clock, the measurement order in seconds rather than a cause.
+pub(crate) fn is_time_column(name: &str) -> bool {
+    TIME_COLUMNS.contains(&name)
+}
+
 /// The time column of a campaign, when it has one that never decreases.
 pub(super) fn time_column<'a>(data: &'a Dataset, exclude: &'a [String]) -> Option<&'a Covariate> {
     usable_covariates(data, exclude).find(|c| {

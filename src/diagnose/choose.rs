@@ -1,0 +1,242 @@
+//! Which of a round's significant candidates joins the model, and what the
+//! report says about the others.
+//!
+//! - **Compared** ([`compared`]): the best significant candidate of each
+//!   kind (the order's drift apart from its step and block: [`group`]), at
+//!   most [`COMPARED`], in their ranked order. The round
+//!   orders them by what each adds on the refitted model
+//!   ([`EffectReport::refit_gain`]), not by the scan's score, so that a
+//!   step the data shows clearly is not crowded out by a harmonic whose
+//!   scan promised more than the refitted model delivers.
+//! - **Not separable** ([`mark_competitors`]): each compared candidate
+//!   names the candidates it cannot be told apart from
+//!   ([`super::confound`], and those of [`alike`]: nearly the same fit
+//!   with nearly its score).
+//! - **The measured column first** ([`prefer_measured`]): when the first
+//!   is an anonymous order effect and a covariate candidate is not
+//!   separable from it, the covariate goes first; both reports say so.
+//! - **The cap** ([`left_out`]): at the cap of effects, the significant
+//!   candidates left, with what each would add.
+//! - **Intervals** ([`widen_intervals`]): those of an added effect with its
+//!   competitors refitted ([`super::profile`]).
+
+use super::confound::{self, SAME_RESIDUAL, competitor_text, not_separable, region_overlap};
+use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_rows};
+use super::rank::alike;
+use super::report::{EffectReport, LeftOut};
+use super::scan::{EffectKind, Family, Tested, step_rows};
+
+impl Family {
+    /// Whether it is the drift over the order (it adds the row as an input).
+    fn add_drift(&self) -> bool {
+        self.grid.iter().any(|g| g.add.contains(&Feature::Row))
+    }
+}
+use crate::dataset::Dataset;
+use crate::features::Feature;
+
+/// Candidates a round compares for adding (one per kind).
+pub const COMPARED: usize = 4;
+
+/// A round's tested candidates in ranked order, their families, the CV
+/// residuals at the scanned rows and the test of significance.
+pub(super) struct Round<'a> {
+    pub tested: &'a [Tested],
+    pub fams: &'a [Family],
+    pub residuals: &'a [[f64; 3]],
+    pub significant: &'a dyn Fn(&Tested) -> bool,
+}
+
+impl Round<'_> {
+    fn family(&self, k: usize) -> &Family {
+        &self.fams[self.tested[k].family]
+    }
+
+    fn eligible(&self, k: usize) -> bool {
+        (self.significant)(&self.tested[k]) && self.tested[k].score > 0.0
+    }
+}
+
+/// The kind a candidate competes within: its kind, the order's drift
+/// apart from its change points. A step and a block of rows (two steps)
+/// are one explanation, a change of level, between which the scan's
+/// evidence decides: it weighs the block's second edge (the mean of its
+/// null over the two-edge grid), which the refitted model's CV does not.
+fn group(f: &Family) -> (EffectKind, bool) {
+    (f.kind, f.kind == EffectKind::Order && f.add_drift())
+}
+
+/// The candidates compared for adding: the first significant one (with a
+/// positive score) of each kind ([`group`]), at most [`COMPARED`].
+pub(super) fn compared(r: &Round) -> Vec<usize> {
+    let mut seen = Vec::new();
+    let mut out = Vec::new();
+    for k in (0..r.tested.len()).filter(|&k| r.eligible(k)) {
+        let g = group(r.family(k));
+        if !seen.contains(&g) {
+            seen.push(g);
+            out.push(k);
+            if out.len() == COMPARED {
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// The competitors of candidate `k`: [`not_separable`] and [`alike`], as
+/// (index, correlation), most correlated first.
+fn competitors_of(r: &Round, k: usize) -> Vec<(usize, f64)> {
+    let mut out: Vec<(usize, f64)> = not_separable(r.tested, r.fams, r.residuals, k, r.significant)
+        .into_iter()
+        .map(|c| (c.index, c.correlation))
+        .collect();
+    for i in alike(r.tested, r.fams, r.residuals, k, r.significant) {
+        if !out.iter().any(|(j, _)| *j == i) {
+            let fit =
+                |t: &Tested| super::rank::fitted(&t.point(&r.fams[t.family]).columns, r.residuals);
+            let c = super::rank::similarity(&fit(&r.tested[k]), &fit(&r.tested[i]));
+            out.push((i, c));
+        }
+    }
+    out
+}
+
+/// Each compared candidate's report names its competitors
+/// ([`EffectReport::confounded_with`]).
+pub(super) fn mark_competitors(reports: &mut [EffectReport], r: &Round, compared: &[usize]) {
+    for &k in compared {
+        let named: Vec<String> = competitors_of(r, k)
+            .into_iter()
+            .map(|(i, c)| competitor_text(&reports[i], c))
+            .collect();
+        reports[k].confounded_with = named;
+    }
+}
+
+/// The measured column before an anonymous order effect it is not
+/// separable from: if `order[0]` is such an effect, the covariate candidate
+/// [`confound::prefer_measured`] finds goes first, and both reports say so.
+pub(super) fn prefer_measured(reports: &mut [EffectReport], r: &Round, order: &mut Vec<usize>) {
+    let Some(&first) = order.first() else { return };
+    let Some(j) = confound::prefer_measured(r.tested, r.fams, r.residuals, first, r.significant)
+    else {
+        return;
+    };
+    order.retain(|&i| i != j);
+    order.insert(0, j);
+    let (over, measured) = (reports[first].label.clone(), reports[j].label.clone());
+    reports[j].add_note(format!(
+        "tried before '{over}': not separable on this campaign, their evidence within noise; the measured column is preferred over an anonymous order effect"
+    ));
+    reports[first].add_note(format!(
+        "'{measured}', a measured column, explains the same residual within noise and was tried first"
+    ));
+}
+
+/// The significant candidates left at the cap, with what each would add:
+/// those compared, in `order`, then the others in their ranked order.
+pub(super) fn left_out(reports: &[EffectReport], r: &Round, order: &[usize]) -> Vec<LeftOut> {
+    let rest = (0..reports.len()).filter(|k| r.eligible(*k) && !order.contains(k));
+    order
+        .iter()
+        .copied()
+        .chain(rest)
+        .map(|k| LeftOut::of(&reports[k]))
+        .collect()
+}
+
+/// The columns an added effect's intervals are computed with refitted, and
+/// their names.
+pub(super) struct Competitors {
+    columns: Vec<Vec<f64>>,
+    names: Vec<String>,
+}
+
+/// The competitors of candidate `k` (its report `reports[k]`) on every row
+/// of `data`: the drift over the order (but for the drift itself) and the
+/// features of the candidates of another source it is not separable from
+/// (one of the same source, `temp_c` alone and lagged, a step and a block
+/// of rows, is the same explanation), but those it adds itself.
+pub(super) fn competitor_columns(
+    data: &Dataset,
+    r: &Round,
+    k: usize,
+    reports: &[EffectReport],
+) -> Competitors {
+    let own = &reports[k].add;
+    let mut c = Competitors {
+        columns: Vec::new(),
+        names: Vec::new(),
+    };
+    if !own.contains(&Feature::Row) {
+        c.columns = drift_columns(data.len());
+        c.names.push("the drift over the measurement order".into());
+    }
+    // one of the same source is the same explanation, not a competing one
+    let source = &reports[k].source;
+    for (i, _) in competitors_of(r, k) {
+        if &reports[i].source == source {
+            continue;
+        }
+        let add: Vec<Feature> = reports[i]
+            .add
+            .iter()
+            .filter(|f| !own.contains(f) && **f != Feature::Row)
+            .cloned()
+            .collect();
+        let cols = feature_columns(data, &add);
+        if !cols.is_empty() {
+            c.columns.extend(cols);
+            c.names.push(format!("'{}'", reports[i].label));
+        }
+    }
+    c
+}
+
+/// An added effect's row and coefficient intervals with its `competitors`
+/// refitted on the CV `residuals` of the model it joined (all rows of
+/// `data`), and, for a step or block of rows, the region of the joint
+/// space its rows make up when they make one up.
+pub(super) fn widen_intervals(
+    report: &mut EffectReport,
+    data: &Dataset,
+    residuals: &[[f64; 3]],
+    competitors: &Competitors,
+) {
+    let m = residuals.len();
+    let rows = widen_rows(report, residuals, &competitors.columns, step_rows(m));
+    let coefs = widen_coefficients(
+        &mut report.size,
+        data,
+        residuals,
+        &report.add,
+        &competitors.columns,
+    );
+    if (rows || coefs) && !competitors.names.is_empty() {
+        report.add_note(format!(
+            "95 % intervals with {} refitted alongside it",
+            competitors.names.join(", ")
+        ));
+    }
+    let steps: Vec<usize> = report
+        .add
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Step { row } => Some(*row),
+            _ => None,
+        })
+        .collect();
+    let inside: Vec<bool> = match steps[..] {
+        [a] => (0..m).map(|i| i >= a).collect(),
+        [a, b] => (0..m).map(|i| (a.min(b)..a.max(b)).contains(&i)).collect(),
+        _ => return,
+    };
+    let overlap = region_overlap(&data.q, &inside);
+    if overlap >= SAME_RESIDUAL {
+        report.confounded_with.push(format!(
+            "a region of the joint space: its rows were measured in a region of their own (correlation of the rows with their {} nearest poses' {overlap:.2}); a function of the pose explains the same",
+            confound::NEIGHBOURS
+        ));
+    }
+}

@@ -1,0 +1,251 @@
+//! Which candidates a campaign cannot tell apart: "not separable on this
+//! campaign" ([`not_separable`]), the measured column preferred over an
+//! anonymous order effect among them ([`prefer_measured`]), and a step or
+//! block of rows that is also a region of the joint space
+//! ([`region_overlap`]).
+//!
+//! **The measure.** A candidate's *fitted contribution* is the
+//! least-squares fit of the centred CV residuals of the current model (at
+//! the scanned rows, per axis) on its centred columns ([`fitted`]). Two
+//! candidates of different families explain the same residual when
+//! 1. the correlation of their fitted contributions (the cosine of the two
+//!    centred fits, pooled over the axes: [`similarity`]) is at least
+//!    [`SAME_RESIDUAL`]; and
+//! 2. their evidence is within noise: with `σ²_a` the mean square of the
+//!    residuals of axis `a`, a candidate of `p` columns explains
+//!    `E = Σ_a (‖f_a‖² − p·σ²_a)/σ²_a` (its fitted sum of squares in noise
+//!    units, less what `p` columns fit of pure noise), and two are within
+//!    noise when `|E₁ − E₂| ≤ 1.96 · 2·√(Σ_a ‖f₁,a − f₂,a‖²/σ²_a)`: the
+//!    standard deviation of the difference of the two fits' residual sums
+//!    of squares under noise `e` is that of `2·e·(f₁ − f₂)`.
+//!
+//! A step and a drift over the order (a mid-campaign step and a linear
+//! ramp correlate at `√(3p(1−p))`, 0.87 at the middle), a covariate and a
+//! step at its jump, an order effect and a smooth function of the pose
+//! measured region by region are such pairs. The residual `σ²_a` holds
+//! whatever the model still misses, so "within noise" errs towards naming
+//! a competitor.
+//!
+//! **Region of the joint space.** A step or block of rows is a region of
+//! the joint space when the poses were measured region by region: its
+//! indicator is then predicted by the indicator of each row's nearest
+//! poses in joint space ([`region_overlap`]: the correlation of the
+//! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
+
+use super::rank::{fitted, similarity};
+use super::report::EffectReport;
+use super::scan::{EffectKind, Family, Tested, is_time_column};
+
+/// Correlation of two fitted contributions from which they explain the
+/// same residual (and of a step or block with its region of the joint
+/// space).
+pub const SAME_RESIDUAL: f64 = 0.7;
+
+/// Nearest poses in joint space a row's region indicator is averaged over.
+pub const NEIGHBOURS: usize = 5;
+
+/// What a candidate explains: its fitted contribution, and its explained
+/// sum of squares in noise units less the columns' share of noise.
+struct Explained {
+    fit: Vec<[f64; 3]>,
+    e: f64,
+}
+
+/// The per-axis mean square of the centred residuals (the noise unit).
+fn noise(residuals: &[[f64; 3]]) -> [f64; 3] {
+    let m = residuals.len().max(1) as f64;
+    std::array::from_fn(|a| {
+        let mu = residuals.iter().map(|r| r[a]).sum::<f64>() / m;
+        let v = residuals.iter().map(|r| (r[a] - mu).powi(2)).sum::<f64>() / m;
+        v.max(f64::MIN_POSITIVE)
+    })
+}
+
+fn explained(t: &Tested, fams: &[Family], residuals: &[[f64; 3]], s2: &[f64; 3]) -> Explained {
+    let cols = &t.point(&fams[t.family]).columns;
+    let fit = fitted(cols, residuals);
+    let p = cols.len() as f64;
+    let e = (0..3)
+        .map(|a| fit.iter().map(|f| f[a] * f[a]).sum::<f64>() / s2[a] - p)
+        .sum();
+    Explained { fit, e }
+}
+
+/// A competitor of a candidate: its index among the tested, the
+/// correlation of their fitted contributions, and both explained sums of
+/// squares in noise units ([`Explained`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Competitor {
+    pub index: usize,
+    pub correlation: f64,
+    pub explained: [f64; 2],
+}
+
+/// The significant candidates of other families that candidate `k` of
+/// `tested` cannot be told apart from on these residuals (the measure of
+/// this module), most correlated first.
+pub(super) fn not_separable(
+    tested: &[Tested],
+    fams: &[Family],
+    residuals: &[[f64; 3]],
+    k: usize,
+    significant: &dyn Fn(&Tested) -> bool,
+) -> Vec<Competitor> {
+    let s2 = noise(residuals);
+    let top = explained(&tested[k], fams, residuals, &s2);
+    let label = &fams[tested[k].family].label;
+    let mut out: Vec<Competitor> = (0..tested.len())
+        .filter(|&i| i != k && significant(&tested[i]))
+        .filter(|&i| &fams[tested[i].family].label != label)
+        .filter_map(|i| {
+            let other = explained(&tested[i], fams, residuals, &s2);
+            let correlation = similarity(&top.fit, &other.fit);
+            let d2: f64 = top
+                .fit
+                .iter()
+                .zip(&other.fit)
+                .map(|(x, y)| (0..3).map(|a| (x[a] - y[a]).powi(2) / s2[a]).sum::<f64>())
+                .sum();
+            let within = (top.e - other.e).abs() <= 1.96 * 2.0 * d2.sqrt();
+            (correlation >= SAME_RESIDUAL && within).then_some(Competitor {
+                index: i,
+                correlation,
+                explained: [top.e, other.e],
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| b.correlation.total_cmp(&a.correlation));
+    out
+}
+
+/// A competitor as the report names it: label (with its parameters),
+/// score, evidence and the correlation of the fitted contributions.
+pub(super) fn competitor_text(r: &EffectReport, correlation: f64) -> String {
+    let params: Vec<String> = r
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3}"))
+        .collect();
+    let params = if params.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", params.join(", "))
+    };
+    format!(
+        "{}{params} (score {:.3}, evidence {:.3}, correlation of the fitted contributions {:.2})",
+        r.label, r.score, r.evidence, correlation
+    )
+}
+
+/// Whether a candidate is an anonymous order effect (a drift, a step or a
+/// block of rows: nothing measured names it).
+fn anonymous(f: &Family) -> bool {
+    f.kind == EffectKind::Order
+}
+
+/// Whether a candidate is a measured column (a covariate: `temp_c`, a
+/// payload), alone or with the joints. A time column (`time_s`, …) is not:
+/// it is the measurement order in seconds, as anonymous as the row.
+fn measured(f: &Family) -> bool {
+    f.kind == EffectKind::Covariate && !f.source.iter().any(|s| is_time_column(s))
+}
+
+/// Between explanations that cannot be told apart, the measured column
+/// goes before an anonymous order effect: if `tested[first]` is an order
+/// effect and a significant covariate candidate is not separable from it
+/// (evidence within noise, [`not_separable`]), that candidate (the one of
+/// fewest columns, then the most evidence) is returned, to go first.
+pub(super) fn prefer_measured(
+    tested: &[Tested],
+    fams: &[Family],
+    residuals: &[[f64; 3]],
+    first: usize,
+    significant: &dyn Fn(&Tested) -> bool,
+) -> Option<usize> {
+    if !anonymous(&fams[tested[first].family]) {
+        return None;
+    }
+    let width = |i: usize| tested[i].point(&fams[tested[i].family]).columns.len();
+    not_separable(tested, fams, residuals, first, significant)
+        .into_iter()
+        .filter(|c| measured(&fams[tested[c.index].family]))
+        .min_by(|a, b| {
+            width(a.index).cmp(&width(b.index)).then(
+                tested[b.index]
+                    .evidence
+                    .total_cmp(&tested[a.index].evidence),
+            )
+        })
+        .map(|c| c.index)
+}
+
+/// How much a set of rows (`inside[i]`, a step's rows after it or a
+/// block's rows) is a region of the joint space: the correlation of its
+/// indicator with the share of each row's [`NEIGHBOURS`] nearest other
+/// poses (Euclidean in the joint angles, degrees) that are inside too. 1:
+/// the rows are a region of their own; near 0: spread over the workspace.
+pub fn region_overlap(q: &[Vec<f64>], inside: &[bool]) -> f64 {
+    let m = q.len();
+    if m <= NEIGHBOURS + 1 || inside.iter().all(|&b| b) || inside.iter().all(|&b| !b) {
+        return 0.0;
+    }
+    let share: Vec<f64> = (0..m)
+        .map(|i| {
+            let mut d: Vec<(f64, usize)> = (0..m)
+                .filter(|&j| j != i)
+                .map(|j| {
+                    let s: f64 = q[i].iter().zip(&q[j]).map(|(a, b)| (a - b).powi(2)).sum();
+                    (s, j)
+                })
+                .collect();
+            d.select_nth_unstable_by(NEIGHBOURS - 1, |a, b| {
+                a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+            });
+            d[..NEIGHBOURS].iter().filter(|(_, j)| inside[*j]).count() as f64 / NEIGHBOURS as f64
+        })
+        .collect();
+    let x: Vec<f64> = inside.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
+    correlation(&x, &share)
+}
+
+/// Pearson correlation of two columns (0 when one is constant).
+fn correlation(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx).powi(2);
+        syy += (b - my).powi(2);
+    }
+    if sxx > 0.0 && syy > 0.0 {
+        sxy / (sxx * syy).sqrt()
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A block of rows measured in its own corner of the joint space is a
+    /// region; the same rows spread over the space are not.
+    #[test]
+    fn a_block_measured_in_its_own_region_overlaps_it() {
+        let m = 120;
+        let inside: Vec<bool> = (0..m).map(|i| (40..80).contains(&i)).collect();
+        // a deterministic scatter of poses; the block's are shifted away
+        let pose = |i: usize, shift: f64| -> Vec<f64> {
+            (0..3)
+                .map(|j| ((i * (7 + 3 * j) + 11 * j) % 97) as f64 + shift)
+                .collect()
+        };
+        let regional: Vec<Vec<f64>> = (0..m)
+            .map(|i| pose(i, if inside[i] { 500.0 } else { 0.0 }))
+            .collect();
+        let spread: Vec<Vec<f64>> = (0..m).map(|i| pose(i, 0.0)).collect();
+        assert!(region_overlap(&regional, &inside) > 0.95);
+        assert!(region_overlap(&spread, &inside) < SAME_RESIDUAL);
+    }
+}

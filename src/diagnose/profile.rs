@@ -1,0 +1,298 @@
+//! Intervals of an added effect that hold under confounding: with its
+//! competing effects refitted, not from the chosen model alone.
+//!
+//! The competitors of an added effect are the candidates of its round it
+//! is not separable from ([`super::confound`]) and, for every effect but
+//! the drift itself, the drift over the measurement order (the row and its
+//! square: a real campaign has the robot's own slow changes, and any step,
+//! covariate or block projects onto them). Both intervals are computed on
+//! the CV residuals of the model the effect was added to (all rows), by
+//! least squares with an intercept:
+//!
+//! - **Row of a step, edges of a block** ([`profile_rows`]): the profile of
+//!   the evidence over the row. For each row `t` the residuals are fitted
+//!   with the step at `t` and the competitors' columns (a block: the other
+//!   edge's step too); with `σ²_a` the mean square left at the best row (per
+//!   axis, `m − p − 1` degrees of freedom), the deviance
+//!   `D(t) = Σ_a (SSR_a(t) − SSR_a(t̂))/σ²_a`, and the interval is every row
+//!   with `D(t) ≤ 2·ln(2/0.05) = 7.38` ([`CHANGE_95`]), joined with the
+//!   scan's own support interval.
+//! - **Coefficients** ([`widen_coefficients`]): the effect's columns fitted
+//!   alone and with the competitors' columns; the competitors move each
+//!   estimate by `Δ` and scale its standard error by `√r` (`r` the ratio of
+//!   the two least-squares variances of that coefficient, the variance
+//!   inflation of the competitors). The interval becomes the symmetric hull
+//!   of the model's own `b ± h` and of `b + Δ ± h·√r`: half-width
+//!   `max(h, |Δ| + h·√r)`.
+
+use super::report::{Coefficient, EffectReport};
+use crate::dataset::Dataset;
+use crate::features::Feature;
+use nalgebra::{DMatrix, DVector};
+
+/// The profile deviance of a row within the 95 % interval: `2·ln(2/0.05)`.
+/// The likelihood ratio of a change at the true row against a change at
+/// another row, as that row moves away on one side, is a martingale of
+/// mean 1 (Gaussian residuals, known σ and size of the change: the profile
+/// re-estimates the size, an approximation), so by Ville's maximal inequality
+/// some row on that side beats the true one by a factor `1/a` with
+/// probability at most `a`; `a` = 2.5 % a side. χ²₁(95 %) = 3.84, the
+/// regular parameter's threshold, undercovers a change point: its profile
+/// is not quadratic, and a clear step's is one row wide.
+const CHANGE_95: f64 = 7.377_758_908_227_871;
+
+/// Orthonormal basis of the centred columns (the intercept is implied).
+fn basis(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for c in columns {
+        let mu = c.iter().sum::<f64>() / c.len().max(1) as f64;
+        let mut v: Vec<f64> = c.iter().map(|x| x - mu).collect();
+        let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for b in &out {
+                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n0 > 0.0 && n > 1e-8 * n0 {
+            v.iter_mut().for_each(|x| *x /= n);
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// `v` centred and with its projection on `q` (orthonormal, centred) taken off.
+fn residualise(v: &[f64], q: &[Vec<f64>]) -> Vec<f64> {
+    let mu = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mut out: Vec<f64> = v.iter().map(|x| x - mu).collect();
+    for b in q {
+        let d: f64 = out.iter().zip(b).map(|(x, y)| x * y).sum();
+        out.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+    }
+    out
+}
+
+/// The drift over the measurement order as competitor columns: the row
+/// and its square.
+pub(super) fn drift_columns(m: usize) -> Vec<Vec<f64>> {
+    let row: Vec<f64> = (0..m).map(|i| i as f64 / m.max(1) as f64).collect();
+    let sq = row.iter().map(|r| r * r).collect();
+    vec![row, sq]
+}
+
+/// The columns of `features` on every row of `data` (those that cannot be
+/// computed are left out).
+pub(super) fn feature_columns(data: &Dataset, features: &[Feature]) -> Vec<Vec<f64>> {
+    features
+        .iter()
+        .filter_map(|f| f.columns(data).ok())
+        .flatten()
+        .collect()
+}
+
+/// The 95 % interval of the row of a step in `residuals` (all rows, the
+/// model's CV residuals) from the profile of the evidence over rows
+/// `range`, with the `competitors` columns refitted at every row; `None`
+/// when nothing can be fitted.
+pub(super) fn profile_rows(
+    residuals: &[[f64; 3]],
+    competitors: &[Vec<f64>],
+    range: std::ops::Range<usize>,
+) -> Option<[usize; 2]> {
+    let m = residuals.len();
+    if range.is_empty() || m < 4 {
+        return None;
+    }
+    let q = basis(competitors);
+    let r: Vec<Vec<f64>> = (0..3)
+        .map(|a| residualise(&residuals.iter().map(|x| x[a]).collect::<Vec<_>>(), &q))
+        .collect();
+    // suffix sums: of the residuals (s_tᵀ r̃ = Σ_{i ≥ t} r̃_i, for r̃ ⟂ 1, q)
+    // and of each basis column (qᵀ s_t)
+    let suffix = |v: &[f64]| -> Vec<f64> {
+        let mut s = vec![0.0; v.len() + 1];
+        for i in (0..v.len()).rev() {
+            s[i] = s[i + 1] + v[i];
+        }
+        s
+    };
+    let rs: Vec<Vec<f64>> = r.iter().map(|v| suffix(v)).collect();
+    let qs: Vec<Vec<f64>> = q.iter().map(|v| suffix(v)).collect();
+    let base: [f64; 3] = std::array::from_fn(|a| r[a].iter().map(|x| x * x).sum());
+    // the fitted sum of squares of the step at t, per axis
+    let gain = |t: usize| -> [f64; 3] {
+        let n = (m - t) as f64;
+        // ‖s̃_t‖² = ‖s_t − mean‖² − ‖qᵀ s_t‖²
+        let norm = n - n * n / m as f64 - qs.iter().map(|s| s[t] * s[t]).sum::<f64>();
+        std::array::from_fn(|a| {
+            if norm > 1e-9 {
+                rs[a][t] * rs[a][t] / norm
+            } else {
+                0.0
+            }
+        })
+    };
+    let gains: Vec<(usize, [f64; 3])> = range.map(|t| (t, gain(t))).collect();
+    let (_, best) = gains
+        .iter()
+        .max_by(|x, y| x.1.iter().sum::<f64>().total_cmp(&y.1.iter().sum::<f64>()))?;
+    let dof = (m as f64 - q.len() as f64 - 2.0).max(1.0);
+    let s2: [f64; 3] = std::array::from_fn(|a| ((base[a] - best[a]) / dof).max(f64::MIN_POSITIVE));
+    let within: Vec<usize> = gains
+        .iter()
+        .filter(|(_, g)| (0..3).map(|a| (best[a] - g[a]) / s2[a]).sum::<f64>() <= CHANGE_95)
+        .map(|(t, _)| *t)
+        .collect();
+    Some([*within.first()?, *within.last()?])
+}
+
+/// The interval of every row parameter (`row`, `from_row`, `to_row`) of an
+/// added step or block from [`profile_rows`], joined with its own: each
+/// edge profiled with the `competitors` and the block's other edge
+/// refitted. Returns whether an interval changed.
+pub(super) fn widen_rows(
+    report: &mut EffectReport,
+    residuals: &[[f64; 3]],
+    competitors: &[Vec<f64>],
+    range: std::ops::Range<usize>,
+) -> bool {
+    let steps: Vec<usize> = report
+        .add
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Step { row } => Some(*row),
+            _ => None,
+        })
+        .collect();
+    let keys: &[&str] = match steps.len() {
+        1 => &["row"],
+        2 => &["from_row", "to_row"],
+        _ => return false,
+    };
+    let m = residuals.len();
+    let mut changed = false;
+    for (k, key) in keys.iter().enumerate() {
+        let mut cols = competitors.to_vec();
+        for (j, row) in steps.iter().enumerate() {
+            if j != k {
+                cols.push((0..m).map(|i| if i >= *row { 1.0 } else { 0.0 }).collect());
+            }
+        }
+        // a block's edge stays on its side of the other one
+        let edge = match (steps.len(), k) {
+            (2, 0) => range.start..range.end.min(steps[1]),
+            (2, _) => range.start.max(steps[0] + 1)..range.end,
+            _ => range.clone(),
+        };
+        let Some([lo, hi]) = profile_rows(residuals, &cols, edge) else {
+            continue;
+        };
+        let own = report.params.get(*key).copied().unwrap_or(steps[k] as f64);
+        let ci = report
+            .params_ci
+            .entry(key.to_string())
+            .or_insert([own, own]);
+        let new = [ci[0].min(lo as f64), ci[1].max(hi as f64)];
+        changed |= new != *ci;
+        *ci = new;
+    }
+    changed
+}
+
+/// Least-squares coefficients of the centred `y` on the centred,
+/// `q`-residualised `x` columns, and the diagonal of `(XᵀX)⁻¹` (by
+/// solves); `None` when singular.
+fn least_squares(
+    x: &[Vec<f64>],
+    ys: &[Vec<f64>],
+    q: &[Vec<f64>],
+) -> Option<(Vec<[f64; 3]>, Vec<f64>)> {
+    let k = x.len();
+    let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q)).collect();
+    let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
+    let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[i], &xr[j]));
+    let chol = g.cholesky()?;
+    let mut beta = vec![[0.0; 3]; k];
+    for (a, y) in ys.iter().enumerate() {
+        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[i], y)));
+        for i in 0..k {
+            beta[i][a] = b[i];
+        }
+    }
+    let diag = (0..k)
+        .map(|i| chol.solve(&DVector::from_fn(k, |j, _| if i == j { 1.0 } else { 0.0 }))[i])
+        .collect();
+    Some((beta, diag))
+}
+
+/// Widen the coefficient intervals `size` of an effect that adds `add`
+/// (columns named like its coefficients) by what refitting the
+/// `competitors` columns alongside it does to each estimate on the CV
+/// `residuals` of `data` (all rows). Returns whether any interval widened.
+pub(super) fn widen_coefficients(
+    size: &mut [Coefficient],
+    data: &Dataset,
+    residuals: &[[f64; 3]],
+    add: &[Feature],
+    competitors: &[Vec<f64>],
+) -> bool {
+    let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
+    let cols = feature_columns(data, add);
+    if cols.len() != names.len() || cols.is_empty() {
+        return false;
+    }
+    let ys: Vec<Vec<f64>> = (0..3)
+        .map(|a| residuals.iter().map(|r| r[a]).collect())
+        .collect();
+    let (Some((alone, v0)), Some((with, v1))) = (
+        least_squares(&cols, &ys, &[]),
+        least_squares(&cols, &ys, &basis(competitors)),
+    ) else {
+        return false;
+    };
+    let mut widened = false;
+    for c in size.iter_mut() {
+        let Some(i) = names.iter().position(|n| n == &c.column) else {
+            continue;
+        };
+        let inflation = (v1[i] / v0[i]).max(1.0).sqrt();
+        for a in 0..3 {
+            let delta = (with[i][a] - alone[i][a]).abs();
+            let h = c.ci95[a];
+            let wide = h.max(delta + h * inflation);
+            widened |= wide > h;
+            c.ci95[a] = wide;
+        }
+    }
+    widened
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step at a row no grid favours is inside its profile interval, and
+    /// the drift refitted alongside widens that interval.
+    #[test]
+    fn the_profile_interval_covers_the_step_and_widens_with_a_drift() {
+        let m = 300;
+        let step = 137;
+        let noise = |i: usize| (((i * 7919) % 101) as f64 / 101.0 - 0.5) * 0.2;
+        let res: Vec<[f64; 3]> = (0..m)
+            .map(|i| {
+                let s = if i >= step { 0.1 } else { 0.0 };
+                let d = 0.3 * i as f64 / m as f64;
+                [s + d + noise(i), -s + noise(i + 3), noise(i + 5)]
+            })
+            .collect();
+        let alone = profile_rows(&res, &[], 15..285).unwrap();
+        let with = profile_rows(&res, &drift_columns(m), 15..285).unwrap();
+        assert!(with[0] <= step && step <= with[1], "{with:?}");
+        assert!(
+            with[1] - with[0] >= alone[1] - alone[0],
+            "{alone:?} {with:?}"
+        );
+    }
+}
