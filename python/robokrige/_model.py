@@ -436,7 +436,9 @@ class ErrorModel(EstimatorBase):
         poses of X, and with ``return_std`` their standard deviations √MSE:
         of the predicted error, a calibration's uncertainty included, the
         measurement noise not (add ``model_.noise_std()`` in quadrature for
-        a new measurement's).
+        a new measurement's). Both are calibrated on the model's
+        leave-one-out residuals, so that 95 % of them fall inside
+        ``±1.96`` standard deviations of a new measurement.
 
         X as in ``fit(X, y)`` (``n_features_in_`` columns); or, the campaign
         form, joints ``q`` alone (``n_joints_`` columns) with ``dirs`` and
