@@ -219,14 +219,7 @@ pub(super) fn widen_intervals(
             competitors.names.join(", ")
         ));
     }
-    let steps: Vec<usize> = report
-        .add
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Step { row } => Some(*row),
-            _ => None,
-        })
-        .collect();
+    let steps = report.step_rows();
     let inside: Vec<bool> = match steps[..] {
         [a] => (0..m).map(|i| i >= a).collect(),
         [a, b] => (0..m).map(|i| (a.min(b)..a.max(b)).contains(&i)).collect(),

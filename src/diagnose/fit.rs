@@ -69,16 +69,7 @@ pub(super) fn cross_validated(
     o: &DiagnoseOptions,
     from: Option<&ErrorModel>,
 ) -> Result<(CvStats, ErrorModel)> {
-    let work = with_columns(data, extras)?;
-    let start = from.and_then(|m| extended_starts(m, extras));
-    let model = ErrorModel::fit_with_extras(
-        &work,
-        o.space,
-        &o.periodic,
-        &o.kriging,
-        extras,
-        start.as_deref(),
-    )?;
+    let (work, model) = fit_extended(data, extras, o, from)?;
     let warm = model.warm_starts();
     let res = if data.len() > o.refit_rows {
         cross_validate_closed_form(&work, &model, o.folds, o.seed)?
@@ -122,16 +113,7 @@ pub(super) fn refit_closed_form(
     o: &DiagnoseOptions,
     from: &ErrorModel,
 ) -> Result<f64> {
-    let work = with_columns(data, extras)?;
-    let start = extended_starts(from, extras);
-    let model = ErrorModel::fit_with_extras(
-        &work,
-        o.space,
-        &o.periodic,
-        &o.kriging,
-        extras,
-        start.as_deref(),
-    )?;
+    let (work, model) = fit_extended(data, extras, o, Some(from))?;
     let res = cross_validate_closed_form(&work, &model, o.folds, o.seed)?;
     Ok(cv_stats(res, extras, &model).pooled_rmse_mm)
 }
@@ -148,6 +130,27 @@ pub(super) fn refit_closed_form(
 /// whose CV then says more about the basin than about the effect (on all
 /// 2 773 rows of UR10 series C, a planted lag and a planted temperature
 /// drift were found but not confirmed that way).
+/// `data` with the columns of `extras`, and the model with them fitted on
+/// all of it: a local search from `from` when given ([`extended_starts`]).
+fn fit_extended(
+    data: &Dataset,
+    extras: &[Feature],
+    o: &DiagnoseOptions,
+    from: Option<&ErrorModel>,
+) -> Result<(Dataset, ErrorModel)> {
+    let work = with_columns(data, extras)?;
+    let start = from.and_then(|m| extended_starts(m, extras));
+    let model = ErrorModel::fit_with_extras(
+        &work,
+        o.space,
+        &o.periodic,
+        &o.kriging,
+        extras,
+        start.as_deref(),
+    )?;
+    Ok((work, model))
+}
+
 fn extended_starts(from: &ErrorModel, extras: &[Feature]) -> Option<Vec<Hyperparameters>> {
     // a model's correlation inputs are its extras that are not trend-only,
     // in their order (`ErrorModel::extras` holds them first)

@@ -158,14 +158,7 @@ pub(super) fn widen_rows(
     competitors: &[Vec<f64>],
     range: std::ops::Range<usize>,
 ) -> bool {
-    let steps: Vec<usize> = report
-        .add
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Step { row } => Some(*row),
-            _ => None,
-        })
-        .collect();
+    let steps = report.step_rows();
     let keys: &[&str] = match steps.len() {
         1 => &["row"],
         2 => &["from_row", "to_row"],

@@ -332,6 +332,20 @@ pub(super) fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficie
 }
 
 impl EffectReport {
+    /// The rows of the steps this candidate adds: one for a step, two for a
+    /// block of rows (its edges), none for any other kind.
+    pub fn step_rows(&self) -> Vec<usize> {
+        self.add
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Step { row } => Some(*row),
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+impl EffectReport {
     /// Add `text` to the report's note (after any note it has: "ranked
     /// before …; not added: …").
     pub(super) fn add_note(&mut self, text: String) {
