@@ -2,6 +2,8 @@
 //! control campaign reports nothing significant; features and the statistics
 //! behave.
 
+mod common;
+
 use robokrige::diagnose::{DiagnoseOptions, EffectKind, diagnose};
 use robokrige::features::Feature;
 use robokrige::kinematics;
@@ -26,17 +28,7 @@ fn campaign(rows: usize, seed: u64, effect: Option<&str>) -> Dataset {
 }
 
 fn quick() -> DiagnoseOptions {
-    DiagnoseOptions::default()
-        .kriging(
-            KrigingOptions::default()
-                .optimizer(OptimizerKind::HookeJeeves)
-                .nugget(true)
-                .max_evals(300)
-                .starts(2),
-        )
-        .folds(5)
-        .permutations(999)
-        .max_effects(2)
+    common::quick_diagnose()
 }
 
 #[test]

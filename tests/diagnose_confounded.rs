@@ -4,12 +4,13 @@
 //! The step's row, its direction and size, and the drift's are seeded
 //! random draws (no round fraction of the campaign a grid could favour).
 
+mod common;
+
 use rand::RngExt;
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{DiagnoseOptions, Diagnosis, EffectReport, diagnose};
 use robokrige::features::Feature;
 use robokrige::kinematics;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
 use robokrige::sim::{CampaignKind, CampaignSpec, SimOutput, simulate};
 use robokrige::stats::rng_for;
 
@@ -53,17 +54,7 @@ fn planted(m: usize, seed: u64) -> (Dataset, usize) {
 }
 
 fn options() -> DiagnoseOptions {
-    DiagnoseOptions::default()
-        .kriging(
-            KrigingOptions::default()
-                .optimizer(OptimizerKind::HookeJeeves)
-                .nugget(true)
-                .max_evals(300)
-                .starts(2),
-        )
-        .folds(5)
-        .permutations(999)
-        .max_effects(2)
+    common::quick_diagnose()
 }
 
 fn names(e: &EffectReport, family: &str) -> bool {

@@ -106,3 +106,22 @@ pub fn fit_searched(
         .check()?
         .fit(x, y)
 }
+
+/// `diagnose` options fast enough for a test: Hooke–Jeeves with 2 starts
+/// and 300 evaluations, a nugget, 5 folds, 999 permutations, at most 2
+/// effects.
+#[allow(dead_code)]
+pub fn quick_diagnose() -> robokrige::diagnose::DiagnoseOptions {
+    use robokrige::kriging::{KrigingOptions, OptimizerKind};
+    robokrige::diagnose::DiagnoseOptions::default()
+        .kriging(
+            KrigingOptions::default()
+                .optimizer(OptimizerKind::HookeJeeves)
+                .nugget(true)
+                .max_evals(300)
+                .starts(2),
+        )
+        .folds(5)
+        .permutations(999)
+        .max_effects(2)
+}
