@@ -25,6 +25,8 @@ use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_r
 use super::rank::alike;
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
+use crate::dataset::Dataset;
+use crate::features::Feature;
 
 impl Family {
     /// Whether it is the drift over the order (it adds the row as an input).
@@ -32,8 +34,6 @@ impl Family {
         self.grid.iter().any(|g| g.add.contains(&Feature::Row))
     }
 }
-use crate::dataset::Dataset;
-use crate::features::Feature;
 
 /// Candidates a round compares for adding (one per kind).
 pub const COMPARED: usize = 4;
@@ -219,7 +219,7 @@ pub(super) fn widen_intervals(
             competitors.names.join(", ")
         ));
     }
-    let steps = report.step_rows();
+    let steps = report.change_point_rows();
     let inside: Vec<bool> = match steps[..] {
         [a] => (0..m).map(|i| i >= a).collect(),
         [a, b] => (0..m).map(|i| (a.min(b)..a.max(b)).contains(&i)).collect(),

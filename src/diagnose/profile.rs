@@ -158,7 +158,7 @@ pub(super) fn widen_rows(
     competitors: &[Vec<f64>],
     range: std::ops::Range<usize>,
 ) -> bool {
-    let steps = report.step_rows();
+    let steps = report.change_point_rows();
     let keys: &[&str] = match steps.len() {
         1 => &["row"],
         2 => &["from_row", "to_row"],

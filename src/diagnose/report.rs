@@ -334,7 +334,7 @@ pub(super) fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficie
 impl EffectReport {
     /// The rows of the steps this candidate adds: one for a step, two for a
     /// block of rows (its edges), none for any other kind.
-    pub fn step_rows(&self) -> Vec<usize> {
+    pub fn change_point_rows(&self) -> Vec<usize> {
         self.add
             .iter()
             .filter_map(|f| match f {
