@@ -89,7 +89,7 @@ fn one_file_holds_the_calibration_and_predicts_their_sum() {
 }
 
 /// `fit --robot` (calibrated by default) → `predict` → `compensate` on the
-/// simulated robot's truth → `diagnose --calibrate --model-out` →
+/// simulated robot's truth → `diagnose --robot --model-out` →
 /// `robot calibrated`, through the binary.
 #[test]
 fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
@@ -165,24 +165,37 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
     eprintln!("circle mean reduction: calibrated {cal:.3}, raw Kriging {raw:.3}");
     assert!(cal >= 0.85, "calibrated model: reduction {cal:.3}");
     assert!(cal >= raw - 0.02, "calibrated {cal:.3} vs raw {raw:.3}");
-    // diagnose on the calibration's residual writes a calibrated model
-    let (c, _, err) = rk(&[
-        "diagnose",
-        &ds("comau_lhs.csv"),
-        "--robot",
-        "comau-nj220",
-        "--calibrate",
-        "--method",
-        "js-hj",
-        "--max-effects",
-        "1",
-        "--model-out",
-        &p("diag.json"),
-    ]);
-    assert_eq!(c, 0, "{err}");
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("diag.json")).unwrap()).unwrap();
-    assert!(d["calibration"]["parameters"].is_array(), "no calibration");
+    // with a robot, diagnose works on the calibration's residual and writes
+    // a calibrated model; --no-calibrate diagnoses the raw error
+    for (flag, out, calibrated) in [
+        (None, "diag.json", true),
+        (Some("--no-calibrate"), "diag_raw.json", false),
+    ] {
+        let mut args = vec![
+            "diagnose".to_string(),
+            ds("comau_lhs.csv"),
+            "--robot".into(),
+            "comau-nj220".into(),
+            "--method".into(),
+            "js-hj".into(),
+            "--max-effects".into(),
+            "1".into(),
+            "--model-out".into(),
+            p(out),
+        ];
+        args.extend(flag.map(String::from));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (c, stdout, err) = rk(&args);
+        assert_eq!(c, 0, "{err}");
+        assert_eq!(stdout.contains("calibrated base:"), calibrated, "{stdout}");
+        let d: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(out)).unwrap()).unwrap();
+        assert_eq!(
+            d["calibration"]["parameters"].is_array(),
+            calibrated,
+            "{flag:?}: calibration in the model written"
+        );
+    }
     // the identified kinematics as a robot file, usable as --robot
     let (c, out, err) = rk(&[
         "robot",

@@ -6,12 +6,16 @@
 //!
 //! Run: `cargo bench --bench plant_real -- [--series b|c|b,c] [--rows N]
 //! [--plants N] [--seed S] [--sizes 1,2] [--kinds step,block,drift,lag,harmonic]
-//! [--minutes M]`. Defaults: both series, all rows, 20 plants (the kinds in
-//! turn), seed 1, sizes 1 and 2, every kind, no time limit (`--minutes`: no
-//! plant starts after M minutes; the table has what ran).
+//! [--minutes M] [--no-calibrate]`. Defaults: both series, all rows, 20
+//! plants (the kinds in turn), seed 1, sizes 1 and 2, every kind, no time
+//! limit (`--minutes`: no plant starts after M minutes; the table has what
+//! ran).
 //!
 //! `diagnose` runs as `robokrige diagnose FILE --robot ur10 --tool
-//! -0.14,0.30,92.82` would: the library entry point with the CLI's defaults.
+//! -0.14,0.30,92.82` would: the library entry point with the CLI's
+//! defaults, so on the residual of the campaign's D-H calibration
+//! (`--no-calibrate`: on the raw error). Plants go into the measured
+//! errors, before the calibration.
 //! The size unit is the pooled CV RMSE of that default model on the
 //! unplanted campaign (the control's "before"), computed once per series.
 
@@ -21,6 +25,7 @@ mod score;
 use plant::KINDS;
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, diagnose, fit_with_effects};
+use robokrige::study::diagnosis::DiagnosisBase;
 use score::Outcome;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -36,6 +41,8 @@ struct Args {
     sizes: Vec<f64>,
     kinds: Vec<String>,
     minutes: Option<f64>,
+    /// `Some(false)` with `--no-calibrate`, else the CLI's default.
+    calibrate: Option<bool>,
 }
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
@@ -57,6 +64,7 @@ fn args() -> Args {
         sizes: vec![1.0, 2.0],
         kinds: KINDS.iter().map(|k| k.to_string()).collect(),
         minutes: None,
+        calibrate: None,
     };
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let mut it = argv.iter();
@@ -82,6 +90,7 @@ fn args() -> Args {
             "--sizes" => a.sizes = list(&v()),
             "--kinds" => a.kinds = list(&v()),
             "--minutes" => a.minutes = Some(v().parse().expect("--minutes M")),
+            "--no-calibrate" => a.calibrate = Some(false),
             other => panic!("unknown option {other}"),
         }
     }
@@ -112,8 +121,13 @@ fn options(data: &Dataset) -> DiagnoseOptions {
         .robot(Some(robot))
 }
 
-fn run(data: &Dataset, o: &DiagnoseOptions) -> Diagnosis {
-    diagnose(data, o, &|_| {}).expect("diagnose")
+/// The diagnosis of `data` as the CLI runs it: on the residual of its
+/// calibration unless `calibrate` is `Some(false)`. Returns the rows
+/// diagnosed too.
+fn run(data: &Dataset, o: &DiagnoseOptions, calibrate: Option<bool>) -> (Diagnosis, Dataset) {
+    let base = DiagnosisBase::new(data.clone(), o, calibrate).expect("calibration");
+    let d = diagnose(&base.data, o, &|_| {}).expect("diagnose");
+    (d, base.data)
 }
 
 fn added(d: &Diagnosis) -> String {
@@ -153,12 +167,17 @@ fn main() {
         let m = data.len();
         let o = options(&data);
         let robot = o.get_robot().expect("robot").clone();
-        let control = run(&data, &o);
+        let (control, control_rows) = run(&data, &o, a.calibrate);
         let sigma = control.before.cv_rmse_mm;
         let pooled = control.before.pooled_rmse_mm;
         println!(
-            "\n## series {s}, {m} rows, seed {}: control {:.0} s, CV RMSE {:.4}/{:.4}/{:.4} mm (pooled {pooled:.4}); control added: {}",
+            "\n## series {s}, {m} rows, seed {}, {}: control {:.0} s, CV RMSE {:.4}/{:.4}/{:.4} mm (pooled {pooled:.4}); control added: {}",
             a.seed,
+            if a.calibrate == Some(false) {
+                "raw error"
+            } else {
+                "calibrated base"
+            },
             control.seconds,
             sigma[0],
             sigma[1],
@@ -198,8 +217,8 @@ fn main() {
                     break 'plants;
                 }
                 let p = plant::at_size(&shape, &data, &robot, k, pooled);
-                let d = run(&plant::apply(&data, &p), &o);
-                let own = |t: &[score::Target]| own_coefficients(&data, &o, &d, t);
+                let (d, _) = run(&plant::apply(&data, &p), &o, a.calibrate);
+                let own = |t: &[score::Target]| own_coefficients(&control_rows, &o, &d, t);
                 let sc = score::score(&d, &control, (&shape, &p), m, &own);
                 println!(
                     "plant {i:>2} {k}× {:<26} {:<10} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
@@ -231,7 +250,8 @@ fn main() {
     }
 }
 
-/// The unplanted campaign's coefficients of `targets` when it is fitted
+/// The unplanted campaign's coefficients of `targets` (`data`: its rows as
+/// diagnosed, the calibration residual by default) when it is fitted
 /// with the planted diagnosis's final effects.
 fn own_coefficients(
     data: &Dataset,

@@ -163,7 +163,7 @@ def diagnose(
     progress: _Progress = None,
     refit_rows: Optional[int] = None,
     scan_rows: Optional[int] = None,
-    calibrate: bool = False,
+    calibrate: Optional[bool] = None,
 ) -> Tuple[str, Model]: ...
 def plan(
     robot: str,

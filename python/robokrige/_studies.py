@@ -244,7 +244,7 @@ def diagnose(
     robot: Optional[str] = None,
     refit_rows: Optional[int] = None,
     scan_rows: Optional[int] = None,
-    calibrate: bool = False,
+    calibrate: Optional[bool] = None,
     as_frame: Optional[bool] = None,
     progress: ProgressArg = None,
 ) -> Diagnosis:
@@ -260,9 +260,11 @@ def diagnose(
     above ``scan_rows`` (None: 3 000) the candidates are scanned on that
     many rows spread evenly over the campaign (the models compared still
     use all rows; ``report["scanned_rows"]`` of ``report["rows"]``).
-    With ``calibrate`` (and ``robot``) the residual of a D-H calibration of
-    the robot is diagnosed, and the improved model holds that calibration,
-    as ``robokrige diagnose --calibrate``.
+    With a ``robot``, the residual of a D-H calibration of the robot is
+    diagnosed and the improved model holds that calibration, as
+    ``robokrige diagnose --robot`` (``calibrate=None``, the default, or
+    True); ``calibrate=False`` diagnoses the raw error, as
+    ``--no-calibrate``.
 
     Returns ``Diagnosis(effects, model, report)``: the effects table (a
     DataFrame when pandas is installed and ``as_frame`` is not False), the
@@ -289,7 +291,7 @@ def diagnose(
             cb,
             None if refit_rows is None else int(refit_rows),
             None if scan_rows is None else int(scan_rows),
-            bool(calibrate),
+            None if calibrate is None else bool(calibrate),
         )
     report = json.loads(text)
     for key in ("before_residuals", "after_residuals"):

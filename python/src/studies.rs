@@ -371,7 +371,7 @@ pub fn compensate(
 #[pyfunction]
 #[pyo3(signature = (data, method="ejs", nugget=true, folds=10, seed=1, permutations=1999,
     fdr=0.05, max_effects=3, periodic="none", robot=None, progress=None,
-    refit_rows=None, scan_rows=None, calibrate=false))]
+    refit_rows=None, scan_rows=None, calibrate=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     py: Python<'_>,
@@ -388,7 +388,7 @@ pub fn diagnose(
     progress: Option<Py<PyAny>>,
     refit_rows: Option<usize>,
     scan_rows: Option<usize>,
-    calibrate: bool,
+    calibrate: Option<bool>,
 ) -> PyResult<(String, Model)> {
     let d = &data.inner;
     let cancel = Cancel::new();
@@ -417,9 +417,9 @@ pub fn diagnose(
         robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
             format!("e.g. the first {n} rows")
         })?;
-        // with `calibrate`, the residual of a D-H calibration is
-        // diagnosed and the model holds that calibration (as the CLI's
-        // `diagnose --calibrate`)
+        // with a robot (unless `calibrate` is false), the residual of a
+        // D-H calibration is diagnosed and the model holds that
+        // calibration, as the CLI's `diagnose --robot`
         let base = robokrige::study::diagnosis::DiagnosisBase::new(d.clone(), &o, calibrate)?;
         let diag = robokrige::diagnose::diagnose(&base.data, &o, &|msg: &str| {
             let k = step.fetch_add(1, Ordering::SeqCst) + 1;

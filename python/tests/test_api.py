@@ -265,12 +265,12 @@ def test_one_calibrated_model_fits_predicts_compensates_and_diagnoses(datasets, 
     r_cal, r_raw = reduction(loaded), reduction(raw)
     assert r_cal >= 0.85, r_cal
     assert r_cal >= r_raw - 0.02, (r_cal, r_raw)
-    # the diagnosis of the calibration's residual keeps the calibration
+    # with a robot, the diagnosis is of the calibration's residual (the
+    # default) and keeps the calibration
     _, improved, report = rk.diagnose(
         datasets / "comau_lhs.csv",
         method="js-hj",
         robot="comau-nj220",
-        calibrate=True,
         max_effects=1,
         permutations=199,
         as_frame=False,

@@ -100,21 +100,27 @@ pub struct DiagnoseArgs {
     /// Save the final model (with the added effects) here.
     #[arg(long)]
     model_out: Option<PathBuf>,
-    /// Robot (preset name or robot file): adds joint cross-talk candidates (through its Jacobian);
-    /// with --traj and --truth, also compensates the trajectory with the model
-    /// before and after and reports the errors.
+    /// Robot (preset name or robot file): the campaign's calibration is
+    /// diagnosed (see --no-calibrate), and joint cross-talk candidates are
+    /// added (through its Jacobian); with --traj and --truth, also
+    /// compensates the trajectory with the model before and after and
+    /// reports the errors.
     #[arg(long)]
     robot: Option<String>,
     /// TCP offset x,y,z (mm) on the robot's flange, replacing its tool (with --robot).
     #[arg(long, requires = "robot", allow_hyphen_values = true)]
     tool: Option<String>,
-    /// Start from the calibrated robot (with --robot): a D-H calibration
-    /// (Levenberg–Marquardt, on all rows) first, then the diagnosis of its
-    /// residual. On real data the calibrated base leaves a far smaller
-    /// misfit than plain Kriging of the raw error, so smaller effects show.
-    /// The models written (--model-out) and compared (--traj) then hold the
-    /// calibration and the Kriging of its residual, as `fit --robot` does.
-    #[arg(long, requires = "robot")]
+    /// With --robot: diagnose the raw error. By default a robot is
+    /// calibrated first (a D-H calibration by Levenberg–Marquardt on all
+    /// rows, as `fit --robot`) and its residual is diagnosed: on real data
+    /// it leaves a far smaller misfit than Kriging of the raw error, so
+    /// smaller effects show. The models written (--model-out) and compared
+    /// (--traj) then hold the calibration and the Kriging of its residual.
+    #[arg(long, requires = "robot", conflicts_with = "calibrate")]
+    no_calibrate: bool,
+    /// Calibrate first: the default with --robot; kept so that older
+    /// scripts still run.
+    #[arg(long, hide = true, requires = "robot")]
     calibrate: bool,
     /// Trajectory to compensate with the model before and after the effects
     /// were added (TCP x,y,z CSV, or joints q1..qN), with --robot and --truth.
@@ -157,7 +163,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     super::check_files(&inputs, &outputs)?;
     let data = super::read_data(&a.data)?.head(a.rows.unwrap_or(usize::MAX));
     let opts = options(&a, &data)?;
-    let base = DiagnosisBase::new(data, &opts, a.calibrate)?;
+    let calibrate = (a.calibrate || a.no_calibrate).then_some(a.calibrate);
+    let base = DiagnosisBase::new(data, &opts, calibrate)?;
     if let Some(cal) = &base.calibration {
         let line = cal.summary_line();
         say!("calibrated base: {line}; diagnosing its residual");

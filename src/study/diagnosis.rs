@@ -2,7 +2,8 @@
 //! [`diagnose`](crate::diagnose::diagnose): optionally on the residual of a
 //! D-H calibration first, then the models before and after the added
 //! effects (each holding that calibration), and their compensation of a
-//! trajectory compared on the simulated robot.
+//! trajectory compared on the simulated robot. With a robot, the residual
+//! of its calibration is what is diagnosed unless the caller says not to.
 //!
 //! With a calibration `c`, the diagnosed data are the residuals
 //! `e − ĉ(q)` of the campaign's errors `e` after the calibration's
@@ -10,7 +11,7 @@
 //! residual ([`ErrorModel::with_calibration`]), as `fit --robot` makes.
 
 use super::{Targets, compensate_and_evaluate_each};
-use crate::calibration::{Calibration, CalibrationOptions, calibrate};
+use crate::calibration::{Calibration, CalibrationOptions};
 use crate::dataset::Dataset;
 use crate::diagnose::{DiagnoseOptions, fit_with_effects};
 use crate::features::Feature;
@@ -33,11 +34,15 @@ pub struct DiagnosisBase {
 }
 
 impl DiagnosisBase {
-    /// `data` as it is, or with `calibrate` the residual of a D-H
-    /// calibration (default options, Levenberg–Marquardt on all rows) of
-    /// the robot of `opts`, which then must have one.
-    pub fn new(data: Dataset, opts: &DiagnoseOptions, calibrate_first: bool) -> Result<Self> {
-        if !calibrate_first {
+    /// `data` as it is, or the residual of a D-H calibration (default
+    /// options, Levenberg–Marquardt on all rows) of the robot of `opts`.
+    ///
+    /// `calibrate`: `None` calibrates exactly when `opts` has a robot —
+    /// the model an engineer deploys with a robot is the calibrated one
+    /// (`fit --robot`), so that is what is diagnosed; `Some(false)` never
+    /// calibrates; `Some(true)` calibrates, and needs the robot.
+    pub fn new(data: Dataset, opts: &DiagnoseOptions, calibrate: Option<bool>) -> Result<Self> {
+        if !calibrate.unwrap_or(opts.get_robot().is_some()) {
             return Ok(DiagnosisBase {
                 calibration: None,
                 data,
@@ -48,7 +53,7 @@ impl DiagnosisBase {
                 "calibrating before the diagnosis needs the robot (--robot)".into(),
             )
         })?;
-        let cal = calibrate(&data, robot, &CalibrationOptions::default())?;
+        let cal = crate::calibration::calibrate(&data, robot, &CalibrationOptions::default())?;
         let data = cal.residual(&data)?;
         Ok(DiagnosisBase {
             calibration: Some(cal),
