@@ -162,6 +162,21 @@ pub enum Feature {
         /// 1-based joint k whose angle drives the deviation.
         from: usize,
     },
+    /// A harmonic of joint j mapped to the TCP: `∂P/∂θ_j(q) · sin(2π θ_j / P)`
+    /// and `· cos(2π θ_j / P)`, the displacement a periodic deviation of
+    /// joint j (a gear's error over its turn) causes (six columns: x, y, z
+    /// of each). Where the Jacobian varies over the campaign, a joint's
+    /// periodic error is not a pure harmonic of its angle at the TCP, and
+    /// [`Feature::Harmonic`] finds it only through sidebands of its period.
+    HarmonicJacobian {
+        /// The measured robot (its position Jacobian).
+        #[serde(deserialize_with = "crate::kinematics::robot_or_preset_name")]
+        robot: Box<crate::kinematics::Robot>,
+        /// 1-based joint j.
+        joint: usize,
+        /// Period P in joint units (degrees; mm for a prismatic joint), > 0.
+        period_deg: f64,
+    },
 }
 
 /// The memory of a joint's moves counted in time ([`Feature::Moves`]): each
@@ -248,6 +263,15 @@ impl Feature {
                 .iter()
                 .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
                 .collect(),
+            Feature::HarmonicJacobian {
+                joint, period_deg, ..
+            } => ["sin", "cos"]
+                .iter()
+                .flat_map(|f| {
+                    ["x", "y", "z"]
+                        .map(|a| format!("J{a}{joint}·{f}(2π·q{joint}/{period_deg:.4}°)"))
+                })
+                .collect(),
             Feature::Moves {
                 joint,
                 tau_poses,
@@ -290,6 +314,7 @@ impl Feature {
                 | Feature::Harmonic { .. }
                 | Feature::Interaction { .. }
                 | Feature::Crosstalk { .. }
+                | Feature::HarmonicJacobian { .. }
                 | Feature::MovesJacobian { .. }
                 | Feature::TcpMove { .. }
                 | Feature::Times { .. }
@@ -299,7 +324,10 @@ impl Feature {
     /// Check joint indices against `n` joints.
     pub fn validate(&self, n: usize) -> Result<()> {
         let joints: Vec<usize> = match self {
-            Feature::Harmonic { joint, period_deg } => {
+            Feature::Harmonic { joint, period_deg }
+            | Feature::HarmonicJacobian {
+                joint, period_deg, ..
+            } => {
                 if period_deg.is_nan() || *period_deg <= 0.0 {
                     return Err(Error::InvalidParameter(format!(
                         "harmonic period must be > 0, got {period_deg}"
@@ -514,6 +542,24 @@ impl Feature {
                 for qi in q {
                     let jac = r.position_jacobian(qi)?;
                     let th = qi[from - 1].to_radians();
+                    for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
+                        for a in 0..3 {
+                            cols[3 * f + a].push(jac[(a, joint - 1)] * v);
+                        }
+                    }
+                }
+                cols
+            }
+            Feature::HarmonicJacobian {
+                robot: r,
+                joint,
+                period_deg,
+            } => {
+                let w = std::f64::consts::TAU / period_deg;
+                let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
+                for qi in q {
+                    let jac = r.position_jacobian(qi)?;
+                    let th = w * qi[joint - 1];
                     for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
                         for a in 0..3 {
                             cols[3 * f + a].push(jac[(a, joint - 1)] * v);

@@ -105,6 +105,58 @@ fn a_gear_harmonic_absorbed_by_the_gp_is_still_found_and_added_as_trend_terms() 
     );
 }
 
+/// A gear harmonic is a deviation of the joint: at the TCP it is the
+/// harmonic times the Jacobian, which varies over the campaign. With the
+/// robot, the harmonic through the Jacobian is a candidate of its own, at
+/// the same periods, and it finds the gear's period too; its columns are
+/// the Jacobian's times sin/cos.
+#[test]
+fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let data = campaign(
+        200,
+        2,
+        Some("harmonic:joint=2,period_deg=7.5,amp_deg=0.004"),
+    );
+    let o = quick().robot(Some(robot.clone()));
+    let d = diagnose(&data, &o, &|_| {}).unwrap();
+    let top = &d.effects[0];
+    assert_eq!(top.kind, EffectKind::Harmonic, "{top:?}");
+    assert_eq!(top.source, ["q2"]);
+    assert!(
+        (top.params["period_deg"] / 7.5 - 1.0).abs() < 0.05,
+        "{top:?}"
+    );
+    assert!(top.accepted, "{top:?}");
+    let jacobian = d
+        .effects
+        .iter()
+        .find(|e| e.label == "harmonic of q2 (via the Jacobian)")
+        .expect("the Jacobian harmonic of q2 is reported");
+    let p = jacobian.params["period_deg"];
+    assert!((p / 7.5 - 1.0).abs() < 0.05, "{jacobian:?}");
+    assert!(jacobian.p_value < 0.01, "{jacobian:?}");
+    // its columns: ∂P/∂θ₂ times sin and cos of 2π θ₂ / P
+    let f = Feature::HarmonicJacobian {
+        robot: Box::new(robot.clone()),
+        joint: 2,
+        period_deg: p,
+    };
+    assert!(f.trend_only());
+    let cols = f.columns_from_poses(&data.q, &data.dir).unwrap();
+    assert_eq!(cols.len(), 6);
+    for i in [0, 77, 199] {
+        let jac = robot.position_jacobian(&data.q[i]).unwrap();
+        let th = std::f64::consts::TAU * data.q[i][1] / p;
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * (1.0 + y.abs());
+        for a in 0..3 {
+            assert!(close(cols[a][i], jac[(a, 1)] * th.sin()), "row {i}");
+            assert!(close(cols[3 + a][i], jac[(a, 1)] * th.cos()), "row {i}");
+        }
+    }
+    assert!(d.after.pooled_rmse_mm < 0.75 * d.before.pooled_rmse_mm);
+}
+
 #[test]
 fn hysteresis_after_reversals_is_traced_to_the_travel_since_the_reversal() {
     let data = campaign(

@@ -20,7 +20,9 @@
 //! coefficient and axis (step: `step@row`; block: `step@from` = +offset and `step@to`
 //! = −offset; drift: the `temp_c` coefficient, mm/K; lag: its memory τ
 //! (planted 0) and the coefficient of each axis's `J·move` column, −g·π/180).
-//! A harmonic's coefficients are per-axis sin/cos trend terms, not the
+//! A harmonic through the Jacobian: the coefficients of each axis's own
+//! `J·sin` and `J·cos` columns, A·cos φ and A·sin φ radians. A plain
+//! harmonic's coefficients are per-axis sin/cos trend terms, not the
 //! joint's amplitude: only its period is scored.
 
 use crate::plant::{Planted, Shape};
@@ -186,10 +188,35 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<
                 .collect();
             (tau_covered, targets)
         }
-        Shape::Harmonic { period_deg, .. } => (
-            within(e.params_ci.get("period_deg"), *period_deg),
-            Vec::new(),
-        ),
+        Shape::Harmonic {
+            joint,
+            period_deg,
+            phase_rad,
+        } => {
+            // through the Jacobian, the trend columns of axis a are
+            // `J_a,j(q)·sin(2π θ_j/P)` and `·cos` (J per radian): a planted
+            // `A sin(2π θ_j/P + φ)` (A in degrees) is A·cos φ and A·sin φ
+            // radians on each axis's own columns. A plain harmonic's
+            // per-axis coefficients have no planted value.
+            let found = param(e, "period_deg").unwrap_or(f64::NAN);
+            let targets = if e.label.ends_with("(via the Jacobian)") {
+                let a = p.value[0].to_radians();
+                ["x", "y", "z"]
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(k, axis)| {
+                        let col = |f: &str| format!("J{axis}{joint}·{f}(2π·q{joint}/{found:.4}°)");
+                        [
+                            (col("sin"), k, a * phase_rad.cos()),
+                            (col("cos"), k, a * phase_rad.sin()),
+                        ]
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            (within(e.params_ci.get("period_deg"), *period_deg), targets)
+        }
     }
 }
 

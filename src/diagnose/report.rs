@@ -174,7 +174,12 @@ impl EffectReport {
     /// feature's first column. Empty when nothing would be added.
     pub fn traced_variable(&self, data: &Dataset) -> (String, Vec<f64>) {
         match self.add.first() {
-            Some(Feature::Harmonic { joint, period_deg }) => (
+            Some(
+                Feature::Harmonic { joint, period_deg }
+                | Feature::HarmonicJacobian {
+                    joint, period_deg, ..
+                },
+            ) => (
                 format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
                 data.q
                     .iter()

@@ -49,7 +49,9 @@ pub(crate) use motion::is_time_column;
 use motion::motion_families;
 use order::order_families;
 pub use order::step_rows;
-use pose::{crosstalk_families, harmonic_families, interaction_families};
+use pose::{
+    crosstalk_families, harmonic_families, harmonic_jacobian_families, interaction_families,
+};
 pub use significance::{Refined, Refit, Tested, benjamini_hochberg, test_families};
 
 /// What kind of effect a family is (the JSON `kind`).
@@ -214,6 +216,7 @@ pub fn families_on(
     harmonic_families(data, &mut out);
     interaction_families(&u, &mut out);
     if let Some(robot) = robot {
+        harmonic_jacobian_families(data, robot, &mut out);
         crosstalk_families(data, robot, &mut out);
     }
     for j in 0..n {

@@ -7,7 +7,10 @@
 //! - the product of two z-scored joint angles, `u_a · u_b`
 //!   ([`Feature::Interaction`]);
 //! - with a robot, joint j deviating with `sin θ_k` and `cos θ_k`, mapped
-//!   to the TCP through the Jacobian ([`Feature::Crosstalk`]).
+//!   to the TCP through the Jacobian ([`Feature::Crosstalk`]);
+//! - with a robot, a harmonic of joint j as a deviation of that joint,
+//!   mapped to the TCP through the Jacobian, over the same periods as the
+//!   plain harmonic ([`Feature::HarmonicJacobian`]).
 
 use super::{EffectKind, Family, GridPoint, Sink, params, single, zscore};
 use crate::dataset::Dataset;
@@ -15,38 +18,101 @@ use crate::features::Feature;
 use crate::kinematics::Robot;
 use std::collections::BTreeMap;
 
+/// The periods a harmonic of joint `j` is scanned at: from half its range
+/// on `data` down to 2°, a tenth of a cycle over the range apart (at most
+/// 480).
+fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
+    let (lo, hi) = data
+        .q
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+            (a.min(r[j]), b.max(r[j]))
+        });
+    let range = hi - lo;
+    let mut periods = Vec::new();
+    let mut cycles = 2.0;
+    while range / cycles >= 2.0 && periods.len() < 480 {
+        periods.push(range / cycles);
+        cycles += 0.1;
+    }
+    periods
+}
+
 /// Harmonics of each joint, periods from 2° to half its range.
 pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
     for j in 0..data.n_joints() {
-        let (lo, hi) = data
-            .q
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
-                (a.min(r[j]), b.max(r[j]))
-            });
-        let range = hi - lo;
-        let mut grid = Vec::new();
-        let mut cycles = 2.0;
-        while range / cycles >= 2.0 && grid.len() < 480 {
-            let period = range / cycles;
-            let w = std::f64::consts::TAU / period;
-            let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
-            let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
-            grid.push(GridPoint {
-                params: params(&[("period_deg", period)]),
-                columns: vec![zscore(&s), zscore(&c)],
-                add: vec![Feature::Harmonic {
-                    joint: j + 1,
-                    period_deg: period,
-                }],
-            });
-            cycles += 0.1;
-        }
+        let grid: Vec<GridPoint> = harmonic_periods(data, j)
+            .into_iter()
+            .map(|period| {
+                let w = std::f64::consts::TAU / period;
+                let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
+                let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
+                GridPoint {
+                    params: params(&[("period_deg", period)]),
+                    columns: vec![zscore(&s), zscore(&c)],
+                    add: vec![Feature::Harmonic {
+                        joint: j + 1,
+                        period_deg: period,
+                    }],
+                }
+            })
+            .collect();
         if !grid.is_empty() {
             out.push(Family {
                 kind: EffectKind::Harmonic,
                 source: vec![format!("q{}", j + 1)],
                 label: format!("harmonic of q{}", j + 1),
+                grid,
+                zoom: None,
+            });
+        }
+    }
+}
+
+/// Harmonics of each joint as a deviation of the joint, mapped to the TCP
+/// through `robot`'s Jacobian; the periods of [`harmonic_families`].
+pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mut Sink) {
+    let Ok(jac) = data
+        .q
+        .iter()
+        .map(|q| robot.position_jacobian(q))
+        .collect::<crate::Result<Vec<_>>>()
+    else {
+        return;
+    };
+    for j in 0..data.n_joints() {
+        let grid: Vec<GridPoint> = harmonic_periods(data, j)
+            .into_iter()
+            .map(|period| {
+                let w = std::f64::consts::TAU / period;
+                let mut columns = Vec::with_capacity(6);
+                for f in [f64::sin, f64::cos] {
+                    for a in 0..3 {
+                        let c: Vec<f64> = data
+                            .q
+                            .iter()
+                            .zip(&jac)
+                            .map(|(r, jq)| jq[(a, j)] * f(w * r[j]))
+                            .collect();
+                        columns.push(zscore(&c));
+                    }
+                }
+                GridPoint {
+                    params: params(&[("period_deg", period)]),
+                    columns,
+                    add: vec![Feature::HarmonicJacobian {
+                        robot: Box::new(robot.clone()),
+                        joint: j + 1,
+                        period_deg: period,
+                    }],
+                }
+            })
+            .collect();
+        if !grid.is_empty() {
+            out.push(Family {
+                kind: EffectKind::Harmonic,
+                source: vec![format!("q{}", j + 1)],
+                label: format!("harmonic of q{} (via the Jacobian)", j + 1),
                 grid,
                 zoom: None,
             });
