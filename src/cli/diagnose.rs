@@ -17,10 +17,11 @@ use std::path::PathBuf;
 #[command(after_help = "\
 Candidates: every numeric covariate column not in the model (alone, × joint
 angles, × one joint angle, lagged), drift and a change point in the measurement
-order, harmonics of each joint over a scanned period range, cross-joint
-products, direction history, and the motion into each pose (a joint's last
-moves with a scanned memory, their size, the TCP's last move with --robot, the
-time since the previous pose with a time column).
+order, harmonics of each joint over a scanned period range (also through the
+Jacobian with --robot), cross-joint products, direction history, and the
+motion into each pose (a joint's last moves with a scanned memory, their size,
+the TCP's last move with --robot, the time since the previous pose with a time
+column).
 Each is tried inside the current model (its columns join the trend at the
 model's correlation parameters, refitted for the strongest few): statistic,
 the leave-one-out gain maximised over its parameter scan; p-value against
