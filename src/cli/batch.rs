@@ -63,14 +63,14 @@ pub fn run(a: BatchArgs) -> Result<()> {
     };
     let (n, folder) = (files.len(), a.folder.display());
     eprintln!("batch: {n} campaign(s) in {folder}, in parallel");
-    let pb = super::progress::bar(files.len() as u64, "campaigns");
-    let results = run_batch(&files, &opts, &|c, r| {
-        pb.inc(1);
-        if let Err(e) = r {
-            pb.println(format!("  {}: failed: {e}", c.display()));
-        }
+    let results = super::progress::with_bar(files.len() as u64, "campaigns", |pb| {
+        run_batch(&files, &opts, &|c, r| {
+            pb.inc(1);
+            if let Err(e) = r {
+                pb.println(format!("  {}: failed: {e}", c.display()));
+            }
+        })
     });
-    pb.finish_and_clear();
     say!("{}", report::header());
     for (file, r) in files.iter().zip(&results) {
         let name = campaign_name(file);

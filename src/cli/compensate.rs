@@ -1,9 +1,9 @@
 //! `robokrige compensate` and `robokrige evaluate`.
 
-use super::progress::spinner;
+use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
-use robokrige::compensate::{CommandsOutput, Compensated, CompensationOptions, compensate};
+use robokrige::compensate::{CommandsOutput, CompensationOptions, compensate};
 use robokrige::kinematics::Robot;
 use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
@@ -144,11 +144,10 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         max_iter: a.max_iter,
         ..targets.compensation_options(&start)
     };
-    let pb = spinner("compensate");
     let t0 = std::time::Instant::now();
-    let res = compensate(&robot, &model, &targets.traj, &opts);
-    pb.finish_and_clear();
-    let res: Compensated = res?;
+    let res = with_spinner("compensate", |_| {
+        compensate(&robot, &model, &targets.traj, &opts)
+    })?;
     let secs = t0.elapsed().as_secs_f64();
     super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;

@@ -1,7 +1,7 @@
 //! `robokrige diagnose`.
 
 use super::compensate::read_targets;
-use super::progress::spinner;
+use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
@@ -170,10 +170,9 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     if base.data.len() > robokrige::kriging::SEARCH_ROWS {
         eprintln!("diagnose: {plan}");
     }
-    let pb = spinner("diagnose");
-    let d = diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()));
-    pb.finish_and_clear();
-    let d = d?;
+    let d = with_spinner("diagnose", |pb| {
+        diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()))
+    })?;
     let data_name = a.data.display().to_string();
     let names = Names {
         data: &data_name,

@@ -1,6 +1,6 @@
 //! `robokrige physics identify | compare`.
 
-use super::progress::bar;
+use super::progress::{steps, with_bar};
 use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::Result;
@@ -232,15 +232,13 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         nugget: a.nugget,
     };
     opts.validate()?;
-    let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
-    let res = compare(&opts, &|k, total, what| {
-        pb.set_length(total as u64);
-        pb.set_position(k as u64);
-        pb.set_message(what.to_string());
-    });
-    pb.finish_and_clear();
-    let res = res?;
+    let res = with_bar(1, "compare", |pb| {
+        compare(&opts, &|k, total, what| {
+            pb.set_length(total as u64);
+            steps(pb)(k, what);
+        })
+    })?;
     let text = report::comparison(&res, t0.elapsed().as_secs_f64());
     say_part!("{text}");
     if let Some(p) = &a.report {
