@@ -176,11 +176,8 @@ pub fn prepare_output(folder: &Path, output: &Path) -> Result<()> {
 /// `NAME.model.json` and `NAME.report.json` (pretty JSON).
 pub fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
     rep.model.save(&out.join(format!("{name}.model.json")))?;
-    let text = serde_json::to_string_pretty(rep).map_err(|e| Error::Json {
-        context: "campaign report".into(),
-        source: e,
-    })?;
-    crate::output::write_text(&out.join(format!("{name}.report.json")), &(text + "\n"))
+    let text = crate::output::json_text(rep, "campaign report")?;
+    crate::output::write_text(&out.join(format!("{name}.report.json")), &text)
 }
 
 /// An error that counts the failed campaigns of `results` (listed in the
