@@ -7,8 +7,7 @@ use robokrige::Result;
 use robokrige::kinematics;
 use robokrige::methods::Method;
 use robokrige::physics::{
-    CompareOptions, DEFAULT_ROBOT, check_campaigns, check_training_campaign, compare,
-    identify_physics,
+    CompareOptions, DEFAULT_ROBOT, check_training_campaign, compare, identify_campaigns,
 };
 use robokrige::report::physics as report;
 use std::path::PathBuf;
@@ -197,13 +196,10 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
+    // refused before the training campaign is read
     check_training_campaign(&robot, a.train.is_some())?;
-    let train = match &a.train {
-        Some(p) => read_data(p)?,
-        None => indexing.clone(),
-    };
-    check_campaigns(&robot, &a.robot, &[&indexing, &train])?;
-    let id = identify_physics(&indexing, &train, &robot)?;
+    let train = a.train.as_deref().map(read_data).transpose()?;
+    let id = identify_campaigns(&robot, &a.robot, &indexing, train.as_ref())?;
     id.full.save(&a.output)?;
     if let Some(p) = &a.dh_output {
         id.dh.save(p)?;

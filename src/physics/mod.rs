@@ -163,6 +163,23 @@ pub fn identify_physics(
     })
 }
 
+/// [`identify_physics`] of `robot` (named `name` by the user) from the
+/// campaigns given: the indexing tests and the training campaign `train`,
+/// which a six-axis robot needs and a SCARA refuses
+/// ([`check_training_campaign`]; a SCARA trains on its indexing tests),
+/// each checked against the robot first ([`check_campaigns`]).
+pub fn identify_campaigns(
+    robot: &Robot,
+    name: &str,
+    indexing: &Dataset,
+    train: Option<&Dataset>,
+) -> Result<PhysicsIdentification> {
+    check_training_campaign(robot, train.is_some())?;
+    let train = train.unwrap_or(indexing);
+    check_campaigns(robot, name, &[indexing, train])?;
+    identify_physics(indexing, train, robot)
+}
+
 /// Register a campaign measured in a tracker's frame into the robot's base
 /// frame (seed 004 eqs 29–35): the rigid transform that best maps the
 /// measured positions `x, y, z` onto the nominal TCP positions of the
