@@ -70,16 +70,9 @@ pub fn run(a: CvArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let params = a.model.resolve(None, &data)?;
     super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
-    let folds = match &a.groups {
-        Some(col) => Folds::Groups(col.clone()),
-        None => Folds::Random {
-            k: a.folds,
-            seed: a.cv_seed,
-        },
-    };
     let plan = CvPlan {
         mode: a.mode,
-        folds,
+        folds: Folds::new(a.groups.as_deref(), a.folds, a.cv_seed),
         hyper_rows: a.hyper_rows,
     };
     plan.validate(data.len())?;
