@@ -172,6 +172,21 @@ pub fn prepare_output(folder: &Path, output: &Path) -> Result<()> {
     std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))
 }
 
+/// Write every campaign of `files` that succeeded (`results`, the same
+/// order) into the folder `out` ([`write_campaign`]).
+pub fn write_campaigns(
+    out: &Path,
+    files: &[PathBuf],
+    results: &[Result<CampaignReport>],
+) -> Result<()> {
+    for (file, r) in files.iter().zip(results) {
+        if let Ok(rep) = r {
+            write_campaign(out, &campaign_name(file), rep)?;
+        }
+    }
+    Ok(())
+}
+
 /// Write campaign `name`'s model and report into the folder `out`:
 /// `NAME.model.json` and `NAME.report.json` (pretty JSON).
 pub fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
