@@ -183,12 +183,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         Some(dir) => effect_plots(dir, &base.data, &d)?,
         None => Vec::new(),
     };
-    for p in &plots {
-        say!("plot: {}", p.display());
-    }
-    if let Some(dir) = a.plots.as_ref().filter(|_| plots.is_empty()) {
-        say!("no plots in {}: no effect was added", dir.display());
-    }
+    say_part!("{}", report::plot_lines(a.plots.as_deref(), &plots));
     let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
     let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
     super::json_to(a.json.as_deref(), &v, "diagnosis")?;

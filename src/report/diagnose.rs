@@ -248,6 +248,20 @@ pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
     out
 }
 
+/// The plots written into the folder `dir` (`--plots`), one line each; or,
+/// when a folder was given but no effect was added, that it holds none.
+pub fn plot_lines(dir: Option<&Path>, plots: &[PathBuf]) -> String {
+    match dir {
+        Some(dir) if plots.is_empty() => {
+            format!("no plots in {}: no effect was added\n", dir.display())
+        }
+        _ => plots
+            .iter()
+            .map(|p| format!("plot: {}\n", p.display()))
+            .collect(),
+    }
+}
+
 /// The line `diagnose` prints for the compensation of trajectory `traj`
 /// with the models before and after.
 pub fn compensation_line(traj: &str, c: &CompensationComparison) -> String {
