@@ -9,7 +9,7 @@ use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
 use robokrige::study::{
-    Targets, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
+    Targets, before_after, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
 };
 use std::path::{Path, PathBuf};
 
@@ -159,16 +159,11 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     }
     let mut eval = None;
     if let Some(tp) = &a.truth {
-        let (ev, (before, after)) =
-            evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
+        let (ev, runs) = evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
         say_part!("{}", report::evaluation(&tp.display().to_string(), &ev));
         if let Some(p) = &a.plot {
             let title = report::plot_title(&a.traj, a.iterative, &model);
-            plot(
-                p,
-                &title,
-                &[("before".into(), before), ("after".into(), after)],
-            )?;
+            plot(p, &title, &before_after(runs))?;
         }
         eval = Some(ev);
     }
