@@ -151,8 +151,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;
-    let output = a.output.display().to_string();
-    let text = report::iterations(&res, a.iterative, &model.describe(), secs, &output);
+    let text = report::iterations(&res, a.iterative, &model.describe(), secs, &a.output);
     say_part!("{text}");
     if let Some(w) = report::stop_warning(&res, a.tol, a.max_iter) {
         eprintln!("{w}");
@@ -160,7 +159,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let (ev, runs) = evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
-        say_part!("{}", report::evaluation(&tp.display().to_string(), &ev));
+        say_part!("{}", report::evaluation(tp, &ev));
         if let Some(p) = &a.plot {
             let title = report::plot_title(&a.traj, a.iterative, &model);
             plot(p, &title, &before_after(runs))?;

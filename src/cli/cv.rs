@@ -81,8 +81,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     if let Some(h) = subset {
         eprint!("{}", report::hyper_subset(&h, data.len()));
     }
-    let data_name = a.data.display().to_string();
-    let text = report::summary(&res, &plan.folds, (&data_name, data.len()), params.params());
+    let text = report::summary(&res, &plan.folds, (&a.data, data.len()), params.params());
     say_part!("{text}");
     let v = report::json(&res, &a.data, params.params())?;
     super::json_to(a.json.as_deref(), &v, "cv result")?;

@@ -188,9 +188,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
     super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
-        let traj = a.traj.as_ref().map(|p| p.display().to_string());
         let extras = Extras {
-            compensation: traj.as_deref().zip(compensation.as_ref()),
+            compensation: a.traj.as_deref().zip(compensation.as_ref()),
             plots: &plots,
         };
         robokrige::output::write_text(path, &report::markdown(&d, names, extras))?;
@@ -225,7 +224,6 @@ fn write_and_compare_models(
     let targets = read_targets(traj, &robot, None, &robot.home)?;
     let on = (&robot, &targets);
     let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
-    let traj = traj.display().to_string();
-    say!("{}", report::compensation_line(&traj, &c));
+    say!("{}", report::compensation_line(traj, &c));
     Ok(Some(c))
 }

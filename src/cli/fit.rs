@@ -176,8 +176,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         let v = report::json((data_path, output), &model, fit, (data.len(), secs));
         super::write_json(path, &v, "fit report")?;
     }
-    let output = output.display().to_string();
-    say_part!("{}", report::summary(&model, data.len(), secs, &output));
+    say_part!("{}", report::summary(&model, data.len(), secs, output));
     Ok(())
 }
 

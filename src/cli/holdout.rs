@@ -101,8 +101,7 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Resu
     let cv = with_bar(k as u64 + 1, "cv", |pb| {
         holdout_cv(data, robot, &base, &fold, hyper_rows, &steps(pb))
     })?;
-    let name = a.data.display().to_string();
-    say_part!("{}", report::cv(&name, (folds, data.len()), &base, &cv));
+    say_part!("{}", report::cv(&a.data, (folds, data.len()), &base, &cv));
     super::json_to(a.json.as_deref(), &cv, "cv table")?;
     Ok(())
 }
@@ -132,8 +131,8 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
             pb.set_message(what.to_string());
         })
     })?;
-    let (name, sizes) = (a.data.display().to_string(), (train.len(), test.len()));
-    say_part!("{}", report::split(&name, sizes, &base, &split));
+    let sizes = (train.len(), test.len());
+    say_part!("{}", report::split(&a.data, sizes, &base, &split));
     super::json_to(a.json.as_deref(), &split.rows, "hold-out table")?;
     Ok(())
 }

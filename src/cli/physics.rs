@@ -277,8 +277,7 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
     robokrige::dataset::write_csv(output, &out)?;
-    let name = output.display().to_string();
-    say_part!("{}", report::registration(&reg, out.len(), &name));
+    say_part!("{}", report::registration(&reg, out.len(), output));
     let v = report::registration_json((data_path, output), &robot.name, out.len(), &reg);
     super::json_to(a.json.as_deref(), &v, "registration")?;
     Ok(())

@@ -45,14 +45,15 @@ pub fn json(res: &CvResult, data: &Path, params: &ErrorModelParams) -> Result<Va
 pub fn summary(
     res: &CvResult,
     folds: &Folds,
-    (data, rows): (&str, usize),
+    (data, rows): (&Path, usize),
     params: &ErrorModelParams,
 ) -> String {
     let s = &res.summary;
     let mut out = format!(
-        "{} ({}) of {data} on {rows} rows ({}), {:.1} s\n",
+        "{} ({}) of {} on {rows} rows ({}), {:.1} s\n",
         how(folds, res.folds),
         res.mode,
+        data.display(),
         params.settings_line(),
         res.seconds
     );

@@ -264,8 +264,8 @@ pub fn plot_lines(dir: Option<&Path>, plots: &[PathBuf]) -> String {
 
 /// The line `diagnose` prints for the compensation of trajectory `traj`
 /// with the models before and after.
-pub fn compensation_line(traj: &str, c: &CompensationComparison) -> String {
-    let (b, a) = (&c.before_model, &c.after_model);
+pub fn compensation_line(traj: &Path, c: &CompensationComparison) -> String {
+    let (b, a, traj) = (&c.before_model, &c.after_model, traj.display());
     format!(
         "compensation of {traj} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
         b.0.mean_abs_mm, b.1.mean_abs_mm, a.1.mean_abs_mm
@@ -277,7 +277,7 @@ pub fn compensation_line(traj: &str, c: &CompensationComparison) -> String {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Extras<'a> {
     /// The trajectory compensated, and the comparison of the models on it.
-    pub compensation: Option<(&'a str, &'a CompensationComparison)>,
+    pub compensation: Option<(&'a Path, &'a CompensationComparison)>,
     /// Residual-vs-effect plots.
     pub plots: &'a [PathBuf],
 }
@@ -312,6 +312,7 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
     }
     round_tables(&mut s, d);
     if let Some((traj, c)) = extras.compensation {
+        let traj = traj.display();
         let ((nb, bb), (_, ab)) = (&c.before_model, &c.after_model);
         let _ = writeln!(s, "\n## Compensation\n");
         let _ = writeln!(
