@@ -7,6 +7,7 @@ use robokrige::model::ErrorModel;
 use robokrige::plan::stop::Forecast;
 use robokrige::plan::{Plan, PlanInputs, PlanParams, Region, TrackerView};
 use robokrige::program::ProgramFormat;
+use robokrige::report::plan as report;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -123,13 +124,10 @@ pub fn run(a: PlanArgs) -> Result<()> {
     plan.write(&a.output, a.format, &robot)?;
     super::json_to(
         a.json.as_deref(),
-        &robokrige::report::plan::json(&plan, forecast.as_ref()),
+        &report::json(&plan, forecast.as_ref()),
         "plan",
     )?;
-    print!(
-        "{}",
-        robokrige::report::plan::text(&plan, forecast.as_ref(), a.target_mm)
-    );
+    print!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));
     println!("wrote {}", a.output.display());
     Ok(())
 }
