@@ -216,13 +216,12 @@ fn write_and_compare_models(
         say!("model with the added effects: {}", p.display());
     }
     // (--traj and --truth without --robot are rejected by clap)
-    let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
+    let (Some(robot), Some(traj), Some(truth_path)) = (opts.get_robot(), &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let robot = kinematics::load_robot_with_tool(robot, a.tool.as_deref())?;
     let truth = load_truth(truth_path)?;
-    let targets = read_targets(traj, &robot, None, &robot.home)?;
-    let on = (&robot, &targets);
+    let targets = read_targets(traj, robot, None, &robot.home)?;
+    let on = (robot, &targets);
     let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
     say!("{}", report::compensation_line(traj, &c));
     Ok(Some(c))
