@@ -227,7 +227,6 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::from_name(&a.ejs)?,
         nugget: a.nugget,
     };
-    opts.validate()?;
     let t0 = std::time::Instant::now();
     let res = with_bar(1, "compare", |pb| {
         compare(&opts, &|k, total, what| {
@@ -274,7 +273,6 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let robot = kinematics::load_robot(&a.robot)?;
     let data = read_data(data_path)?;
-    robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
     robokrige::dataset::write_csv(output, &out)?;
     say_part!("{}", report::registration(&reg, out.len(), output));

@@ -186,17 +186,18 @@ pub fn identify_campaigns(
 /// commanded joints ([`crate::frames::register`], reflection-safe), applied
 /// to the positions, and the errors recomputed as `registered − nominal`.
 /// The best-fit rigid part of the robot's own error is absorbed by the
-/// transform, as in the paper.
+/// transform, as in the paper. Error unless the campaign fits `nominal`
+/// ([`Robot::check_dataset`]) and has the measured positions.
 pub fn register_campaign(
     data: &Dataset,
     nominal: &Robot,
 ) -> Result<(Dataset, crate::frames::Registration)> {
     use nalgebra::{Point3, Vector3};
+    nominal.check_dataset(data)?;
     let positions = data.positions.as_ref().ok_or_else(|| crate::Error::Input {
         source_name: data.source.clone(),
         message: "registration needs the measured positions x,y,z".into(),
     })?;
-    nominal.check_dataset(data)?;
     let from: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
     let to: Vec<Vector3<f64>> = data
         .q
