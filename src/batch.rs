@@ -172,15 +172,27 @@ pub fn prepare_output(folder: &Path, output: &Path) -> Result<()> {
     std::fs::create_dir_all(output).map_err(|e| Error::io(output, e))
 }
 
+/// Write every campaign of `files` that succeeded (`results`, the same
+/// order) into the folder `out` ([`write_campaign`]).
+pub fn write_campaigns(
+    out: &Path,
+    files: &[PathBuf],
+    results: &[Result<CampaignReport>],
+) -> Result<()> {
+    for (file, r) in files.iter().zip(results) {
+        if let Ok(rep) = r {
+            write_campaign(out, &campaign_name(file), rep)?;
+        }
+    }
+    Ok(())
+}
+
 /// Write campaign `name`'s model and report into the folder `out`:
 /// `NAME.model.json` and `NAME.report.json` (pretty JSON).
 pub fn write_campaign(out: &Path, name: &str, rep: &CampaignReport) -> Result<()> {
     rep.model.save(&out.join(format!("{name}.model.json")))?;
-    let text = serde_json::to_string_pretty(rep).map_err(|e| Error::Json {
-        context: "campaign report".into(),
-        source: e,
-    })?;
-    crate::output::write_text(&out.join(format!("{name}.report.json")), &(text + "\n"))
+    let text = crate::output::json_text(rep, "campaign report")?;
+    crate::output::write_text(&out.join(format!("{name}.report.json")), &text)
 }
 
 /// An error that counts the failed campaigns of `results` (listed in the

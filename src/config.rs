@@ -62,6 +62,46 @@ pub fn parse_error(source: &str, step: usize, e: &clap::Error) -> Error {
     }
 }
 
+/// Run `steps`, the argument lists of the config file `source`, in order,
+/// each announced first by `announce("step K of N: COMMAND LINE")`; with
+/// `dry_run` none runs. `parse` turns a step into a command (a refusal is
+/// [`parse_error`]) and `run` runs it; the first step that fails stops the
+/// run with an error naming its number and subcommand. Returns the record
+/// of every step ([`crate::report::run::step`]: with its wall time once it
+/// ran).
+pub fn run_steps<C>(
+    (source, steps): (&str, &[Vec<String>]),
+    dry_run: bool,
+    announce: impl Fn(&str),
+    parse: impl Fn(&[String]) -> std::result::Result<C, clap::Error>,
+    mut run: impl FnMut(C) -> Result<()>,
+) -> Result<Vec<serde_json::Value>> {
+    let mut log = Vec::new();
+    for (k, argv) in steps.iter().enumerate() {
+        let line = command_line(argv);
+        announce(&format!("step {} of {}: {line}", k + 1, steps.len()));
+        if dry_run {
+            log.push(crate::report::run::step(k + 1, argv, None));
+            continue;
+        }
+        let command = parse(argv).map_err(|e| parse_error(source, k + 1, &e))?;
+        let t0 = std::time::Instant::now();
+        let r = run(command);
+        let ran = (
+            t0.elapsed().as_secs_f64(),
+            r.as_ref().err().map(ToString::to_string),
+        );
+        log.push(crate::report::run::step(k + 1, argv, Some(ran)));
+        if let Err(e) = r {
+            return Err(Error::Input {
+                source_name: source.into(),
+                message: format!("step {} ({}) failed: {e}", k + 1, argv[1]),
+            });
+        }
+    }
+    Ok(log)
+}
+
 /// Shell-quote an argument when it needs it (for the printed command lines).
 fn quote(s: &str) -> String {
     if !s.is_empty()

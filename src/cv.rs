@@ -301,6 +301,12 @@ pub enum Folds {
 }
 
 impl Folds {
+    /// Leave-one-group-out over the column `groups` when one is named,
+    /// else `k` random folds seeded by `seed`.
+    pub fn new(groups: Option<&str>, k: usize, seed: u64) -> Folds {
+        groups.map_or(Folds::Random { k, seed }, |g| Folds::Groups(g.into()))
+    }
+
     /// The fold of every row of `data`.
     pub fn partition(&self, data: &Dataset) -> Result<Vec<usize>> {
         match self {

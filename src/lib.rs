@@ -41,7 +41,7 @@
 //! | studies | [`demo`] | the demo's job on the simulated COMAU: methods by CV, compensation, a diagnosis |
 //! | output | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
 //! | output | [`report`] | the studies' text reports: the tables the CLI prints, its Markdown reports |
-//! | output | `config` | config files (`robokrige run`): steps as command lines; Cargo feature `cli` |
+//! | output | `config` | config files (`robokrige run`): steps as command lines, run in order; Cargo feature `cli` |
 //!
 //! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
 //! `plot` (plotters), both on by default; `default-features = false` gives

@@ -42,6 +42,16 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
 
+/// `value` as pretty JSON with a final newline, the text of every JSON
+/// report file (`context` names it in an error).
+pub fn json_text(value: &impl serde::Serialize, context: &str) -> Result<String> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::Json {
+        context: context.into(),
+        source: e,
+    })?;
+    Ok(text + "\n")
+}
+
 /// A new temporary file in `path`'s folder, named after it.
 fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
     let name = path

@@ -3,8 +3,8 @@
 use clap::Args;
 use robokrige::Result;
 use robokrige::batch::{
-    BatchOptions, campaign_name, campaigns, check_failures, prepare_output, run_batch,
-    write_campaign, write_summary,
+    BatchOptions, campaigns, check_failures, prepare_output, run_batch, write_campaigns,
+    write_summary,
 };
 use robokrige::kinematics::load_robot;
 use robokrige::report::batch as report;
@@ -63,22 +63,16 @@ pub fn run(a: BatchArgs) -> Result<()> {
     };
     let (n, folder) = (files.len(), a.folder.display());
     eprintln!("batch: {n} campaign(s) in {folder}, in parallel");
-    let pb = super::progress::bar(files.len() as u64, "campaigns");
-    let results = run_batch(&files, &opts, &|c, r| {
-        pb.inc(1);
-        if let Err(e) = r {
-            pb.println(format!("  {}: failed: {e}", c.display()));
-        }
+    let results = super::progress::with_bar(files.len() as u64, "campaigns", |pb| {
+        run_batch(&files, &opts, &|c, r| {
+            pb.inc(1);
+            if let Err(e) = r {
+                pb.println(format!("  {}: failed: {e}", c.display()));
+            }
+        })
     });
-    pb.finish_and_clear();
-    say!("{}", report::header());
-    for (file, r) in files.iter().zip(&results) {
-        let name = campaign_name(file);
-        if let Ok(rep) = r {
-            write_campaign(&a.output, &name, rep)?;
-        }
-        say!("{}", report::row(&name, r));
-    }
+    say_part!("{}", report::table(&files, &results));
+    write_campaigns(&a.output, &files, &results)?;
     write_summary(&summary_csv, &files, &results)?;
     say!("summary -> {}", summary_csv.display());
     let v = report::json(&files, &results);

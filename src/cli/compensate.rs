@@ -1,15 +1,15 @@
 //! `robokrige compensate` and `robokrige evaluate`.
 
-use super::progress::spinner;
+use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
-use robokrige::compensate::{CommandsOutput, Compensated, CompensationOptions, compensate};
+use robokrige::compensate::{CommandsOutput, CompensationOptions, compensate};
 use robokrige::kinematics::Robot;
 use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
 use robokrige::study::{
-    Targets, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
+    Targets, before_after, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
 };
 use std::path::{Path, PathBuf};
 
@@ -144,32 +144,25 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         max_iter: a.max_iter,
         ..targets.compensation_options(&start)
     };
-    let pb = spinner("compensate");
     let t0 = std::time::Instant::now();
-    let res = compensate(&robot, &model, &targets.traj, &opts);
-    pb.finish_and_clear();
-    let res: Compensated = res?;
+    let res = with_spinner("compensate", |_| {
+        compensate(&robot, &model, &targets.traj, &opts)
+    })?;
     let secs = t0.elapsed().as_secs_f64();
     super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;
-    let output = a.output.display().to_string();
-    let text = report::iterations(&res, a.iterative, &model.describe(), secs, &output);
+    let text = report::iterations(&res, a.iterative, &model.describe(), secs, &a.output);
     say_part!("{text}");
     if let Some(w) = report::stop_warning(&res, a.tol, a.max_iter) {
         eprintln!("{w}");
     }
     let mut eval = None;
     if let Some(tp) = &a.truth {
-        let (ev, (before, after)) =
-            evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
-        say_part!("{}", report::evaluation(&tp.display().to_string(), &ev));
+        let (ev, runs) = evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;
+        say_part!("{}", report::evaluation(tp, &ev));
         if let Some(p) = &a.plot {
             let title = report::plot_title(&a.traj, a.iterative, &model);
-            plot(
-                p,
-                &title,
-                &[("before".into(), before), ("after".into(), after)],
-            )?;
+            plot(p, &title, &before_after(runs))?;
         }
         eval = Some(ev);
     }

@@ -1,7 +1,7 @@
 //! `robokrige cv`.
 
 use super::fit::ModelArgs;
-use super::progress::{self, bar};
+use super::progress::{ga, of_total, with_bar};
 use clap::Args;
 use robokrige::Result;
 use robokrige::cv::{CvMode, CvPlan, Folds, cross_validate_method, largest_training_rows};
@@ -70,33 +70,18 @@ pub fn run(a: CvArgs) -> Result<()> {
     let data = super::read_data(&a.data)?;
     let params = a.model.resolve(None, &data)?;
     super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
-    let folds = match &a.groups {
-        Some(col) => Folds::Groups(col.clone()),
-        None => Folds::Random {
-            k: a.folds,
-            seed: a.cv_seed,
-        },
-    };
     let plan = CvPlan {
         mode: a.mode,
-        folds,
+        folds: Folds::new(a.groups.as_deref(), a.folds, a.cv_seed),
         hyper_rows: a.hyper_rows,
     };
     plan.validate(data.len())?;
     let params = params.check()?;
-    let pb = bar(0, "folds");
-    let res = plan.run(&data, &params, &progress::of_total(&pb));
-    pb.finish_and_clear();
-    let (res, subset) = res?;
+    let (res, subset) = with_bar(0, "folds", |pb| plan.run(&data, &params, &of_total(pb)))?;
     if let Some(h) = subset {
         eprint!("{}", report::hyper_subset(&h, data.len()));
     }
-    let (how, data_name) = (
-        report::how(&plan.folds, res.folds),
-        a.data.display().to_string(),
-    );
-    let settings = params.params().settings_line();
-    let text = report::summary(&res, &how, (&data_name, data.len()), &settings);
+    let text = report::summary(&res, &plan.folds, (&a.data, data.len()), params.params());
     say_part!("{text}");
     let v = report::json(&res, &a.data, params.params())?;
     super::json_to(a.json.as_deref(), &v, "cv result")?;
@@ -117,11 +102,9 @@ fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     say!("{}", report::methods_header(a.folds, data.len(), a.cv_seed));
     let mut results = Vec::new();
     for m in methods {
-        let pb = bar(a.folds as u64, m.name());
-        let ga = progress::ga(&pb);
-        let res = cross_validate_method(&data, m, a.folds, a.cv_seed, &|| pb.inc(1), &ga);
-        pb.finish_and_clear();
-        let res = res?;
+        let res = with_bar(a.folds as u64, m.name(), |pb| {
+            cross_validate_method(&data, m, a.folds, a.cv_seed, &|| pb.inc(1), &ga(pb))
+        })?;
         say!("{}", report::methods_row(m.name(), &res));
         results.push((m, res));
     }

@@ -4,7 +4,7 @@
 //! simulated robot, and diagnose a campaign with an undeclared effect.
 //! Writes the data, models, SVG plots and a Markdown report to a folder.
 
-use super::progress::{self, bar};
+use super::progress::{steps, with_bar};
 use clap::Args;
 use robokrige::Result;
 use robokrige::demo::{Demo, run_demo};
@@ -35,19 +35,19 @@ pub fn run(a: DemoArgs) -> Result<()> {
     Demo::create_folders(out)?;
     let report_md = out.join("report.md");
     super::check_files(&[], &[Some(report_md.as_path()), a.json.as_deref()])?;
-    let pb = bar(robokrige::demo::STEPS as u64 + 2, "demo");
-    let demo = run_demo(&Default::default(), &progress::steps(&pb));
-    let demo = demo.inspect_err(|_| pb.finish_and_clear())?;
-    pb.set_message("writing the data, models and plots");
-    demo.write_files(out)?;
-    let figures = demo_plots(&demo, &out.join("plots"))?;
-    pb.inc(1);
-    pb.set_message("writing the report");
-    let secs = t0.elapsed().as_secs_f64();
-    let report = report::markdown(&demo, &figures, secs, out);
-    robokrige::output::write_text(&report_md, &report)?;
-    pb.inc(1);
-    pb.finish_and_clear();
+    let (demo, secs) = with_bar(robokrige::demo::STEPS as u64 + 2, "demo", |pb| {
+        let demo = run_demo(&Default::default(), &steps(pb))?;
+        pb.set_message("writing the data, models and plots");
+        demo.write_files(out)?;
+        let figures = demo_plots(&demo, &out.join("plots"))?;
+        pb.inc(1);
+        pb.set_message("writing the report");
+        let secs = t0.elapsed().as_secs_f64();
+        let report = report::markdown(&demo, &figures, secs, out);
+        robokrige::output::write_text(&report_md, &report)?;
+        pb.inc(1);
+        Ok::<_, robokrige::Error>((demo, secs))
+    })?;
     say_part!("{}", report::summary(&demo, secs));
     let v = report::json(&demo, out, secs);
     super::json_to(a.json.as_deref(), &v, "demo summary")?;

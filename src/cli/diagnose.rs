@@ -1,7 +1,7 @@
 //! `robokrige diagnose`.
 
 use super::compensate::read_targets;
-use super::progress::spinner;
+use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
@@ -178,10 +178,9 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     if base.data.len() > robokrige::kriging::SEARCH_ROWS {
         eprintln!("diagnose: {plan}");
     }
-    let pb = spinner("diagnose");
-    let d = diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()));
-    pb.finish_and_clear();
-    let d = d?;
+    let d = with_spinner("diagnose", |pb| {
+        diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()))
+    })?;
     let data_name = a.data.display().to_string();
     let names = Names {
         data: &data_name,
@@ -192,19 +191,13 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         Some(dir) => effect_plots(dir, &base.data, &d)?,
         None => Vec::new(),
     };
-    for p in &plots {
-        say!("plot: {}", p.display());
-    }
-    if let Some(dir) = a.plots.as_ref().filter(|_| plots.is_empty()) {
-        say!("no plots in {}: no effect was added", dir.display());
-    }
+    say_part!("{}", report::plot_lines(a.plots.as_deref(), &plots));
     let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
     let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
     super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
-        let traj = a.traj.as_ref().map(|p| p.display().to_string());
         let extras = Extras {
-            compensation: traj.as_deref().zip(compensation.as_ref()),
+            compensation: a.traj.as_deref().zip(compensation.as_ref()),
             plots: &plots,
         };
         robokrige::output::write_text(path, &report::markdown(&d, names, extras))?;
@@ -231,15 +224,13 @@ fn write_and_compare_models(
         say!("model with the added effects: {}", p.display());
     }
     // (--traj and --truth without --robot are rejected by clap)
-    let (Some(robot), Some(traj), Some(truth_path)) = (&a.robot, &a.traj, &a.truth) else {
+    let (Some(robot), Some(traj), Some(truth_path)) = (opts.get_robot(), &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let robot = kinematics::load_robot_with_tool(robot, a.tool.as_deref())?;
     let truth = load_truth(truth_path)?;
-    let targets = read_targets(traj, &robot, None, &robot.home)?;
-    let on = (&robot, &targets);
+    let targets = read_targets(traj, robot, None, &robot.home)?;
+    let on = (robot, &targets);
     let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
-    let traj = traj.display().to_string();
-    say!("{}", report::compensation_line(&traj, &c));
+    say!("{}", report::compensation_line(traj, &c));
     Ok(Some(c))
 }

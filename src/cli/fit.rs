@@ -1,5 +1,6 @@
 //! `robokrige fit` and `robokrige predict`.
 
+use super::progress::{ga, with_spinner};
 use clap::Args;
 use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
@@ -162,12 +163,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     super::plan_fit("fit", data.len(), optimizer, None)?;
     let t0 = std::time::Instant::now();
     let model = match &a.method {
-        Some(name) => {
-            let pb = super::progress::spinner(name);
-            let model = params.fit_with_progress(&data, &super::progress::ga(&pb));
-            pb.finish_and_clear();
-            model?
-        }
+        Some(name) => with_spinner(name, |pb| params.fit_with_progress(&data, &ga(pb)))?,
         None => params.fit(&data)?,
     };
     let secs = t0.elapsed().as_secs_f64();
@@ -180,8 +176,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         let v = report::json((data_path, output), &model, fit, (data.len(), secs));
         super::write_json(path, &v, "fit report")?;
     }
-    let output = output.display().to_string();
-    say_part!("{}", report::summary(&model, data.len(), secs, &output));
+    say_part!("{}", report::summary(&model, data.len(), secs, output));
     Ok(())
 }
 

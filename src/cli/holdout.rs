@@ -3,7 +3,7 @@
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
 use super::fit::KrigingArgs;
-use super::progress::{self, bar};
+use super::progress::{steps, with_bar};
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
@@ -97,12 +97,11 @@ fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Resu
     super::plan_fit("holdout", data.len(), optimizer, None)?;
     let fold = folds.partition(data)?;
     let k = fold.iter().max().map_or(0, |x| x + 1);
-    let pb = bar(k as u64 + 1, "cv");
     let hyper_rows = a.train.unwrap_or(data.len());
-    let cv = holdout_cv(data, robot, &base, &fold, hyper_rows, &progress::steps(&pb))?;
-    pb.finish_and_clear();
-    let name = a.data.display().to_string();
-    say_part!("{}", report::cv(&name, (folds, data.len()), &base, &cv));
+    let cv = with_bar(k as u64 + 1, "cv", |pb| {
+        holdout_cv(data, robot, &base, &fold, hyper_rows, &steps(pb))
+    })?;
+    say_part!("{}", report::cv(&a.data, (folds, data.len()), &base, &cv));
     super::json_to(a.json.as_deref(), &cv, "cv table")?;
     Ok(())
 }
@@ -122,18 +121,18 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let base = base_params(&a, &train)?;
     let optimizer = base.get_kriging().get_optimizer();
     super::plan_fit("holdout", train.len(), optimizer, Some("--train"))?;
-    let pb = bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout");
     let extras = SplitExtras {
         pca: a.pca,
         ga: a.ga,
     };
-    let split = holdout_split(&train, &test, &robot, &base, extras, &|what| {
-        pb.inc(1);
-        pb.set_message(what.to_string());
+    let split = with_bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout", |pb| {
+        holdout_split(&train, &test, &robot, &base, extras, &|what| {
+            pb.inc(1);
+            pb.set_message(what.to_string());
+        })
     })?;
-    pb.finish_and_clear();
-    let (name, sizes) = (a.data.display().to_string(), (train.len(), test.len()));
-    say_part!("{}", report::split(&name, sizes, &base, &split));
+    let sizes = (train.len(), test.len());
+    say_part!("{}", report::split(&a.data, sizes, &base, &split));
     super::json_to(a.json.as_deref(), &split.rows, "hold-out table")?;
     Ok(())
 }

@@ -2,9 +2,9 @@
 
 use clap::Args;
 use robokrige::Result;
-use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit, import};
+use robokrige::dataset::import::{AngleUnit, ImportSpec, LengthUnit};
 use robokrige::dataset::write_csv;
-use robokrige::kinematics::{self, Robot, locate_imported};
+use robokrige::kinematics::{self, import_for, locate_imported};
 use robokrige::report::import as report;
 use std::path::PathBuf;
 
@@ -78,33 +78,19 @@ pub fn run(a: ImportArgs) -> Result<()> {
     spec.angles = a.angles.unwrap_or(spec.angles);
     spec.lengths = a.lengths.unwrap_or(spec.lengths);
     let robot = a.robot.as_deref().map(kinematics::load_robot).transpose()?;
-    let prismatic = robot
-        .as_ref()
-        .map(Robot::prismatic_joints)
-        .unwrap_or_default();
-    let mut imported = import(&a.export, &spec, &prismatic)?;
-    if let Some(r) = &robot {
-        r.check_dataset(&imported.data)?;
-    }
+    let mut imported = import_for(&a.export, &spec, robot.as_ref())?;
     say_part!("{}", report::read(&imported, &spec, &a.export));
     let located = locate_imported(robot.as_ref(), &mut imported.data)?;
-    if let (Some(r), Some(fit)) = (&robot, &located) {
-        say_part!("{}", report::located(&r.name, imported.data.len(), fit));
-    }
-    if robot.is_none() && imported.data.positions.is_some() {
-        say!(
-            "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors"
-        );
-    }
+    let name = robot.as_ref().map(|r| r.name.as_str());
+    say_part!("{}", report::located(name, &imported, located.as_ref()));
     write_csv(&a.output, &imported.data)?;
     say!("wrote {}", a.output.display());
     if let Some(path) = &a.json {
-        let robot = robot.as_ref().map(|r| r.name.as_str());
         let v = report::json(
             (&a.export, &a.output),
             &imported,
             &spec,
-            (robot, located.as_ref()),
+            (name, located.as_ref()),
         );
         super::write_json(path, &v, "import report")?;
     }

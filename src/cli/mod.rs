@@ -36,8 +36,8 @@ mod run;
 mod simulate;
 
 use clap::{Parser, Subcommand};
+use robokrige::Result;
 use robokrige::model::CoverageWarning;
-use robokrige::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
 
@@ -136,11 +136,7 @@ fn dispatch(command: Command) -> Result<()> {
 /// (`context` names it in an error). Every `--json FILE` option: `-` is
 /// standard output.
 pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
-    let json = serde_json::to_string_pretty(value).map_err(|e| Error::Json {
-        context: context.into(),
-        source: e,
-    });
-    let text = json? + "\n";
+    let text = robokrige::output::json_text(value, context)?;
     if is_stdout(path) {
         print!("{text}");
         return Ok(());

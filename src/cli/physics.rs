@@ -1,14 +1,13 @@
 //! `robokrige physics identify | compare`.
 
-use super::progress::bar;
+use super::progress::{steps, with_bar};
 use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::Result;
 use robokrige::kinematics;
 use robokrige::methods::Method;
 use robokrige::physics::{
-    CompareOptions, DEFAULT_ROBOT, check_campaigns, check_training_campaign, compare,
-    identify_physics,
+    CompareOptions, DEFAULT_ROBOT, check_training_campaign, compare, identify_campaigns,
 };
 use robokrige::report::physics as report;
 use std::path::PathBuf;
@@ -197,13 +196,10 @@ fn run_identify(a: IdentifyArgs) -> Result<()> {
     let robot = kinematics::load_robot(&a.robot)?;
     // repeated poses are the design of an indexing test: no warning for them
     let indexing = robokrige::dataset::read_csv(&a.indexing)?;
+    // refused before the training campaign is read
     check_training_campaign(&robot, a.train.is_some())?;
-    let train = match &a.train {
-        Some(p) => read_data(p)?,
-        None => indexing.clone(),
-    };
-    check_campaigns(&robot, &a.robot, &[&indexing, &train])?;
-    let id = identify_physics(&indexing, &train, &robot)?;
+    let train = a.train.as_deref().map(read_data).transpose()?;
+    let id = identify_campaigns(&robot, &a.robot, &indexing, train.as_ref())?;
     id.full.save(&a.output)?;
     if let Some(p) = &a.dh_output {
         id.dh.save(p)?;
@@ -231,16 +227,13 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         ejs: Method::from_name(&a.ejs)?,
         nugget: a.nugget,
     };
-    opts.validate()?;
-    let pb = bar(1, "compare");
     let t0 = std::time::Instant::now();
-    let res = compare(&opts, &|k, total, what| {
-        pb.set_length(total as u64);
-        pb.set_position(k as u64);
-        pb.set_message(what.to_string());
-    });
-    pb.finish_and_clear();
-    let res = res?;
+    let res = with_bar(1, "compare", |pb| {
+        compare(&opts, &|k, total, what| {
+            pb.set_length(total as u64);
+            steps(pb)(k, what);
+        })
+    })?;
     let text = report::comparison(&res, t0.elapsed().as_secs_f64());
     say_part!("{text}");
     if let Some(p) = &a.report {
@@ -280,11 +273,9 @@ fn run_register(a: RegisterArgs) -> Result<()> {
     super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let robot = kinematics::load_robot(&a.robot)?;
     let data = read_data(data_path)?;
-    robot.check_dataset(&data)?;
     let (out, reg) = robokrige::physics::register_campaign(&data, &robot)?;
     robokrige::dataset::write_csv(output, &out)?;
-    let name = output.display().to_string();
-    say_part!("{}", report::registration(&reg, out.len(), &name));
+    say_part!("{}", report::registration(&reg, out.len(), output));
     let v = report::registration_json((data_path, output), &robot.name, out.len(), &reg);
     super::json_to(a.json.as_deref(), &v, "registration")?;
     Ok(())

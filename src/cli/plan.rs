@@ -5,8 +5,9 @@ use clap::Args;
 use robokrige::Result;
 use robokrige::model::ErrorModel;
 use robokrige::plan::stop::Forecast;
-use robokrige::plan::{PlanInputs, PlanParams, Region, TrackerView};
-use robokrige::program::{ProgramFormat, ProgramOptions};
+use robokrige::plan::{Plan, PlanInputs, PlanParams, Region, TrackerView};
+use robokrige::program::ProgramFormat;
+use robokrige::report::plan as report;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -97,10 +98,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         &[Some(a.output.as_path()), a.json.as_deref()],
     )?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
-    if a.format != ProgramFormat::Csv {
-        // a program the controller cannot take is refused before the planning
-        ProgramOptions::for_file(&a.output, a.format, robot.prismatic_joints())?;
-    }
+    Plan::check_output(&a.output, a.format, &robot)?;
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;
     let pool = a.pool.as_deref().map(read_data).transpose()?;
     let prior = a.prior.as_deref().map(ErrorModel::load).transpose()?;
@@ -126,13 +124,10 @@ pub fn run(a: PlanArgs) -> Result<()> {
     plan.write(&a.output, a.format, &robot)?;
     super::json_to(
         a.json.as_deref(),
-        &robokrige::report::plan::json(&plan, forecast.as_ref()),
+        &report::json(&plan, forecast.as_ref()),
         "plan",
     )?;
-    print!(
-        "{}",
-        robokrige::report::plan::text(&plan, forecast.as_ref(), a.target_mm)
-    );
+    print!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));
     println!("wrote {}", a.output.display());
     Ok(())
 }

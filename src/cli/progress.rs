@@ -3,8 +3,9 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// A bar of `len` steps labelled `prefix`, with elapsed time and a message.
-pub fn bar(len: u64, prefix: &str) -> ProgressBar {
+/// Run `work` with a bar of `len` steps labelled `prefix` (elapsed time and
+/// a message) drawn, and clear the bar once it returns, failed or not.
+pub fn with_bar<T>(len: u64, prefix: &str, work: impl FnOnce(&ProgressBar) -> T) -> T {
     let pb = ProgressBar::new(len);
     pb.set_style(
         ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {elapsed:>4} {msg}")
@@ -12,11 +13,13 @@ pub fn bar(len: u64, prefix: &str) -> ProgressBar {
             .progress_chars("=> "),
     );
     pb.set_prefix(prefix.to_string());
-    pb
+    let out = work(&pb);
+    pb.finish_and_clear();
+    out
 }
 
-/// A spinner labelled `prefix` for steps of unknown length.
-pub fn spinner(prefix: &str) -> ProgressBar {
+/// [`with_bar`] with a spinner, for work of unknown length.
+pub fn with_spinner<T>(prefix: &str, work: impl FnOnce(&ProgressBar) -> T) -> T {
     let pb = ProgressBar::new_spinner();
     pb.set_style(
         ProgressStyle::with_template("{prefix:>10} {spinner} {elapsed:>4} {msg}")
@@ -24,7 +27,9 @@ pub fn spinner(prefix: &str) -> ProgressBar {
     );
     pb.set_prefix(prefix.to_string());
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
-    pb
+    let out = work(&pb);
+    pb.finish_and_clear();
+    out
 }
 
 /// A library's progress `(done, total)` drawn on `pb`.

@@ -57,30 +57,13 @@ pub fn run(a: RunArgs) -> Result<()> {
     let folder = config::folder(&a.config);
     let json_out = a.json.as_deref().map(config::output_path);
     std::env::set_current_dir(&folder).map_err(|e| Error::io(&folder, e))?;
-    let mut log = Vec::new();
-    for (k, argv) in steps.iter().enumerate() {
-        let line = config::command_line(argv);
-        say!("step {} of {}: {line}", k + 1, steps.len());
-        if a.dry_run {
-            log.push(report::step(k + 1, argv, None));
-            continue;
-        }
-        let cli = super::Cli::try_parse_from(argv)
-            .map_err(|e| config::parse_error(&source, k + 1, &e))?;
-        let t0 = std::time::Instant::now();
-        let r = super::dispatch(cli.command);
-        let ran = (
-            t0.elapsed().as_secs_f64(),
-            r.as_ref().err().map(ToString::to_string),
-        );
-        log.push(report::step(k + 1, argv, Some(ran)));
-        if let Err(e) = r {
-            return Err(Error::Input {
-                source_name: source.clone(),
-                message: format!("step {} ({}) failed: {e}", k + 1, argv[1]),
-            });
-        }
-    }
+    let log = config::run_steps(
+        (&source, &steps),
+        a.dry_run,
+        |line: &str| say!("{line}"),
+        |argv: &[String]| super::Cli::try_parse_from(argv),
+        |cli| super::dispatch(cli.command),
+    )?;
     let v = report::json(&a.config, &folder, &log);
     super::json_to(json_out.as_deref(), &v, "run log")
 }

@@ -137,6 +137,23 @@ pub fn errors_from_positions(robot: &Robot, data: &mut Dataset) -> Result<Option
     Ok(Some(fit))
 }
 
+/// Import the export at `path` with `spec` ([`crate::dataset::import::import`])
+/// for the measured robot, if one is given: its prismatic joints' values
+/// read as lengths, the campaign checked against it
+/// ([`Robot::check_dataset`]).
+pub fn import_for(
+    path: &std::path::Path,
+    spec: &crate::dataset::import::ImportSpec,
+    robot: Option<&Robot>,
+) -> Result<crate::dataset::import::Imported> {
+    let prismatic = robot.map(Robot::prismatic_joints).unwrap_or_default();
+    let imported = crate::dataset::import::import(path, spec, &prismatic)?;
+    if let Some(r) = robot {
+        r.check_dataset(&imported.data)?;
+    }
+    Ok(imported)
+}
+
 /// [`errors_from_positions`] of an imported campaign (`import`) with its
 /// robot, if one is given; an import map that gives both errors and
 /// positions is refused.

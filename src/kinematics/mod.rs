@@ -25,7 +25,7 @@ pub use calib::{
     apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
-pub use locate::{TrackerFit, errors_from_positions, locate_imported, locate_tracker};
+pub use locate::{TrackerFit, errors_from_positions, import_for, locate_imported, locate_tracker};
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
 pub use robot_file::{

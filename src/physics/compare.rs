@@ -184,8 +184,10 @@ fn path(nominal: &Robot, opts: &CompareOptions) -> Result<Trajectory> {
     Ok(Trajectory::new(poses))
 }
 
-/// Run the whole comparison; `progress(step, total, what)` after each step.
+/// Run the whole comparison ([`CompareOptions::validate`] first);
+/// `progress(step, total, what)` after each step.
 pub fn compare(opts: &CompareOptions, progress: &dyn Fn(usize, usize, &str)) -> Result<Comparison> {
+    opts.validate()?;
     let nominal = kinematics::load_robot(&opts.robot)?;
     let robot = TrueRobot::draw(&nominal, &ErrorProfile::for_robot(&nominal), opts.seed);
     // 6 set-up steps, then one per model row (6)

@@ -163,23 +163,41 @@ pub fn identify_physics(
     })
 }
 
+/// [`identify_physics`] of `robot` (named `name` by the user) from the
+/// campaigns given: the indexing tests and the training campaign `train`,
+/// which a six-axis robot needs and a SCARA refuses
+/// ([`check_training_campaign`]; a SCARA trains on its indexing tests),
+/// each checked against the robot first ([`check_campaigns`]).
+pub fn identify_campaigns(
+    robot: &Robot,
+    name: &str,
+    indexing: &Dataset,
+    train: Option<&Dataset>,
+) -> Result<PhysicsIdentification> {
+    check_training_campaign(robot, train.is_some())?;
+    let train = train.unwrap_or(indexing);
+    check_campaigns(robot, name, &[indexing, train])?;
+    identify_physics(indexing, train, robot)
+}
+
 /// Register a campaign measured in a tracker's frame into the robot's base
 /// frame (seed 004 eqs 29–35): the rigid transform that best maps the
 /// measured positions `x, y, z` onto the nominal TCP positions of the
 /// commanded joints ([`crate::frames::register`], reflection-safe), applied
 /// to the positions, and the errors recomputed as `registered − nominal`.
 /// The best-fit rigid part of the robot's own error is absorbed by the
-/// transform, as in the paper.
+/// transform, as in the paper. Error unless the campaign fits `nominal`
+/// ([`Robot::check_dataset`]) and has the measured positions.
 pub fn register_campaign(
     data: &Dataset,
     nominal: &Robot,
 ) -> Result<(Dataset, crate::frames::Registration)> {
     use nalgebra::{Point3, Vector3};
+    nominal.check_dataset(data)?;
     let positions = data.positions.as_ref().ok_or_else(|| crate::Error::Input {
         source_name: data.source.clone(),
         message: "registration needs the measured positions x,y,z".into(),
     })?;
-    nominal.check_dataset(data)?;
     let from: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
     let to: Vec<Vector3<f64>> = data
         .q

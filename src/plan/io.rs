@@ -80,6 +80,17 @@ impl Plan {
         })
     }
 
+    /// Refuse, before any planning, an output the plan could not be
+    /// written to in `format` ([`Plan::write`]): a program that `robot`'s
+    /// controller cannot take, or a file that names no valid program
+    /// ([`ProgramOptions::for_file`]).
+    pub fn check_output(path: &Path, format: ProgramFormat, robot: &Robot) -> Result<()> {
+        if format != ProgramFormat::Csv {
+            ProgramOptions::for_file(path, format, robot.prismatic_joints())?;
+        }
+        Ok(())
+    }
+
     /// Write the plan in `format`: [`Plan::write_csv`] for CSV, else a
     /// program of joint moves for `robot`'s controller
     /// ([`crate::program`]), measured poses and via-points marked, each

@@ -18,8 +18,18 @@ pub fn json(files: &[PathBuf], results: &[Result<CampaignReport>]) -> serde_json
     serde_json::Value::Array(reports)
 }
 
+/// The fleet table: a header, then one line per campaign of `files` with
+/// its report or its error (`results`, the same order).
+pub fn table(files: &[PathBuf], results: &[Result<CampaignReport>]) -> String {
+    let mut s = header() + "\n";
+    for (file, r) in files.iter().zip(results) {
+        s += &(row(&campaign_name(file), r) + "\n");
+    }
+    s
+}
+
 /// The header of the fleet table.
-pub fn header() -> String {
+fn header() -> String {
     format!(
         "{:<28} {:>6} {:<20} {:>10} {:>26} {:>9} {:>7}",
         "campaign", "rows", "robot", "measured", "CV RMSE x / y / z (mm)", "CV mean", "s"
@@ -28,7 +38,7 @@ pub fn header() -> String {
 
 /// Campaign `name`'s line: rows, robot, the measured mean 3D error, the CV
 /// RMSE per axis and mean 3D error, the wall time; or its error.
-pub fn row(name: &str, r: &Result<CampaignReport>) -> String {
+fn row(name: &str, r: &Result<CampaignReport>) -> String {
     match r {
         Ok(rep) => {
             let cv = rep.cv.rms_mm;

@@ -39,9 +39,9 @@ pub fn iterations(
     iterative: bool,
     model: &str,
     secs: f64,
-    output: &str,
+    output: &Path,
 ) -> String {
-    let mut s = String::new();
+    let (mut s, output) = (String::new(), output.display());
     let _ = writeln!(
         s,
         "{} {} points with {model} in {secs:.3} s -> {output}",
@@ -92,9 +92,10 @@ fn index_list(v: &[usize]) -> String {
 
 /// The evaluation of a compensation on the simulated robot of `truth`: the
 /// errors before and after, and the reduction.
-pub fn evaluation(truth: &str, ev: &Evaluation) -> String {
+pub fn evaluation(truth: &Path, ev: &Evaluation) -> String {
     format!(
-        "on the simulated robot ({truth}), measured error vs target (mm):\n{}\n{}\n{}\n",
+        "on the simulated robot ({}), measured error vs target (mm):\n{}\n{}\n{}\n",
+        truth.display(),
         table_line("before (nominal)", &ev.before),
         table_line("after (compensated)", &ev.after),
         reduction_line("", ev)

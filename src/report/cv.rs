@@ -38,15 +38,24 @@ pub fn json(res: &CvResult, data: &Path, params: &ErrorModelParams) -> Result<Va
     Ok(v)
 }
 
-/// What `cv` prints for one model choice: `how` it was cross-validated
-/// (e.g. "10-fold CV"), of which file (`data`) of how many `rows`, with
-/// which settings (`settings`, a line), then the per-axis RMSE, the 3D
-/// error and the predictive scores.
-pub fn summary(res: &CvResult, how: &str, (data, rows): (&str, usize), settings: &str) -> String {
+/// What `cv` prints for one model choice: how it was cross-validated
+/// (`folds`, [`how`]), of which file (`data`) of how many `rows`, with
+/// which settings ([`ErrorModelParams::settings_line`]), then the per-axis
+/// RMSE, the 3D error and the predictive scores.
+pub fn summary(
+    res: &CvResult,
+    folds: &Folds,
+    (data, rows): (&Path, usize),
+    params: &ErrorModelParams,
+) -> String {
     let s = &res.summary;
     let mut out = format!(
-        "{how} ({}) of {data} on {rows} rows ({settings}), {:.1} s\n",
-        res.mode, res.seconds
+        "{} ({}) of {} on {rows} rows ({}), {:.1} s\n",
+        how(folds, res.folds),
+        res.mode,
+        data.display(),
+        params.settings_line(),
+        res.seconds
     );
     let _ = writeln!(
         out,

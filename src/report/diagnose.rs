@@ -248,10 +248,24 @@ pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
     out
 }
 
+/// The plots written into the folder `dir` (`--plots`), one line each; or,
+/// when a folder was given but no effect was added, that it holds none.
+pub fn plot_lines(dir: Option<&Path>, plots: &[PathBuf]) -> String {
+    match dir {
+        Some(dir) if plots.is_empty() => {
+            format!("no plots in {}: no effect was added\n", dir.display())
+        }
+        _ => plots
+            .iter()
+            .map(|p| format!("plot: {}\n", p.display()))
+            .collect(),
+    }
+}
+
 /// The line `diagnose` prints for the compensation of trajectory `traj`
 /// with the models before and after.
-pub fn compensation_line(traj: &str, c: &CompensationComparison) -> String {
-    let (b, a) = (&c.before_model, &c.after_model);
+pub fn compensation_line(traj: &Path, c: &CompensationComparison) -> String {
+    let (b, a, traj) = (&c.before_model, &c.after_model, traj.display());
     format!(
         "compensation of {traj} (iterative, on the simulated robot): nominal mean |δ| {:.4} mm; model before {:.4} mm, after {:.4} mm",
         b.0.mean_abs_mm, b.1.mean_abs_mm, a.1.mean_abs_mm
@@ -263,7 +277,7 @@ pub fn compensation_line(traj: &str, c: &CompensationComparison) -> String {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Extras<'a> {
     /// The trajectory compensated, and the comparison of the models on it.
-    pub compensation: Option<(&'a str, &'a CompensationComparison)>,
+    pub compensation: Option<(&'a Path, &'a CompensationComparison)>,
     /// Residual-vs-effect plots.
     pub plots: &'a [PathBuf],
 }
@@ -298,6 +312,7 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
     }
     round_tables(&mut s, d);
     if let Some((traj, c)) = extras.compensation {
+        let traj = traj.display();
         let ((nb, bb), (_, ab)) = (&c.before_model, &c.after_model);
         let _ = writeln!(s, "\n## Compensation\n");
         let _ = writeln!(

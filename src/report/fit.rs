@@ -27,8 +27,8 @@ pub fn json(
 /// `output`: the space, correlation and nugget; per axis the family CV (if
 /// chosen by CV), ln ψ, σ², the nugget, the trend terms, the evaluations
 /// and log10 ξ; the trend selection; the calibration.
-pub fn summary(model: &ErrorModel, rows: usize, secs: f64, output: &str) -> String {
-    let mut s = String::new();
+pub fn summary(model: &ErrorModel, rows: usize, secs: f64, output: &Path) -> String {
+    let (mut s, output) = (String::new(), output.display());
     let _ = writeln!(
         s,
         "fitted {rows} rows in {:?} space ({}, {}) in {secs:.2} s -> {output}",

@@ -7,18 +7,19 @@ use crate::kriging::OptimizerKind;
 use crate::params::ErrorModelParams;
 use crate::stats::PredictiveScores;
 use std::fmt::Write as _;
+use std::path::Path;
 
 /// What `holdout` prints for a split of the campaign `data` into
 /// `n_train` training and `n_test` test rows, fitted from `base`: the
 /// rows, the Kriging search and nugget, the periodic joints, then the
 /// calibration and the table ([`rows`]).
 pub fn split(
-    data: &str,
+    data: &Path,
     (n_train, n_test): (usize, usize),
     base: &ErrorModelParams,
     split: &HoldoutSplit,
 ) -> String {
-    let k = base.get_kriging();
+    let (k, data) = (base.get_kriging(), data.display());
     format!(
         "{data}: train rows 1–{n_train}, test rows {}–{}; Kriging by {}{}; periodic joints (sin/cos): {}\n{}{}",
         n_train + 1,
@@ -44,11 +45,12 @@ pub fn split(
 /// hyperparameters' rows and time, the periodic joints, then the tables
 /// ([`rows`], [`scores`]) and [`cv_tail`].
 pub fn cv(
-    data: &str,
+    data: &Path,
     (folds, rows_all): (&Folds, usize),
     base: &ErrorModelParams,
     cv: &HoldoutCv,
 ) -> String {
+    let data = data.display();
     let how = match folds {
         Folds::Random { k, seed } => format!("{k}-fold CV (fold seed {seed})"),
         Folds::Groups(_) => super::cv::how(folds, cv.folds),

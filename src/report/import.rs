@@ -33,10 +33,23 @@ pub fn read(imported: &Imported, spec: &ImportSpec, export: &Path) -> String {
     s
 }
 
-/// The tracker located for robot `robot` over `rows` rows: the tracker →
-/// base transform (translation, roll-pitch-yaw), the TCP offset and the
-/// RMS of the errors it leaves.
-pub fn located(robot: &str, rows: usize, fit: &TrackerFit) -> String {
+/// What became of the measured positions of `imported`: with the robot
+/// (named `robot`) and the tracker located (`fit`), the tracker → base
+/// transform (translation, roll-pitch-yaw), the TCP offset and the RMS of
+/// the errors it leaves; without a robot, that they stay in the tracker's
+/// frame; empty for a campaign that gives errors.
+pub fn located(robot: Option<&str>, imported: &Imported, fit: Option<&TrackerFit>) -> String {
+    match (robot, fit) {
+        (Some(r), Some(fit)) => tracker(r, imported.data.len(), fit),
+        (None, _) if imported.data.positions.is_some() => {
+            "  measured positions kept as x,y,z (tracker frame); give --robot to turn them into errors\n".into()
+        }
+        _ => String::new(),
+    }
+}
+
+/// The tracker located for robot `robot` over `rows` rows ([`located`]).
+fn tracker(robot: &str, rows: usize, fit: &TrackerFit) -> String {
     let t = fit.tracker_to_base.translation.vector;
     let (roll, pitch, yaw) = fit.tracker_to_base.rotation.euler_angles();
     format!(

@@ -243,8 +243,8 @@ pub fn registration_json(
 /// The registration of a campaign into the base frame (`physics
 /// register`): the transform, and the residual over its `rows` rows
 /// written to `output`.
-pub fn registration(reg: &Registration, rows: usize, output: &str) -> String {
-    let t = reg.transform.translation.vector;
+pub fn registration(reg: &Registration, rows: usize, output: &Path) -> String {
+    let (t, output) = (reg.transform.translation.vector, output.display());
     let (axis, angle) = axis_angle(reg);
     format!(
         "base ← tracker: translation ({:.3}, {:.3}, {:.3}) mm, rotation {:.5}° about ({:.4}, {:.4}, {:.4}){}\n\

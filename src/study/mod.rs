@@ -306,6 +306,12 @@ pub fn evaluate_file(
     })
 }
 
+/// The measured errors of a nominal and a compensated run as named runs,
+/// `before` and `after` ([`named_runs`] names the nominal run `before` too).
+pub fn before_after((before, after): Runs) -> Vec<(String, Vec<[f64; 3]>)> {
+    vec![("before".into(), before), ("after".into(), after)]
+}
+
 /// The measured errors of `evals` as named runs: the nominal run (the
 /// same in each, taken from the first) as `before`, then each file's.
 pub fn named_runs(evals: &[FileEvaluation]) -> Vec<(String, Vec<[f64; 3]>)> {
