@@ -814,6 +814,17 @@ fn json_dash_writes_only_json_to_stdout_on_every_subcommand() {
             &p("imp.csv"),
         ],
         vec!["robot", "show", "ur10"],
+        vec![
+            "plan",
+            "--robot",
+            "ur10",
+            "--budget",
+            "6",
+            "--candidates",
+            "200",
+            "-o",
+            &p("plan.csv"),
+        ],
     ]
     .into_iter()
     .map(|v| v.into_iter().map(String::from).collect())

@@ -127,7 +127,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         &report::json(&plan, forecast.as_ref()),
         "plan",
     )?;
-    print!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));
-    println!("wrote {}", a.output.display());
+    say_part!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));
+    say!("wrote {}", a.output.display());
     Ok(())
 }
