@@ -38,34 +38,44 @@ fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
     periods
 }
 
+/// The family `label` of joint `j`'s harmonics: `point(P)` at each of its
+/// periods P ([`harmonic_periods`]).
+fn push_harmonics(
+    out: &mut Sink,
+    data: &Dataset,
+    j: usize,
+    label: String,
+    point: impl Fn(f64) -> GridPoint,
+) {
+    let grid: Vec<GridPoint> = harmonic_periods(data, j).into_iter().map(point).collect();
+    if !grid.is_empty() {
+        out.push(Family {
+            kind: EffectKind::Harmonic,
+            source: vec![format!("q{}", j + 1)],
+            label,
+            grid,
+            zoom: None,
+        });
+    }
+}
+
 /// Harmonics of each joint, periods from 2° to half its range.
 pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
     for j in 0..data.n_joints() {
-        let grid: Vec<GridPoint> = harmonic_periods(data, j)
-            .into_iter()
-            .map(|period| {
-                let w = std::f64::consts::TAU / period;
-                let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
-                let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
-                GridPoint {
-                    params: params(&[("period_deg", period)]),
-                    columns: vec![zscore(&s), zscore(&c)],
-                    add: vec![Feature::Harmonic {
-                        joint: j + 1,
-                        period_deg: period,
-                    }],
-                }
-            })
-            .collect();
-        if !grid.is_empty() {
-            out.push(Family {
-                kind: EffectKind::Harmonic,
-                source: vec![format!("q{}", j + 1)],
-                label: format!("harmonic of q{}", j + 1),
-                grid,
-                zoom: None,
-            });
-        }
+        let label = format!("harmonic of q{}", j + 1);
+        push_harmonics(out, data, j, label, |period| {
+            let w = std::f64::consts::TAU / period;
+            let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
+            let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
+            GridPoint {
+                params: params(&[("period_deg", period)]),
+                columns: vec![zscore(&s), zscore(&c)],
+                add: vec![Feature::Harmonic {
+                    joint: j + 1,
+                    period_deg: period,
+                }],
+            }
+        });
     }
 }
 
@@ -81,42 +91,31 @@ pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mu
         return;
     };
     for j in 0..data.n_joints() {
-        let grid: Vec<GridPoint> = harmonic_periods(data, j)
-            .into_iter()
-            .map(|period| {
-                let w = std::f64::consts::TAU / period;
-                let mut columns = Vec::with_capacity(6);
-                for f in [f64::sin, f64::cos] {
-                    for a in 0..3 {
-                        let c: Vec<f64> = data
-                            .q
-                            .iter()
-                            .zip(&jac)
-                            .map(|(r, jq)| jq[(a, j)] * f(w * r[j]))
-                            .collect();
-                        columns.push(zscore(&c));
-                    }
+        let label = format!("harmonic of q{} (via the Jacobian)", j + 1);
+        push_harmonics(out, data, j, label, |period| {
+            let w = std::f64::consts::TAU / period;
+            let mut columns = Vec::with_capacity(6);
+            for f in [f64::sin, f64::cos] {
+                for a in 0..3 {
+                    let c: Vec<f64> = data
+                        .q
+                        .iter()
+                        .zip(&jac)
+                        .map(|(r, jq)| jq[(a, j)] * f(w * r[j]))
+                        .collect();
+                    columns.push(zscore(&c));
                 }
-                GridPoint {
-                    params: params(&[("period_deg", period)]),
-                    columns,
-                    add: vec![Feature::HarmonicJacobian {
-                        robot: Box::new(robot.clone()),
-                        joint: j + 1,
-                        period_deg: period,
-                    }],
-                }
-            })
-            .collect();
-        if !grid.is_empty() {
-            out.push(Family {
-                kind: EffectKind::Harmonic,
-                source: vec![format!("q{}", j + 1)],
-                label: format!("harmonic of q{} (via the Jacobian)", j + 1),
-                grid,
-                zoom: None,
-            });
-        }
+            }
+            GridPoint {
+                params: params(&[("period_deg", period)]),
+                columns,
+                add: vec![Feature::HarmonicJacobian {
+                    robot: Box::new(robot.clone()),
+                    joint: j + 1,
+                    period_deg: period,
+                }],
+            }
+        });
     }
 }
 
