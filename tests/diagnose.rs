@@ -155,6 +155,24 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
         }
     }
     assert!(d.after.pooled_rmse_mm < 0.75 * d.before.pooled_rmse_mm);
+    // a model with it is saved with its robot and predicts the same back
+    let m = ErrorModelParams::new()
+        .space(Space::Ejs)
+        .kriging(
+            KrigingOptions::default()
+                .optimizer(OptimizerKind::HookeJeeves)
+                .max_evals(100),
+        )
+        .extras(vec![f])
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
+    assert_eq!(back.extras(), m.extras());
+    assert_eq!(
+        back.predict_mean(&data.q, &data.dir).unwrap(),
+        m.predict_mean(&data.q, &data.dir).unwrap()
+    );
 }
 
 #[test]
