@@ -62,20 +62,31 @@ pub fn parse_error(source: &str, step: usize, e: &clap::Error) -> Error {
     }
 }
 
+/// What [`run_steps`] ran: the record of every step announced
+/// ([`crate::report::run::step`]: with its wall time and error once it
+/// ran), and the failure that stopped the run, if one did.
+#[derive(Debug)]
+pub struct StepsRun {
+    /// One record per step announced, the failed one included.
+    pub log: Vec<serde_json::Value>,
+    /// The error that stopped the run: a step that could not be parsed or
+    /// failed, named by its number and subcommand.
+    pub failure: Option<Error>,
+}
+
 /// Run `steps`, the argument lists of the config file `source`, in order,
 /// each announced first by `announce("step K of N: COMMAND LINE")`; with
 /// `dry_run` none runs. `parse` turns a step into a command (a refusal is
 /// [`parse_error`]) and `run` runs it; the first step that fails stops the
-/// run with an error naming its number and subcommand. Returns the record
-/// of every step ([`crate::report::run::step`]: with its wall time once it
-/// ran).
+/// run. The record of what ran is kept either way, so a `--json` log can
+/// say which step failed and why.
 pub fn run_steps<C>(
     (source, steps): (&str, &[Vec<String>]),
     dry_run: bool,
     announce: impl Fn(&str),
     parse: impl Fn(&[String]) -> std::result::Result<C, clap::Error>,
     mut run: impl FnMut(C) -> Result<()>,
-) -> Result<Vec<serde_json::Value>> {
+) -> StepsRun {
     let mut log = Vec::new();
     for (k, argv) in steps.iter().enumerate() {
         let line = command_line(argv);
@@ -84,7 +95,13 @@ pub fn run_steps<C>(
             log.push(crate::report::run::step(k + 1, argv, None));
             continue;
         }
-        let command = parse(argv).map_err(|e| parse_error(source, k + 1, &e))?;
+        let command = match parse(argv) {
+            Ok(c) => c,
+            Err(e) => {
+                let failure = Some(parse_error(source, k + 1, &e));
+                return StepsRun { log, failure };
+            }
+        };
         let t0 = std::time::Instant::now();
         let r = run(command);
         let ran = (
@@ -93,13 +110,14 @@ pub fn run_steps<C>(
         );
         log.push(crate::report::run::step(k + 1, argv, Some(ran)));
         if let Err(e) = r {
-            return Err(Error::Input {
+            let failure = Some(Error::Input {
                 source_name: source.into(),
                 message: format!("step {} ({}) failed: {e}", k + 1, argv[1]),
             });
+            return StepsRun { log, failure };
         }
     }
-    Ok(log)
+    StepsRun { log, failure: None }
 }
 
 /// Shell-quote an argument when it needs it (for the printed command lines).

@@ -109,6 +109,40 @@ fn a_config_with_an_unknown_option_names_the_step_and_the_options() {
     assert!(err.contains("no subcommand 'fly'"), "{err}");
 }
 
+/// A step that fails stops the run, and the `--json` log still says what
+/// ran: the steps before it, and the failed one with its error.
+#[test]
+fn a_failed_step_is_in_the_run_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("c.toml");
+    std::fs::write(
+        &cfg,
+        "[[step]]\ncommand = \"simulate\"\nposes = 20\noutput = \"s.csv\"\n\n\
+         [[step]]\ncommand = \"fit\"\ndata = \"missing.csv\"\noutput = \"m.json\"\n\n\
+         [[step]]\ncommand = \"simulate\"\nposes = 20\noutput = \"t.csv\"\n",
+    )
+    .unwrap();
+    let log = dir.path().join("log.json");
+    let (c, _, err) = rk(&[
+        "run",
+        &cfg.display().to_string(),
+        "--json",
+        &log.display().to_string(),
+    ]);
+    assert_eq!(c, 1, "{err}");
+    assert!(err.contains("step 2 (fit) failed"), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&log).expect("the log")).unwrap();
+    let steps = v["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 2, "{v}");
+    assert!(steps[0]["error"].is_null(), "{v}");
+    assert!(
+        steps[1]["error"].as_str().unwrap().contains("missing.csv"),
+        "{v}"
+    );
+    assert!(!dir.path().join("t.csv").exists(), "the run went on");
+}
+
 #[test]
 fn a_batch_reports_every_campaign_with_its_own_robot_and_lists_failures() {
     let dir = tempfile::tempdir().unwrap();

@@ -57,13 +57,15 @@ pub fn run(a: RunArgs) -> Result<()> {
     let folder = config::folder(&a.config);
     let json_out = a.json.as_deref().map(config::output_path);
     std::env::set_current_dir(&folder).map_err(|e| Error::io(&folder, e))?;
-    let log = config::run_steps(
+    let ran = config::run_steps(
         (&source, &steps),
         a.dry_run,
         |line: &str| say!("{line}"),
         |argv: &[String]| super::Cli::try_parse_from(argv),
         |cli| super::dispatch(cli.command),
-    )?;
-    let v = report::json(&a.config, &folder, &log);
-    super::json_to(json_out.as_deref(), &v, "run log")
+    );
+    // the log is written when a step failed too: it says which and why
+    let v = report::json(&a.config, &folder, &ran.log);
+    super::json_to(json_out.as_deref(), &v, "run log")?;
+    ran.failure.map_or(Ok(()), Err)
 }
