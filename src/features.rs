@@ -537,36 +537,14 @@ impl Feature {
                 robot: r,
                 joint,
                 from,
-            } => {
-                let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
-                for qi in q {
-                    let jac = r.position_jacobian(qi)?;
-                    let th = qi[from - 1].to_radians();
-                    for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
-                        for a in 0..3 {
-                            cols[3 * f + a].push(jac[(a, joint - 1)] * v);
-                        }
-                    }
-                }
-                cols
-            }
+            } => jacobian_sin_cos(r, q, *joint, |qi| qi[from - 1].to_radians())?,
             Feature::HarmonicJacobian {
                 robot: r,
                 joint,
                 period_deg,
             } => {
                 let w = std::f64::consts::TAU / period_deg;
-                let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(m)).collect();
-                for qi in q {
-                    let jac = r.position_jacobian(qi)?;
-                    let th = w * qi[joint - 1];
-                    for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
-                        for a in 0..3 {
-                            cols[3 * f + a].push(jac[(a, joint - 1)] * v);
-                        }
-                    }
-                }
-                cols
+                jacobian_sin_cos(r, q, *joint, |qi| w * qi[joint - 1])?
             }
             Feature::SinceReversal { joint } => {
                 let j = joint - 1;
@@ -711,6 +689,29 @@ fn check_complete(data: &Dataset, names: &[String], cols: Vec<Vec<f64>>) -> Resu
 }
 
 /// Number of input columns of `extras` that enter the correlation (the
+/// The six columns of a deviation `sin φ(q)`, `cos φ(q)` of 1-based joint
+/// `joint` mapped to the TCP through `robot`'s position Jacobian: x, y, z
+/// of `∂P/∂θ_j·sin φ`, then of `∂P/∂θ_j·cos φ` ([`Feature::Crosstalk`],
+/// [`Feature::HarmonicJacobian`]).
+fn jacobian_sin_cos(
+    robot: &crate::kinematics::Robot,
+    q: &[Vec<f64>],
+    joint: usize,
+    phase: impl Fn(&[f64]) -> f64,
+) -> Result<Vec<Vec<f64>>> {
+    let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(q.len())).collect();
+    for qi in q {
+        let jac = robot.position_jacobian(qi)?;
+        let th = phase(qi);
+        for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
+            for a in 0..3 {
+                cols[3 * f + a].push(jac[(a, joint - 1)] * v);
+            }
+        }
+    }
+    Ok(cols)
+}
+
 /// others are trend-only).
 pub fn correlation_dims(extras: &[Feature]) -> usize {
     extras.iter().map(|f| f.names().len()).sum::<usize>() - trend_only_dims(extras)

@@ -25,6 +25,7 @@
 //!   of the model's own `b ± h` and of `b + Δ ± h·√r`: half-width
 //!   `max(h, |Δ| + h·√r)`.
 
+use super::rank::orthonormal;
 use super::report::{Coefficient, EffectReport};
 use crate::dataset::Dataset;
 use crate::features::Feature;
@@ -40,28 +41,6 @@ use nalgebra::{DMatrix, DVector};
 /// regular parameter's threshold, undercovers a change point: its profile
 /// is not quadratic, and a clear step's is one row wide.
 const CHANGE_95: f64 = 7.377_758_908_227_871;
-
-/// Orthonormal basis of the centred columns (the intercept is implied).
-fn basis(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let mut out: Vec<Vec<f64>> = Vec::new();
-    for c in columns {
-        let mu = c.iter().sum::<f64>() / c.len().max(1) as f64;
-        let mut v: Vec<f64> = c.iter().map(|x| x - mu).collect();
-        let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for _ in 0..2 {
-            for b in &out {
-                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
-            }
-        }
-        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if n0 > 0.0 && n > 1e-8 * n0 {
-            v.iter_mut().for_each(|x| *x /= n);
-            out.push(v);
-        }
-    }
-    out
-}
 
 /// `v` centred and with its projection on `q` (orthonormal, centred) taken off.
 fn residualise(v: &[f64], q: &[Vec<f64>]) -> Vec<f64> {
@@ -105,7 +84,7 @@ pub(super) fn profile_rows(
     if range.is_empty() || m < 4 {
         return None;
     }
-    let q = basis(competitors);
+    let q = orthonormal(competitors);
     let r: Vec<Vec<f64>> = (0..3)
         .map(|a| residualise(&residuals.iter().map(|x| x[a]).collect::<Vec<_>>(), &q))
         .collect();
@@ -241,7 +220,7 @@ pub(super) fn widen_coefficients(
         .collect();
     let (Some((alone, v0)), Some((with, v1))) = (
         least_squares(&cols, &ys, &[]),
-        least_squares(&cols, &ys, &basis(competitors)),
+        least_squares(&cols, &ys, &orthonormal(competitors)),
     ) else {
         return false;
     };

@@ -96,8 +96,8 @@ const SAME_FIT: f64 = 0.9;
 const SAME_SCORE: f64 = 0.8;
 
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
-/// dependent columns are dropped.
-fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
+/// dependent columns are dropped (the intercept is implied).
+pub(super) fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let mut basis: Vec<Vec<f64>> = Vec::new();
     for c in columns {
         let mu = c.iter().sum::<f64>() / c.len() as f64;
