@@ -321,6 +321,24 @@ impl Feature {
         )
     }
 
+    /// The output axis each column is a regressor of, one per
+    /// [`Feature::names`] entry: `Some(a)` for the x, y or z row of a
+    /// deviation of a joint mapped to the TCP through the Jacobian
+    /// ([`Feature::Crosstalk`], [`Feature::HarmonicJacobian`],
+    /// [`Feature::MovesJacobian`]), `None` (every axis) for any other
+    /// column. A deviation `δθ_j` moves axis `a` by `∂P_a/∂θ_j·δθ_j`: axis
+    /// a's error has `∂P_a/∂θ_j·h` as its regressor, and the other axes'
+    /// rows of the Jacobian are not part of it.
+    pub fn column_axes(&self) -> Vec<Option<usize>> {
+        match self {
+            Feature::Crosstalk { .. } | Feature::HarmonicJacobian { .. } => {
+                [0, 1, 2, 0, 1, 2].map(Some).to_vec()
+            }
+            Feature::MovesJacobian { .. } => [0, 1, 2].map(Some).to_vec(),
+            _ => vec![None; self.names().len()],
+        }
+    }
+
     /// Check joint indices against `n` joints.
     pub fn validate(&self, n: usize) -> Result<()> {
         let joints: Vec<usize> = match self {

@@ -136,6 +136,10 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
     let p = jacobian.params["period_deg"];
     assert!((p / 7.5 - 1.0).abs() < 0.05, "{jacobian:?}");
     assert!(jacobian.p_value < 0.01, "{jacobian:?}");
+    // the period is resolved between the scanned ones: its interval holds
+    // the planted period
+    let [lo, hi] = jacobian.params_ci["period_deg"];
+    assert!(lo <= 7.5 && 7.5 <= hi, "{jacobian:?}");
     // its columns: ∂P/∂θ₂ times sin and cos of 2π θ₂ / P
     let f = Feature::HarmonicJacobian {
         robot: Box::new(robot.clone()),
@@ -143,6 +147,7 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
         period_deg: p,
     };
     assert!(f.trend_only());
+    let f_names = f.names();
     let cols = f.columns_from_poses(&data.q, &data.dir).unwrap();
     assert_eq!(cols.len(), 6);
     for i in [0, 77, 199] {
@@ -167,6 +172,14 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
         .check()
         .and_then(|p| p.fit(&data))
         .unwrap();
+    // each axis's trend has its own row of the Jacobian only
+    for (name, axis) in f_names.iter().zip([0, 1, 2, 0, 1, 2]) {
+        let c = m.trend_coefficient(name).unwrap();
+        for (a, (b, se)) in c.iter().enumerate() {
+            assert_eq!(a == axis, *se > 0.0, "{name} on axis {a}: {c:?}");
+            assert_eq!(a == axis, *b != 0.0, "{name} on axis {a}: {c:?}");
+        }
+    }
     let back = ErrorModel::from_json(&serde_json::to_string(&m).unwrap(), "m.json").unwrap();
     assert_eq!(back.extras(), m.extras());
     assert_eq!(

@@ -93,8 +93,7 @@ fn competitors_of(r: &Round, k: usize) -> Vec<(usize, f64)> {
         .collect();
     for i in alike(r.tested, r.fams, r.residuals, k, r.significant) {
         if !out.iter().any(|(j, _)| *j == i) {
-            let fit =
-                |t: &Tested| super::rank::fitted(&t.point(&r.fams[t.family]).columns, r.residuals);
+            let fit = |t: &Tested| super::rank::fitted(t.point(&r.fams[t.family]), r.residuals);
             let c = super::rank::similarity(&fit(&r.tested[k]), &fit(&r.tested[i]));
             out.push((i, c));
         }

@@ -62,11 +62,13 @@ fn noise(residuals: &[[f64; 3]]) -> [f64; 3] {
 }
 
 fn explained(t: &Tested, fams: &[Family], residuals: &[[f64; 3]], s2: &[f64; 3]) -> Explained {
-    let cols = &t.point(&fams[t.family]).columns;
-    let fit = fitted(cols, residuals);
-    let p = cols.len() as f64;
+    let point = t.point(&fams[t.family]);
+    let fit = fitted(point, residuals);
     let e = (0..3)
-        .map(|a| fit.iter().map(|f| f[a] * f[a]).sum::<f64>() / s2[a] - p)
+        .map(|a| {
+            let p = point.on_axis(a).len() as f64;
+            fit.iter().map(|f| f[a] * f[a]).sum::<f64>() / s2[a] - p
+        })
         .sum();
     Explained { fit, e }
 }

@@ -199,11 +199,11 @@ struct Prepared {
 /// span of the trend (or of the point's earlier columns).
 const DEPENDENT: f64 = 1e-7;
 
-fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
+fn prepare(sys: &AxisSystem, grid: &[&[&[f64]]]) -> Prepared {
     let m = sys.rows();
-    let k: usize = grid.iter().map(Vec::len).sum();
+    let k: usize = grid.iter().map(|p| p.len()).sum();
     let x = Mat::<f64>::from_fn(m, k, {
-        let cols: Vec<&Vec<f64>> = grid.iter().flatten().collect();
+        let cols: Vec<&[f64]> = grid.iter().flat_map(|p| p.iter().copied()).collect();
         move |i, j| cols[j][i]
     });
     let (xt, xb) = sys.whiten(x);
@@ -212,7 +212,7 @@ fn prepare(sys: &AxisSystem, grid: &[Vec<Vec<f64>>]) -> Prepared {
     let (mut src, mut dst) = (0, 0);
     for point in grid {
         let start = dst;
-        for _ in point {
+        for _ in point.iter() {
             let full2: f64 = (0..m).map(|i| xt[(i, src)].powi(2)).sum::<f64>()
                 + (0..xb.nrows()).map(|i| xb[(i, src)].powi(2)).sum::<f64>();
             let mut v: Vec<f64> = (0..m).map(|i| xt[(i, src)]).collect();
@@ -306,16 +306,33 @@ fn loo_sse(sys: &AxisSystem, prep: &Prepared, gamma: &[f64], rt: &[f64]) -> Vec<
         .collect()
 }
 
+/// The regressor columns of one grid point on each output axis (a column
+/// of every axis is in all three).
+pub type AxisColumns<'a> = [Vec<&'a [f64]>; 3];
+
+/// Columns that are regressors of every axis, as [`AxisColumns`].
+pub fn on_every_axis(columns: &[Vec<f64>]) -> AxisColumns<'_> {
+    std::array::from_fn(|_| columns.iter().map(Vec::as_slice).collect())
+}
+
 /// One candidate family prepared on the three outputs.
 pub struct FamilyTest {
     axes: Vec<Prepared>,
 }
 
 impl FamilyTest {
-    /// `grid[g]` holds the regressor columns of grid point g.
-    pub fn new(systems: &[AxisSystem], grid: &[Vec<Vec<f64>>]) -> Self {
+    /// `grid[g][a]` holds the regressor columns of grid point g on output
+    /// axis a.
+    pub fn new(systems: &[AxisSystem], grid: &[AxisColumns<'_>]) -> Self {
         FamilyTest {
-            axes: systems.iter().map(|s| prepare(s, grid)).collect(),
+            axes: systems
+                .iter()
+                .enumerate()
+                .map(|(a, s)| {
+                    let on_axis: Vec<&[&[f64]]> = grid.iter().map(|p| &p[a][..]).collect();
+                    prepare(s, &on_axis)
+                })
+                .collect(),
         }
     }
 
@@ -584,6 +601,7 @@ pub fn refit_systems(
     errors: &[[f64; 3]],
     opts: &KrigingOptions,
     columns: &[Vec<f64>],
+    axes: &[Option<usize>],
     fold: &[usize],
 ) -> Result<Vec<AxisSystem>> {
     let corr = model.correlation_dims();
@@ -610,7 +628,10 @@ pub fn refit_systems(
                     "diagnose refits need a polynomial trend".into(),
                 ));
             };
-            let terms = crate::model::with_linear_columns(base, columns.len());
+            let on: Vec<Option<usize>> = (0..columns.len())
+                .map(|c| axes.get(c).copied().flatten())
+                .collect();
+            let terms = crate::model::with_linear_columns(base, &on, a);
             let y_fit: Vec<f64> = search_rows.iter().map(|&i| errors[i][a]).collect();
             let start = Hyperparameters::of(&model.reports[a], corr);
             // the refit continues the model's own family (with the family
@@ -690,7 +711,7 @@ mod tests {
         let m = x.len();
         let fold: Vec<usize> = (0..m).map(|i| (i * 7) % 6).collect();
         let sys = vec![AxisSystem::new(&model, &fold).unwrap()];
-        let test = FamilyTest::new(&sys, &[vec![extra.clone()]]);
+        let test = FamilyTest::new(&sys, &[on_every_axis(std::slice::from_ref(&extra))]);
         // the same column in the trend, factorised at the same ξ and nugget
         let x_aug: Vec<Vec<f64>> = x
             .iter()
@@ -736,7 +757,8 @@ mod tests {
         assert!((kfold_sse_before(&sys) - kf_before).abs() < 1e-8 * kf_before);
         assert!((test.kfold_sse(&sys, 0) - kf_after).abs() < 1e-8 * kf_before);
         // a column already in the trend (a constant) adds nothing
-        let none = FamilyTest::new(&sys, &[vec![vec![3.0; m]]]);
+        let constant = vec![vec![3.0; m]];
+        let none = FamilyTest::new(&sys, &[on_every_axis(&constant)]);
         assert!(none.best(&sys, &observed(&sys)).1.abs() < 1e-12);
         // sign-flipped pseudo-campaigns keep the model's own fit
         let signs: Vec<f64> = (0..m)
@@ -745,10 +767,11 @@ mod tests {
         let pseudo = flipped(&sys, &signs);
         assert!(pseudo[0].sse0 > 0.0 && test.best(&sys, &pseudo).1.is_finite());
         // a batch of them gives what each gives alone
-        let grid = vec![
+        let points = [
             vec![extra.clone()],
             vec![extra.clone(), x.iter().map(|r| r[0] * r[1]).collect()],
         ];
+        let grid: Vec<AxisColumns<'_>> = points.iter().map(|g| on_every_axis(g)).collect();
         let two = FamilyTest::new(&sys, &grid);
         let signs2: Vec<f64> = (0..m).map(|i| if i % 5 < 2 { -1.0 } else { 1.0 }).collect();
         let batch = flipped_batch(&sys, &[signs.clone(), signs2.clone()]);

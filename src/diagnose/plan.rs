@@ -30,7 +30,8 @@ pub const BYTES_PER_ROW_VALUE: u64 = 330;
 /// sin and cos), and its values took 580–750 B per row (UR10 series C,
 /// 2 773 and 600 rows, against the same campaigns without it).
 fn value_weight(point: &super::scan::GridPoint) -> usize {
-    point.columns.len().div_ceil(3).max(1)
+    let widest = (0..3).map(|a| point.on_axis(a).len()).max().unwrap_or(0);
+    widest.div_ceil(3).max(1)
 }
 
 /// Rows, evenly spread over the campaign, the candidate families are

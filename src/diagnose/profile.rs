@@ -173,29 +173,39 @@ pub(super) fn widen_rows(
     changed
 }
 
-/// Least-squares coefficients of the centred `y` on the centred,
-/// `q`-residualised `x` columns, and the diagonal of `(XᵀX)⁻¹` (by
-/// solves); `None` when singular.
+/// Least-squares coefficients of the centred `ys[a]` on the centred,
+/// `q`-residualised `x` columns that are regressors of axis `a` (`axes[i]`
+/// `None` or `Some(a)`, [`Feature::column_axes`]), and the diagonal of
+/// `(XᵀX)⁻¹` of each axis's fit (by solves); a column off an axis has 0
+/// there. `None` when an axis's fit is singular.
+#[allow(clippy::type_complexity)]
 fn least_squares(
     x: &[Vec<f64>],
+    axes: &[Option<usize>],
     ys: &[Vec<f64>],
     q: &[Vec<f64>],
-) -> Option<(Vec<[f64; 3]>, Vec<f64>)> {
-    let k = x.len();
+) -> Option<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
     let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q)).collect();
     let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
-    let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[i], &xr[j]));
-    let chol = g.cholesky()?;
-    let mut beta = vec![[0.0; 3]; k];
+    let mut beta = vec![[0.0; 3]; x.len()];
+    let mut diag = vec![[0.0; 3]; x.len()];
     for (a, y) in ys.iter().enumerate() {
-        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[i], y)));
-        for i in 0..k {
-            beta[i][a] = b[i];
+        let on: Vec<usize> = (0..x.len())
+            .filter(|&i| axes.get(i).copied().flatten().is_none_or(|b| b == a))
+            .collect();
+        let k = on.len();
+        if k == 0 {
+            continue;
+        }
+        let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[on[i]], &xr[on[j]]));
+        let chol = g.cholesky()?;
+        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[on[i]], y)));
+        for (r, &i) in on.iter().enumerate() {
+            beta[i][a] = b[r];
+            let unit = DVector::from_fn(k, |j, _| if j == r { 1.0 } else { 0.0 });
+            diag[i][a] = chol.solve(&unit)[r];
         }
     }
-    let diag = (0..k)
-        .map(|i| chol.solve(&DVector::from_fn(k, |j, _| if i == j { 1.0 } else { 0.0 }))[i])
-        .collect();
     Some((beta, diag))
 }
 
@@ -211,6 +221,7 @@ pub(super) fn widen_coefficients(
     competitors: &[Vec<f64>],
 ) -> bool {
     let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
+    let axes: Vec<Option<usize>> = add.iter().flat_map(Feature::column_axes).collect();
     let cols = feature_columns(data, add);
     if cols.len() != names.len() || cols.is_empty() {
         return false;
@@ -219,8 +230,8 @@ pub(super) fn widen_coefficients(
         .map(|a| residuals.iter().map(|r| r[a]).collect())
         .collect();
     let (Some((alone, v0)), Some((with, v1))) = (
-        least_squares(&cols, &ys, &[]),
-        least_squares(&cols, &ys, &orthonormal(competitors)),
+        least_squares(&cols, &axes, &ys, &[]),
+        least_squares(&cols, &axes, &ys, &orthonormal(competitors)),
     ) else {
         return false;
     };
@@ -229,8 +240,8 @@ pub(super) fn widen_coefficients(
         let Some(i) = names.iter().position(|n| n == &c.column) else {
             continue;
         };
-        let inflation = (v1[i] / v0[i]).max(1.0).sqrt();
-        for a in 0..3 {
+        for a in (0..3).filter(|&a| axes[i].is_none_or(|b| b == a)) {
+            let inflation = (v1[i][a] / v0[i][a]).max(1.0).sqrt();
             let delta = (with[i][a] - alone[i][a]).abs();
             let h = c.ci95[a];
             let wide = h.max(delta + h * inflation);

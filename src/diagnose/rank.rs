@@ -11,7 +11,7 @@
 //! least [`SAME_FIT`], pooled over the axes, and the other's score is at
 //! least [`SAME_SCORE`] of the first's.
 
-use super::scan::{self, Tested};
+use super::scan::{self, GridPoint, Tested};
 
 /// Significant candidates first: kinds of effect not in the model yet
 /// (`seen` false) before more of a kind already added (so that a cap of a
@@ -47,7 +47,7 @@ pub(super) fn alike(
     k: usize,
     significant: &dyn Fn(&scan::Tested) -> bool,
 ) -> Vec<usize> {
-    let fit = |t: &scan::Tested| fitted(&t.point(&fams[t.family]).columns, residuals);
+    let fit = |t: &scan::Tested| fitted(t.point(&fams[t.family]), residuals);
     let top = fit(&tested[k]);
     (0..tested.len())
         .filter(|&i| {
@@ -97,9 +97,10 @@ const SAME_SCORE: f64 = 0.8;
 
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
 /// dependent columns are dropped (the intercept is implied).
-pub(super) fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
+pub(super) fn orthonormal<C: AsRef<[f64]>>(columns: &[C]) -> Vec<Vec<f64>> {
     let mut basis: Vec<Vec<f64>> = Vec::new();
     for c in columns {
+        let c = c.as_ref();
         let mu = c.iter().sum::<f64>() / c.len() as f64;
         let mut v: Vec<f64> = c.iter().map(|x| x - mu).collect();
         let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -118,15 +119,17 @@ pub(super) fn orthonormal(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
     basis
 }
 
-/// The least-squares fit of the centred residuals on the centred `columns`
-/// (m × 3), for comparing what two candidates explain.
-pub fn fitted(columns: &[Vec<f64>], resid: &[[f64; 3]]) -> Vec<[f64; 3]> {
+/// The least-squares fit of the centred residuals of each axis on the
+/// centred columns of `point` that are regressors of that axis
+/// ([`GridPoint::on_axis`]) (m × 3), for comparing what two candidates
+/// explain.
+pub fn fitted(point: &GridPoint, resid: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let m = resid.len();
     let mean: [f64; 3] =
         std::array::from_fn(|a| resid.iter().map(|r| r[a]).sum::<f64>() / m as f64);
     let mut out = vec![[0.0; 3]; m];
-    for b in orthonormal(columns) {
-        for a in 0..3 {
+    for a in 0..3 {
+        for b in orthonormal(&point.on_axis(a)) {
             let d: f64 = b.iter().zip(resid).map(|(x, r)| x * (r[a] - mean[a])).sum();
             for (o, x) in out.iter_mut().zip(&b) {
                 o[a] += d * x;
@@ -161,11 +164,7 @@ mod tests {
             kind: EffectKind::Covariate,
             source: vec!["t".into()],
             label: label.into(),
-            grid: vec![GridPoint {
-                params: BTreeMap::new(),
-                columns,
-                add,
-            }],
+            grid: vec![GridPoint::new(BTreeMap::new(), columns, add)],
             zoom: None,
         }
     }

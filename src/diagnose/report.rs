@@ -141,6 +141,11 @@ pub struct Coefficient {
     pub estimate: [f64; 3],
     /// Half-width of the 95 % interval per axis.
     pub ci95: [f64; 3],
+    /// The one output axis the column is a regressor of (0, 1, 2 for x, y,
+    /// z: a row of the Jacobian, [`Feature::column_axes`]); the estimate
+    /// and interval of the other axes are then 0. `None`: every axis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<usize>,
 }
 
 /// The "after" check of an added effect: did the model with it
@@ -324,13 +329,14 @@ pub(super) fn support_interval<'a>(
 /// The trend coefficients of the columns `add` brings, with 95 % intervals.
 pub(super) fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficient> {
     add.iter()
-        .flat_map(Feature::names)
-        .filter_map(|column| {
+        .flat_map(|f| f.names().into_iter().zip(f.column_axes()))
+        .filter_map(|(column, axis)| {
             let c = model.trend_coefficient(&column)?;
             Some(Coefficient {
                 estimate: c.map(|(b, _)| b),
                 ci95: c.map(|(_, se)| 1.96 * se),
                 column,
+                axis,
             })
         })
         .collect()

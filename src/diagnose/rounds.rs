@@ -220,11 +220,20 @@ impl Rounds {
             Some(all) if !c.rows.is_all() => all,
             _ => std::array::from_fn(|a| systems[a].expected_loo_rmse()),
         };
-        let refit = |cols: &[Vec<f64>]| {
-            gls::refit_systems(scanned, c.scan_errors, &o.kriging, cols, c.fold).ok()
+        let refit = |point: &scan::GridPoint| {
+            gls::refit_systems(
+                scanned,
+                c.scan_errors,
+                &o.kriging,
+                &point.columns,
+                &point.axes,
+                c.fold,
+            )
+            .ok()
         };
         let tested = scan::test_families(
             fams,
+            c.data,
             c.rows,
             systems,
             resamples,

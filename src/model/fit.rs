@@ -185,17 +185,27 @@ pub(crate) fn solve_outputs(
     by_axis(fits)
 }
 
-/// `base` with one linear trend term per extra input column: `k` columns
-/// appended after its `base.dim` inputs, each entering as `s_{dim+j}`.
-pub(crate) fn with_linear_columns(base: &Monomials, k: usize) -> Monomials {
+/// `base` with `axes.len()` extra input columns appended after its
+/// `base.dim` inputs, and a linear trend term `s_{dim+j}` for each column
+/// `j` that is a regressor of output `axis` (`axes[j]` is `None`, every
+/// axis, or `Some(axis)`; [`Feature::column_axes`]). A column of another
+/// axis stays an input of the model without a term on this one.
+pub(crate) fn with_linear_columns(
+    base: &Monomials,
+    axes: &[Option<usize>],
+    axis: usize,
+) -> Monomials {
     let d = base.dim;
+    let k = axes.len();
     let mut terms = base.clone();
     terms.dim = d + k;
     terms.exponents.iter_mut().for_each(|e| e.resize(d + k, 0));
-    for j in 0..k {
-        let mut e = vec![0u8; d + k];
-        e[d + j] = 1;
-        terms.exponents.push(e);
+    for (j, on) in axes.iter().enumerate() {
+        if on.is_none_or(|a| a == axis) {
+            let mut e = vec![0u8; d + k];
+            e[d + j] = 1;
+            terms.exponents.push(e);
+        }
     }
     terms
 }
@@ -219,17 +229,12 @@ impl ErrorModel {
         extras.sort_by_key(Feature::trend_only);
         let extras = &extras[..];
         let d0 = space.encoded_dim(data.n_joints(), periodic);
-        let extra_dims: usize = extras.iter().map(|f| f.names().len()).sum();
-        let trend = Trend::from(with_linear_columns(&opts.trend.monomials(d0), extra_dims));
+        let axes: Vec<Option<usize>> = extras.iter().flat_map(Feature::column_axes).collect();
+        let base = opts.trend.monomials(d0);
+        let trends: [Trend; 3] =
+            std::array::from_fn(|a| Trend::from(with_linear_columns(&base, &axes, a)));
         let (map, x) = InputMap::fit(data, space, periodic, extras)?;
-        fit_outputs(
-            data,
-            &map,
-            &x,
-            opts,
-            &[trend.clone(), trend.clone(), trend],
-            starts,
-        )
+        fit_outputs(data, &map, &x, opts, &trends, starts)
     }
 
     /// This model refitted on `data` at its own hyperparameters — ξ, ν and

@@ -212,25 +212,32 @@ impl ErrorModel {
     /// The linear trend term of input column `column` (by name, e.g.
     /// `step@150`), per output: its GLS coefficient and standard error in mm
     /// per unit of the raw column (`β·y_std/σ_col`, from
-    /// [`KrigingModel::beta_std_errors`]). `None` when the column is not an
-    /// input or has no linear term of its own in a polynomial trend.
+    /// [`KrigingModel::beta_std_errors`]); `(0, 0)` on an output whose
+    /// trend has no term for it (a column of another axis,
+    /// [`Feature::column_axes`]). `None` when the column is not an input, or
+    /// has a linear term of its own on no output of a polynomial trend.
     pub fn trend_coefficient(&self, column: &str) -> Option<[(f64, f64); 3]> {
         let i = self.input_names().iter().position(|n| n == column)?;
         let scale = self.input_norm().std.get(i).copied().filter(|s| *s > 0.0)?;
         let mut out = [(0.0, 0.0); 3];
+        let mut found = false;
         for (o, k) in out.iter_mut().zip(&self.outputs) {
             let Trend::Monomials(m) = &k.data.trend else {
                 return None;
             };
-            let t = m
+            let Some(t) = m
                 .exponents
                 .iter()
-                .position(|e| e.iter().enumerate().all(|(d, &x)| x == u8::from(d == i)))?;
+                .position(|e| e.iter().enumerate().all(|(d, &x)| x == u8::from(d == i)))
+            else {
+                continue;
+            };
             let se = k.beta_std_errors();
             let unit = k.data.y_std / scale;
             *o = (k.data.beta[t] * unit, se[t] * unit);
+            found = true;
         }
-        Some(out)
+        found.then_some(out)
     }
 
     /// This model's hyperparameters, with the curvature its search ended

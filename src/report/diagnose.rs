@@ -176,6 +176,7 @@ pub fn effect_lines(e: &EffectReport) -> Vec<String> {
                 }
             };
             let v: Vec<String> = (0..3)
+                .filter(|&a| c.axis.is_none_or(|b| b == a))
                 .map(|a| {
                     format!(
                         "{} {} ± {}",

@@ -127,6 +127,7 @@ pub(super) fn covariate_families(
             grid: vec![GridPoint {
                 params: BTreeMap::new(),
                 columns: cols,
+                axes: Vec::new(),
                 add: vec![add],
             }],
             zoom: None,

@@ -34,6 +34,7 @@ pub(super) fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
             grid: vec![GridPoint {
                 params: BTreeMap::new(),
                 columns: signed(&pv[0]),
+                axes: Vec::new(),
                 add: vec![prev],
             }],
             zoom: None,
@@ -53,6 +54,7 @@ pub(super) fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
     let mut grid = vec![GridPoint {
         params: BTreeMap::new(),
         columns: signed(&s),
+        axes: Vec::new(),
         add: vec![since.clone()],
     }];
     let mut scale = smax / 2.0;
@@ -61,6 +63,7 @@ pub(super) fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
         grid.push(GridPoint {
             params: params(&[("scale_deg", scale)]),
             columns: signed(&sat),
+            axes: Vec::new(),
             add: vec![since.clone()],
         });
         scale /= 1.5;

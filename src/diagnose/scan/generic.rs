@@ -49,6 +49,7 @@ pub(super) fn generic_bases(
                 grid: vec![GridPoint {
                     params: BTreeMap::new(),
                     columns: vec![zscore(&v[0])],
+                    axes: Vec::new(),
                     add: vec![f.clone()],
                 }],
                 zoom: None,
@@ -93,6 +94,7 @@ pub(super) fn generic_families(data: &Dataset, (f, v, label): &Base, lagged: boo
             Some(GridPoint {
                 params: params(&[("joint", k as f64)]),
                 columns: z_all(t.columns(data).ok()?),
+                axes: Vec::new(),
                 add: vec![t],
             })
         })
@@ -120,6 +122,7 @@ pub(super) fn generic_families(data: &Dataset, (f, v, label): &Base, lagged: boo
                         .map(|i| v[i.saturating_sub(lag)])
                         .collect::<Vec<_>>(),
                 )],
+                axes: Vec::new(),
                 add: vec![Feature::Lagged {
                     of: Box::new(f.clone()),
                     lag,

@@ -109,8 +109,61 @@ pub struct GridPoint {
     pub params: BTreeMap<String, f64>,
     /// Regressors, one column per entry (row order).
     pub columns: Vec<Vec<f64>>,
+    /// The output axis of each column (`None`: every axis,
+    /// [`Feature::column_axes`]); empty when every column is a regressor of
+    /// every axis.
+    pub axes: Vec<Option<usize>>,
     /// What to add to the model if this is accepted.
     pub add: Vec<Feature>,
+}
+
+impl GridPoint {
+    /// A grid point whose every column is a regressor of every axis.
+    pub fn new(params: BTreeMap<String, f64>, columns: Vec<Vec<f64>>, add: Vec<Feature>) -> Self {
+        GridPoint {
+            params,
+            columns,
+            axes: Vec::new(),
+            add,
+        }
+    }
+
+    /// A grid point whose columns are those of its features `add`, in
+    /// their order, with their axes ([`Feature::column_axes`]).
+    pub fn of_features(
+        params: BTreeMap<String, f64>,
+        columns: Vec<Vec<f64>>,
+        add: Vec<Feature>,
+    ) -> Self {
+        let axes: Vec<Option<usize>> = add.iter().flat_map(Feature::column_axes).collect();
+        debug_assert_eq!(axes.len(), columns.len());
+        GridPoint {
+            params,
+            columns,
+            axes,
+            add,
+        }
+    }
+
+    /// The axis of column `c`: `None` for every axis.
+    pub fn axis(&self, c: usize) -> Option<usize> {
+        self.axes.get(c).copied().flatten()
+    }
+
+    /// The columns that are regressors of output `axis`.
+    pub fn on_axis(&self, axis: usize) -> Vec<&[f64]> {
+        self.columns
+            .iter()
+            .enumerate()
+            .filter(|(c, _)| self.axis(*c).is_none_or(|a| a == axis))
+            .map(|(_, v)| v.as_slice())
+            .collect()
+    }
+
+    /// [`GridPoint::on_axis`] of the three axes.
+    pub fn by_axis(&self) -> [Vec<&[f64]>; 3] {
+        std::array::from_fn(|a| self.on_axis(a))
+    }
 }
 
 /// A candidate effect: a name and a grid of regressor sets.
@@ -130,8 +183,9 @@ pub struct Family {
     pub zoom: Option<Zoom>,
 }
 
-/// The finer grid points around `point`, on the scanned rows `rows`.
-pub type Zoom = fn(point: &GridPoint, rows: &ScanRows) -> Vec<GridPoint>;
+/// The finer grid points around `point`, on the scanned rows `rows` of
+/// `data` (the campaign the family was built on).
+pub type Zoom = fn(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<GridPoint>;
 
 /// Where [`families`] puts its families: each grid point's columns,
 /// computed on the whole campaign, are taken at the scanned rows (and
@@ -228,11 +282,7 @@ pub fn families_on(
 
 /// A grid point of one column and one feature.
 fn single(params: BTreeMap<String, f64>, col: Vec<f64>, add: Feature) -> GridPoint {
-    GridPoint {
-        params,
-        columns: vec![col],
-        add: vec![add],
-    }
+    GridPoint::new(params, vec![col], vec![add])
 }
 
 /// Every column z-scored.

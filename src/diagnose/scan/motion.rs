@@ -141,6 +141,7 @@ fn move_families(
             grid: vec![GridPoint {
                 params: BTreeMap::new(),
                 columns: vec![zscore(&s[0])],
+                axes: Vec::new(),
                 add: vec![size],
             }],
             zoom: None,
@@ -185,13 +186,16 @@ fn move_point(
             (cols, plain)
         }
     };
-    Some(GridPoint {
-        params: match clock {
-            Some(c) => params(&[("tau_s", c.tau_s)]),
-            None => params(&[("tau_poses", tau)]),
-        },
-        columns,
-        add: vec![add],
+    let params = match clock {
+        Some(c) => params(&[("tau_s", c.tau_s)]),
+        None => params(&[("tau_poses", tau)]),
+    };
+    // through the Jacobian the columns are the feature's (x, y, z rows);
+    // without it, the moves and their products with the joint angles
+    Some(if robot.is_some() {
+        GridPoint::of_features(params, columns, vec![add])
+    } else {
+        GridPoint::new(params, columns, vec![add])
     })
 }
 
@@ -208,6 +212,7 @@ fn tcp_move_family(data: &Dataset, robot: &Robot, out: &mut Sink) {
             grid: vec![GridPoint {
                 params: BTreeMap::new(),
                 columns: z_all(c),
+                axes: Vec::new(),
                 add: vec![f],
             }],
             zoom: None,

@@ -47,6 +47,7 @@ fn block_point(rows: &ScanRows, from: usize, to: usize) -> GridPoint {
                 .map(|i| if (from..to).contains(&i) { 1.0 } else { 0.0 })
                 .collect(),
         ],
+        axes: Vec::new(),
         add: vec![Feature::Step { row: a }, Feature::Step { row: b }],
     }
 }
@@ -61,13 +62,14 @@ fn step_point(rows: &ScanRows, t: usize) -> GridPoint {
                 .map(|i| if i >= t { 1.0 } else { 0.0 })
                 .collect(),
         ],
+        axes: Vec::new(),
         add: vec![Feature::Step { row }],
     }
 }
 
 /// [`Zoom`](super::Zoom) of a block: each edge moved a scanned row at a time within one
 /// lattice spacing, the other held.
-fn zoom_block(point: &GridPoint, rows: &ScanRows) -> Vec<GridPoint> {
+fn zoom_block(point: &GridPoint, rows: &ScanRows, _: &crate::dataset::Dataset) -> Vec<GridPoint> {
     let (from, to) = (
         rows.position(point.params["from_row"] as usize),
         rows.position(point.params["to_row"] as usize),
@@ -103,6 +105,7 @@ pub(super) fn order_families(m: usize, rows: &ScanRows, out: &mut Sink) {
                 row.clone(),
                 zscore(&row.iter().map(|r| r * r).collect::<Vec<_>>()),
             ],
+            axes: Vec::new(),
             add: vec![Feature::Row],
         }],
         zoom: None,

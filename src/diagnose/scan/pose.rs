@@ -14,28 +14,90 @@
 
 use super::{EffectKind, Family, GridPoint, Sink, params, single, zscore};
 use crate::dataset::Dataset;
+use crate::diagnose::rows::ScanRows;
 use crate::features::Feature;
 use crate::kinematics::Robot;
 use std::collections::BTreeMap;
 
-/// The periods a harmonic of joint `j` is scanned at: from half its range
-/// on `data` down to 2°, a tenth of a cycle over the range apart (at most
-/// 480).
-fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
+/// Cycles over a joint's range between two scanned periods.
+const CYCLE_STEP: f64 = 0.1;
+
+/// Steps of the zoom ([`zoom_harmonic`]) per [`CYCLE_STEP`].
+const ZOOM_STEPS: usize = 10;
+
+/// The shortest period scanned (degrees).
+const MIN_PERIOD: f64 = 2.0;
+
+/// Joint `j`'s range on `data`.
+fn joint_range(data: &Dataset, j: usize) -> f64 {
     let (lo, hi) = data
         .q
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
             (a.min(r[j]), b.max(r[j]))
         });
-    let range = hi - lo;
+    hi - lo
+}
+
+/// The periods a harmonic of joint `j` is scanned at: from half its range
+/// on `data` down to [`MIN_PERIOD`], [`CYCLE_STEP`] of a cycle over the
+/// range apart (at most 480).
+fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
+    let range = joint_range(data, j);
     let mut periods = Vec::new();
     let mut cycles = 2.0;
-    while range / cycles >= 2.0 && periods.len() < 480 {
+    while range / cycles >= MIN_PERIOD && periods.len() < 480 {
         periods.push(range / cycles);
-        cycles += 0.1;
+        cycles += CYCLE_STEP;
     }
     periods
+}
+
+/// [`Zoom`](super::Zoom) of a harmonic (plain or through the Jacobian):
+/// the periods within one scanned step of the point's, a tenth of a step
+/// apart. The lattice puts a period between two of its own points a
+/// twentieth of a cycle over the range off at the ends, and its support
+/// interval then sits beside the period rather than around it.
+fn zoom_harmonic(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<GridPoint> {
+    let with_period = |p: f64| -> Option<Feature> {
+        match point.add.first()? {
+            Feature::Harmonic { joint, .. } => Some(Feature::Harmonic {
+                joint: *joint,
+                period_deg: p,
+            }),
+            Feature::HarmonicJacobian { robot, joint, .. } => Some(Feature::HarmonicJacobian {
+                robot: robot.clone(),
+                joint: *joint,
+                period_deg: p,
+            }),
+            _ => None,
+        }
+    };
+    let (
+        Some(&period),
+        Some(Feature::Harmonic { joint, .. } | Feature::HarmonicJacobian { joint, .. }),
+    ) = (point.params.get("period_deg"), point.add.first())
+    else {
+        return Vec::new();
+    };
+    let range = joint_range(data, joint - 1);
+    let cycles = range / period;
+    let fine = CYCLE_STEP / ZOOM_STEPS as f64;
+    (1..=ZOOM_STEPS)
+        .flat_map(|k| [-(k as f64), k as f64])
+        .map(|k| range / (cycles + k * fine))
+        .filter(|p| p.is_finite() && *p >= MIN_PERIOD && *p <= range / 2.0)
+        .filter_map(|p| {
+            let f = with_period(p)?;
+            let columns = f.columns(data).ok()?;
+            let columns = columns.iter().map(|c| zscore(&rows.pick(c))).collect();
+            Some(GridPoint::of_features(
+                params(&[("period_deg", p)]),
+                columns,
+                vec![f],
+            ))
+        })
+        .collect()
 }
 
 /// The family `label` of joint `j`'s harmonics: `point(P)` at each of its
@@ -54,7 +116,7 @@ fn push_harmonics(
             source: vec![format!("q{}", j + 1)],
             label,
             grid,
-            zoom: None,
+            zoom: Some(zoom_harmonic),
         });
     }
 }
@@ -70,6 +132,7 @@ pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
             GridPoint {
                 params: params(&[("period_deg", period)]),
                 columns: vec![zscore(&s), zscore(&c)],
+                axes: Vec::new(),
                 add: vec![Feature::Harmonic {
                     joint: j + 1,
                     period_deg: period,
@@ -106,15 +169,15 @@ pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mu
                     columns.push(zscore(&c));
                 }
             }
-            GridPoint {
-                params: params(&[("period_deg", period)]),
+            GridPoint::of_features(
+                params(&[("period_deg", period)]),
                 columns,
-                add: vec![Feature::HarmonicJacobian {
+                vec![Feature::HarmonicJacobian {
                     robot: Box::new(robot.clone()),
                     joint: j + 1,
                     period_deg: period,
                 }],
-            }
+            )
         });
     }
 }
@@ -163,11 +226,11 @@ pub(super) fn crosstalk_families(data: &Dataset, robot: &Robot, out: &mut Sink) 
                 kind: EffectKind::Interaction,
                 source: vec![format!("q{j}"), format!("q{k}")],
                 label: format!("q{j} deviating with sin/cos q{k} (via the Jacobian)"),
-                grid: vec![GridPoint {
-                    params: BTreeMap::new(),
-                    columns: cols.iter().map(|c| zscore(c)).collect(),
-                    add: vec![f],
-                }],
+                grid: vec![GridPoint::of_features(
+                    BTreeMap::new(),
+                    cols.iter().map(|c| zscore(c)).collect(),
+                    vec![f],
+                )],
                 zoom: None,
             });
         }

@@ -19,7 +19,8 @@
 use super::{Family, GridPoint, Zoom};
 use crate::Result;
 use crate::cancel::Cancel;
-use crate::diagnose::gls::{self, AxisSystem, FamilyTest};
+use crate::dataset::Dataset;
+use crate::diagnose::gls::{self, AxisColumns, AxisSystem, FamilyTest};
 use crate::diagnose::rows::ScanRows;
 use crate::stats::rng_for;
 use rand::RngExt;
@@ -92,7 +93,7 @@ const CHI2_1_95: f64 = 3.841_458_820_694_124;
 
 /// Re-estimates ξ with a grid point's columns in the trend and returns the
 /// model's systems there ([`gls::refit_systems`]); `None` keeps the first test.
-pub type Refit<'a> = dyn Fn(&[Vec<f64>]) -> Option<Vec<AxisSystem>> + Sync + 'a;
+pub type Refit<'a> = dyn Fn(&GridPoint) -> Option<Vec<AxisSystem>> + Sync + 'a;
 
 /// Resamples per batch of the sequential test.
 const BATCH: usize = 100;
@@ -162,6 +163,7 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 #[allow(clippy::too_many_arguments)]
 pub fn test_families(
     families: &[Family],
+    data: &Dataset,
     rows: &ScanRows,
     systems: Vec<AxisSystem>,
     permutations: usize,
@@ -171,9 +173,9 @@ pub fn test_families(
     cancel: &Cancel,
     progress: &dyn Fn(&str),
 ) -> Result<Vec<Tested>> {
-    let grids: Vec<Vec<Vec<Vec<f64>>>> = families
+    let grids: Vec<Vec<AxisColumns<'_>>> = families
         .iter()
-        .map(|f| f.grid.iter().map(|g| g.columns.clone()).collect())
+        .map(|f| f.grid.iter().map(GridPoint::by_axis).collect())
         .collect();
     let base = Baseline::new(&systems);
     let mut trials: Vec<Trial> = grids.par_iter().map(|grid| base.trial(grid)).collect();
@@ -216,7 +218,8 @@ pub fn test_families(
             }
             if let Some(zoom) = families[k].zoom.filter(|_| trials[k].stat.is_finite()) {
                 let start = &families[k].grid[trials[k].best];
-                t.refined = resolve(zoom, start, rows, &systems, &base.data, within);
+                let on = (data, rows);
+                t.refined = resolve(zoom, start, on, &systems, &base.data, within);
             }
             t
         })
@@ -269,7 +272,7 @@ impl<'a> Baseline<'a> {
     }
 
     /// A family's grid tested at the model's ξ: its best point and gain.
-    fn trial(&self, grid: &[Vec<Vec<f64>>]) -> Trial {
+    fn trial(&self, grid: &[AxisColumns<'_>]) -> Trial {
         let base = FamilyTest::new(self.systems, grid);
         let (best, stat) = base.best(self.systems, &self.data);
         Trial {
@@ -391,7 +394,7 @@ impl<'a> Baseline<'a> {
 /// its improvement over the model as it is (`loo0`) is larger there.
 fn refine_strongest(
     families: &[Family],
-    grids: &[Vec<Vec<Vec<f64>>>],
+    grids: &[Vec<AxisColumns<'_>>],
     trials: &mut [Trial],
     refine: usize,
     refit: &Refit<'_>,
@@ -409,7 +412,7 @@ fn refine_strongest(
             n + 1,
             refine.min(order.len())
         ));
-        let Some(sys) = refit(&families[k].grid[trials[k].best].columns) else {
+        let Some(sys) = refit(&families[k].grid[trials[k].best]) else {
             continue;
         };
         let test = FamilyTest::new(&sys, &grids[k]);
@@ -439,7 +442,7 @@ fn refine_strongest(
 fn resolve(
     zoom: Zoom,
     start: &GridPoint,
-    rows: &ScanRows,
+    (campaign, rows): (&Dataset, &ScanRows),
     systems: &[AxisSystem],
     data: &[gls::Response],
     within: f64,
@@ -447,11 +450,11 @@ fn resolve(
     let mut found: Option<Refined> = None;
     for _ in 0..ZOOM_PASSES {
         let centre = found.as_ref().map_or(start, |r| &r.point);
-        let local = zoom(centre, rows);
+        let local = zoom(centre, rows, campaign);
         if local.is_empty() {
             break;
         }
-        let grid: Vec<Vec<Vec<f64>>> = local.iter().map(|g| g.columns.clone()).collect();
+        let grid: Vec<AxisColumns<'_>> = local.iter().map(GridPoint::by_axis).collect();
         let test = FamilyTest::new(systems, &grid);
         let (best, gain) = test.best(systems, data);
         if !gain.is_finite() {
