@@ -164,25 +164,15 @@ pub fn is_stdout(path: &Path) -> bool {
 }
 
 /// Refuse a fit of `rows` rows that would exceed the memory limit
-/// ([`robokrige::model::check_fit_memory`]); print the plan for large inputs.
-///
-/// `option` is the command's option that takes fewer rows (`--rows`), if
-/// any; otherwise the user is told to fit a subset of the file.
+/// ([`robokrige::model::check_fit_rows`]: `option` takes fewer rows, if
+/// the command has one); print the plan for large inputs.
 pub fn plan_fit(
     command: &str,
     rows: usize,
     optimizer: robokrige::kriging::OptimizerKind,
     option: Option<&str>,
 ) -> Result<()> {
-    let subset = |n: usize| match option {
-        Some(o) => format!("`{o} {n}`"),
-        None => format!(
-            "a subset: e.g. the first {n} rows, `head -n {} data.csv > subset.csv`",
-            n + 1
-        ),
-    };
-    let plan = robokrige::model::check_fit_memory(rows, optimizer, subset)?;
-    if rows > robokrige::kriging::SEARCH_ROWS {
+    if let Some(plan) = robokrige::model::check_fit_rows(rows, optimizer, option)? {
         eprintln!("{command}: {plan}");
     }
     Ok(())
