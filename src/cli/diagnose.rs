@@ -5,7 +5,7 @@ use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
-use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
+use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis, diagnose};
 use robokrige::kinematics;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
@@ -170,12 +170,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         let line = cal.summary_line();
         say!("calibrated base: {line}; diagnosing its residual");
     }
-    let plan = robokrige::diagnose::DiagnosePlan::new(&base.data, &opts);
-    plan.check(
-        |n| format!("`--rows {n}`"),
-        |n| format!("`--scan-rows {n}`"),
-    )?;
-    if base.data.len() > robokrige::kriging::SEARCH_ROWS {
+    let options = ("--rows", "--scan-rows");
+    if let Some(plan) = DiagnosePlan::check_options(&base.data, &opts, options)? {
         eprintln!("diagnose: {plan}");
     }
     let d = with_spinner("diagnose", |pb| {
