@@ -48,6 +48,14 @@ pub fn steps(pb: &ProgressBar) -> impl Fn(usize, &str) + Sync + '_ {
     }
 }
 
+/// A library's progress `(done, total, what)` drawn on `pb`.
+pub fn steps_of(pb: &ProgressBar) -> impl Fn(usize, usize, &str) + Sync + '_ {
+    |done, total, what| {
+        pb.set_length(total as u64);
+        steps(pb)(done, what);
+    }
+}
+
 /// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message.
 pub fn ga(pb: &ProgressBar) -> impl Fn(usize, usize, f64) + Sync + '_ {
     |axis, generation, best| {
