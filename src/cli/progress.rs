@@ -2,6 +2,7 @@
 //! so piped and test output stays clean.
 
 use indicatif::{ProgressBar, ProgressStyle};
+use robokrige::report::fit::ga_progress;
 
 /// Run `work` with a bar of `len` steps labelled `prefix` (elapsed time and
 /// a message) drawn, and clear the bar once it returns, failed or not.
@@ -56,12 +57,8 @@ pub fn steps_of(pb: &ProgressBar) -> impl Fn(usize, usize, &str) + Sync + '_ {
     }
 }
 
-/// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message.
+/// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message
+/// ([`robokrige::report::fit::ga_progress`]).
 pub fn ga(pb: &ProgressBar) -> impl Fn(usize, usize, f64) + Sync + '_ {
-    |axis, generation, best| {
-        pb.set_message(format!(
-            "GA {} generation {generation}: best CV RMSE {best:.4} mm",
-            robokrige::model::AXES[axis]
-        ))
-    }
+    |axis, generation, best| pb.set_message(ga_progress(axis, generation, best))
 }
