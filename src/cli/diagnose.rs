@@ -6,7 +6,7 @@ use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
 use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis, diagnose};
-use robokrige::kinematics;
+use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
@@ -146,12 +146,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         .max_effects(a.max_effects)
         .refit_rows(a.refit_rows)
         .scan_rows(a.scan_rows)
-        .robot(
-            a.robot
-                .as_deref()
-                .map(|r| kinematics::load_robot_with_tool(r, a.tool.as_deref()))
-                .transpose()?,
-        ))
+        .robot(load_optional_robot(a.robot.as_deref(), a.tool.as_deref())?))
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
