@@ -149,14 +149,8 @@ pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Re
     path.map_or(Ok(()), |p| write_json(p, value, context))
 }
 
-/// Check a command's files before any work
-/// ([`robokrige::output::check_outputs`]); `None`s are options not given.
-pub fn check_files(inputs: &[Option<&Path>], outputs: &[Option<&Path>]) -> Result<()> {
-    fn given<'a>(v: &[Option<&'a Path>]) -> Vec<&'a Path> {
-        v.iter().flatten().copied().collect()
-    }
-    robokrige::output::check_outputs(&given(inputs), &given(outputs))
-}
+/// Check a command's files before any work; `None`s are options not given.
+pub use robokrige::output::check_given as check_files;
 
 /// Whether an output path is `-` (standard output).
 pub fn is_stdout(path: &Path) -> bool {
