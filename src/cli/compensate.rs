@@ -166,17 +166,14 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         }
         eval = Some(ev);
     }
-    if let Some(path) = &a.json {
-        let files = report::Files {
-            targets: &a.traj,
-            output: &a.output,
-            model: &a.model,
-        };
-        let run = (&res, a.iterative, secs);
-        let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
-        super::write_json(path, &v, "compensation report")?;
-    }
-    Ok(())
+    let files = report::Files {
+        targets: &a.traj,
+        output: &a.output,
+        model: &a.model,
+    };
+    let run = (&res, a.iterative, secs);
+    let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
+    super::json_to(a.json.as_deref(), &v, "compensation report")
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {

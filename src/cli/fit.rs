@@ -170,11 +170,9 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     model.save(output)?;
-    if let Some(path) = &a.json {
-        let fit = (params.params(), a.method.as_deref());
-        let v = report::json((data_path, output), &model, fit, (data.len(), secs));
-        super::write_json(path, &v, "fit report")?;
-    }
+    let fit = (params.params(), a.method.as_deref());
+    let v = report::json((data_path, output), &model, fit, (data.len(), secs));
+    super::json_to(a.json.as_deref(), &v, "fit report")?;
     say_part!("{}", report::summary(&model, data.len(), secs, output));
     Ok(())
 }

@@ -81,14 +81,11 @@ pub fn run(a: ImportArgs) -> Result<()> {
     say_part!("{}", report::located(name, &imported, located.as_ref()));
     write_csv(&a.output, &imported.data)?;
     say!("wrote {}", a.output.display());
-    if let Some(path) = &a.json {
-        let v = report::json(
-            (&a.export, &a.output),
-            &imported,
-            &spec,
-            (name, located.as_ref()),
-        );
-        super::write_json(path, &v, "import report")?;
-    }
-    Ok(())
+    let v = report::json(
+        (&a.export, &a.output),
+        &imported,
+        &spec,
+        (name, located.as_ref()),
+    );
+    super::json_to(a.json.as_deref(), &v, "import report")
 }

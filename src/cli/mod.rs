@@ -132,21 +132,17 @@ fn dispatch(command: Command) -> Result<()> {
     }
 }
 
-/// Write `value` as pretty JSON (with a final newline) to `path`
-/// (`context` names it in an error). Every `--json FILE` option: `-` is
+/// Write `value` as pretty JSON (with a final newline) to the file of a
+/// `--json FILE` option, if given (`context` names it in an error); `-` is
 /// standard output.
-pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
+pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
     let text = robokrige::output::json_text(value, context)?;
     if is_stdout(path) {
         print!("{text}");
         return Ok(());
     }
     robokrige::output::write_text(path, &text)
-}
-
-/// [`write_json`] to the file of a `--json` option, if given.
-pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
-    path.map_or(Ok(()), |p| write_json(p, value, context))
 }
 
 /// Check a command's files before any work; `None`s are options not given.

@@ -83,7 +83,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     let outputs = [Some(&*a.output), Some(&*truth_path), a.json.as_deref()];
     super::check_files(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
-    super::write_json(&truth_path, &truth, "truth")?;
+    super::json_to(Some(&truth_path), &truth, "truth")?;
     out.write_csv(&a.output)?;
     let summary = report::json(&out, &truth, (&a.output, &truth_path));
     say_part!("{}", report::summary(&summary));
