@@ -1,6 +1,5 @@
 //! `robokrige diagnose`.
 
-use super::compensate::read_targets;
 use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
@@ -10,7 +9,7 @@ use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
-use robokrige::study::load_truth;
+use robokrige::study::{Targets, load_truth};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -219,7 +218,8 @@ fn write_and_compare_models(
         return Ok(None);
     };
     let truth = load_truth(truth_path)?;
-    let targets = read_targets(traj, robot, None, &robot.home)?;
+    let targets = Targets::read(traj, robot, None, &robot.home)?;
+    super::warn(&targets.warnings);
     let on = (robot, &targets);
     let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
     say!("{}", report::compensation_line(traj, &c));

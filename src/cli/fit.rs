@@ -166,9 +166,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         None => params.fit(&data)?,
     };
     let secs = t0.elapsed().as_secs_f64();
-    for w in model.conditioning_warnings() {
-        eprintln!("warning: {w}");
-    }
+    super::warn(model.conditioning_warnings());
     model.save(output)?;
     let fit = (params.params(), a.method.as_deref());
     let v = report::json((data_path, output), &model, fit, (data.len(), secs));

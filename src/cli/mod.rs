@@ -171,10 +171,15 @@ pub fn plan_fit(
 /// Read a measurement CSV and print its plausibility warnings on stderr.
 pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
     let d = robokrige::dataset::read_csv(path)?;
-    for w in d.warnings() {
+    warn(d.warnings());
+    Ok(d)
+}
+
+/// Print `warnings` on stderr, a `warning: ` line each.
+pub fn warn<W: std::fmt::Display>(warnings: impl IntoIterator<Item = W>) {
+    for w in warnings {
         eprintln!("warning: {w}");
     }
-    Ok(d)
 }
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).
