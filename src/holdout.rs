@@ -14,6 +14,7 @@
 //! and calibration.
 
 use crate::calibration::{Calibration, CalibrationOptions, calibrate};
+use crate::cv::Folds;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
 use crate::model::{ErrorModel, GROSS_FACTOR};
@@ -98,6 +99,25 @@ impl HoldoutCv {
             .iter()
             .fold([0.0f64; 5], |a, b| std::array::from_fn(|i| a[i].max(b[i])))
     }
+}
+
+/// [`holdout_cv`] over the partition `folds` of `data` ([`Folds::partition`]),
+/// the hyperparameters chosen on the first `hyper_rows` rows (all rows when
+/// `None`); `progress(done, steps, message)` is called before each of the
+/// `steps` = k + 1 steps.
+pub fn holdout_cv_folds(
+    data: &Dataset,
+    robot: &Robot,
+    base: &ErrorModelParams,
+    folds: &Folds,
+    hyper_rows: Option<usize>,
+    progress: &dyn Fn(usize, usize, &str),
+) -> Result<HoldoutCv> {
+    let fold = folds.partition(data)?;
+    let steps = fold.iter().max().map_or(0, |x| x + 1) + 1;
+    let hyper_rows = hyper_rows.unwrap_or(data.len());
+    let progress = |done: usize, what: &str| progress(done, steps, what);
+    holdout_cv(data, robot, base, &fold, hyper_rows, &progress)
 }
 
 /// Predictions of one model on the held-out rows, gathered over the folds.
@@ -329,6 +349,15 @@ pub struct SplitExtras {
     pub pca: bool,
     /// Also EJS with the trend chosen by the GA (seed 004) among the same.
     pub ga: bool,
+}
+
+impl SplitExtras {
+    /// The models [`holdout_split`] trains (one `progress` call each):
+    /// the D-H calibration, the calibrated and kinematic-trend models in JS
+    /// and EJS, and these extras.
+    pub fn models(self) -> usize {
+        5 + usize::from(self.pca) + usize::from(self.ga)
+    }
 }
 
 /// The result of [`holdout_split`].

@@ -110,6 +110,15 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// [`check_outputs`] of the paths given, `None` being an optional file
+/// (a command's option) that was not.
+pub fn check_given(inputs: &[Option<&Path>], outputs: &[Option<&Path>]) -> Result<()> {
+    fn given<'a>(v: &[Option<&'a Path>]) -> Vec<&'a Path> {
+        v.iter().flatten().copied().collect()
+    }
+    check_outputs(&given(inputs), &given(outputs))
+}
+
 /// An output file can be written: see [`check_outputs`].
 pub fn check_writable(path: &Path) -> Result<()> {
     let refuse = |why: String| {

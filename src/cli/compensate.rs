@@ -4,7 +4,6 @@ use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::compensate::{CommandsOutput, CompensationOptions, compensate};
-use robokrige::kinematics::Robot;
 use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
@@ -107,20 +106,6 @@ pub struct EvaluateArgs {
     json: Option<PathBuf>,
 }
 
-/// The targets of `path` (see [`Targets::read`]), its warnings shown.
-pub(super) fn read_targets(
-    path: &Path,
-    robot: &Robot,
-    orientation: Option<&[f64]>,
-    start: &[f64],
-) -> Result<Targets> {
-    let t = Targets::read(path, robot, orientation, start)?;
-    for w in &t.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(t)
-}
-
 /// The measured 3D error along the trajectory, one line per run.
 fn plot(path: &Path, title: &str, runs: &[(String, Vec<[f64; 3]>)]) -> Result<()> {
     robokrige::plot::measured_errors(path, title, runs)?;
@@ -137,7 +122,8 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let model = AnyModel::load(&a.model)?;
     model.check_robot(&robot, &a.model.display().to_string())?;
     let start = robot.start_or_home(a.start.as_deref())?;
-    let targets = read_targets(&a.traj, &robot, a.orientation.as_deref(), &start)?;
+    let targets = Targets::read(&a.traj, &robot, a.orientation.as_deref(), &start)?;
+    super::warn(&targets.warnings);
     let opts = CompensationOptions {
         iterative: a.iterative,
         tol_mm: a.tol,
@@ -166,17 +152,14 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         }
         eval = Some(ev);
     }
-    if let Some(path) = &a.json {
-        let files = report::Files {
-            targets: &a.traj,
-            output: &a.output,
-            model: &a.model,
-        };
-        let run = (&res, a.iterative, secs);
-        let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
-        super::write_json(path, &v, "compensation report")?;
-    }
-    Ok(())
+    let files = report::Files {
+        targets: &a.traj,
+        output: &a.output,
+        model: &a.model,
+    };
+    let run = (&res, a.iterative, secs);
+    let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
+    super::json_to(a.json.as_deref(), &v, "compensation report")
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
@@ -186,7 +169,8 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let truth = load_truth(&a.truth)?;
     let robot = truth_robot(&truth, a.robot.as_deref(), &a.truth)?;
     let start = robot.start_or_home(a.start.as_deref())?;
-    let targets = read_targets(&a.traj, &robot, None, &start)?;
+    let targets = Targets::read(&a.traj, &robot, None, &start)?;
+    super::warn(&targets.warnings);
     let mut evals = Vec::new();
     say!("measured error vs target on the simulated robot (mm):");
     for path in &a.compensated {

@@ -1,16 +1,15 @@
 //! `robokrige diagnose`.
 
-use super::compensate::read_targets;
 use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
-use robokrige::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
-use robokrige::kinematics;
+use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis, diagnose};
+use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
-use robokrige::study::load_truth;
+use robokrige::study::{Targets, load_truth};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -146,12 +145,7 @@ fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
         .max_effects(a.max_effects)
         .refit_rows(a.refit_rows)
         .scan_rows(a.scan_rows)
-        .robot(
-            a.robot
-                .as_deref()
-                .map(|r| kinematics::load_robot_with_tool(r, a.tool.as_deref()))
-                .transpose()?,
-        ))
+        .robot(load_optional_robot(a.robot.as_deref(), a.tool.as_deref())?))
 }
 
 pub fn run(a: DiagnoseArgs) -> Result<()> {
@@ -170,12 +164,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         let line = cal.summary_line();
         say!("calibrated base: {line}; diagnosing its residual");
     }
-    let plan = robokrige::diagnose::DiagnosePlan::new(&base.data, &opts);
-    plan.check(
-        |n| format!("`--rows {n}`"),
-        |n| format!("`--scan-rows {n}`"),
-    )?;
-    if base.data.len() > robokrige::kriging::SEARCH_ROWS {
+    let options = ("--rows", "--scan-rows");
+    if let Some(plan) = DiagnosePlan::check_options(&base.data, &opts, options)? {
         eprintln!("diagnose: {plan}");
     }
     let d = with_spinner("diagnose", |pb| {
@@ -228,7 +218,8 @@ fn write_and_compare_models(
         return Ok(None);
     };
     let truth = load_truth(truth_path)?;
-    let targets = read_targets(traj, robot, None, &robot.home)?;
+    let targets = Targets::read(traj, robot, None, &robot.home)?;
+    super::warn(&targets.warnings);
     let on = (robot, &targets);
     let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
     say!("{}", report::compensation_line(traj, &c));

@@ -4,7 +4,7 @@ use super::progress::{ga, with_spinner};
 use clap::Args;
 use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
-use robokrige::kinematics::load_robot_with_tool;
+use robokrige::kinematics::load_optional_robot;
 use robokrige::kriging::{CorrChoice, OptimizerKind, TrendKind};
 use robokrige::methods::{Method, Overrides, params_with};
 use robokrige::model::ErrorModel;
@@ -113,8 +113,7 @@ impl ModelArgs {
 
     /// The flags given, as the library's overrides.
     fn overrides(&self) -> Result<Overrides> {
-        let robot = self.robot.as_deref();
-        let robot = robot.map(|r| load_robot_with_tool(r, self.tool.as_deref()));
+        let robot = load_optional_robot(self.robot.as_deref(), self.tool.as_deref())?;
         let o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
@@ -126,7 +125,7 @@ impl ModelArgs {
             .with(self.trend, Overrides::trend)
             .with(self.starts, Overrides::starts)
             .with(self.periodic.as_deref(), Overrides::periodic)
-            .with(robot.transpose()?, Overrides::robot);
+            .with(robot, Overrides::robot);
         Ok(self.kriging.apply(o))
     }
 }
@@ -167,15 +166,11 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
         None => params.fit(&data)?,
     };
     let secs = t0.elapsed().as_secs_f64();
-    for w in model.conditioning_warnings() {
-        eprintln!("warning: {w}");
-    }
+    super::warn(model.conditioning_warnings());
     model.save(output)?;
-    if let Some(path) = &a.json {
-        let fit = (params.params(), a.method.as_deref());
-        let v = report::json((data_path, output), &model, fit, (data.len(), secs));
-        super::write_json(path, &v, "fit report")?;
-    }
+    let fit = (params.params(), a.method.as_deref());
+    let v = report::json((data_path, output), &model, fit, (data.len(), secs));
+    super::json_to(a.json.as_deref(), &v, "fit report")?;
     say_part!("{}", report::summary(&model, data.len(), secs, output));
     Ok(())
 }

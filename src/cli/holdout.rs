@@ -3,13 +3,13 @@
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
 use super::fit::KrigingArgs;
-use super::progress::{steps, with_bar};
+use super::progress::{steps_of, with_bar};
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
 use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{SplitExtras, holdout_cv, holdout_split, split_rows};
+use robokrige::holdout::{SplitExtras, holdout_cv_folds, holdout_split, split_rows};
 use robokrige::kinematics::Robot;
 use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
@@ -83,23 +83,22 @@ pub struct HoldoutArgs {
     json: Option<PathBuf>,
 }
 
-/// The base parameters of the Kriging fits of `a` (options and the
-/// periodic joints it gives for the training rows `rows`).
-fn base_params(a: &HoldoutArgs, rows: &Dataset) -> Result<ErrorModelParams> {
+/// The base parameters of the Kriging fits of `a` on `rows` (options, and
+/// the periodic joints those rows give), their fit's memory checked
+/// (`option` takes fewer rows, if given).
+fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<ErrorModelParams> {
     let o = Overrides::new().seed(a.seed).periodic(a.periodic.as_str());
-    params_with(None, &a.kriging.apply(o), rows)
+    let base = params_with(None, &a.kriging.apply(o), rows)?;
+    let optimizer = base.get_kriging().get_optimizer();
+    super::plan_fit("holdout", rows.len(), optimizer, option)?;
+    Ok(base)
 }
 
-/// K-fold CV on all rows ([`robokrige::holdout::holdout_cv`]).
+/// K-fold CV on all rows ([`robokrige::holdout::holdout_cv_folds`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
-    let base = base_params(a, data)?;
-    let optimizer = base.get_kriging().get_optimizer();
-    super::plan_fit("holdout", data.len(), optimizer, None)?;
-    let fold = folds.partition(data)?;
-    let k = fold.iter().max().map_or(0, |x| x + 1);
-    let hyper_rows = a.train.unwrap_or(data.len());
-    let cv = with_bar(k as u64 + 1, "cv", |pb| {
-        holdout_cv(data, robot, &base, &fold, hyper_rows, &steps(pb))
+    let base = base_params(a, data, None)?;
+    let cv = with_bar(0, "cv", |pb| {
+        holdout_cv_folds(data, robot, &base, folds, a.train, &steps_of(pb))
     })?;
     say_part!("{}", report::cv(&a.data, (folds, data.len()), &base, &cv));
     super::json_to(a.json.as_deref(), &cv, "cv table")?;
@@ -111,21 +110,18 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let data = read_data(&a.data)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
-    if let Some(k) = a.cv {
-        return run_cv(&a, &data, &robot, &Folds::Random { k, seed: a.seed });
-    }
-    if let Some(col) = &a.groups {
-        return run_cv(&a, &data, &robot, &Folds::Groups(col.clone()));
+    if a.cv.is_some() || a.groups.is_some() {
+        // --groups and --cv exclude each other (clap)
+        let folds = Folds::new(a.groups.as_deref(), a.cv.unwrap_or_default(), a.seed);
+        return run_cv(&a, &data, &robot, &folds);
     }
     let (train, test) = split_rows(&data, a.train, a.test)?;
-    let base = base_params(&a, &train)?;
-    let optimizer = base.get_kriging().get_optimizer();
-    super::plan_fit("holdout", train.len(), optimizer, Some("--train"))?;
+    let base = base_params(&a, &train, Some("--train"))?;
     let extras = SplitExtras {
         pca: a.pca,
         ga: a.ga,
     };
-    let split = with_bar(5 + u64::from(a.pca) + u64::from(a.ga), "holdout", |pb| {
+    let split = with_bar(extras.models() as u64, "holdout", |pb| {
         holdout_split(&train, &test, &robot, &base, extras, &|what| {
             pb.inc(1);
             pb.set_message(what.to_string());

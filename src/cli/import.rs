@@ -68,11 +68,7 @@ pub struct ImportArgs {
 pub fn run(a: ImportArgs) -> Result<()> {
     let inputs = [Some(a.export.as_path()), a.map_file.as_deref()];
     super::check_files(&inputs, &[Some(a.output.as_path()), a.json.as_deref()])?;
-    let mut spec = match &a.map_file {
-        Some(p) => ImportSpec::from_file(p)?,
-        None => ImportSpec::default(),
-    };
-    spec.map_all(&a.map)?;
+    let mut spec = ImportSpec::read(a.map_file.as_deref(), &a.map)?;
     spec.delimiter = a.delimiter.or(spec.delimiter);
     spec.decimal = a.decimal.or(spec.decimal);
     spec.angles = a.angles.unwrap_or(spec.angles);
@@ -85,14 +81,11 @@ pub fn run(a: ImportArgs) -> Result<()> {
     say_part!("{}", report::located(name, &imported, located.as_ref()));
     write_csv(&a.output, &imported.data)?;
     say!("wrote {}", a.output.display());
-    if let Some(path) = &a.json {
-        let v = report::json(
-            (&a.export, &a.output),
-            &imported,
-            &spec,
-            (name, located.as_ref()),
-        );
-        super::write_json(path, &v, "import report")?;
-    }
-    Ok(())
+    let v = report::json(
+        (&a.export, &a.output),
+        &imported,
+        &spec,
+        (name, located.as_ref()),
+    );
+    super::json_to(a.json.as_deref(), &v, "import report")
 }

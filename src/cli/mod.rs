@@ -132,10 +132,11 @@ fn dispatch(command: Command) -> Result<()> {
     }
 }
 
-/// Write `value` as pretty JSON (with a final newline) to `path`
-/// (`context` names it in an error). Every `--json FILE` option: `-` is
+/// Write `value` as pretty JSON (with a final newline) to the file of a
+/// `--json FILE` option, if given (`context` names it in an error); `-` is
 /// standard output.
-pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<()> {
+pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
     let text = robokrige::output::json_text(value, context)?;
     if is_stdout(path) {
         print!("{text}");
@@ -144,19 +145,8 @@ pub fn write_json(path: &Path, value: &impl Serialize, context: &str) -> Result<
     robokrige::output::write_text(path, &text)
 }
 
-/// [`write_json`] to the file of a `--json` option, if given.
-pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
-    path.map_or(Ok(()), |p| write_json(p, value, context))
-}
-
-/// Check a command's files before any work
-/// ([`robokrige::output::check_outputs`]); `None`s are options not given.
-pub fn check_files(inputs: &[Option<&Path>], outputs: &[Option<&Path>]) -> Result<()> {
-    fn given<'a>(v: &[Option<&'a Path>]) -> Vec<&'a Path> {
-        v.iter().flatten().copied().collect()
-    }
-    robokrige::output::check_outputs(&given(inputs), &given(outputs))
-}
+/// Check a command's files before any work; `None`s are options not given.
+pub use robokrige::output::check_given as check_files;
 
 /// Whether an output path is `-` (standard output).
 pub fn is_stdout(path: &Path) -> bool {
@@ -164,25 +154,15 @@ pub fn is_stdout(path: &Path) -> bool {
 }
 
 /// Refuse a fit of `rows` rows that would exceed the memory limit
-/// ([`robokrige::model::check_fit_memory`]); print the plan for large inputs.
-///
-/// `option` is the command's option that takes fewer rows (`--rows`), if
-/// any; otherwise the user is told to fit a subset of the file.
+/// ([`robokrige::model::check_fit_rows`]: `option` takes fewer rows, if
+/// the command has one); print the plan for large inputs.
 pub fn plan_fit(
     command: &str,
     rows: usize,
     optimizer: robokrige::kriging::OptimizerKind,
     option: Option<&str>,
 ) -> Result<()> {
-    let subset = |n: usize| match option {
-        Some(o) => format!("`{o} {n}`"),
-        None => format!(
-            "a subset: e.g. the first {n} rows, `head -n {} data.csv > subset.csv`",
-            n + 1
-        ),
-    };
-    let plan = robokrige::model::check_fit_memory(rows, optimizer, subset)?;
-    if rows > robokrige::kriging::SEARCH_ROWS {
+    if let Some(plan) = robokrige::model::check_fit_rows(rows, optimizer, option)? {
         eprintln!("{command}: {plan}");
     }
     Ok(())
@@ -191,10 +171,15 @@ pub fn plan_fit(
 /// Read a measurement CSV and print its plausibility warnings on stderr.
 pub fn read_data(path: &Path) -> Result<robokrige::dataset::Dataset> {
     let d = robokrige::dataset::read_csv(path)?;
-    for w in d.warnings() {
+    warn(d.warnings());
+    Ok(d)
+}
+
+/// Print `warnings` on stderr, a `warning: ` line each.
+pub fn warn<W: std::fmt::Display>(warnings: impl IntoIterator<Item = W>) {
+    for w in warnings {
         eprintln!("warning: {w}");
     }
-    Ok(d)
 }
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).

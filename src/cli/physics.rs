@@ -1,6 +1,6 @@
 //! `robokrige physics identify | compare`.
 
-use super::progress::{steps, with_bar};
+use super::progress::{steps_of, with_bar};
 use super::read_data;
 use clap::{Args, Subcommand};
 use robokrige::Result;
@@ -228,12 +228,7 @@ fn run_compare(a: CompareArgs) -> Result<()> {
         nugget: a.nugget,
     };
     let t0 = std::time::Instant::now();
-    let res = with_bar(1, "compare", |pb| {
-        compare(&opts, &|k, total, what| {
-            pb.set_length(total as u64);
-            steps(pb)(k, what);
-        })
-    })?;
+    let res = with_bar(1, "compare", |pb| compare(&opts, &steps_of(pb)))?;
     let text = report::comparison(&res, t0.elapsed().as_secs_f64());
     say_part!("{text}");
     if let Some(p) = &a.report {

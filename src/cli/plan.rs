@@ -103,16 +103,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let pool = a.pool.as_deref().map(read_data).transpose()?;
     let prior = a.prior.as_deref().map(ErrorModel::load).transpose()?;
     let region = Region::from_options(a.region.as_deref(), pool.as_ref(), &robot)?;
-    let mut params = PlanParams::new(a.budget)
+    let tracker = a.tracker.as_deref();
+    let view = TrackerView::from_options(tracker, a.max_range, a.max_incidence)?;
+    let params = PlanParams::new(a.budget)
         .first_batch(a.first_batch)
         .candidates(a.candidates)
         .region_points(a.region_points)
         .via_step(a.via_step)
-        .seed(a.seed);
-    let tracker = a.tracker.as_deref();
-    if let Some(view) = TrackerView::from_options(tracker, a.max_range, a.max_incidence)? {
-        params = params.tracker(view);
-    }
+        .seed(a.seed)
+        .tracker(view);
     let plan = params.check()?.plan(&PlanInputs {
         robot: &robot,
         campaign: campaign.as_ref(),

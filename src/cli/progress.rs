@@ -2,6 +2,7 @@
 //! so piped and test output stays clean.
 
 use indicatif::{ProgressBar, ProgressStyle};
+use robokrige::report::fit::ga_progress;
 
 /// Run `work` with a bar of `len` steps labelled `prefix` (elapsed time and
 /// a message) drawn, and clear the bar once it returns, failed or not.
@@ -48,12 +49,16 @@ pub fn steps(pb: &ProgressBar) -> impl Fn(usize, &str) + Sync + '_ {
     }
 }
 
-/// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message.
-pub fn ga(pb: &ProgressBar) -> impl Fn(usize, usize, f64) + Sync + '_ {
-    |axis, generation, best| {
-        pb.set_message(format!(
-            "GA {} generation {generation}: best CV RMSE {best:.4} mm",
-            robokrige::model::AXES[axis]
-        ))
+/// A library's progress `(done, total, what)` drawn on `pb`.
+pub fn steps_of(pb: &ProgressBar) -> impl Fn(usize, usize, &str) + Sync + '_ {
+    |done, total, what| {
+        pb.set_length(total as u64);
+        steps(pb)(done, what);
     }
+}
+
+/// The GA's progress `(axis, generation, best CV RMSE)` as `pb`'s message
+/// ([`robokrige::report::fit::ga_progress`]).
+pub fn ga(pb: &ProgressBar) -> impl Fn(usize, usize, f64) + Sync + '_ {
+    |axis, generation, best| pb.set_message(ga_progress(axis, generation, best))
 }

@@ -73,11 +73,7 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
         &[Some(a.model.as_path())],
         &[Some(a.output.as_path()), a.json.as_deref()],
     )?;
-    let model = robokrige::model::ErrorModel::load(&a.model)?;
-    let cal = model.calibration().ok_or_else(|| robokrige::Error::Input {
-        source_name: a.model.display().to_string(),
-        message: "holds no calibration: fit it with --robot (and without --no-calibrate)".into(),
-    })?;
+    let cal = robokrige::model::ErrorModel::load_calibration(&a.model)?;
     let robot = cal.calibrated_robot();
     let text = RobotFile::text_of(&robot)?;
     robokrige::output::write_text(&a.output, &text)?;

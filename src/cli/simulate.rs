@@ -70,11 +70,7 @@ pub struct SimulateArgs {
 pub fn run(a: SimulateArgs) -> Result<()> {
     let mut spec = CampaignSpec::new(a.kind, a.seed);
     spec.poses = a.poses.unwrap_or(spec.poses);
-    spec.effects = a
-        .effects
-        .iter()
-        .map(|s| Effect::parse(s))
-        .collect::<Result<_>>()?;
+    spec.effects = Effect::parse_all(&a.effects)?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
     spec.circle_diameter_mm = a.diameter.unwrap_or(spec.circle_diameter_mm);
     spec.indexing_cycles = a.cycles.unwrap_or(spec.indexing_cycles);
@@ -87,7 +83,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     let outputs = [Some(&*a.output), Some(&*truth_path), a.json.as_deref()];
     super::check_files(&[], &outputs)?;
     let (out, truth) = simulate(&robot, &spec)?;
-    super::write_json(&truth_path, &truth, "truth")?;
+    super::json_to(Some(&truth_path), &truth, "truth")?;
     out.write_csv(&a.output)?;
     let summary = report::json(&out, &truth, (&a.output, &truth_path));
     say_part!("{}", report::summary(&summary));

@@ -109,6 +109,18 @@ impl ImportSpec {
         })
     }
 
+    /// The spec of the mapping file `file` ([`ImportSpec::from_file`]; the
+    /// default without one) with the pairs of `maps` on top
+    /// ([`ImportSpec::map_all`]).
+    pub fn read(file: Option<&Path>, maps: &[String]) -> Result<Self> {
+        let mut spec = match file {
+            Some(p) => Self::from_file(p)?,
+            None => Self::default(),
+        };
+        spec.map_all(maps)?;
+        Ok(spec)
+    }
+
     /// [`ImportSpec::map`] of each list in order: a target named twice
     /// among them all is refused.
     pub fn map_all(&mut self, lists: &[String]) -> Result<()> {

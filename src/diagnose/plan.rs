@@ -143,6 +143,24 @@ impl DiagnosePlan {
         })
     }
 
+    /// The plan of diagnosing `data` with `o` as a command checks it before
+    /// it starts: refused by [`DiagnosePlan::check`] with advice that names
+    /// the command's options `(rows, scan_rows)` (e.g. `("--rows",
+    /// "--scan-rows")`); returned when it is worth showing (a campaign above
+    /// [`crate::kriging::SEARCH_ROWS`] rows), `None` for a small one.
+    pub fn check_options(
+        data: &Dataset,
+        o: &DiagnoseOptions,
+        (rows, scan_rows): (&str, &str),
+    ) -> Result<Option<Self>> {
+        let plan = Self::new(data, o);
+        plan.check(
+            |n| format!("`{rows} {n}`"),
+            |n| format!("`{scan_rows} {n}`"),
+        )?;
+        Ok((data.len() > crate::kriging::SEARCH_ROWS).then_some(plan))
+    }
+
     /// Refuse when the plan needs more than the memory limit
     /// ([`crate::memory::limit`]); `rows_hint(n)` says how to diagnose `n`
     /// rows, `scan_hint(s)` how to scan `s` rows of all of them (offered

@@ -29,8 +29,8 @@ pub use locate::{TrackerFit, errors_from_positions, import_for, locate_imported,
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
 pub use robot_file::{
-    DEFAULT_REVOLUTE_LIMITS, FrameSpec, JointSpec, RobotFile, load_robot, load_robot_with_tool,
-    read_robot_file, robot_or_preset_name, table_digest,
+    DEFAULT_REVOLUTE_LIMITS, FrameSpec, JointSpec, RobotFile, load_optional_robot, load_robot,
+    load_robot_with_tool, read_robot_file, robot_or_preset_name, table_digest,
 };
 
 use crate::{Error, Result};

@@ -336,6 +336,11 @@ pub fn load_robot_with_tool(spec: &str, tool: Option<&str>) -> Result<Robot> {
     robot.with_tool_translation(xyz).map_err(|_| bad())
 }
 
+/// [`load_robot_with_tool`] of an optional robot: `None` without one.
+pub fn load_optional_robot(spec: Option<&str>, tool: Option<&str>) -> Result<Option<Robot>> {
+    spec.map(|s| load_robot_with_tool(s, tool)).transpose()
+}
+
 /// Serde `deserialize_with` for a robot stored in a file: its whole table, or
 /// (files written before robot files existed) a preset's name.
 pub fn robot_or_preset_name<'de, D>(d: D) -> std::result::Result<Box<Robot>, D::Error>

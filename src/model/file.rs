@@ -94,6 +94,17 @@ impl ErrorModel {
         Self::from_json(&text, &path.display().to_string())
     }
 
+    /// The D-H calibration held by the model file `path` (fitted with
+    /// `fit --robot`); an error names the file when it holds none.
+    pub fn load_calibration(path: &Path) -> Result<crate::calibration::Calibration> {
+        let model = Self::load(path)?;
+        model.calibration().cloned().ok_or_else(|| Error::Input {
+            source_name: path.display().to_string(),
+            message: "holds no calibration: fit it with --robot (and without --no-calibrate)"
+                .into(),
+        })
+    }
+
     /// Parse a saved model from JSON text (`source_name` for messages).
     pub fn from_json(text: &str, source_name: &str) -> Result<Self> {
         let head: serde_json::Value = serde_json::from_str(text).map_err(|e| Error::Json {

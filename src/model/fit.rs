@@ -64,6 +64,28 @@ pub fn check_fit_memory(
     check_fit_memory_with(rows, &opts, subset)
 }
 
+/// [`check_fit_memory`] as a command checks a fit of a file's `rows` rows
+/// before it starts: the advice names `option`, the command's option that
+/// takes fewer rows (e.g. `--train`), or else a subset of the file. Returns
+/// the plan when it is worth showing (above
+/// [`crate::kriging::SEARCH_ROWS`] rows, where the search converges on a
+/// subset), `None` for a small fit.
+pub fn check_fit_rows(
+    rows: usize,
+    optimizer: crate::kriging::OptimizerKind,
+    option: Option<&str>,
+) -> Result<Option<crate::kriging::FitPlan>> {
+    let subset = |n: usize| match option {
+        Some(o) => format!("`{o} {n}`"),
+        None => format!(
+            "a subset: e.g. the first {n} rows, `head -n {} data.csv > subset.csv`",
+            n + 1
+        ),
+    };
+    let plan = check_fit_memory(rows, optimizer, subset)?;
+    Ok((rows > crate::kriging::SEARCH_ROWS).then_some(plan))
+}
+
 /// [`check_fit_memory`] for a fit with `opts`.
 fn check_fit_memory_with(
     rows: usize,

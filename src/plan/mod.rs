@@ -135,9 +135,9 @@ impl PlanParams {
         self
     }
 
-    /// Plan only poses this tracker sees.
-    pub fn tracker(mut self, view: TrackerView) -> Self {
-        self.tracker = Some(view);
+    /// Plan only poses this tracker sees (all poses for `None`).
+    pub fn tracker(mut self, view: impl Into<Option<TrackerView>>) -> Self {
+        self.tracker = view.into();
         self
     }
 

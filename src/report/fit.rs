@@ -23,6 +23,15 @@ pub fn json(
         "calibration": model.calibration().map(|c| c.identifiability())})
 }
 
+/// The progress line of a GA trend selection: output `axis`, its
+/// `generation`, and the best CV RMSE so far (mm).
+pub fn ga_progress(axis: usize, generation: usize, best: f64) -> String {
+    format!(
+        "GA {} generation {generation}: best CV RMSE {best:.4} mm",
+        AXES[axis]
+    )
+}
+
 /// What `fit` prints after fitting `rows` rows in `secs` s into the file
 /// `output`: the space, correlation and nugget; per axis the family CV (if
 /// chosen by CV), ln ψ, σ², the nugget, the trend terms, the evaluations

@@ -116,6 +116,11 @@ pub const EFFECT_NAMES: [&str; 7] = [
 pub const MEASUREMENT_EFFECTS: [&str; 3] = ["temperature", "payload", "tracker-step"];
 
 impl Effect {
+    /// [`Effect::parse`] of each spec, in order.
+    pub fn parse_all(specs: &[String]) -> Result<Vec<Effect>> {
+        specs.iter().map(|s| Effect::parse(s)).collect()
+    }
+
     /// Parse `NAME[:key=value,…]` (see module docs); missing keys take defaults.
     pub fn parse(spec: &str) -> Result<Effect> {
         let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
