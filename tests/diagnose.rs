@@ -863,3 +863,36 @@ fn scanned_rows_keep_the_history_of_the_whole_campaign() {
         assert_eq!(g.add, [Feature::Step { row }]);
     }
 }
+
+#[test]
+fn a_lag_the_calibration_took_up_part_of_is_covered_by_its_interval() {
+    // diagnosed on the calibration's residual (the default with a robot):
+    // the calibration, identified with the lag in the errors, took up
+    // part of it, and the interval of what is left must still hold the
+    // planted gain on each axis's own row of the Jacobian
+    let robot = kinematics::preset("comau-nj220").unwrap();
+    let data = campaign(200, 1, Some("lag:joint=2,gain=0.0005,tau_poses=0"));
+    let o = quick().robot(Some(robot));
+    let base = robokrige::study::diagnosis::DiagnosisBase::new(data, &o, None).unwrap();
+    assert!(base.calibration.is_some());
+    let d = base.diagnose(&o, &|_| {}).unwrap();
+    let lag = d
+        .effects
+        .iter()
+        .find(|e| e.accepted && e.source == ["move2"])
+        .expect("the lag is added");
+    let planted = -0.0005f64.to_radians();
+    assert_eq!(lag.size.len(), 3, "{lag:?}");
+    for c in &lag.size {
+        let a = c.axis.expect("a row of the Jacobian");
+        assert!(
+            (c.estimate[a] - planted).abs() <= c.ci95[a],
+            "{} on axis {a}: {} ± {} for a planted {planted}",
+            c.column,
+            c.estimate[a],
+            c.ci95[a]
+        );
+    }
+    let note = lag.note.as_deref().unwrap_or("");
+    assert!(note.contains("directions the calibration saw"), "{note}");
+}

@@ -24,7 +24,7 @@ mod score;
 
 use plant::KINDS;
 use robokrige::dataset::{Dataset, read_csv};
-use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, diagnose, fit_with_effects};
+use robokrige::diagnose::{DiagnoseOptions, Diagnosis, base_params, fit_with_effects};
 use robokrige::study::diagnosis::DiagnosisBase;
 use score::Outcome;
 use std::path::PathBuf;
@@ -126,7 +126,7 @@ fn options(data: &Dataset) -> DiagnoseOptions {
 /// diagnosed too.
 fn run(data: &Dataset, o: &DiagnoseOptions, calibrate: Option<bool>) -> (Diagnosis, Dataset) {
     let base = DiagnosisBase::new(data.clone(), o, calibrate).expect("calibration");
-    let d = diagnose(&base.data, o, &|_| {}).expect("diagnose");
+    let d = base.diagnose(o, &|_| {}).expect("diagnose");
     (d, base.data)
 }
 

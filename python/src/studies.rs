@@ -421,7 +421,7 @@ pub fn diagnose(
         // D-H calibration is diagnosed and the model holds that
         // calibration, as the CLI's `diagnose --robot`
         let base = robokrige::study::diagnosis::DiagnosisBase::new(d.clone(), &o, calibrate)?;
-        let diag = robokrige::diagnose::diagnose(&base.data, &o, &|msg: &str| {
+        let diag = base.diagnose(&o, &|msg: &str| {
             let k = step.fetch_add(1, Ordering::SeqCst) + 1;
             p.call((k, 0usize, msg.to_string()));
         })?;

@@ -105,6 +105,10 @@ pub struct Calibration {
     stop: String,
 }
 
+/// Columns over a campaign's rows per output axis: `d[a][i][k]`, axis a,
+/// column i, row k ([`Calibration::seen_displacements`]).
+pub type Displacements = [Vec<Vec<f64>>; 3];
+
 /// Identify the kinematic errors of `nominal` on the measured campaign
 /// `data` (joints as commanded): see the module documentation.
 pub fn calibrate(
@@ -311,6 +315,40 @@ impl Calibration {
             self.identifiability().parameters_total
         );
         robot
+    }
+
+    /// The TCP displacement of a unit step along each direction the campaign
+    /// saw, at the poses `q`, per axis: `out[a][i][k] = ∂P_a/∂p(q_k)·D v_i`
+    /// for the first [`Identifiability::directions_seen`] directions `D v_i`
+    /// of the scaled Jacobian (at the nominal parameters, as the directions
+    /// were found). Whatever of an effect on these poses lies in their span
+    /// the calibration has taken up; refitted beside the effect, they give
+    /// it back (Frisch–Waugh). Empty per axis for a calibration read from a
+    /// file that does not record its directions.
+    pub fn seen_displacements(&self, q: &[Vec<f64>]) -> Result<Displacements> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        let seen = &self.uncertainty[..self
+            .identifiability
+            .directions_seen
+            .min(self.uncertainty.len())];
+        let per_pose: Vec<[Vec<f64>; 3]> = q
+            .par_iter()
+            .map(|qk| {
+                let j = identification_jacobian(&self.nominal, qk);
+                std::array::from_fn(|a| {
+                    seen.iter()
+                        .map(|(dir, _)| j[a].iter().zip(dir).map(|(x, y)| x * y).sum())
+                        .collect()
+                })
+            })
+            .collect();
+        Ok(std::array::from_fn(|a| {
+            (0..seen.len())
+                .map(|i| per_pose.iter().map(|p| p[a][i]).collect())
+                .collect()
+        }))
     }
 
     /// The identified parameter errors (degrees and mm), in the order of

@@ -4,7 +4,7 @@ use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
 use robokrige::dataset::Dataset;
-use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis, diagnose};
+use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis};
 use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
@@ -169,7 +169,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         eprintln!("diagnose: {plan}");
     }
     let d = with_spinner("diagnose", |pb| {
-        diagnose(&base.data, &opts, &|msg| pb.set_message(msg.to_string()))
+        base.diagnose(&opts, &|msg| pb.set_message(msg.to_string()))
     })?;
     let data_name = a.data.display().to_string();
     let names = Names {

@@ -25,6 +25,7 @@ use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_r
 use super::rank::alike;
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
+use crate::calibration::Displacements;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 
@@ -146,19 +147,25 @@ pub(super) fn left_out(reports: &[EffectReport], r: &Round, order: &[usize]) -> 
 }
 
 /// The columns an added effect's intervals are computed with refitted, and
-/// their names.
+/// their names: `columns` on every axis, `calibration` (the displacements
+/// of the directions the calibration saw) on its own axis, for the
+/// coefficients only.
 pub(super) struct Competitors {
     columns: Vec<Vec<f64>>,
+    calibration: Option<Displacements>,
     names: Vec<String>,
 }
 
 /// The competitors of candidate `k` (its report `reports[k]`) on every row
-/// of `data`: the drift over the order (but for the drift itself) and the
+/// of `data`: the drift over the order (but for the drift itself), the
 /// features of the candidates of another source it is not separable from
 /// (one of the same source, `temp_c` alone and lagged, a step and a block
-/// of rows, is the same explanation), but those it adds itself.
+/// of rows, is the same explanation), but those it adds itself, and, when
+/// `data` is a calibration's residual, the `calibration`'s directions
+/// ([`Competitors`]).
 pub(super) fn competitor_columns(
     data: &Dataset,
+    calibration: Option<&Displacements>,
     r: &Round,
     k: usize,
     reports: &[EffectReport],
@@ -166,6 +173,7 @@ pub(super) fn competitor_columns(
     let own = &reports[k].add;
     let mut c = Competitors {
         columns: Vec::new(),
+        calibration: calibration.filter(|d| !d[0].is_empty()).cloned(),
         names: Vec::new(),
     };
     if !own.contains(&Feature::Row) {
@@ -210,12 +218,19 @@ pub(super) fn widen_intervals(
         data,
         residuals,
         &report.add,
-        &competitors.columns,
+        (&competitors.columns, competitors.calibration.as_ref()),
     );
-    if (rows || coefs) && !competitors.names.is_empty() {
+    let mut names = competitors.names.clone();
+    if coefs && let Some(d) = &competitors.calibration {
+        names.push(format!(
+            "the {} directions the calibration saw (the coefficients)",
+            d[0].len()
+        ));
+    }
+    if (rows || coefs) && !names.is_empty() {
         report.add_note(format!(
             "95 % intervals with {} refitted alongside it",
-            competitors.names.join(", ")
+            names.join(", ")
         ));
     }
     let steps = report.change_point_rows();

@@ -73,6 +73,7 @@ mod rows;
 pub mod scan;
 
 use crate::Result;
+use crate::calibration::Calibration;
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 pub use accept::{AFTER_LEVEL_RATIO, Worth};
@@ -101,7 +102,26 @@ pub use scan::EffectKind;
 /// # Ok::<(), robokrige::Error>(())
 /// ```
 pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) -> Result<Diagnosis> {
+    diagnose_residual(data, None, o, progress)
+}
+
+/// [`diagnose`] of `data`, the residual of `calibration` (its rows with
+/// `ex,ey,ez` replaced by what the calibration leaves, as
+/// [`Calibration::residual`] gives): the calibration took up whatever of an
+/// effect lies in the span of the directions it saw, so each added
+/// effect's coefficient intervals are computed with those directions
+/// refitted beside it ([`Calibration::seen_displacements`]). `None`: a
+/// diagnosis of the campaign as it is.
+pub fn diagnose_residual(
+    data: &Dataset,
+    calibration: Option<&Calibration>,
+    o: &DiagnoseOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Diagnosis> {
     o.validate()?;
+    let calibration = calibration
+        .map(|c| c.seen_displacements(&data.q))
+        .transpose()?;
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;
     // the rows the candidates are scanned on (all, up to `scan_rows`), and
@@ -131,6 +151,7 @@ pub fn diagnose(data: &Dataset, o: &DiagnoseOptions, progress: &dyn Fn(&str)) ->
         rows: &rows,
         fold: &scan_fold,
         scan_errors: &scan_errors,
+        calibration: calibration.as_ref(),
         o,
     };
     progress("cross-validating the current model");

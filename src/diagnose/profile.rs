@@ -27,6 +27,7 @@
 
 use super::rank::orthonormal;
 use super::report::{Coefficient, EffectReport};
+use crate::calibration::Displacements;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use nalgebra::{DMatrix, DVector};
@@ -174,18 +175,17 @@ pub(super) fn widen_rows(
 }
 
 /// Least-squares coefficients of the centred `ys[a]` on the centred,
-/// `q`-residualised `x` columns that are regressors of axis `a` (`axes[i]`
-/// `None` or `Some(a)`, [`Feature::column_axes`]), and the diagonal of
-/// `(XᵀX)⁻¹` of each axis's fit (by solves); a column off an axis has 0
-/// there. `None` when an axis's fit is singular.
+/// `q[a]`-residualised `x` columns that are regressors of axis `a`
+/// (`axes[i]` `None` or `Some(a)`, [`Feature::column_axes`]), and the
+/// diagonal of `(XᵀX)⁻¹` of each axis's fit (by solves); a column off an
+/// axis has 0 there. `None` when an axis's fit is singular.
 #[allow(clippy::type_complexity)]
 fn least_squares(
     x: &[Vec<f64>],
     axes: &[Option<usize>],
     ys: &[Vec<f64>],
-    q: &[Vec<f64>],
+    q: [&[Vec<f64>]; 3],
 ) -> Option<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
-    let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q)).collect();
     let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
     let mut beta = vec![[0.0; 3]; x.len()];
     let mut diag = vec![[0.0; 3]; x.len()];
@@ -197,6 +197,7 @@ fn least_squares(
         if k == 0 {
             continue;
         }
+        let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q[a])).collect();
         let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[on[i]], &xr[on[j]]));
         let chol = g.cholesky()?;
         let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[on[i]], y)));
@@ -211,14 +212,16 @@ fn least_squares(
 
 /// Widen the coefficient intervals `size` of an effect that adds `add`
 /// (columns named like its coefficients) by what refitting the
-/// `competitors` columns alongside it does to each estimate on the CV
-/// `residuals` of `data` (all rows). Returns whether any interval widened.
+/// `competitors` alongside it does to each estimate on the CV `residuals`
+/// of `data` (all rows): columns of every axis, and columns per axis (a
+/// calibration's directions, [`crate::calibration::Calibration::seen_displacements`]).
+/// Returns whether any interval widened.
 pub(super) fn widen_coefficients(
     size: &mut [Coefficient],
     data: &Dataset,
     residuals: &[[f64; 3]],
     add: &[Feature],
-    competitors: &[Vec<f64>],
+    (competitors, per_axis): (&[Vec<f64>], Option<&Displacements>),
 ) -> bool {
     let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
     let axes: Vec<Option<usize>> = add.iter().flat_map(Feature::column_axes).collect();
@@ -229,9 +232,19 @@ pub(super) fn widen_coefficients(
     let ys: Vec<Vec<f64>> = (0..3)
         .map(|a| residuals.iter().map(|r| r[a]).collect())
         .collect();
+    let basis: Vec<Vec<Vec<f64>>> = (0..3)
+        .map(|a| {
+            let mut c: Vec<&[f64]> = competitors.iter().map(Vec::as_slice).collect();
+            if let Some(p) = per_axis {
+                c.extend(p[a].iter().map(Vec::as_slice));
+            }
+            orthonormal(&c)
+        })
+        .collect();
+    let none: &[Vec<f64>] = &[];
     let (Some((alone, v0)), Some((with, v1))) = (
-        least_squares(&cols, &axes, &ys, &[]),
-        least_squares(&cols, &axes, &ys, &orthonormal(competitors)),
+        least_squares(&cols, &axes, &ys, [none; 3]),
+        least_squares(&cols, &axes, &ys, [&basis[0], &basis[1], &basis[2]]),
     ) else {
         return false;
     };

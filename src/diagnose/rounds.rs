@@ -15,6 +15,7 @@ use super::report::{
 use super::rows::{ScanRows, place_steps};
 use super::scan::{self, EffectKind, Family, Tested};
 use crate::Result;
+use crate::calibration::Displacements;
 use crate::dataset::Dataset;
 use crate::features::Feature;
 use crate::model::ErrorModel;
@@ -28,6 +29,10 @@ pub(super) struct Campaign<'a> {
     pub rows: &'a ScanRows,
     pub fold: &'a [usize],
     pub scan_errors: &'a [[f64; 3]],
+    /// The displacements of the directions the calibration whose residual
+    /// is diagnosed saw, per axis, on every row
+    /// ([`crate::calibration::Calibration::seen_displacements`]).
+    pub calibration: Option<&'a Displacements>,
     pub o: &'a DiagnoseOptions,
 }
 
@@ -306,7 +311,7 @@ impl Rounds {
             let (after, trial_model) = cross_validated(c.data, &trial, o, Some(&self.model))?;
             let (now, then) = (self.current.pooled_rmse_mm, after.pooled_rmse_mm);
             if worth.counts(now.powi(2), then.powi(2)) {
-                let competitors = choose::competitor_columns(c.data, r, k, reports);
+                let competitors = choose::competitor_columns(c.data, c.calibration, r, k, reports);
                 let index = self.effects.len() + k;
                 self.accept(
                     c,

@@ -61,6 +61,17 @@ impl DiagnosisBase {
         })
     }
 
+    /// The diagnosis of the rows ([`crate::diagnose::diagnose_residual`]:
+    /// with a calibration, its directions are refitted beside each added
+    /// effect for the coefficient intervals).
+    pub fn diagnose(
+        &self,
+        opts: &DiagnoseOptions,
+        progress: &dyn Fn(&str),
+    ) -> Result<crate::diagnose::Diagnosis> {
+        crate::diagnose::diagnose_residual(&self.data, self.calibration.as_ref(), opts, progress)
+    }
+
     /// The models before the diagnosis ([`DiagnosisBase::model`] without
     /// extras) and `after` it compared on `targets`
     /// ([`compare_compensation`]).
