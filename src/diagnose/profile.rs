@@ -23,7 +23,12 @@
 //!   the two least-squares variances of that coefficient, the variance
 //!   inflation of the competitors). The interval becomes the symmetric hull
 //!   of the model's own `b ± h` and of `b + Δ ± h·√r`: half-width
-//!   `max(h, |Δ| + h·√r)`.
+//!   `max(h, |Δ| + h·√r)`. On a calibration's residual the directions the
+//!   calibration saw are competitors too, on each axis its own rows of
+//!   them ([`crate::calibration::Calibration::seen_displacements`]): the
+//!   calibration was identified with the effect in the errors and took up
+//!   its projection on them, which the effect's estimate alone misses and
+//!   the estimate with them refitted gives back (Frisch–Waugh).
 
 use super::rank::orthonormal;
 use super::report::{Coefficient, EffectReport};
