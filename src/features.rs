@@ -706,30 +706,44 @@ fn check_complete(data: &Dataset, names: &[String], cols: Vec<Vec<f64>>) -> Resu
     Ok(cols)
 }
 
-/// Number of input columns of `extras` that enter the correlation (the
-/// The six columns of a deviation `sin φ(q)`, `cos φ(q)` of 1-based joint
-/// `joint` mapped to the TCP through `robot`'s position Jacobian: x, y, z
-/// of `∂P/∂θ_j·sin φ`, then of `∂P/∂θ_j·cos φ` ([`Feature::Crosstalk`],
-/// [`Feature::HarmonicJacobian`]).
+/// [`jacobian_sin_cos_at`] with `robot`'s position Jacobian at each pose.
 fn jacobian_sin_cos(
     robot: &crate::kinematics::Robot,
     q: &[Vec<f64>],
     joint: usize,
     phase: impl Fn(&[f64]) -> f64,
 ) -> Result<Vec<Vec<f64>>> {
+    let jac = q
+        .iter()
+        .map(|qi| robot.position_jacobian(qi))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(jacobian_sin_cos_at(&jac, q, joint, phase))
+}
+
+/// The six columns of a deviation `sin φ(q)`, `cos φ(q)` of 1-based joint
+/// `joint` mapped to the TCP through the position Jacobian `jac[k]` of
+/// each pose `q[k]`: x, y, z of `∂P/∂θ_j·sin φ`, then of `∂P/∂θ_j·cos φ`
+/// ([`Feature::Crosstalk`], [`Feature::HarmonicJacobian`]; the diagnosis
+/// scans many phases on the same Jacobians).
+pub(crate) fn jacobian_sin_cos_at(
+    jac: &[nalgebra::Matrix3xX<f64>],
+    q: &[Vec<f64>],
+    joint: usize,
+    phase: impl Fn(&[f64]) -> f64,
+) -> Vec<Vec<f64>> {
     let mut cols: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(q.len())).collect();
-    for qi in q {
-        let jac = robot.position_jacobian(qi)?;
+    for (qi, jq) in q.iter().zip(jac) {
         let th = phase(qi);
         for (f, v) in [th.sin(), th.cos()].into_iter().enumerate() {
             for a in 0..3 {
-                cols[3 * f + a].push(jac[(a, joint - 1)] * v);
+                cols[3 * f + a].push(jq[(a, joint - 1)] * v);
             }
         }
     }
-    Ok(cols)
+    cols
 }
 
+/// Number of input columns of `extras` that enter the correlation (the
 /// others are trend-only).
 pub fn correlation_dims(extras: &[Feature]) -> usize {
     extras.iter().map(|f| f.names().len()).sum::<usize>() - trend_only_dims(extras)

@@ -10,7 +10,7 @@ use robokrige::Error;
 use robokrige::cancel::Cancel;
 use robokrige::dataset::Dataset;
 use robokrige::kriging::OptimizerKind;
-use robokrige::model::{AXES, ErrorModel};
+use robokrige::model::ErrorModel;
 use std::path::PathBuf;
 
 /// Predicted means and, if asked for, standard deviations (m × 3 each).
@@ -59,10 +59,7 @@ pub fn fit_model(
             p.call((
                 generation,
                 0usize,
-                format!(
-                    "GA {} generation {generation}: best CV RMSE {best:.4} mm",
-                    AXES[axis.min(2)]
-                ),
+                robokrige::report::fit::ga_progress(axis.min(2), generation, best),
             ))
         })
     })?;

@@ -326,24 +326,11 @@ impl Calibration {
     /// it back (Frisch–Waugh). Empty per axis for a calibration read from a
     /// file that does not record its directions.
     pub fn seen_displacements(&self, q: &[Vec<f64>]) -> Result<Displacements> {
-        for r in q {
-            self.nominal.check_len(r)?;
-        }
         let seen = &self.uncertainty[..self
             .identifiability
             .directions_seen
             .min(self.uncertainty.len())];
-        let per_pose: Vec<[Vec<f64>; 3]> = q
-            .par_iter()
-            .map(|qk| {
-                let j = identification_jacobian(&self.nominal, qk);
-                std::array::from_fn(|a| {
-                    seen.iter()
-                        .map(|(dir, _)| j[a].iter().zip(dir).map(|(x, y)| x * y).sum())
-                        .collect()
-                })
-            })
-            .collect();
+        let per_pose = self.displacements_at(q, seen)?;
         Ok(std::array::from_fn(|a| {
             (0..seen.len())
                 .map(|i| per_pose.iter().map(|p| p[a][i]).collect())
@@ -415,21 +402,40 @@ impl Calibration {
     /// says so. `J` is taken at the nominal parameters, as the directions
     /// were. 2(5n + 9) forward kinematics per pose.
     pub fn predict_variance(&self, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        let along = self.displacements_at(q, &self.uncertainty)?;
+        Ok(along
+            .iter()
+            .map(|d| {
+                std::array::from_fn(|a| {
+                    d[a].iter()
+                        .zip(&self.uncertainty)
+                        .map(|(x, (_, var))| var * x * x)
+                        .sum()
+                })
+            })
+            .collect())
+    }
+
+    /// At each pose of `q`, per axis, the TCP displacement of a unit step
+    /// along each direction of `dirs` (`out[k][a][i]`), with the
+    /// identification Jacobian at the nominal parameters, where the
+    /// directions were found.
+    fn displacements_at(
+        &self,
+        q: &[Vec<f64>],
+        dirs: &[(Vec<f64>, f64)],
+    ) -> Result<Vec<[Vec<f64>; 3]>> {
         for r in q {
             self.nominal.check_len(r)?;
         }
         Ok(q.par_iter()
             .map(|qk| {
-                // at the nominal parameters, where the directions were found
                 let j = identification_jacobian(&self.nominal, qk);
-                let mut v = [0.0; 3];
-                for (dir, var) in &self.uncertainty {
-                    for (a, va) in v.iter_mut().enumerate() {
-                        let along: f64 = j[a].iter().zip(dir).map(|(x, y)| x * y).sum();
-                        *va += var * along * along;
-                    }
-                }
-                v
+                std::array::from_fn(|a| {
+                    dirs.iter()
+                        .map(|(dir, _)| j[a].iter().zip(dir).map(|(x, y)| x * y).sum())
+                        .collect()
+                })
             })
             .collect())
     }

@@ -591,7 +591,8 @@ pub fn loo_sse_before(systems: &[AxisSystem]) -> f64 {
 /// by a local search from the model's own, so an irrelevant column leaves
 /// them where they were) with the columns as trend-only inputs, and then
 /// factorised at that ξ with its own trend, so the candidate is tested
-/// where the model would stand with it. `errors` are the campaign's
+/// where the model would stand with it; `axes` is the output axis of each
+/// column (`None`: every axis). `errors` are the campaign's
 /// measured errors (mm). On a campaign larger than `opts.converge_rows`,
 /// ξ and ν are re-estimated on the subset a fit with `opts` converges on
 /// ([`crate::kriging::converge_subset`]: a likelihood step costs m³/3) and
@@ -628,10 +629,7 @@ pub fn refit_systems(
                     "diagnose refits need a polynomial trend".into(),
                 ));
             };
-            let on: Vec<Option<usize>> = (0..columns.len())
-                .map(|c| axes.get(c).copied().flatten())
-                .collect();
-            let terms = crate::model::with_linear_columns(base, &on, a);
+            let terms = crate::model::with_linear_columns(base, axes, a);
             let y_fit: Vec<f64> = search_rows.iter().map(|&i| errors[i][a]).collect();
             let start = Hyperparameters::of(&model.reports[a], corr);
             // the refit continues the model's own family (with the family

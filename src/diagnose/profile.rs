@@ -196,16 +196,16 @@ fn least_squares(
     let mut diag = vec![[0.0; 3]; x.len()];
     for (a, y) in ys.iter().enumerate() {
         let on: Vec<usize> = (0..x.len())
-            .filter(|&i| axes.get(i).copied().flatten().is_none_or(|b| b == a))
+            .filter(|&i| axes[i].is_none_or(|b| b == a))
             .collect();
         let k = on.len();
         if k == 0 {
             continue;
         }
-        let xr: Vec<Vec<f64>> = x.iter().map(|c| residualise(c, q[a])).collect();
-        let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[on[i]], &xr[on[j]]));
+        let xr: Vec<Vec<f64>> = on.iter().map(|&i| residualise(&x[i], q[a])).collect();
+        let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[i], &xr[j]));
         let chol = g.cholesky()?;
-        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[on[i]], y)));
+        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[i], y)));
         for (r, &i) in on.iter().enumerate() {
             beta[i][a] = b[r];
             let unit = DVector::from_fn(k, |j, _| if j == r { 1.0 } else { 0.0 });

@@ -124,12 +124,7 @@ pub(super) fn covariate_families(
             kind: EffectKind::Covariate,
             source: vec![c.name.clone()],
             label: format!("{} × joint angles", c.name),
-            grid: vec![GridPoint {
-                params: BTreeMap::new(),
-                columns: cols,
-                axes: Vec::new(),
-                add: vec![add],
-            }],
+            grid: vec![GridPoint::new(BTreeMap::new(), cols, vec![add])],
             zoom: None,
         });
     }

@@ -31,12 +31,7 @@ pub(super) fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
             kind: EffectKind::DirectionHistory,
             source: vec![format!("dir{}", j + 1)],
             label: format!("previous direction of q{}", j + 1),
-            grid: vec![GridPoint {
-                params: BTreeMap::new(),
-                columns: signed(&pv[0]),
-                axes: Vec::new(),
-                add: vec![prev],
-            }],
+            grid: vec![GridPoint::new(BTreeMap::new(), signed(&pv[0]), vec![prev])],
             zoom: None,
         });
     }
@@ -51,21 +46,19 @@ pub(super) fn direction_families(data: &Dataset, j: usize, out: &mut Sink) {
     if smax <= 0.0 {
         return;
     }
-    let mut grid = vec![GridPoint {
-        params: BTreeMap::new(),
-        columns: signed(&s),
-        axes: Vec::new(),
-        add: vec![since.clone()],
-    }];
+    let mut grid = vec![GridPoint::new(
+        BTreeMap::new(),
+        signed(&s),
+        vec![since.clone()],
+    )];
     let mut scale = smax / 2.0;
     while scale >= 0.5 && grid.len() < 24 {
         let sat: Vec<f64> = s.iter().map(|v| 1.0 - (-v / scale).exp()).collect();
-        grid.push(GridPoint {
-            params: params(&[("scale_deg", scale)]),
-            columns: signed(&sat),
-            axes: Vec::new(),
-            add: vec![since.clone()],
-        });
+        grid.push(GridPoint::new(
+            params(&[("scale_deg", scale)]),
+            signed(&sat),
+            vec![since.clone()],
+        ));
         scale /= 1.5;
     }
     out.push(Family {

@@ -46,12 +46,11 @@ pub(super) fn generic_bases(
                 kind: EffectKind::MotionHistory,
                 source: vec![t.name.clone()],
                 label: format!("time since the previous pose (Δ{})", t.name),
-                grid: vec![GridPoint {
-                    params: BTreeMap::new(),
-                    columns: vec![zscore(&v[0])],
-                    axes: Vec::new(),
-                    add: vec![f.clone()],
-                }],
+                grid: vec![GridPoint::new(
+                    BTreeMap::new(),
+                    vec![zscore(&v[0])],
+                    vec![f.clone()],
+                )],
                 zoom: None,
             });
             bases.push((f, v[0].clone(), format!("Δ{}", t.name)));
@@ -91,12 +90,11 @@ pub(super) fn generic_families(data: &Dataset, (f, v, label): &Base, lagged: boo
                 joint: k,
                 centre,
             };
-            Some(GridPoint {
-                params: params(&[("joint", k as f64)]),
-                columns: z_all(t.columns(data).ok()?),
-                axes: Vec::new(),
-                add: vec![t],
-            })
+            Some(GridPoint::new(
+                params(&[("joint", k as f64)]),
+                z_all(t.columns(data).ok()?),
+                vec![t],
+            ))
         })
         .collect();
     out.push(Family {
@@ -115,18 +113,19 @@ pub(super) fn generic_families(data: &Dataset, (f, v, label): &Base, lagged: boo
         label: format!("{label}, lagged"),
         grid: LAGS
             .iter()
-            .map(|&lag| GridPoint {
-                params: params(&[("lag", lag as f64)]),
-                columns: vec![zscore(
-                    &(0..v.len())
-                        .map(|i| v[i.saturating_sub(lag)])
-                        .collect::<Vec<_>>(),
-                )],
-                axes: Vec::new(),
-                add: vec![Feature::Lagged {
-                    of: Box::new(f.clone()),
-                    lag,
-                }],
+            .map(|&lag| {
+                GridPoint::new(
+                    params(&[("lag", lag as f64)]),
+                    vec![zscore(
+                        &(0..v.len())
+                            .map(|i| v[i.saturating_sub(lag)])
+                            .collect::<Vec<_>>(),
+                    )],
+                    vec![Feature::Lagged {
+                        of: Box::new(f.clone()),
+                        lag,
+                    }],
+                )
             })
             .collect(),
         zoom: None,

@@ -110,8 +110,7 @@ pub struct GridPoint {
     /// Regressors, one column per entry (row order).
     pub columns: Vec<Vec<f64>>,
     /// The output axis of each column (`None`: every axis,
-    /// [`Feature::column_axes`]); empty when every column is a regressor of
-    /// every axis.
+    /// [`Feature::column_axes`]), one per column.
     pub axes: Vec<Option<usize>>,
     /// What to add to the model if this is accepted.
     pub add: Vec<Feature>,
@@ -122,8 +121,8 @@ impl GridPoint {
     pub fn new(params: BTreeMap<String, f64>, columns: Vec<Vec<f64>>, add: Vec<Feature>) -> Self {
         GridPoint {
             params,
+            axes: vec![None; columns.len()],
             columns,
-            axes: Vec::new(),
             add,
         }
     }
@@ -145,18 +144,13 @@ impl GridPoint {
         }
     }
 
-    /// The axis of column `c`: `None` for every axis.
-    pub fn axis(&self, c: usize) -> Option<usize> {
-        self.axes.get(c).copied().flatten()
-    }
-
     /// The columns that are regressors of output `axis`.
     pub fn on_axis(&self, axis: usize) -> Vec<&[f64]> {
         self.columns
             .iter()
-            .enumerate()
-            .filter(|(c, _)| self.axis(*c).is_none_or(|a| a == axis))
-            .map(|(_, v)| v.as_slice())
+            .zip(&self.axes)
+            .filter(|(_, on)| on.is_none_or(|a| a == axis))
+            .map(|(v, _)| v.as_slice())
             .collect()
     }
 

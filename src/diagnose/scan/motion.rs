@@ -138,12 +138,11 @@ fn move_families(
             kind: EffectKind::MotionHistory,
             source: vec![format!("move{j}")],
             label: format!("size of q{j}'s last move"),
-            grid: vec![GridPoint {
-                params: BTreeMap::new(),
-                columns: vec![zscore(&s[0])],
-                axes: Vec::new(),
-                add: vec![size],
-            }],
+            grid: vec![GridPoint::new(
+                BTreeMap::new(),
+                vec![zscore(&s[0])],
+                vec![size],
+            )],
             zoom: None,
         });
     }
@@ -209,12 +208,7 @@ fn tcp_move_family(data: &Dataset, robot: &Robot, out: &mut Sink) {
             kind: EffectKind::MotionHistory,
             source: vec!["tcp_move".into()],
             label: "the TCP's last move".into(),
-            grid: vec![GridPoint {
-                params: BTreeMap::new(),
-                columns: z_all(c),
-                axes: Vec::new(),
-                add: vec![f],
-            }],
+            grid: vec![GridPoint::new(BTreeMap::new(), z_all(c), vec![f])],
             zoom: None,
         });
     }

@@ -40,31 +40,29 @@ fn block_spacing(m: usize) -> usize {
 /// second step need not return to the first level).
 fn block_point(rows: &ScanRows, from: usize, to: usize) -> GridPoint {
     let (a, b) = (rows.row(from), rows.row(to));
-    GridPoint {
-        params: params(&[("from_row", a as f64), ("to_row", b as f64)]),
-        columns: vec![
+    GridPoint::new(
+        params(&[("from_row", a as f64), ("to_row", b as f64)]),
+        vec![
             (0..rows.len())
                 .map(|i| if (from..to).contains(&i) { 1.0 } else { 0.0 })
                 .collect(),
         ],
-        axes: Vec::new(),
-        add: vec![Feature::Step { row: a }, Feature::Step { row: b }],
-    }
+        vec![Feature::Step { row: a }, Feature::Step { row: b }],
+    )
 }
 
 /// Grid point of a step at scanned position `t` (the campaign row there).
 fn step_point(rows: &ScanRows, t: usize) -> GridPoint {
     let row = rows.row(t);
-    GridPoint {
-        params: params(&[("row", row as f64)]),
-        columns: vec![
+    GridPoint::new(
+        params(&[("row", row as f64)]),
+        vec![
             (0..rows.len())
                 .map(|i| if i >= t { 1.0 } else { 0.0 })
                 .collect(),
         ],
-        axes: Vec::new(),
-        add: vec![Feature::Step { row }],
-    }
+        vec![Feature::Step { row }],
+    )
 }
 
 /// [`Zoom`](super::Zoom) of a block: each edge moved a scanned row at a time within one
@@ -99,15 +97,14 @@ pub(super) fn order_families(m: usize, rows: &ScanRows, out: &mut Sink) {
         kind: EffectKind::Order,
         source: vec!["row".into()],
         label: "drift over the measurement order".into(),
-        grid: vec![GridPoint {
-            params: BTreeMap::new(),
-            columns: vec![
+        grid: vec![GridPoint::new(
+            BTreeMap::new(),
+            vec![
                 row.clone(),
                 zscore(&row.iter().map(|r| r * r).collect::<Vec<_>>()),
             ],
-            axes: Vec::new(),
-            add: vec![Feature::Row],
-        }],
+            vec![Feature::Row],
+        )],
         zoom: None,
     });
     // the order families on the scanned rows: a step, a block's edges at

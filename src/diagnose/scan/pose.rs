@@ -12,10 +12,10 @@
 //!   mapped to the TCP through the Jacobian, over the same periods as the
 //!   plain harmonic ([`Feature::HarmonicJacobian`]).
 
-use super::{EffectKind, Family, GridPoint, Sink, params, single, zscore};
+use super::{EffectKind, Family, GridPoint, Sink, params, single, z_all, zscore};
 use crate::dataset::Dataset;
 use crate::diagnose::rows::ScanRows;
-use crate::features::Feature;
+use crate::features::{Feature, jacobian_sin_cos_at};
 use crate::kinematics::Robot;
 use std::collections::BTreeMap;
 
@@ -59,26 +59,21 @@ fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
 /// twentieth of a cycle over the range off at the ends, and its support
 /// interval then sits beside the period rather than around it.
 fn zoom_harmonic(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<GridPoint> {
-    let with_period = |p: f64| -> Option<Feature> {
-        match point.add.first()? {
-            Feature::Harmonic { joint, .. } => Some(Feature::Harmonic {
-                joint: *joint,
-                period_deg: p,
-            }),
-            Feature::HarmonicJacobian { robot, joint, .. } => Some(Feature::HarmonicJacobian {
-                robot: robot.clone(),
-                joint: *joint,
-                period_deg: p,
-            }),
-            _ => None,
-        }
-    };
-    let (
-        Some(&period),
-        Some(Feature::Harmonic { joint, .. } | Feature::HarmonicJacobian { joint, .. }),
-    ) = (point.params.get("period_deg"), point.add.first())
-    else {
+    let (Some(&period), Some(first)) = (point.params.get("period_deg"), point.add.first()) else {
         return Vec::new();
+    };
+    let (joint, robot) = match first {
+        Feature::Harmonic { joint, .. } => (*joint, None),
+        Feature::HarmonicJacobian { robot, joint, .. } => (*joint, Some(robot)),
+        _ => return Vec::new(),
+    };
+    let with_period = |period_deg: f64| match robot {
+        None => Feature::Harmonic { joint, period_deg },
+        Some(robot) => Feature::HarmonicJacobian {
+            robot: robot.clone(),
+            joint,
+            period_deg,
+        },
     };
     let range = joint_range(data, joint - 1);
     let cycles = range / period;
@@ -88,7 +83,7 @@ fn zoom_harmonic(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<Grid
         .map(|k| range / (cycles + k * fine))
         .filter(|p| p.is_finite() && *p >= MIN_PERIOD && *p <= range / 2.0)
         .filter_map(|p| {
-            let f = with_period(p)?;
+            let f = with_period(p);
             let columns = f.columns(data).ok()?;
             let columns = columns.iter().map(|c| zscore(&rows.pick(c))).collect();
             Some(GridPoint::of_features(
@@ -129,15 +124,14 @@ pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
             let w = std::f64::consts::TAU / period;
             let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
             let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
-            GridPoint {
-                params: params(&[("period_deg", period)]),
-                columns: vec![zscore(&s), zscore(&c)],
-                axes: Vec::new(),
-                add: vec![Feature::Harmonic {
+            GridPoint::new(
+                params(&[("period_deg", period)]),
+                vec![zscore(&s), zscore(&c)],
+                vec![Feature::Harmonic {
                     joint: j + 1,
                     period_deg: period,
                 }],
-            }
+            )
         });
     }
 }
@@ -157,21 +151,10 @@ pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mu
         let label = format!("harmonic of q{} (via the Jacobian)", j + 1);
         push_harmonics(out, data, j, label, |period| {
             let w = std::f64::consts::TAU / period;
-            let mut columns = Vec::with_capacity(6);
-            for f in [f64::sin, f64::cos] {
-                for a in 0..3 {
-                    let c: Vec<f64> = data
-                        .q
-                        .iter()
-                        .zip(&jac)
-                        .map(|(r, jq)| jq[(a, j)] * f(w * r[j]))
-                        .collect();
-                    columns.push(zscore(&c));
-                }
-            }
+            let columns = jacobian_sin_cos_at(&jac, &data.q, j + 1, |qi| w * qi[j]);
             GridPoint::of_features(
                 params(&[("period_deg", period)]),
-                columns,
+                z_all(columns),
                 vec![Feature::HarmonicJacobian {
                     robot: Box::new(robot.clone()),
                     joint: j + 1,
