@@ -35,6 +35,7 @@ _DEFAULTS: Dict[str, Any] = dict(
     tool=None,
     kinematic=False,
     calibrate=True,
+    joint_harmonics=True,
     method=None,
     n_joints=None,
     dirs="auto",
@@ -167,6 +168,11 @@ class ErrorModel(EstimatorBase):
         Kriging to what the calibration leaves; the model holds both, as
         ``robokrige fit --robot``. False: Kriging of the raw error
         (``--no-calibrate``).
+    joint_harmonics : bool
+        With the calibration: also identify the joints' periodic (gear
+        transmission) errors, each period added only when the residual
+        noise cannot explain it. False: the MD-H, tool and base errors
+        alone (``--geometric``).
     method : str, optional
         A named method instead ("recommended", "js-hj", "ejs-hj", "ejs-gps",
         "ejs-pca", "ejs-ga"): it fixes space, trend, corr, optimizer,
@@ -221,6 +227,7 @@ class ErrorModel(EstimatorBase):
         tool: Optional[Tuple[float, float, float]] = None,
         kinematic: bool = False,
         calibrate: bool = True,
+        joint_harmonics: bool = True,
         method: Optional[str] = None,
         n_joints: Optional[int] = None,
         dirs: str = "auto",
@@ -238,6 +245,7 @@ class ErrorModel(EstimatorBase):
         self.tool = tool
         self.kinematic = kinematic
         self.calibrate = calibrate
+        self.joint_harmonics = joint_harmonics
         self.method = method
         self.n_joints = n_joints
         self.dirs = dirs
@@ -279,7 +287,7 @@ class ErrorModel(EstimatorBase):
         """The parameters as the extension reads them (checked types)."""
         p = {k: v for k, v in self.get_params().items() if k not in ("n_joints", "dirs", "covariates")}
         p["periodic"] = _periodic_spec(p["periodic"])
-        for key in ("nugget", "kinematic", "calibrate"):
+        for key in ("nugget", "kinematic", "calibrate", "joint_harmonics"):
             if not isinstance(p[key], (bool, np.bool_)):
                 raise _bad(f"{key} must be True or False, not {p[key]!r}")
             p[key] = bool(p[key])

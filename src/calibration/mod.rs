@@ -18,12 +18,20 @@
 //! [`CalibrationOptions::noise_mm`]); when it hides some directions, the
 //! fit is repeated on the directions it leaves.
 //!
+//! By default ([`CalibrationOptions::joint_harmonics`]) the calibration
+//! then looks for the periodic transmission errors of the joints' gears on
+//! what the geometric fit leaves ([`harmonics`]), adds those the noise
+//! cannot explain, and refits the geometric directions beside them.
+//!
 //! A [`Calibration`] predicts the kinematic part of the error,
-//! `δ̂_cal(q) = P_cal(q) − P_nom(q)`, and gives the residual `e − δ̂_cal` that a
-//! Kriging model learns next (the calibrated error model).
+//! `δ̂_cal(q) = P_cal(q + δq(q)) − P_nom(q)` (`δq` the joint harmonics, zero
+//! without them), and gives the residual `e − δ̂_cal` that a Kriging model
+//! learns next (the calibrated error model).
 
+pub mod harmonics;
 pub mod identifiability;
 
+pub use harmonics::JointHarmonic;
 pub use identifiability::{Identifiability, ParameterReport};
 
 use crate::dataset::Dataset;
@@ -46,6 +54,11 @@ pub struct CalibrationOptions {
     /// Levenberg–Marquardt trial steps per fit.
     #[serde(default = "default_max_iter")]
     pub max_iter: usize,
+    /// Search for periodic joint errors after the geometric fit
+    /// ([`harmonics`]); the default. Files written before it existed read
+    /// as `false`: their calibrations were geometric.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub joint_harmonics: bool,
 }
 
 fn default_max_iter() -> usize {
@@ -57,11 +70,21 @@ impl Default for CalibrationOptions {
         CalibrationOptions {
             noise_mm: None,
             max_iter: default_max_iter(),
+            joint_harmonics: true,
         }
     }
 }
 
 impl CalibrationOptions {
+    /// The MD-H, tool and base errors alone, without joint harmonics: the
+    /// D-H calibration of the literature.
+    pub fn geometric() -> Self {
+        CalibrationOptions {
+            joint_harmonics: false,
+            ..CalibrationOptions::default()
+        }
+    }
+
     /// Error unless the noise is finite and positive and the iterations
     /// at least one.
     pub fn validate(&self) -> Result<()> {
@@ -97,6 +120,12 @@ pub struct Calibration {
     /// mm² per axis: the calibration's uncertainty where it was measured.
     #[serde(default)]
     campaign_variance: [f64; 3],
+    /// The joint harmonics added after the geometric fit.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    harmonics: Vec<JointHarmonic>,
+    /// Covariance of their coefficients (degrees², row-major, 2h × 2h).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    harmonic_covariance: Vec<f64>,
     options: CalibrationOptions,
     rows: usize,
     rms_before_mm: f64,
@@ -164,7 +193,7 @@ pub fn calibrate_joints(
         .noise_mm
         .unwrap_or_else(|| first.r.norm() / dof_left.sqrt());
     let k = sj.seen_above(s);
-    let fit = if k == rank {
+    let mut fit = if k == rank {
         first
     } else {
         // the directions are orthogonal in the scaled parameters, so the
@@ -172,6 +201,32 @@ pub fn calibrate_joints(
         // fit ends up to first order: start there
         fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
     };
+    let mut found = None;
+    if opts.joint_harmonics {
+        let pjac = harmonics::jacobians(nominal, joints)?;
+        let seen = &jac * sj.basis(k);
+        let hf = harmonics::search(nominal, joints, &pjac, &fit.r, &seen)?;
+        if !hf.harmonics.is_empty() {
+            // the geometric directions refitted beside the harmonics: on
+            // the targets with the harmonics' TCP displacement removed
+            let shifted: Vec<Vector3<f64>> = targets
+                .iter()
+                .zip(&hf.shift)
+                .map(|(t, d)| t - Vector3::from(*d))
+                .collect();
+            let u0 = fit.u.clone();
+            fit = fit_subspace(nominal, joints, &shifted, &sj, &u0, opts)?;
+            let identified = apply_errors(nominal, &fit.p);
+            let moved: Vec<Vec<f64>> = joints
+                .iter()
+                .map(|q| harmonics::deviated(&hf.harmonics, q))
+                .collect();
+            fit.r = position_residual(&identified, &moved, targets);
+            found = Some(hf);
+        }
+    }
+    let (harmonics, harmonic_covariance) =
+        found.map_or((Vec::new(), Vec::new()), |h| (h.harmonics, h.covariance));
     let identifiability = sj.report(k, s, &fit.p, &names, m);
     let basis = sj.basis(sj.sigma.len());
     let uncertainty = sj
@@ -183,6 +238,8 @@ pub fn calibrate_joints(
     let mut cal = Calibration {
         uncertainty,
         campaign_variance: [0.0; 3],
+        harmonics,
+        harmonic_covariance,
         nominal: nominal.clone(),
         identified: apply_errors(nominal, &fit.p),
         parameters: fit.p,
@@ -303,16 +360,25 @@ impl Calibration {
 
     /// The identified robot as a robot of its own: named
     /// `<nominal>-calibrated`, its convention noting the poses and the
-    /// directions seen (for `robot calibrated`).
+    /// directions seen (for `robot calibrated`). A robot file holds the
+    /// MD-H table, tool and base: the joint harmonics are not in it.
     pub fn calibrated_robot(&self) -> Robot {
         let mut robot = self.identified().clone();
         robot.name = format!("{}-calibrated", self.nominal().name);
         robot.convention = format!(
-            "{}; MD-H, tool and base errors identified on {} poses ({} of {} directions seen)",
+            "{}; MD-H, tool and base errors identified on {} poses ({} of {} directions seen{})",
             self.nominal().convention,
             self.rows(),
             self.identifiability().directions_seen,
-            self.identifiability().parameters_total
+            self.identifiability().parameters_total,
+            if self.harmonics.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; its {} joint harmonics are in the model file only",
+                    self.harmonics.len()
+                )
+            }
         );
         robot
     }
@@ -330,12 +396,50 @@ impl Calibration {
             .identifiability
             .directions_seen
             .min(self.uncertainty.len())];
-        let per_pose = self.displacements_at(q, seen)?;
+        let mut per_pose = self.displacements_at(q, seen)?;
+        for (p, h) in per_pose.iter_mut().zip(self.harmonic_columns_at(q)?) {
+            for (pa, ha) in p.iter_mut().zip(h) {
+                pa.extend(ha);
+            }
+        }
+        let width = seen.len() + 2 * self.harmonics.len();
         Ok(std::array::from_fn(|a| {
-            (0..seen.len())
+            (0..width)
                 .map(|i| per_pose.iter().map(|p| p[a][i]).collect())
                 .collect()
         }))
+    }
+
+    /// The joint harmonics added after the geometric fit (none for a
+    /// geometric calibration).
+    pub fn harmonics(&self) -> &[JointHarmonic] {
+        &self.harmonics
+    }
+
+    /// At each pose of `q`, per axis, the TCP displacement of a unit
+    /// coefficient of each joint harmonic's sine and cosine (`out[k][a]`,
+    /// `2h` values: `J_aj sin, J_aj cos` per harmonic, Jacobian per degree
+    /// at the nominal parameters).
+    fn harmonic_columns_at(&self, q: &[Vec<f64>]) -> Result<Vec<[Vec<f64>; 3]>> {
+        if self.harmonics.is_empty() {
+            return Ok(vec![Default::default(); q.len()]);
+        }
+        let jac = harmonics::jacobians(&self.nominal, q)?;
+        Ok(q.iter()
+            .zip(&jac)
+            .map(|(qk, jq)| {
+                std::array::from_fn(|a| {
+                    self.harmonics
+                        .iter()
+                        .flat_map(|h| {
+                            let (s, c) = h.unit_terms(qk[h.joint - 1]);
+                            let l = jq[(a, h.joint - 1)];
+                            [l * s, l * c]
+                        })
+                        .collect()
+                })
+            })
+            .collect())
     }
 
     /// The identified parameter errors (degrees and mm), in the order of
@@ -379,7 +483,8 @@ impl Calibration {
         }
         Ok(q.par_iter()
             .map(|qk| {
-                (self.identified.fk_unchecked(qk).translation.vector
+                let reached = harmonics::deviated(&self.harmonics, qk);
+                (self.identified.fk_unchecked(&reached).translation.vector
                     - self.nominal.fk_unchecked(qk).translation.vector)
                     .into()
             })
@@ -401,16 +506,30 @@ impl Calibration {
     /// less than the noise; far from them they may not, and the variance
     /// says so. `J` is taken at the nominal parameters, as the directions
     /// were. 2(5n + 9) forward kinematics per pose.
+    ///
+    /// Joint harmonics add `h_a(q)ᵀ C h_a(q)`, `h_a` the displacements of
+    /// their unit coefficients and `C` the coefficients' least-squares
+    /// covariance.
     pub fn predict_variance(&self, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         let along = self.displacements_at(q, &self.uncertainty)?;
+        let harmonic = self.harmonic_columns_at(q)?;
+        let w = 2 * self.harmonics.len();
+        let cov = &self.harmonic_covariance;
         Ok(along
             .iter()
-            .map(|d| {
+            .zip(&harmonic)
+            .map(|(d, h)| {
                 std::array::from_fn(|a| {
-                    d[a].iter()
+                    let geometric: f64 = d[a]
+                        .iter()
                         .zip(&self.uncertainty)
                         .map(|(x, (_, var))| var * x * x)
-                        .sum()
+                        .sum();
+                    let periodic: f64 = (0..w)
+                        .flat_map(|i| (0..w).map(move |j| (i, j)))
+                        .map(|(i, j)| h[a][i] * cov[i * w + j] * h[a][j])
+                        .sum();
+                    geometric + periodic
                 })
             })
             .collect())
@@ -505,6 +624,17 @@ impl Calibration {
                 "the calibration's uncertainty directions are inconsistent".into(),
             ));
         }
+        for h in &self.harmonics {
+            h.validate(n).map_err(bad)?;
+        }
+        let w = 2 * self.harmonics.len();
+        if self.harmonic_covariance.len() != w * w
+            || self.harmonic_covariance.iter().any(|v| !v.is_finite())
+        {
+            return Err(bad(
+                "the covariance of the calibration's joint harmonics is inconsistent".into(),
+            ));
+        }
         if self.parameters.iter().any(|v| !v.is_finite()) {
             return Err(bad(
                 "the calibration has a parameter that is not finite".into()
@@ -523,9 +653,24 @@ impl Calibration {
         Ok(())
     }
 
-    /// One line: "27 of 39 directions seen (noise 0.21 mm, cond 41, O1 …)".
+    /// One line: "27 of 39 directions seen (noise 0.21 mm, cond 41, O1 …)",
+    /// and the joint harmonics, if any.
     pub fn summary_line(&self) -> String {
         let id = &self.identifiability;
+        let harmonics = if self.harmonics.is_empty() {
+            String::new()
+        } else {
+            let per_joint: Vec<String> = (1..=self.nominal.dof())
+                .map(|j| (j, self.harmonics.iter().filter(|h| h.joint == j).count()))
+                .filter(|(_, k)| *k > 0)
+                .map(|(j, k)| format!("q{j} {k}"))
+                .collect();
+            format!(
+                "; {} joint harmonics ({})",
+                self.harmonics.len(),
+                per_joint.join(", ")
+            )
+        };
         format!(
             "{} of {} directions seen above the residual noise {:.3} mm (condition number {:.3e}, O1 {:.3e}, O3 {:.3e}); RMS per coordinate {:.4} → {:.4} mm on {} poses",
             id.directions_seen,
@@ -537,7 +682,7 @@ impl Calibration {
             self.rms_before_mm,
             self.rms_after_mm,
             self.rows
-        )
+        ) + &harmonics
     }
 }
 
@@ -547,7 +692,20 @@ mod tests {
     use crate::kinematics::load_robot;
 
     fn campaign(robot: &Robot, truth: &Robot, m: usize, noise: f64) -> Dataset {
-        let mut rng = crate::stats::rng_for(5, "calibration test");
+        campaign_with(robot, truth, &[], m, noise, 5)
+    }
+
+    /// `m` random poses of `robot` measured on `truth` whose joints also
+    /// have the periodic errors `harmonics`, with noise `noise` mm.
+    fn campaign_with(
+        robot: &Robot,
+        truth: &Robot,
+        harmonics: &[JointHarmonic],
+        m: usize,
+        noise: f64,
+        seed: u64,
+    ) -> Dataset {
+        let mut rng = crate::stats::rng_for(seed, "calibration test");
         let ranges = robot.work_ranges.clone();
         let q: Vec<Vec<f64>> = (0..m)
             .map(|_| {
@@ -562,7 +720,8 @@ mod tests {
             data.q
                 .iter()
                 .map(|q| {
-                    let d = truth.fk_unchecked(q).translation.vector
+                    let reached = harmonics::deviated(harmonics, q);
+                    let d = truth.fk_unchecked(&reached).translation.vector
                         - robot.fk_unchecked(q).translation.vector;
                     std::array::from_fn(|a| {
                         d[a] + noise
@@ -617,6 +776,101 @@ mod tests {
         )
         .unwrap();
         assert!(noisy.identifiability().directions_seen < id.directions_seen);
+    }
+
+    /// Geometric errors of the tests' truth: a1, d2, α3.
+    fn geometric_truth(robot: &Robot) -> Robot {
+        let mut p = vec![0.0; crate::kinematics::calib_len(robot.dof())];
+        p[2] = 0.4;
+        p[5 + 1] = -0.3;
+        p[5 * 2 + 3] = 0.02;
+        apply_errors(robot, &p)
+    }
+
+    #[test]
+    fn finds_a_planted_joint_harmonic_and_nothing_on_a_campaign_without_one() {
+        use rand::RngExt;
+        let robot = load_robot("comau-nj220").unwrap();
+        let truth = geometric_truth(&robot);
+        for seed in 1..=3u64 {
+            let mut rng = crate::stats::rng_for(seed, "planted joint harmonic");
+            let (s, c) = (rng.random::<f64>() * std::f64::consts::TAU).sin_cos();
+            let amp = 0.004 + 0.016 * rng.random::<f64>();
+            // 3 to 12 cycles over the joint's work range: a harmonic, not
+            // a smooth curve the geometric model and Kriging take up
+            let joint = 1 + rng.random_range(0..3usize);
+            let (lo, hi) = robot.work_ranges[joint - 1];
+            let planted = JointHarmonic {
+                joint,
+                period_deg: (hi - lo) / (3.0 + 9.0 * rng.random::<f64>()),
+                sin_deg: amp * s,
+                cos_deg: amp * c,
+                evidence: 0.0,
+                tcp_rms_mm: 0.0,
+            };
+            let data = campaign_with(&robot, &truth, &[planted.clone()], 300, 0.01, seed);
+            let cal = calibrate(&data, &robot, &CalibrationOptions::default()).unwrap();
+            let found = cal.harmonics();
+            assert_eq!(
+                found.len(),
+                1,
+                "seed {seed}: {found:?}, planted {planted:?}"
+            );
+            let h = &found[0];
+            assert_eq!(h.joint, planted.joint, "seed {seed}");
+            assert!(
+                (h.period_deg / planted.period_deg - 1.0).abs() < 0.01,
+                "seed {seed}: {} against {}",
+                h.period_deg,
+                planted.period_deg
+            );
+            assert!(
+                (h.amplitude_deg() / amp - 1.0).abs() < 0.15,
+                "seed {seed}: {} against {amp}",
+                h.amplitude_deg()
+            );
+            // what is left is the noise, and the geometric calibration alone
+            // leaves more
+            assert!(
+                cal.rms_mm().1 < 0.0115,
+                "seed {seed}: {}",
+                cal.summary_line()
+            );
+            let geometric = calibrate(&data, &robot, &CalibrationOptions::geometric()).unwrap();
+            assert!(geometric.harmonics().is_empty());
+            assert!(geometric.rms_mm().1 > 1.2 * cal.rms_mm().1);
+            // the harmonics' columns join the directions a diagnosis refits,
+            // and their coefficients' uncertainty the prediction's variance
+            let seen = cal.identifiability().directions_seen;
+            assert_eq!(cal.seen_displacements(&data.q).unwrap()[0].len(), seen + 2);
+            let with = cal.predict_variance(&data.q[..20]).unwrap();
+            let mut without = cal.clone();
+            without.harmonic_covariance = vec![0.0; 4];
+            let base = without.predict_variance(&data.q[..20]).unwrap();
+            assert!(with.iter().zip(&base).all(|(a, b)| a[0] >= b[0]));
+            assert!(with.iter().zip(&base).any(|(a, b)| a[0] > b[0]));
+            // a file round-trips; one written before joint harmonics existed
+            // reads as a geometric calibration
+            let text = serde_json::to_string(&cal).unwrap();
+            let back: Calibration = serde_json::from_str(&text).unwrap();
+            assert_eq!(
+                back.predict(&data.q[..5]).unwrap(),
+                cal.predict(&data.q[..5]).unwrap()
+            );
+            let old = serde_json::to_string(&geometric).unwrap();
+            assert!(!old.contains("harmonic"), "{old}");
+            let back: Calibration = serde_json::from_str(&old).unwrap();
+            assert!(!back.options().joint_harmonics);
+        }
+        for seed in 11..=15u64 {
+            let data = campaign_with(&robot, &truth, &[], 300, 0.01, seed);
+            let cal = calibrate(&data, &robot, &CalibrationOptions::default()).unwrap();
+            assert!(
+                cal.harmonics().is_empty(),
+                "seed {seed}: {}",
+                cal.summary_line()
+            );
+        }
     }
 
     #[test]

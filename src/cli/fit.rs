@@ -84,8 +84,9 @@ pub struct ModelArgs {
     kinematic: bool,
     /// With --robot: Kriging of the raw error. By default a robot is
     /// calibrated first (MD-H, tool and base errors by Levenberg–Marquardt
-    /// on the directions the campaign sees) and Kriging fits what the
-    /// calibration leaves; the model file holds both.
+    /// on the directions the campaign sees, then the joints' periodic
+    /// errors) and Kriging fits what the calibration leaves; the model file
+    /// holds both.
     #[arg(long, requires = "robot")]
     no_calibrate: bool,
     /// Residual noise per coordinate (mm) that decides which calibration
@@ -97,6 +98,10 @@ pub struct ModelArgs {
         conflicts_with = "no_calibrate"
     )]
     calibration_noise: Option<f64>,
+    /// Calibrate the MD-H, tool and base errors only: no periodic (gear)
+    /// errors of the joints.
+    #[arg(long, requires = "robot", conflicts_with = "no_calibrate")]
+    geometric: bool,
 }
 
 impl ModelArgs {
@@ -119,6 +124,7 @@ impl ModelArgs {
             .kinematic(self.kinematic)
             .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
                 noise_mm: self.calibration_noise,
+                joint_harmonics: !self.geometric,
                 ..CalibrationOptions::default()
             }))
             .with(self.space, Overrides::space)

@@ -80,6 +80,7 @@ fn calibrated(a: CalibratedArgs) -> Result<()> {
     let report = cal.identifiability();
     super::json_to(a.json.as_deref(), report, "identifiability report")?;
     say!("{}: {}", robot.name, cal.summary_line());
+    super::warn(robokrige::report::fit::not_in_robot_file(&cal));
     say!("calibrated robot file -> {}", a.output.display());
     Ok(())
 }

@@ -297,6 +297,13 @@ impl ErrorModel {
         self.calibration.as_deref()
     }
 
+    /// The options a refit identifies its calibration with: the model's
+    /// own, or the defaults for a model without a calibration.
+    pub fn calibration_options(&self) -> crate::calibration::CalibrationOptions {
+        self.calibration()
+            .map_or_else(Default::default, |c| c.options().clone())
+    }
+
     /// The file version this model is written as: 4 with a calibration, 3
     /// without.
     fn file_version(&self) -> u32 {

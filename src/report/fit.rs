@@ -10,7 +10,7 @@ use std::path::Path;
 /// The JSON of `fit --json`: the files (`data`, `output`), the rows, the
 /// settings ([`ErrorModelParams::settings`]), the method if one was named,
 /// the robot, the wall time `secs`, each output's fit report, the trend
-/// selection and the calibration's identifiability.
+/// selection, the calibration's identifiability and its joint harmonics.
 pub fn json(
     (data, output): (&Path, &Path),
     model: &ErrorModel,
@@ -20,7 +20,8 @@ pub fn json(
     serde_json::json!({"data": data, "model": output, "rows": rows,
         "settings": super::settings(params), "method": method, "robot": model.robot(),
         "seconds": secs, "outputs": model.reports(), "selection": model.selection(),
-        "calibration": model.calibration().map(|c| c.identifiability())})
+        "calibration": model.calibration().map(|c| c.identifiability()),
+        "joint_harmonics": model.calibration().map(|c| c.harmonics())})
 }
 
 /// The progress line of a GA trend selection: output `axis`, its
@@ -100,6 +101,9 @@ pub fn summary(model: &ErrorModel, rows: usize, secs: f64, output: &Path) -> Str
 /// parameters it left at nominal.
 pub fn calibration(c: &Calibration) -> String {
     let mut s = format!("  calibration: {}\n", c.summary_line());
+    for line in joint_harmonics(c) {
+        let _ = writeln!(s, "  {line}");
+    }
     let fixed = c.identifiability().fixed_names();
     if !fixed.is_empty() {
         let _ = writeln!(
@@ -109,6 +113,45 @@ pub fn calibration(c: &Calibration) -> String {
         );
     }
     s
+}
+
+/// One line per joint with harmonics: how many, their periods, and the
+/// largest at the joint and at the TCP.
+pub fn joint_harmonics(c: &Calibration) -> Vec<String> {
+    let h = c.harmonics();
+    let mut joints: Vec<usize> = h.iter().map(|h| h.joint).collect();
+    joints.sort_unstable();
+    joints.dedup();
+    joints
+        .into_iter()
+        .map(|j| {
+            let of: Vec<_> = h.iter().filter(|h| h.joint == j).collect();
+            let (lo, hi) = of.iter().fold((f64::INFINITY, 0.0f64), |(a, b), h| {
+                (a.min(h.period_deg), b.max(h.period_deg))
+            });
+            let big = of
+                .iter()
+                .max_by(|a, b| a.tcp_rms_mm.total_cmp(&b.tcp_rms_mm))
+                .expect("a joint listed has a harmonic");
+            format!(
+                "q{j}: {} harmonic(s), periods {lo:.2}–{hi:.2}°; the largest at the TCP {:.4} mm RMS ({:.4}° at the joint, period {:.2}°)",
+                of.len(),
+                big.tcp_rms_mm,
+                big.amplitude_deg(),
+                big.period_deg
+            )
+        })
+        .collect()
+}
+
+/// What a robot file of the calibration leaves out (`robot calibrated`).
+pub fn not_in_robot_file(c: &Calibration) -> Option<String> {
+    let n = c.harmonics().len();
+    (n > 0).then(|| {
+        format!(
+            "the robot file holds the MD-H, tool and base errors; the {n} joint harmonics stay in the model file (a controller that compensates with the model gets them, one that loads this table does not)"
+        )
+    })
 }
 
 /// One line per output of what PCC+PCA or the GA selected.

@@ -53,7 +53,9 @@ impl DiagnosisBase {
                 "calibrating before the diagnosis needs the robot (--robot)".into(),
             )
         })?;
-        let cal = crate::calibration::calibrate(&data, robot, &CalibrationOptions::default())?;
+        // geometric: the joint harmonics stay candidates of the diagnosis,
+        // found with their evidence and intervals
+        let cal = crate::calibration::calibrate(&data, robot, &CalibrationOptions::geometric())?;
         let data = cal.residual(&data)?;
         Ok(DiagnosisBase {
             calibration: Some(cal),

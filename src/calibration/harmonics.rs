@@ -1,0 +1,518 @@
+//! Periodic joint errors: the transmission error of a joint's gears.
+//!
+//! A gear train does not turn its output by exactly the commanded angle: the
+//! eccentricities and tooth errors of its stages add periodic terms in the
+//! joint angle. Joint `j` then reaches
+//!
+//! ```text
+//! q_j + δq_j(q_j),    δq_j(q) = Σ_h s_h sin(2π q / P_h) + c_h cos(2π q / P_h)   (degrees),
+//! ```
+//!
+//! and, to first order, the TCP moves by `∂P/∂q_j(q) · δq_j(q_j)`: a
+//! harmonic of the joint seen through the Jacobian, whose amplitude at the
+//! TCP changes over the workspace with the lever arm. One deviation of the
+//! joint moves all three axes, so `s_h, c_h` are shared by x, y and z.
+//!
+//! # Which periods: a forward search tied to the noise
+//!
+//! On the residual `r` (3m, stacked x, y, z per pose) of the geometric
+//! calibration, each candidate period `P` of joint `j` gives two columns
+//! `h_s = J_j(q) sin(2πq_j/P)` and `h_c = J_j(q) cos(2πq_j/P)`. With `H̃`
+//! these columns made orthogonal to the geometric directions the campaign
+//! sees and to the harmonics already added (Frisch–Waugh), adding the pair
+//! lowers the residual sum of squares by
+//!
+//! ```text
+//! Δ = bᵀ A⁻¹ b,    A = H̃ᵀH̃,  b = H̃ᵀ r.
+//! ```
+//!
+//! Without a harmonic at `P` and with residual noise of variance `s²` per
+//! coordinate, `Δ / s²` is χ² with 2 degrees of freedom, `P(χ²₂ > x) =
+//! e^{−x/2}`. Over the `N` periods scanned, the largest exceeds
+//!
+//! ```text
+//! Δ / s² > 2 ln(N / α)
+//! ```
+//!
+//! with probability at most `α` (Bonferroni): a harmonic is added only
+//! then, with `α =` [`FALSE_ALARM`]. The search repeats on the new residual
+//! until nothing passes (at most [`MAX_PER_JOINT`] per joint, a bound on
+//! the time: the periods of a joint are a Fourier series of its angular
+//! deviation, as the lookup tables of the physics models). The noise
+//! `s` is the residual's own (everything the geometric model leaves); on
+//! a campaign of random poses the smooth part of it is uncorrelated with a
+//! short-period harmonic and acts as noise, so the test is conservative.
+//!
+//! The periods scanned are those of the diagnosis' harmonic candidates
+//! ([`scan_periods`]): from half the joint's range down to [`MIN_PERIOD`],
+//! a tenth of a cycle over the range apart, and no shorter than four
+//! spacings of the campaign's distinct joint values (a period must be
+//! sampled to be seen). The best period of each joint is then refined ten
+//! times finer ([`zoom_periods`]).
+
+use crate::kinematics::{JointKind, Robot};
+use crate::{Error, Result};
+use nalgebra::{DMatrix, DVector, Matrix3xX};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Cycles over a joint's range between two scanned periods.
+pub(crate) const CYCLE_STEP: f64 = 0.1;
+
+/// Steps of a zoom per [`CYCLE_STEP`].
+pub(crate) const ZOOM_STEPS: usize = 10;
+
+/// The shortest period scanned (degrees).
+pub(crate) const MIN_PERIOD: f64 = 2.0;
+
+/// Most periods scanned per joint.
+const MAX_PERIODS: usize = 480;
+
+/// Chance that noise alone adds a harmonic in one round of the search.
+pub const FALSE_ALARM: f64 = 0.01;
+
+/// Most harmonics added per joint (a bound on the search's time).
+pub const MAX_PER_JOINT: usize = 16;
+
+/// One periodic error of a joint: it reaches `q + s·sin(2πq/P) + c·cos(2πq/P)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointHarmonic {
+    /// 1-based joint.
+    pub joint: usize,
+    /// Period P in the joint's value, degrees.
+    pub period_deg: f64,
+    /// Coefficient `s` of the sine, degrees.
+    pub sin_deg: f64,
+    /// Coefficient `c` of the cosine, degrees.
+    pub cos_deg: f64,
+    /// `Δ / s²` when it was added: χ²₂ if there were no harmonic.
+    pub evidence: f64,
+    /// RMS over the campaign's poses of the TCP displacement it causes
+    /// (3D, mm): what it matters at the tool, whatever the joint's lever.
+    #[serde(default)]
+    pub tcp_rms_mm: f64,
+}
+
+impl JointHarmonic {
+    /// The joint's deviation at value `q`, degrees.
+    pub fn deviation(&self, q: f64) -> f64 {
+        let (s, c) = self.unit_terms(q);
+        self.sin_deg * s + self.cos_deg * c
+    }
+
+    /// `(sin, cos)` of the harmonic's phase at joint value `q`: the
+    /// deviation per unit coefficient.
+    pub fn unit_terms(&self, q: f64) -> (f64, f64) {
+        self.phase(q).sin_cos()
+    }
+
+    /// Amplitude `√(s² + c²)`, degrees.
+    pub fn amplitude_deg(&self) -> f64 {
+        self.sin_deg.hypot(self.cos_deg)
+    }
+
+    fn phase(&self, q: f64) -> f64 {
+        std::f64::consts::TAU * q / self.period_deg
+    }
+
+    /// Error unless the joint exists, the period is positive and the
+    /// coefficients are finite.
+    pub(crate) fn validate(&self, dof: usize) -> std::result::Result<(), String> {
+        if self.joint == 0 || self.joint > dof {
+            return Err(format!(
+                "a joint harmonic of joint {} on a {dof}-joint robot",
+                self.joint
+            ));
+        }
+        let finite = [self.sin_deg, self.cos_deg, self.evidence, self.tcp_rms_mm]
+            .iter()
+            .all(|v| v.is_finite());
+        if !(self.period_deg.is_finite() && self.period_deg > 0.0 && finite) {
+            return Err(format!(
+                "a joint harmonic of q{} is not finite or has no positive period",
+                self.joint
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The joint values `q` with every harmonic's deviation added.
+pub fn deviated(harmonics: &[JointHarmonic], q: &[f64]) -> Vec<f64> {
+    let mut out = q.to_vec();
+    for h in harmonics {
+        out[h.joint - 1] += h.deviation(q[h.joint - 1]);
+    }
+    out
+}
+
+/// The periods a harmonic of a joint with range `range` (degrees) is
+/// scanned at: from half the range down to `shortest` (at least
+/// [`MIN_PERIOD`]), [`CYCLE_STEP`] of a cycle over the range apart, at most
+/// 480.
+pub fn scan_periods(range: f64, shortest: f64) -> Vec<f64> {
+    let shortest = shortest.max(MIN_PERIOD);
+    let mut periods = Vec::new();
+    let mut cycles = 2.0;
+    while range / cycles >= shortest && periods.len() < MAX_PERIODS {
+        periods.push(range / cycles);
+        cycles += CYCLE_STEP;
+    }
+    periods
+}
+
+/// The periods within one scanned step of `period` on a joint of range
+/// `range`, a tenth of a step apart (both sides, nearest first), inside
+/// the scanned span.
+pub fn zoom_periods(range: f64, period: f64) -> Vec<f64> {
+    zoom_at(range, period, CYCLE_STEP / ZOOM_STEPS as f64)
+}
+
+/// The periods `1..=ZOOM_STEPS` steps of `step` cycles over the range
+/// either side of `period`, inside the scanned span.
+fn zoom_at(range: f64, period: f64, step: f64) -> Vec<f64> {
+    let cycles = range / period;
+    (1..=ZOOM_STEPS)
+        .flat_map(|k| [-(k as f64), k as f64])
+        .map(|k| range / (cycles + k * step))
+        .filter(|p| p.is_finite() && *p >= MIN_PERIOD && *p <= range / 2.0)
+        .collect()
+}
+
+/// What [`search`] found.
+#[derive(Debug, Clone)]
+pub(crate) struct HarmonicFit {
+    /// The harmonics added, with their coefficients.
+    pub harmonics: Vec<JointHarmonic>,
+    /// Covariance of the coefficients `(s_1, c_1, s_2, …)`, degrees²,
+    /// row-major `2h × 2h`.
+    pub covariance: Vec<f64>,
+    /// TCP displacement of the harmonics at each pose (first order), mm.
+    pub shift: Vec<[f64; 3]>,
+}
+
+/// Per-pose position Jacobians per degree (per mm) of each joint value, at
+/// `robot`'s parameters.
+pub(crate) fn jacobians(robot: &Robot, joints: &[Vec<f64>]) -> Result<Vec<Matrix3xX<f64>>> {
+    joints
+        .par_iter()
+        .map(|q| {
+            let mut j = robot.position_jacobian(q)?;
+            for i in 0..robot.dof() {
+                j.column_mut(i).scale_mut(robot.unit_scale(i));
+            }
+            Ok(j)
+        })
+        .collect()
+}
+
+/// The two stacked columns (3m each) of joint `j` (0-based) at `period`.
+fn columns(
+    jac: &[Matrix3xX<f64>],
+    joints: &[Vec<f64>],
+    j: usize,
+    period: f64,
+) -> [DVector<f64>; 2] {
+    let w = std::f64::consts::TAU / period;
+    let m = joints.len();
+    let mut s = DVector::zeros(3 * m);
+    let mut c = DVector::zeros(3 * m);
+    for (k, (q, jq)) in joints.iter().zip(jac).enumerate() {
+        let (sn, cs) = (w * q[j]).sin_cos();
+        for a in 0..3 {
+            s[3 * k + a] = jq[(a, j)] * sn;
+            c[3 * k + a] = jq[(a, j)] * cs;
+        }
+    }
+    [s, c]
+}
+
+/// `Δ = bᵀA⁻¹b` of a 2×2 `A` (0 if `A` is not positive definite).
+fn drop_2x2(a: [f64; 3], b: [f64; 2]) -> f64 {
+    let [ass, asc, acc] = a;
+    let det = ass * acc - asc * asc;
+    if !(det > 1e-12 * (ass * acc).max(f64::MIN_POSITIVE)) {
+        return 0.0;
+    }
+    (acc * b[0] * b[0] - 2.0 * asc * b[0] * b[1] + ass * b[1] * b[1]) / det
+}
+
+/// Per pose of joint `j`: `‖J_j‖²` and `J_j·r_k` (the scan's sums need nothing else).
+fn per_pose(jac: &[Matrix3xX<f64>], r: &DVector<f64>, j: usize) -> Vec<(f64, f64)> {
+    jac.iter()
+        .enumerate()
+        .map(|(k, jq)| {
+            let col = jq.column(j);
+            let rk = r.fixed_rows::<3>(3 * k);
+            (col.norm_squared(), col.dot(&rk))
+        })
+        .collect()
+}
+
+/// Unprojected `Δ` of joint `j` at `period` (an upper bound of `A` and so
+/// a slight underestimate of the drop: the scan's ranking).
+fn scan_drop(joints: &[Vec<f64>], pp: &[(f64, f64)], j: usize, period: f64) -> f64 {
+    let w = std::f64::consts::TAU / period;
+    let (mut a, mut b) = ([0.0; 3], [0.0; 2]);
+    for (q, (n2, jr)) in joints.iter().zip(pp) {
+        let (s, c) = (w * q[j]).sin_cos();
+        a[0] += s * s * n2;
+        a[1] += s * c * n2;
+        a[2] += c * c * n2;
+        b[0] += s * jr;
+        b[1] += c * jr;
+    }
+    drop_2x2(a, b)
+}
+
+/// The range of joint `j` over `joints` and the shortest period its
+/// sampling resolves (four spacings of its distinct values, 0.01° apart).
+fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64) {
+    let mut v: Vec<i64> = joints
+        .iter()
+        .map(|q| (q[j] * 100.0).round() as i64)
+        .collect();
+    v.sort_unstable();
+    v.dedup();
+    let range = v
+        .last()
+        .zip(v.first())
+        .map_or(0.0, |(hi, lo)| (hi - lo) as f64 / 100.0);
+    (range, 4.0 * range / v.len().max(1) as f64)
+}
+
+/// Zoom levels after the scan, each ten times finer: the last resolves
+/// 10⁻⁴ of a cycle over the range, so that a harmonic's period is not off
+/// by enough to leave a sideband of it above the noise.
+const ZOOM_LEVELS: i32 = 3;
+
+/// The best period of joint `j` on the residual: scanned, then zoomed
+/// [`ZOOM_LEVELS`] times around the best so far.
+fn best_period(
+    joints: &[Vec<f64>],
+    pp: &[(f64, f64)],
+    j: usize,
+    periods: &[f64],
+    range: f64,
+) -> Option<f64> {
+    let best = |ps: &[f64]| {
+        ps.par_iter()
+            .map(|&p| (p, scan_drop(joints, pp, j, p)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    };
+    let mut top = best(periods)?;
+    for level in 1..=ZOOM_LEVELS {
+        let step = CYCLE_STEP / (ZOOM_STEPS as f64).powi(level);
+        if let Some(z) = best(&zoom_at(range, top.0, step))
+            && z.1 > top.1
+        {
+            top = z;
+        }
+    }
+    Some(top.0)
+}
+
+/// An orthonormal basis grown one column at a time (twice-run
+/// Gram–Schmidt), and the residual of `r_geo` projected off it.
+struct Basis {
+    q: Vec<DVector<f64>>,
+    r: DVector<f64>,
+}
+
+impl Basis {
+    /// The columns of `seen`, with `r` already off their span (the
+    /// geometric fit's residual).
+    fn new(seen: &DMatrix<f64>, r: &DVector<f64>) -> Self {
+        let mut b = Basis {
+            q: Vec::new(),
+            r: r.clone(),
+        };
+        for c in seen.column_iter() {
+            b.push(&c.into_owned());
+        }
+        b
+    }
+
+    /// `v` with its part in the span removed.
+    fn project_out(&self, v: &DVector<f64>) -> DVector<f64> {
+        let mut v = v.clone();
+        for _ in 0..2 {
+            for q in &self.q {
+                let d = q.dot(&v);
+                v.axpy(-d, q, 1.0);
+            }
+        }
+        v
+    }
+
+    /// Add `v`'s new direction (if it has one), and take it off the residual.
+    fn push(&mut self, v: &DVector<f64>) {
+        let w = self.project_out(v);
+        let n = w.norm();
+        if n > 1e-10 * v.norm() {
+            let w = w / n;
+            let d = w.dot(&self.r);
+            self.r.axpy(-d, &w, 1.0);
+            self.q.push(w);
+        }
+    }
+
+    /// Residual variance per coordinate.
+    fn noise(&self) -> f64 {
+        let left = self.r.len().saturating_sub(self.q.len()).max(1);
+        self.r.norm_squared() / left as f64
+    }
+}
+
+/// `Δ / s²` of the columns of joint `j` at `period` beside `basis`.
+fn evidence(basis: &Basis, jac: &[Matrix3xX<f64>], joints: &[Vec<f64>], j: usize, p: f64) -> f64 {
+    let [hs, hc] = columns(jac, joints, j, p).map(|h| basis.project_out(&h));
+    let a = [hs.dot(&hs), hs.dot(&hc), hc.dot(&hc)];
+    drop_2x2(a, [hs.dot(&basis.r), hc.dot(&basis.r)]) / basis.noise()
+}
+
+/// Forward search for joint harmonics on the residual `r_geo` (3m) of a
+/// geometric calibration whose seen directions move the TCP by the
+/// columns of `seen` (3m × k): see the module documentation. Each round
+/// takes every joint's best period, strongest first, and adds those that
+/// still pass beside the ones added before them. `jac` are the per-pose
+/// Jacobians per degree ([`jacobians`]).
+pub(crate) fn search(
+    robot: &Robot,
+    joints: &[Vec<f64>],
+    jac: &[Matrix3xX<f64>],
+    r_geo: &DVector<f64>,
+    seen: &DMatrix<f64>,
+) -> Result<HarmonicFit> {
+    let m = joints.len();
+    let grids: Vec<(usize, f64, Vec<f64>)> = (0..robot.dof())
+        .filter(|&j| robot.links[j].kind == JointKind::Revolute)
+        .map(|j| {
+            let (range, shortest) = sampling(joints, j);
+            (j, range, scan_periods(range, shortest))
+        })
+        .filter(|(_, _, p)| !p.is_empty())
+        .collect();
+    let scanned: usize = grids.iter().map(|(_, _, p)| p.len()).sum();
+    let threshold = 2.0 * (scanned.max(1) as f64 / FALSE_ALARM).ln();
+    let mut chosen: Vec<(usize, f64, f64)> = Vec::new(); // joint, period, evidence
+    let mut basis = Basis::new(seen, r_geo);
+    loop {
+        let mut round: Vec<(usize, f64, f64)> = grids
+            .par_iter()
+            .filter(|(j, _, _)| chosen.iter().filter(|c| c.0 == *j).count() < MAX_PER_JOINT)
+            .filter_map(|(j, range, periods)| {
+                let pp = per_pose(jac, &basis.r, *j);
+                let p = best_period(joints, &pp, *j, periods, *range)?;
+                Some((*j, p, evidence(&basis, jac, joints, *j, p)))
+            })
+            .collect();
+        round.sort_by(|a, b| b.2.total_cmp(&a.2));
+        let before = chosen.len();
+        for (i, &(j, p, first)) in round.iter().enumerate() {
+            // the strongest as scanned; the others beside those just added
+            let e = if i == 0 {
+                first
+            } else {
+                evidence(&basis, jac, joints, j, p)
+            };
+            if e > threshold {
+                chosen.push((j, p, e));
+                for h in columns(jac, joints, j, p) {
+                    basis.push(&h);
+                }
+            }
+        }
+        if chosen.len() == before {
+            break;
+        }
+    }
+    if chosen.is_empty() {
+        return Ok(HarmonicFit {
+            harmonics: Vec::new(),
+            covariance: Vec::new(),
+            shift: vec![[0.0; 3]; m],
+        });
+    }
+    let raw: Vec<DVector<f64>> = chosen
+        .iter()
+        .flat_map(|&(j, p, _)| columns(jac, joints, j, p))
+        .collect();
+    let g = Basis::new(seen, r_geo);
+    let (beta, inv_gram) = solve(&g, &raw, r_geo)?;
+    let s2 = basis.noise();
+    let harmonics = chosen
+        .iter()
+        .enumerate()
+        .map(|(i, &(j, p, evidence))| {
+            let tcp = &raw[2 * i] * beta[2 * i] + &raw[2 * i + 1] * beta[2 * i + 1];
+            JointHarmonic {
+                joint: j + 1,
+                period_deg: p,
+                sin_deg: beta[2 * i],
+                cos_deg: beta[2 * i + 1],
+                evidence,
+                tcp_rms_mm: tcp.norm() / (m as f64).sqrt(),
+            }
+        })
+        .collect();
+    let mut shift = vec![[0.0; 3]; m];
+    for (h, b) in raw.iter().zip(beta.iter()) {
+        for (k, s) in shift.iter_mut().enumerate() {
+            for a in 0..3 {
+                s[a] += h[3 * k + a] * b;
+            }
+        }
+    }
+    Ok(HarmonicFit {
+        harmonics,
+        covariance: (inv_gram * s2).transpose().as_slice().to_vec(),
+        shift,
+    })
+}
+
+/// Least squares of `r_geo` on the columns `raw` made orthogonal to the
+/// geometric directions `g` (Frisch–Waugh: the harmonics' coefficients
+/// of the joint fit): the coefficients and `(H̃ᵀH̃)⁻¹`, their covariance
+/// per unit noise variance.
+fn solve(
+    g: &Basis,
+    raw: &[DVector<f64>],
+    r_geo: &DVector<f64>,
+) -> Result<(DVector<f64>, DMatrix<f64>)> {
+    let cols: Vec<DVector<f64>> = raw.iter().map(|h| g.project_out(h)).collect();
+    let h = DMatrix::from_columns(&cols);
+    let chol = h.tr_mul(&h).cholesky().ok_or_else(|| {
+        Error::Numerical("the joint harmonics' columns are not independent".into())
+    })?;
+    let beta = chol.solve(&h.tr_mul(r_geo));
+    Ok((beta, chol.inverse()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn periods_span_half_the_range_down_to_the_sampling_limit() {
+        let p = scan_periods(360.0, 0.5);
+        assert_eq!(p[0], 180.0);
+        assert!(p.iter().all(|&x| x >= MIN_PERIOD));
+        assert!(p.len() <= MAX_PERIODS);
+        let coarse = scan_periods(360.0, 30.0);
+        assert!(coarse.iter().all(|&x| x >= 30.0) && coarse.len() < p.len());
+        let z = zoom_periods(360.0, 20.0);
+        assert_eq!(z.len(), 2 * ZOOM_STEPS);
+        assert!(
+            z.iter()
+                .all(|&x| (x - 20.0).abs() < 20.0 * 20.0 / 360.0 * CYCLE_STEP * 1.01)
+        );
+    }
+
+    #[test]
+    fn the_drop_of_a_pair_is_its_projection() {
+        // A = I: Δ = |b|²; singular A: nothing
+        assert!((drop_2x2([1.0, 0.0, 1.0], [3.0, 4.0]) - 25.0).abs() < 1e-12);
+        assert_eq!(drop_2x2([1.0, 1.0, 1.0], [1.0, 1.0]), 0.0);
+    }
+}
