@@ -57,13 +57,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Cycles over a joint's range between two scanned periods.
-pub(crate) const CYCLE_STEP: f64 = 0.1;
+pub const CYCLE_STEP: f64 = 0.1;
 
 /// Steps of a zoom per [`CYCLE_STEP`].
-pub(crate) const ZOOM_STEPS: usize = 10;
+pub const ZOOM_STEPS: usize = 10;
 
 /// The shortest period scanned (degrees).
-pub(crate) const MIN_PERIOD: f64 = 2.0;
+pub const MIN_PERIOD: f64 = 2.0;
 
 /// Most periods scanned per joint.
 const MAX_PERIODS: usize = 480;
@@ -231,7 +231,7 @@ fn columns(
 fn drop_2x2(a: [f64; 3], b: [f64; 2]) -> f64 {
     let [ass, asc, acc] = a;
     let det = ass * acc - asc * asc;
-    if !(det > 1e-12 * (ass * acc).max(f64::MIN_POSITIVE)) {
+    if det.is_nan() || det <= 1e-12 * (ass * acc).max(f64::MIN_POSITIVE) {
         return 0.0;
     }
     (acc * b[0] * b[0] - 2.0 * asc * b[0] * b[1] + ass * b[1] * b[1]) / det

@@ -808,7 +808,14 @@ mod tests {
                 evidence: 0.0,
                 tcp_rms_mm: 0.0,
             };
-            let data = campaign_with(&robot, &truth, &[planted.clone()], 300, 0.01, seed);
+            let data = campaign_with(
+                &robot,
+                &truth,
+                std::slice::from_ref(&planted),
+                300,
+                0.01,
+                seed,
+            );
             let cal = calibrate(&data, &robot, &CalibrationOptions::default()).unwrap();
             let found = cal.harmonics();
             assert_eq!(
