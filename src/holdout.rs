@@ -13,7 +13,7 @@
 //! options and periodic joints); each model then sets its own space, trend
 //! and calibration.
 
-use crate::calibration::{Calibration, CalibrationOptions, calibrate};
+use crate::calibration::{Calibration, CalibrationOptions, calibrate, calibrate_both};
 use crate::cv::Folds;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
@@ -262,12 +262,10 @@ fn fold_out(
     let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| fold[i] == f);
     let (tr, held) = (data.select(&train), data.select(&test));
     let t = Instant::now();
-    let dh = calibrate(&tr, robot, &CalibrationOptions::geometric())?;
-    let dh_secs = t.elapsed().as_secs_f64();
-    // the calibrated models' own calibration (the joint harmonics besides)
-    let t = Instant::now();
-    let cal = calibrate(&tr, robot, &calibrated[0].calibration_options())?;
-    let cal_secs = t.elapsed().as_secs_f64();
+    // the D-H row's geometric calibration and, from the same geometric
+    // fit, the calibrated models' own (the joint harmonics besides)
+    let (dh, cal) = calibrate_both(&tr, robot, &calibrated[0].calibration_options())?;
+    let (dh_secs, cal_secs) = (t.elapsed().as_secs_f64(), t.elapsed().as_secs_f64());
     let s = dh.identifiability().noise_mm;
     let dh_held = Held {
         mean: dh.predict(&held.q)?,
@@ -391,17 +389,14 @@ pub fn holdout_split(
     let mut rows = vec![score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0)];
     progress("D-H calibration");
     let t0 = Instant::now();
-    let dh = calibrate(train, robot, &CalibrationOptions::geometric())?;
-    let dh_secs = t0.elapsed().as_secs_f64();
+    let (dh, calibration) = calibrate_both(train, robot, &CalibrationOptions::default())?;
+    let (dh_secs, cal_secs) = (t0.elapsed().as_secs_f64(), t0.elapsed().as_secs_f64());
     rows.push(score(
         "D-H calibration (LM)",
         &truth,
         &dh.predict(&test.q)?,
         dh_secs,
     ));
-    let t0 = Instant::now();
-    let calibration = calibrate(train, robot, &CalibrationOptions::default())?;
-    let cal_secs = t0.elapsed().as_secs_f64();
     for space in [Space::Js, Space::Ejs] {
         let label = format!("{space:?}").to_uppercase();
         progress(&format!("calibrated model {label}"));

@@ -215,3 +215,49 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
     assert!(err.contains("no calibration"), "{err}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_the_table() {
+    let dir = std::env::temp_dir().join(format!("robokrige-harmonic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let data = ds("comau_harmonic.csv");
+    let fit = |out: &str, extra: &[&str]| {
+        let o = p(out);
+        let mut args = vec![
+            "fit",
+            &data,
+            "--robot",
+            "comau-nj220",
+            "--optimizer",
+            "hj",
+            "--corr",
+            "gaussian",
+            "-o",
+            &o,
+            "--json",
+            "-",
+        ];
+        args.extend_from_slice(extra);
+        let (c, out, err) = rk(&args);
+        assert_eq!(c, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v["joint_harmonics"].as_array().unwrap().clone()
+    };
+    // the 7.5° harmonic the campaign was simulated with, and nothing else
+    let found = fit("h.json", &[]);
+    assert_eq!(found.len(), 1, "{found:?}");
+    let period = found[0]["period_deg"].as_f64().unwrap();
+    assert!((period / 7.5 - 1.0).abs() < 0.02, "{period}");
+    assert!(fit("g.json", &["--geometric"]).is_empty());
+    let (c, out, err) = rk(&["robot", "calibrated", &p("h.json"), "-o", &p("h.toml")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(out.contains("1 joint harmonics"), "{out}");
+    assert!(
+        err.contains("joint harmonics stay in the model file"),
+        "{err}"
+    );
+    let (_, _, err) = rk(&["robot", "calibrated", &p("g.json"), "-o", &p("g.toml")]);
+    assert!(!err.contains("joint harmonics"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -315,3 +315,22 @@ def need_pandas_or_none():
     except ImportError:
         return None
     return pandas
+
+
+def test_the_calibration_finds_a_joint_harmonic_unless_told_geometric(datasets):
+    """comau_harmonic.csv has a 7.5° harmonic planted on a joint: the
+    default calibration adds it; joint_harmonics=False does not."""
+    import json
+
+    campaign = rk.read_campaign(datasets / "comau_harmonic.csv", as_frame=False)
+    q, d, e = arrays(campaign)
+    opts = dict(robot="comau-nj220", corr="gaussian", optimizer="hj")
+
+    def harmonics(m):
+        return json.loads(m.model_.to_json())["calibration"].get("harmonics", [])
+
+    found = harmonics(rk.ErrorModel(**opts).fit(q, d, e))
+    assert len(found) == 1 and abs(found[0]["period_deg"] / 7.5 - 1.0) < 0.02, found
+    assert harmonics(rk.ErrorModel(joint_harmonics=False, **opts).fit(q, d, e)) == []
+    with pytest.raises(rk.RobokrigeError, match="joint_harmonics must be True or False"):
+        rk.ErrorModel(joint_harmonics="yes", **opts).fit(q, d, e)

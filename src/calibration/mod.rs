@@ -145,6 +145,17 @@ pub fn calibrate(
     nominal: &Robot,
     opts: &CalibrationOptions,
 ) -> Result<Calibration> {
+    let targets = measured_targets(data, nominal, opts)?;
+    calibrate_joints(&data.q, &targets, nominal, opts)
+}
+
+/// The measured TCP positions of `data` (nominal position plus error),
+/// after the checks of [`calibrate`].
+fn measured_targets(
+    data: &Dataset,
+    nominal: &Robot,
+    opts: &CalibrationOptions,
+) -> Result<Vec<Vector3<f64>>> {
     opts.validate()?;
     nominal.check_dataset(data)?;
     let errors = data.errors_or_err()?;
@@ -157,13 +168,12 @@ pub fn calibrate(
             ),
         });
     }
-    let targets: Vec<Vector3<f64>> = data
+    Ok(data
         .q
         .iter()
         .zip(errors)
         .map(|(q, e)| nominal.fk_unchecked(q).translation.vector + Vector3::from(*e))
-        .collect();
-    calibrate_joints(&data.q, &targets, nominal, opts)
+        .collect())
 }
 
 /// [`calibrate`] on joint values `joints` (e.g. corrected by lookup tables)
@@ -174,86 +184,167 @@ pub fn calibrate_joints(
     nominal: &Robot,
     opts: &CalibrationOptions,
 ) -> Result<Calibration> {
-    opts.validate()?;
-    let m = joints.len();
-    let names = calib_names(nominal.dof());
-    let r0 = position_residual(nominal, joints, targets);
-    let rho0 = rms(&r0);
-    if !(rho0.is_finite() && rho0 > 0.0) {
-        return Err(Error::InvalidParameter(format!(
-            "the calibration needs measured errors that are finite and not all zero (RMS {rho0})"
-        )));
-    }
-    let jac = stacked_jacobian(nominal, joints);
-    let sj = ScaledJacobian::new(&jac, rho0);
-    let rank = sj.numerical_rank();
-    let first = fit_subspace(nominal, joints, targets, &sj, &vec![0.0; rank], opts)?;
-    let dof_left = (3 * m).saturating_sub(rank).max(1) as f64;
-    let s = opts
-        .noise_mm
-        .unwrap_or_else(|| first.r.norm() / dof_left.sqrt());
-    let k = sj.seen_above(s);
-    let mut fit = if k == rank {
-        first
-    } else {
-        // the directions are orthogonal in the scaled parameters, so the
-        // first fit's coordinates along the kept ones are where the truncated
-        // fit ends up to first order: start there
-        fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
-    };
-    let mut found = None;
+    let stage = Geometric::fit(joints, targets, nominal, opts)?;
     if opts.joint_harmonics {
-        let pjac = harmonics::jacobians(nominal, joints)?;
-        let seen = &jac * sj.basis(k);
-        let hf = harmonics::search(nominal, joints, &pjac, &fit.r, &seen)?;
-        if !hf.harmonics.is_empty() {
-            // the geometric directions refitted beside the harmonics: on
-            // the targets with the harmonics' TCP displacement removed
-            let shifted: Vec<Vector3<f64>> = targets
-                .iter()
-                .zip(&hf.shift)
-                .map(|(t, d)| t - Vector3::from(*d))
-                .collect();
-            let u0 = fit.u.clone();
-            fit = fit_subspace(nominal, joints, &shifted, &sj, &u0, opts)?;
-            let identified = apply_errors(nominal, &fit.p);
-            let moved: Vec<Vec<f64>> = joints
-                .iter()
-                .map(|q| harmonics::deviated(&hf.harmonics, q))
-                .collect();
-            fit.r = position_residual(&identified, &moved, targets);
-            found = Some(hf);
-        }
+        stage.with_harmonics()
+    } else {
+        stage.calibration(&stage.fit, None)
     }
-    let (harmonics, harmonic_covariance) =
-        found.map_or((Vec::new(), Vec::new()), |h| (h.harmonics, h.covariance));
-    let identifiability = sj.report(k, s, &fit.p, &names, m);
-    let basis = sj.basis(sj.sigma.len());
-    let uncertainty = sj
-        .posterior_variances(s)
-        .into_iter()
-        .enumerate()
-        .map(|(i, v)| (basis.column(i).iter().copied().collect(), v))
-        .collect();
-    let mut cal = Calibration {
-        uncertainty,
-        campaign_variance: [0.0; 3],
-        harmonics,
-        harmonic_covariance,
-        nominal: nominal.clone(),
-        identified: apply_errors(nominal, &fit.p),
-        parameters: fit.p,
-        identifiability,
-        options: opts.clone(),
-        rows: m,
-        rms_before_mm: rho0,
-        rms_after_mm: rms(&fit.r),
-        iterations: fit.iterations,
-        stop: fit.stop,
+}
+
+/// The geometric calibration and, from the same geometric fit, the one
+/// `opts` asks for (with the joint harmonics when
+/// [`CalibrationOptions::joint_harmonics`]): what a comparison of the two
+/// needs without fitting the geometry twice.
+pub fn calibrate_both(
+    data: &Dataset,
+    nominal: &Robot,
+    opts: &CalibrationOptions,
+) -> Result<(Calibration, Calibration)> {
+    let targets = measured_targets(data, nominal, opts)?;
+    let geometric_opts = CalibrationOptions {
+        joint_harmonics: false,
+        ..opts.clone()
     };
-    let var = cal.predict_variance(joints)?;
-    cal.campaign_variance = std::array::from_fn(|a| var.iter().map(|v| v[a]).fold(0.0, f64::max));
-    Ok(cal)
+    let stage = Geometric::fit(&data.q, &targets, nominal, &geometric_opts)?;
+    let geometric = stage.calibration(&stage.fit, None)?;
+    if !opts.joint_harmonics {
+        return Ok((geometric.clone(), geometric));
+    }
+    let mut full = stage.with_harmonics()?;
+    full.options = opts.clone();
+    Ok((geometric, full))
+}
+
+/// The geometric fit of a calibration, before its joint harmonics.
+struct Geometric<'a> {
+    joints: &'a [Vec<f64>],
+    targets: &'a [Vector3<f64>],
+    nominal: &'a Robot,
+    opts: &'a CalibrationOptions,
+    jac: DMatrix<f64>,
+    sj: ScaledJacobian,
+    k: usize,
+    s: f64,
+    rho0: f64,
+    fit: SubspaceFit,
+}
+
+impl<'a> Geometric<'a> {
+    /// Levenberg–Marquardt on every numerically identifiable direction,
+    /// then on those seen above the noise of that first fit.
+    fn fit(
+        joints: &'a [Vec<f64>],
+        targets: &'a [Vector3<f64>],
+        nominal: &'a Robot,
+        opts: &'a CalibrationOptions,
+    ) -> Result<Self> {
+        opts.validate()?;
+        let m = joints.len();
+        let r0 = position_residual(nominal, joints, targets);
+        let rho0 = rms(&r0);
+        if !(rho0.is_finite() && rho0 > 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "the calibration needs measured errors that are finite and not all zero (RMS {rho0})"
+            )));
+        }
+        let jac = stacked_jacobian(nominal, joints);
+        let sj = ScaledJacobian::new(&jac, rho0);
+        let rank = sj.numerical_rank();
+        let first = fit_subspace(nominal, joints, targets, &sj, &vec![0.0; rank], opts)?;
+        let dof_left = (3 * m).saturating_sub(rank).max(1) as f64;
+        let s = opts
+            .noise_mm
+            .unwrap_or_else(|| first.r.norm() / dof_left.sqrt());
+        let k = sj.seen_above(s);
+        let fit = if k == rank {
+            first
+        } else {
+            // the directions are orthogonal in the scaled parameters, so the
+            // first fit's coordinates along the kept ones are where the
+            // truncated fit ends up to first order: start there
+            fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
+        };
+        Ok(Geometric {
+            joints,
+            targets,
+            nominal,
+            opts,
+            jac,
+            sj,
+            k,
+            s,
+            rho0,
+            fit,
+        })
+    }
+
+    /// The joint harmonics searched on the geometric residual, the
+    /// geometric directions refitted beside them.
+    fn with_harmonics(&self) -> Result<Calibration> {
+        let (joints, targets, nominal) = (self.joints, self.targets, self.nominal);
+        let pjac = harmonics::jacobians(nominal, joints)?;
+        let seen = &self.jac * self.sj.basis(self.k);
+        let hf = harmonics::search(nominal, joints, &pjac, &self.fit.r, &seen)?;
+        if hf.harmonics.is_empty() {
+            return self.calibration(&self.fit, None);
+        }
+        // the geometric directions refitted beside the harmonics: on the
+        // targets with the harmonics' TCP displacement removed
+        let shifted: Vec<Vector3<f64>> = targets
+            .iter()
+            .zip(&hf.shift)
+            .map(|(t, d)| t - Vector3::from(*d))
+            .collect();
+        let mut fit = fit_subspace(nominal, joints, &shifted, &self.sj, &self.fit.u, self.opts)?;
+        let moved: Vec<Vec<f64>> = joints
+            .iter()
+            .map(|q| harmonics::deviated(&hf.harmonics, q))
+            .collect();
+        fit.r = position_residual(&apply_errors(nominal, &fit.p), &moved, targets);
+        self.calibration(&fit, Some(hf))
+    }
+
+    /// The calibration of the geometric fit `fit` (this stage's or the
+    /// one refitted beside the harmonics `found`).
+    fn calibration(
+        &self,
+        fit: &SubspaceFit,
+        found: Option<harmonics::HarmonicFit>,
+    ) -> Result<Calibration> {
+        let (sj, m) = (&self.sj, self.joints.len());
+        let names = calib_names(self.nominal.dof());
+        let identifiability = sj.report(self.k, self.s, &fit.p, &names, m);
+        let basis = sj.basis(sj.sigma.len());
+        let uncertainty = sj
+            .posterior_variances(self.s)
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| (basis.column(i).iter().copied().collect(), v))
+            .collect();
+        let (harmonics, harmonic_covariance) =
+            found.map_or((Vec::new(), Vec::new()), |h| (h.harmonics, h.covariance));
+        let mut cal = Calibration {
+            uncertainty,
+            campaign_variance: [0.0; 3],
+            harmonics,
+            harmonic_covariance,
+            nominal: self.nominal.clone(),
+            identified: apply_errors(self.nominal, &fit.p),
+            parameters: fit.p.clone(),
+            identifiability,
+            options: self.opts.clone(),
+            rows: m,
+            rms_before_mm: self.rho0,
+            rms_after_mm: rms(&fit.r),
+            iterations: fit.iterations,
+            stop: fit.stop.clone(),
+        };
+        let var = cal.predict_variance(self.joints)?;
+        cal.campaign_variance =
+            std::array::from_fn(|a| var.iter().map(|v| v[a]).fold(0.0, f64::max));
+        Ok(cal)
+    }
 }
 
 struct SubspaceFit {

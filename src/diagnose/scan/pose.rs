@@ -13,20 +13,12 @@
 //!   plain harmonic ([`Feature::HarmonicJacobian`]).
 
 use super::{EffectKind, Family, GridPoint, Sink, params, single, z_all, zscore};
+use crate::calibration::harmonics::{MIN_PERIOD, scan_periods, zoom_periods};
 use crate::dataset::Dataset;
 use crate::diagnose::rows::ScanRows;
 use crate::features::{Feature, jacobian_sin_cos_at};
 use crate::kinematics::Robot;
 use std::collections::BTreeMap;
-
-/// Cycles over a joint's range between two scanned periods.
-const CYCLE_STEP: f64 = 0.1;
-
-/// Steps of the zoom ([`zoom_harmonic`]) per [`CYCLE_STEP`].
-const ZOOM_STEPS: usize = 10;
-
-/// The shortest period scanned (degrees).
-const MIN_PERIOD: f64 = 2.0;
 
 /// Joint `j`'s range on `data`.
 fn joint_range(data: &Dataset, j: usize) -> f64 {
@@ -39,18 +31,11 @@ fn joint_range(data: &Dataset, j: usize) -> f64 {
     hi - lo
 }
 
-/// The periods a harmonic of joint `j` is scanned at: from half its range
-/// on `data` down to [`MIN_PERIOD`], [`CYCLE_STEP`] of a cycle over the
-/// range apart (at most 480).
+/// The periods a harmonic of joint `j` is scanned at: those of the
+/// calibration's joint harmonics ([`scan_periods`]) from half its range on
+/// `data` down to 2°.
 fn harmonic_periods(data: &Dataset, j: usize) -> Vec<f64> {
-    let range = joint_range(data, j);
-    let mut periods = Vec::new();
-    let mut cycles = 2.0;
-    while range / cycles >= MIN_PERIOD && periods.len() < 480 {
-        periods.push(range / cycles);
-        cycles += CYCLE_STEP;
-    }
-    periods
+    scan_periods(joint_range(data, j), MIN_PERIOD)
 }
 
 /// [`Zoom`](super::Zoom) of a harmonic (plain or through the Jacobian):
@@ -75,13 +60,8 @@ fn zoom_harmonic(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<Grid
             period_deg,
         },
     };
-    let range = joint_range(data, joint - 1);
-    let cycles = range / period;
-    let fine = CYCLE_STEP / ZOOM_STEPS as f64;
-    (1..=ZOOM_STEPS)
-        .flat_map(|k| [-(k as f64), k as f64])
-        .map(|k| range / (cycles + k * fine))
-        .filter(|p| p.is_finite() && *p >= MIN_PERIOD && *p <= range / 2.0)
+    zoom_periods(joint_range(data, joint - 1), period)
+        .into_iter()
         .filter_map(|p| {
             let f = with_period(p);
             let columns = f.columns(data).ok()?;
