@@ -213,6 +213,34 @@ pub(crate) fn jacobians(robot: &Robot, joints: &[Vec<f64>]) -> Result<Vec<Matrix
         .collect()
 }
 
+/// A backlash of each joint whose approach direction reverses in `dirs`:
+/// the stacked column `J_j(q_k) λ_kj` (3m), the TCP displacement of a joint
+/// step that follows the direction.
+pub(crate) fn backlash_columns(
+    jac: &[Matrix3xX<f64>],
+    dirs: Option<&[Vec<f64>]>,
+) -> Vec<DVector<f64>> {
+    let Some(dirs) = dirs.filter(|d| d.len() == jac.len()) else {
+        return Vec::new();
+    };
+    let n = jac.first().map_or(0, |j| j.ncols());
+    (0..n)
+        .filter(|&j| {
+            let pos = dirs.iter().any(|d| d.get(j).is_some_and(|v| *v > 0.0));
+            let neg = dirs.iter().any(|d| d.get(j).is_some_and(|v| *v < 0.0));
+            pos && neg
+        })
+        .map(|j| {
+            DVector::from_iterator(
+                3 * jac.len(),
+                jac.iter()
+                    .zip(dirs)
+                    .flat_map(|(jq, d)| (0..3).map(move |a| jq[(a, j)] * d[j])),
+            )
+        })
+        .collect()
+}
+
 /// The two stacked columns (3m each) of joint `j` (0-based) at `period`.
 fn columns(
     jac: &[Matrix3xX<f64>],

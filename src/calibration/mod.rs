@@ -146,7 +146,12 @@ pub fn calibrate(
     opts: &CalibrationOptions,
 ) -> Result<Calibration> {
     let targets = measured_targets(data, nominal, opts)?;
-    calibrate_joints(&data.q, &targets, nominal, opts)
+    let stage = Geometric::fit(&data.q, &targets, nominal, opts)?;
+    if opts.joint_harmonics {
+        stage.with_harmonics(Some(&data.dir))
+    } else {
+        stage.calibration(&stage.fit, None)
+    }
 }
 
 /// The measured TCP positions of `data` (nominal position plus error),
@@ -186,7 +191,7 @@ pub fn calibrate_joints(
 ) -> Result<Calibration> {
     let stage = Geometric::fit(joints, targets, nominal, opts)?;
     if opts.joint_harmonics {
-        stage.with_harmonics()
+        stage.with_harmonics(None)
     } else {
         stage.calibration(&stage.fit, None)
     }
@@ -211,7 +216,7 @@ pub fn calibrate_both(
     if !opts.joint_harmonics {
         return Ok((geometric.clone(), geometric));
     }
-    let mut full = stage.with_harmonics()?;
+    let mut full = stage.with_harmonics(Some(&data.dir))?;
     full.options = opts.clone();
     Ok((geometric, full))
 }
@@ -280,11 +285,19 @@ impl<'a> Geometric<'a> {
     }
 
     /// The joint harmonics searched on the geometric residual, the
-    /// geometric directions refitted beside them.
-    fn with_harmonics(&self) -> Result<Calibration> {
+    /// geometric directions refitted beside them. With the approach
+    /// directions `dirs`, a backlash of each joint that reverses
+    /// (`∂P/∂q_j · λ_j`, a step of the joint with the direction) is refitted
+    /// beside each candidate and left to the Kriging: a harmonic must not
+    /// take up a direction effect.
+    fn with_harmonics(&self, dirs: Option<&[Vec<f64>]>) -> Result<Calibration> {
         let (joints, targets, nominal) = (self.joints, self.targets, self.nominal);
         let pjac = harmonics::jacobians(nominal, joints)?;
-        let seen = &self.jac * self.sj.basis(self.k);
+        let geometric = &self.jac * self.sj.basis(self.k);
+        let mut columns: Vec<DVector<f64>> =
+            geometric.column_iter().map(|c| c.into_owned()).collect();
+        columns.extend(harmonics::backlash_columns(&pjac, dirs));
+        let seen = DMatrix::from_columns(&columns);
         let hf = harmonics::search(nominal, joints, &pjac, &self.fit.r, &seen)?;
         if hf.harmonics.is_empty() {
             return self.calibration(&self.fit, None);
