@@ -98,6 +98,11 @@ pub struct JointHarmonic {
     /// (3D, mm): what it matters at the tool, whatever the joint's lever.
     #[serde(default)]
     pub tcp_rms_mm: f64,
+    /// The joint's values on the campaign it was identified on, degrees:
+    /// beyond them the deviation fades out over one period
+    /// ([`JointHarmonic::taper`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampled_deg: Option<[f64; 2]>,
 }
 
 impl JointHarmonic {
@@ -107,10 +112,27 @@ impl JointHarmonic {
         self.sin_deg * s + self.cos_deg * c
     }
 
-    /// `(sin, cos)` of the harmonic's phase at joint value `q`: the
-    /// deviation per unit coefficient.
+    /// `(sin, cos)` of the harmonic's phase at joint value `q`, times the
+    /// [`taper`](JointHarmonic::taper): the deviation per unit coefficient.
     pub fn unit_terms(&self, q: f64) -> (f64, f64) {
-        self.phase(q).sin_cos()
+        let (s, c) = self.phase(q).sin_cos();
+        let w = self.taper(q);
+        (w * s, w * c)
+    }
+
+    /// 1 on the joint values the harmonic was identified on, falling
+    /// linearly to 0 one period beyond them. A period and phase fitted on
+    /// a range drift apart from the truth with the distance from it (the
+    /// frequency is known to about one cycle over the range), so far from
+    /// the measured values the harmonic is not extrapolated: the
+    /// calibration falls back to its geometric part there, as a lookup
+    /// table ends where it was measured.
+    pub fn taper(&self, q: f64) -> f64 {
+        let Some([lo, hi]) = self.sampled_deg else {
+            return 1.0;
+        };
+        let outside = (lo - q).max(q - hi).max(0.0);
+        (1.0 - outside / self.period_deg).max(0.0)
     }
 
     /// Amplitude `√(s² + c²)`, degrees.
@@ -131,9 +153,13 @@ impl JointHarmonic {
                 self.joint
             ));
         }
+        let span_ok = self
+            .sampled_deg
+            .is_none_or(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo <= hi);
         let finite = [self.sin_deg, self.cos_deg, self.evidence, self.tcp_rms_mm]
             .iter()
-            .all(|v| v.is_finite());
+            .all(|v| v.is_finite())
+            && span_ok;
         if !(self.period_deg.is_finite() && self.period_deg > 0.0 && finite) {
             return Err(format!(
                 "a joint harmonic of q{} is not finite or has no positive period",
@@ -144,7 +170,8 @@ impl JointHarmonic {
     }
 }
 
-/// The joint values `q` with every harmonic's deviation added.
+/// The joint values `q` with every harmonic's deviation (tapered beyond the
+/// values it was identified on) added.
 pub fn deviated(harmonics: &[JointHarmonic], q: &[f64]) -> Vec<f64> {
     let mut out = q.to_vec();
     for h in harmonics {
@@ -300,9 +327,10 @@ fn scan_drop(joints: &[Vec<f64>], pp: &[(f64, f64)], j: usize, period: f64) -> f
     drop_2x2(a, b)
 }
 
-/// The range of joint `j` over `joints` and the shortest period its
-/// sampling resolves (four spacings of its distinct values, 0.01° apart).
-fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64) {
+/// The range of joint `j` over `joints`, the shortest period its sampling
+/// resolves (four spacings of its distinct values, 0.01° apart), and its
+/// lowest and highest value.
+fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64, [f64; 2]) {
     let mut v: Vec<i64> = joints
         .iter()
         .map(|q| (q[j] * 100.0).round() as i64)
@@ -313,7 +341,8 @@ fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64) {
         .last()
         .zip(v.first())
         .map_or(0.0, |(hi, lo)| (hi - lo) as f64 / 100.0);
-    (range, 4.0 * range / v.len().max(1) as f64)
+    let lo = v.first().map_or(0.0, |x| *x as f64 / 100.0);
+    (range, 4.0 * range / v.len().max(1) as f64, [lo, lo + range])
 }
 
 /// Zoom levels after the scan, each ten times finer: the last resolves
@@ -436,10 +465,11 @@ pub(crate) fn search(
     seen: &DMatrix<f64>,
 ) -> Result<HarmonicFit> {
     let m = joints.len();
+    let spans: Vec<[f64; 2]> = (0..robot.dof()).map(|j| sampling(joints, j).2).collect();
     let grids: Vec<(usize, f64, Vec<f64>)> = (0..robot.dof())
         .filter(|&j| robot.links[j].kind == JointKind::Revolute)
         .map(|j| {
-            let (range, shortest) = sampling(joints, j);
+            let (range, shortest, _) = sampling(joints, j);
             (j, range, scan_periods(range, shortest))
         })
         .filter(|(_, _, p)| !p.is_empty())
@@ -507,6 +537,7 @@ pub(crate) fn search(
                 cos_deg: beta[2 * i + 1],
                 evidence,
                 tcp_rms_mm: tcp.norm() / (m as f64).sqrt(),
+                sampled_deg: Some(spans[j]),
             }
         })
         .collect();

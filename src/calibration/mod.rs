@@ -911,6 +911,7 @@ mod tests {
                 cos_deg: amp * c,
                 evidence: 0.0,
                 tcp_rms_mm: 0.0,
+                sampled_deg: None,
             };
             let data = campaign_with(
                 &robot,
