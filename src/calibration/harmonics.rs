@@ -445,7 +445,8 @@ fn evidence(
     let amp_deg = ((acc * b[0] - asc * b[1]) / det).hypot((ass * b[1] - asc * b[0]) / det);
     let rad = amp_deg.to_radians();
     // lever per degree → per radian: ℓ = lever·180/π
-    if !(lever.to_degrees() * rad * rad / 2.0 < basis.noise().sqrt()) {
+    let second_order = lever.to_degrees() * rad * rad / 2.0;
+    if second_order.is_nan() || second_order >= basis.noise().sqrt() {
         return 0.0;
     }
     drop_2x2([ass, asc, acc], b) / basis.noise()
