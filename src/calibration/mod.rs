@@ -911,7 +911,7 @@ mod tests {
                 cos_deg: amp * c,
                 evidence: 0.0,
                 tcp_rms_mm: 0.0,
-                sampled_deg: None,
+                covered_deg: Vec::new(),
             };
             let data = campaign_with(
                 &robot,
