@@ -98,12 +98,6 @@ pub struct JointHarmonic {
     /// (3D, mm): what it matters at the tool, whatever the joint's lever.
     #[serde(default)]
     pub tcp_rms_mm: f64,
-    /// The joint values it was identified on, degrees: the campaign's
-    /// values of the joint merged into intervals wherever they lie less
-    /// than half a period apart. Away from them the deviation fades out
-    /// over one period ([`JointHarmonic::taper`]).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub covered_deg: Vec<[f64; 2]>,
 }
 
 impl JointHarmonic {
@@ -113,32 +107,10 @@ impl JointHarmonic {
         self.sin_deg * s + self.cos_deg * c
     }
 
-    /// `(sin, cos)` of the harmonic's phase at joint value `q`, times the
-    /// [`taper`](JointHarmonic::taper): the deviation per unit coefficient.
+    /// `(sin, cos)` of the harmonic's phase at joint value `q`: the
+    /// deviation per unit coefficient.
     pub fn unit_terms(&self, q: f64) -> (f64, f64) {
-        let (s, c) = self.phase(q).sin_cos();
-        let w = self.taper(q);
-        (w * s, w * c)
-    }
-
-    /// 1 on the joint values the harmonic was identified on
-    /// ([`JointHarmonic::covered_deg`]), falling linearly to 0 one period
-    /// away from them. A period and phase fitted on some values drift
-    /// apart from the truth with the distance from them (the frequency is
-    /// known to about one cycle over what was measured), so across a gap
-    /// or beyond the campaign the harmonic is not extrapolated: the
-    /// calibration falls back to its geometric part there, as a lookup
-    /// table ends where it was measured.
-    pub fn taper(&self, q: f64) -> f64 {
-        if self.covered_deg.is_empty() {
-            return 1.0;
-        }
-        let away = self
-            .covered_deg
-            .iter()
-            .map(|[lo, hi]| (lo - q).max(q - hi).max(0.0))
-            .fold(f64::INFINITY, f64::min);
-        (1.0 - away / self.period_deg).max(0.0)
+        self.phase(q).sin_cos()
     }
 
     /// Amplitude `√(s² + c²)`, degrees.
@@ -159,14 +131,9 @@ impl JointHarmonic {
                 self.joint
             ));
         }
-        let span_ok = self
-            .covered_deg
-            .iter()
-            .all(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo <= hi);
         let finite = [self.sin_deg, self.cos_deg, self.evidence, self.tcp_rms_mm]
             .iter()
-            .all(|v| v.is_finite())
-            && span_ok;
+            .all(|v| v.is_finite());
         if !(self.period_deg.is_finite() && self.period_deg > 0.0 && finite) {
             return Err(format!(
                 "a joint harmonic of q{} is not finite or has no positive period",
@@ -177,8 +144,7 @@ impl JointHarmonic {
     }
 }
 
-/// The joint values `q` with every harmonic's deviation (tapered beyond the
-/// values it was identified on) added.
+/// The joint values `q` with every harmonic's deviation added.
 pub fn deviated(harmonics: &[JointHarmonic], q: &[f64]) -> Vec<f64> {
     let mut out = q.to_vec();
     for h in harmonics {
@@ -334,10 +300,9 @@ fn scan_drop(joints: &[Vec<f64>], pp: &[(f64, f64)], j: usize, period: f64) -> f
     drop_2x2(a, b)
 }
 
-/// The range of joint `j` over `joints`, the shortest period its sampling
-/// resolves (four spacings of its distinct values, 0.01° apart), and those
-/// distinct values, sorted.
-fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64, Vec<f64>) {
+/// The range of joint `j` over `joints` and the shortest period its
+/// sampling resolves (four spacings of its distinct values, 0.01° apart).
+fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64) {
     let mut v: Vec<i64> = joints
         .iter()
         .map(|q| (q[j] * 100.0).round() as i64)
@@ -348,25 +313,7 @@ fn sampling(joints: &[Vec<f64>], j: usize) -> (f64, f64, Vec<f64>) {
         .last()
         .zip(v.first())
         .map_or(0.0, |(hi, lo)| (hi - lo) as f64 / 100.0);
-    let shortest = 4.0 * range / v.len().max(1) as f64;
-    (
-        range,
-        shortest,
-        v.iter().map(|x| *x as f64 / 100.0).collect(),
-    )
-}
-
-/// The sorted values `v` merged into intervals wherever they lie less than
-/// `gap` apart.
-fn covered(v: &[f64], gap: f64) -> Vec<[f64; 2]> {
-    let mut out: Vec<[f64; 2]> = Vec::new();
-    for &x in v {
-        match out.last_mut() {
-            Some(last) if x - last[1] < gap => last[1] = x,
-            _ => out.push([x, x]),
-        }
-    }
-    out
+    (range, 4.0 * range / v.len().max(1) as f64)
 }
 
 /// Zoom levels after the scan, each ten times finer: the last resolves
@@ -490,11 +437,10 @@ pub(crate) fn search(
     seen: &DMatrix<f64>,
 ) -> Result<HarmonicFit> {
     let m = joints.len();
-    let values: Vec<Vec<f64>> = (0..robot.dof()).map(|j| sampling(joints, j).2).collect();
     let grids: Vec<(usize, f64, Vec<f64>)> = (0..robot.dof())
         .filter(|&j| robot.links[j].kind == JointKind::Revolute)
         .map(|j| {
-            let (range, shortest, _) = sampling(joints, j);
+            let (range, shortest) = sampling(joints, j);
             (j, range, scan_periods(range, shortest))
         })
         .filter(|(_, _, p)| !p.is_empty())
@@ -562,7 +508,6 @@ pub(crate) fn search(
                 cos_deg: beta[2 * i + 1],
                 evidence,
                 tcp_rms_mm: tcp.norm() / (m as f64).sqrt(),
-                covered_deg: covered(&values[j], p / 2.0),
             }
         })
         .collect();
@@ -617,33 +562,6 @@ mod tests {
             z.iter()
                 .all(|&x| (x - 20.0).abs() < 20.0 * 20.0 / 360.0 * CYCLE_STEP * 1.01)
         );
-    }
-
-    #[test]
-    fn a_harmonic_fades_out_a_period_away_from_the_values_it_was_fitted_on() {
-        let cover = covered(&[0.0, 1.0, 2.0, 10.0, 11.0, 40.0], 5.0);
-        assert_eq!(cover, vec![[0.0, 2.0], [10.0, 11.0], [40.0, 40.0]]);
-        let h = JointHarmonic {
-            joint: 1,
-            period_deg: 8.0,
-            sin_deg: 0.01,
-            cos_deg: 0.0,
-            evidence: 100.0,
-            tcp_rms_mm: 0.1,
-            covered_deg: cover,
-        };
-        assert_eq!(h.taper(1.5), 1.0);
-        assert_eq!(h.taper(10.5), 1.0);
-        assert!((h.taper(25.0) - (1.0 - 14.0 / 8.0).max(0.0)).abs() < 1e-12);
-        assert!((h.taper(6.0) - 0.5).abs() < 1e-12); // 4° from both covered ends
-        assert_eq!(h.taper(-9.0), 0.0);
-        assert_eq!(h.deviation(-9.0), 0.0);
-        let old = JointHarmonic {
-            covered_deg: Vec::new(),
-            ..h.clone()
-        };
-        assert_eq!(old.taper(-9.0), 1.0);
-        assert!(h.validate(6).is_ok());
     }
 
     #[test]

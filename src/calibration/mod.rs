@@ -911,7 +911,6 @@ mod tests {
                 cos_deg: amp * c,
                 evidence: 0.0,
                 tcp_rms_mm: 0.0,
-                covered_deg: Vec::new(),
             };
             let data = campaign_with(
                 &robot,
