@@ -18,6 +18,25 @@ fn ds(f: &str) -> String {
     format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// `robokrige fit DATA --robot comau-nj220` with quick options, writing
+/// `out`, with `extra` arguments.
+fn quick_fit(data: &str, out: &str, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "fit",
+        data,
+        "--robot",
+        "comau-nj220",
+        "--optimizer",
+        "hj",
+        "--corr",
+        "gaussian",
+        "-o",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    rk(&args)
+}
+
 fn quick() -> KrigingOptions {
     KrigingOptions::default()
         .optimizer(OptimizerKind::HookeJeeves)
@@ -97,23 +116,7 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
     std::fs::create_dir_all(&dir).unwrap();
     let p = |f: &str| dir.join(f).display().to_string();
     let ds_lhs = ds("comau_lhs.csv");
-    let fit = |out: &str, extra: &[&str]| {
-        let mut args = vec![
-            "fit",
-            &ds_lhs,
-            "--robot",
-            "comau-nj220",
-            "--optimizer",
-            "hj",
-            "--corr",
-            "gaussian",
-            "-o",
-        ];
-        let o = p(out);
-        args.push(&o);
-        args.extend_from_slice(extra);
-        rk(&args)
-    };
+    let fit = |out: &str, extra: &[&str]| quick_fit(&ds_lhs, &p(out), extra);
     let (c, out, err) = fit("cal.json", &[]);
     assert_eq!(c, 0, "{err}");
     assert!(out.contains("calibration:"), "{out}");
@@ -223,23 +226,8 @@ fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_th
     let p = |f: &str| dir.join(f).display().to_string();
     let data = ds("comau_harmonic.csv");
     let fit = |out: &str, extra: &[&str]| {
-        let o = p(out);
-        let mut args = vec![
-            "fit",
-            &data,
-            "--robot",
-            "comau-nj220",
-            "--optimizer",
-            "hj",
-            "--corr",
-            "gaussian",
-            "-o",
-            &o,
-            "--json",
-            "-",
-        ];
-        args.extend_from_slice(extra);
-        let (c, out, err) = rk(&args);
+        let extra: Vec<&str> = ["--json", "-"].iter().chain(extra).copied().collect();
+        let (c, out, err) = quick_fit(&data, &p(out), &extra);
         assert_eq!(c, 0, "{err}");
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
         v["joint_harmonics"].as_array().unwrap().clone()
