@@ -43,16 +43,22 @@
 //! term the Jacobian leaves out, `ℓ A²/2` with `ℓ` the joint's largest
 //! lever over the campaign, below the noise `s`; a larger one is a
 //! direction the joint barely moves the TCP in, not a gear error. The noise
-//! `s` is the residual's own (everything the geometric model leaves); on
-//! a campaign of random poses the smooth part of it is uncorrelated with a
-//! short-period harmonic and acts as noise, so the test is conservative.
+//! `s` is the residual's own (everything the geometric model leaves). On
+//! a campaign of random poses its smooth part is nearly uncorrelated with
+//! a short-period harmonic and acts as noise; a smooth structure the
+//! geometric model lacks can still pass as a series of periods, which is
+//! one reason for the bound per joint. A backlash of each joint whose
+//! direction reverses (`∂P/∂q_j · λ_j`) is refitted beside every candidate
+//! and left to the Kriging, so that a harmonic does not take up a
+//! direction effect.
 //!
 //! The periods scanned are those of the diagnosis' harmonic candidates
 //! ([`scan_periods`]): from half the joint's range down to [`MIN_PERIOD`],
 //! a tenth of a cycle over the range apart, and no shorter than four
 //! spacings of the campaign's distinct joint values (a period must be
-//! sampled to be seen). The best period of each joint is then refined ten
-//! times finer ([`zoom_periods`]).
+//! sampled to be seen). The best period of each joint is then refined
+//! three times, each ten times finer (as [`zoom_periods`]), to 10⁻⁴ of a
+//! cycle over the range.
 
 use crate::kinematics::{JointKind, Robot};
 use crate::{Error, Result};
