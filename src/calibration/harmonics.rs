@@ -268,14 +268,23 @@ fn columns(
     [s, c]
 }
 
-/// `Δ = bᵀA⁻¹b` of a 2×2 `A` (0 if `A` is not positive definite).
-fn drop_2x2(a: [f64; 3], b: [f64; 2]) -> f64 {
+/// `A⁻¹b` of a symmetric 2×2 `A = [a₀ a₁; a₁ a₂]`, or `None` if `A` is
+/// not positive definite.
+fn solve_2x2(a: [f64; 3], b: [f64; 2]) -> Option<[f64; 2]> {
     let [ass, asc, acc] = a;
     let det = ass * acc - asc * asc;
     if det.is_nan() || det <= 1e-12 * (ass * acc).max(f64::MIN_POSITIVE) {
-        return 0.0;
+        return None;
     }
-    (acc * b[0] * b[0] - 2.0 * asc * b[0] * b[1] + ass * b[1] * b[1]) / det
+    Some([
+        (acc * b[0] - asc * b[1]) / det,
+        (ass * b[1] - asc * b[0]) / det,
+    ])
+}
+
+/// `Δ = bᵀA⁻¹b` of a 2×2 `A` (0 if `A` is not positive definite).
+fn drop_2x2(a: [f64; 3], b: [f64; 2]) -> f64 {
+    solve_2x2(a, b).map_or(0.0, |x| b[0] * x[0] + b[1] * x[1])
 }
 
 /// Per pose of joint `j`: `‖J_j‖²` and `J_j·r_k` (the scan's sums need nothing else).
@@ -355,6 +364,7 @@ fn best_period(
 
 /// An orthonormal basis grown one column at a time (twice-run
 /// Gram–Schmidt), and the residual of `r_geo` projected off it.
+#[derive(Clone)]
 struct Basis {
     q: Vec<DVector<f64>>,
     r: DVector<f64>,
@@ -416,17 +426,17 @@ fn evidence(
     lever: f64,
 ) -> f64 {
     let [hs, hc] = columns(jac, joints, j, p).map(|h| basis.project_out(&h));
-    let [ass, asc, acc] = [hs.dot(&hs), hs.dot(&hc), hc.dot(&hc)];
     let b = [hs.dot(&basis.r), hc.dot(&basis.r)];
-    let det = ass * acc - asc * asc;
-    let amp_deg = ((acc * b[0] - asc * b[1]) / det).hypot((ass * b[1] - asc * b[0]) / det);
-    let rad = amp_deg.to_radians();
+    let Some(coef) = solve_2x2([hs.dot(&hs), hs.dot(&hc), hc.dot(&hc)], b) else {
+        return 0.0;
+    };
+    let rad = coef[0].hypot(coef[1]).to_radians();
     // lever per degree → per radian: ℓ = lever·180/π
     let second_order = lever.to_degrees() * rad * rad / 2.0;
     if second_order.is_nan() || second_order >= basis.noise().sqrt() {
         return 0.0;
     }
-    drop_2x2([ass, asc, acc], b) / basis.noise()
+    (b[0] * coef[0] + b[1] * coef[1]) / basis.noise()
 }
 
 /// Forward search for joint harmonics on the residual `r_geo` (3m) of a
@@ -454,7 +464,10 @@ pub(crate) fn search(
     let scanned: usize = grids.iter().map(|(_, _, p)| p.len()).sum();
     let threshold = 2.0 * (scanned.max(1) as f64 / FALSE_ALARM).ln();
     let mut chosen: Vec<(usize, f64, f64)> = Vec::new(); // joint, period, evidence
-    let mut basis = Basis::new(seen, r_geo);
+    // the geometric (and backlash) directions alone: what the harmonics'
+    // coefficients are made orthogonal to at the end
+    let g = Basis::new(seen, r_geo);
+    let mut basis = g.clone();
     let levers: Vec<f64> = (0..robot.dof())
         .map(|j| jac.iter().map(|jq| jq.column(j).norm()).fold(0.0, f64::max))
         .collect();
@@ -499,7 +512,6 @@ pub(crate) fn search(
         .iter()
         .flat_map(|&(j, p, _)| columns(jac, joints, j, p))
         .collect();
-    let g = Basis::new(seen, r_geo);
     let (beta, inv_gram) = solve(&g, &raw, r_geo)?;
     let s2 = basis.noise();
     let harmonics = chosen

@@ -146,12 +146,7 @@ pub fn calibrate(
     opts: &CalibrationOptions,
 ) -> Result<Calibration> {
     let targets = measured_targets(data, nominal, opts)?;
-    let stage = Geometric::fit(&data.q, &targets, nominal, opts)?;
-    if opts.joint_harmonics {
-        stage.with_harmonics(Some(&data.dir))
-    } else {
-        stage.calibration(&stage.fit, None)
-    }
+    Geometric::fit(&data.q, &targets, nominal, opts)?.finish(Some(&data.dir))
 }
 
 /// The measured TCP positions of `data` (nominal position plus error),
@@ -189,12 +184,7 @@ pub fn calibrate_joints(
     nominal: &Robot,
     opts: &CalibrationOptions,
 ) -> Result<Calibration> {
-    let stage = Geometric::fit(joints, targets, nominal, opts)?;
-    if opts.joint_harmonics {
-        stage.with_harmonics(None)
-    } else {
-        stage.calibration(&stage.fit, None)
-    }
+    Geometric::fit(joints, targets, nominal, opts)?.finish(None)
 }
 
 /// The geometric calibration and, from the same geometric fit, the one
@@ -282,6 +272,16 @@ impl<'a> Geometric<'a> {
             rho0,
             fit,
         })
+    }
+
+    /// The calibration the options ask for: with the joint harmonics
+    /// ([`Geometric::with_harmonics`], `dirs` as there) or geometric.
+    fn finish(&self, dirs: Option<&[Vec<f64>]>) -> Result<Calibration> {
+        if self.opts.joint_harmonics {
+            self.with_harmonics(dirs)
+        } else {
+            self.calibration(&self.fit, None)
+        }
     }
 
     /// The joint harmonics searched on the geometric residual, the
