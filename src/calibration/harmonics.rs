@@ -52,6 +52,12 @@
 //! and left to the Kriging, so that a harmonic does not take up a
 //! direction effect.
 //!
+//! The coefficients are then fitted to the geometric residual beside the
+//! geometric directions, which are refitted with them, when that lowers
+//! the residual by more than the level-`α` bound of χ²ₖ ([`chi2_bound`],
+//! `k` the directions seen); otherwise beside the backlash alone, the
+//! geometry kept (see `Geometric::with_harmonics` in the parent module).
+//!
 //! The periods scanned are those of the diagnosis' harmonic candidates
 //! ([`scan_periods`]): from half the joint's range down to [`MIN_PERIOD`],
 //! a tenth of a cycle over the range apart, and no shorter than four
@@ -192,7 +198,19 @@ fn zoom_at(range: f64, period: f64, step: f64) -> Vec<f64> {
         .collect()
 }
 
-/// What [`search`] found.
+/// What [`search`] chose: the periods, before their coefficients.
+#[derive(Debug, Clone)]
+pub(crate) struct Found {
+    /// Per harmonic added: 0-based joint, period (degrees), evidence `Δ/s²`.
+    pub chosen: Vec<(usize, f64, f64)>,
+    /// Their stacked columns (3m), two per harmonic (sine, cosine).
+    pub columns: Vec<DVector<f64>>,
+    /// Residual variance per coordinate with the geometric directions, the
+    /// backlash and the harmonics fitted, mm².
+    pub noise: f64,
+}
+
+/// The harmonics' coefficients ([`coefficients`]).
 #[derive(Debug, Clone)]
 pub(crate) struct HarmonicFit {
     /// The harmonics added, with their coefficients.
@@ -371,15 +389,17 @@ struct Basis {
 }
 
 impl Basis {
-    /// The columns of `seen`, with `r` already off their span (the
-    /// geometric fit's residual).
-    fn new(seen: &DMatrix<f64>, r: &DVector<f64>) -> Self {
+    /// The span of `columns`, with `r` projected off it.
+    fn new<C: std::borrow::Borrow<DVector<f64>>>(
+        columns: impl Iterator<Item = C>,
+        r: &DVector<f64>,
+    ) -> Self {
         let mut b = Basis {
             q: Vec::new(),
             r: r.clone(),
         };
-        for c in seen.column_iter() {
-            b.push(&c.into_owned());
+        for c in columns {
+            b.push(c.borrow());
         }
         b
     }
@@ -441,18 +461,19 @@ fn evidence(
 
 /// Forward search for joint harmonics on the residual `r_geo` (3m) of a
 /// geometric calibration whose seen directions move the TCP by the
-/// columns of `seen` (3m × k): see the module documentation. Each round
-/// takes every joint's best period, strongest first, and adds those that
-/// still pass beside the ones added before them. `jac` are the per-pose
-/// Jacobians per degree ([`jacobians`]).
+/// columns of `geometric` (3m × k), with the `backlash` columns
+/// ([`backlash_columns`]) refitted beside every candidate: see the module
+/// documentation. Each round takes every joint's best period, strongest
+/// first, and adds those that still pass beside the ones added before
+/// them. `jac` are the per-pose Jacobians per degree ([`jacobians`]).
 pub(crate) fn search(
     robot: &Robot,
     joints: &[Vec<f64>],
     jac: &[Matrix3xX<f64>],
     r_geo: &DVector<f64>,
-    seen: &DMatrix<f64>,
-) -> Result<HarmonicFit> {
-    let m = joints.len();
+    geometric: &DMatrix<f64>,
+    backlash: &[DVector<f64>],
+) -> Found {
     let grids: Vec<(usize, f64, Vec<f64>)> = (0..robot.dof())
         .filter(|&j| robot.links[j].kind == JointKind::Revolute)
         .map(|j| {
@@ -464,10 +485,14 @@ pub(crate) fn search(
     let scanned: usize = grids.iter().map(|(_, _, p)| p.len()).sum();
     let threshold = 2.0 * (scanned.max(1) as f64 / FALSE_ALARM).ln();
     let mut chosen: Vec<(usize, f64, f64)> = Vec::new(); // joint, period, evidence
-    // the geometric (and backlash) directions alone: what the harmonics'
-    // coefficients are made orthogonal to at the end
-    let g = Basis::new(seen, r_geo);
-    let mut basis = g.clone();
+    let mut columns_added = Vec::new();
+    let mut basis = Basis::new(
+        geometric
+            .column_iter()
+            .map(|c| c.into_owned())
+            .chain(backlash.iter().cloned()),
+        r_geo,
+    );
     let levers: Vec<f64> = (0..robot.dof())
         .map(|j| jac.iter().map(|jq| jq.column(j).norm()).fold(0.0, f64::max))
         .collect();
@@ -494,6 +519,7 @@ pub(crate) fn search(
                 chosen.push((j, p, e));
                 for h in columns(jac, joints, j, p) {
                     basis.push(&h);
+                    columns_added.push(h);
                 }
             }
         }
@@ -501,20 +527,36 @@ pub(crate) fn search(
             break;
         }
     }
-    if chosen.is_empty() {
-        return Ok(HarmonicFit {
-            harmonics: Vec::new(),
-            covariance: Vec::new(),
-            shift: vec![[0.0; 3]; m],
-        });
+    Found {
+        chosen,
+        columns: columns_added,
+        noise: basis.noise(),
     }
-    let raw: Vec<DVector<f64>> = chosen
-        .iter()
-        .flat_map(|&(j, p, _)| columns(jac, joints, j, p))
-        .collect();
-    let (beta, inv_gram) = solve(&g, &raw, r_geo)?;
-    let s2 = basis.noise();
-    let harmonics = chosen
+}
+
+/// The coefficients of the harmonics `found`, fitted to the geometric
+/// residual `r_geo` beside the columns `beside` (the geometric directions
+/// refitted with them and the backlash; Frisch–Waugh): `(H̃ᵀH̃)⁻¹ H̃ᵀ r_geo`
+/// with `H̃` the harmonics' columns off the span of `beside`, and
+/// covariance `s² (H̃ᵀH̃)⁻¹`. Without the geometric directions in
+/// `beside`, `r_geo` is already off their span and this bounds the
+/// covariance from above.
+pub(crate) fn coefficients(
+    found: &Found,
+    beside: impl Iterator<Item = DVector<f64>>,
+    r_geo: &DVector<f64>,
+) -> Result<HarmonicFit> {
+    let g = Basis::new(beside, r_geo);
+    let cols: Vec<DVector<f64>> = found.columns.iter().map(|h| g.project_out(h)).collect();
+    let h = DMatrix::from_columns(&cols);
+    let chol = h.tr_mul(&h).cholesky().ok_or_else(|| {
+        Error::Numerical("the joint harmonics' columns are not independent".into())
+    })?;
+    let beta = chol.solve(&h.tr_mul(r_geo));
+    let raw = &found.columns;
+    let m = r_geo.len() / 3;
+    let harmonics = found
+        .chosen
         .iter()
         .enumerate()
         .map(|(i, &(j, p, evidence))| {
@@ -539,32 +581,35 @@ pub(crate) fn search(
     }
     Ok(HarmonicFit {
         harmonics,
-        covariance: (inv_gram * s2).transpose().as_slice().to_vec(),
+        covariance: (chol.inverse() * found.noise)
+            .transpose()
+            .as_slice()
+            .to_vec(),
         shift,
     })
 }
 
-/// Least squares of `r_geo` on the columns `raw` made orthogonal to the
-/// geometric directions `g` (Frisch–Waugh: the harmonics' coefficients
-/// of the joint fit): the coefficients and `(H̃ᵀH̃)⁻¹`, their covariance
-/// per unit noise variance.
-fn solve(
-    g: &Basis,
-    raw: &[DVector<f64>],
-    r_geo: &DVector<f64>,
-) -> Result<(DVector<f64>, DMatrix<f64>)> {
-    let cols: Vec<DVector<f64>> = raw.iter().map(|h| g.project_out(h)).collect();
-    let h = DMatrix::from_columns(&cols);
-    let chol = h.tr_mul(&h).cholesky().ok_or_else(|| {
-        Error::Numerical("the joint harmonics' columns are not independent".into())
-    })?;
-    let beta = chol.solve(&h.tr_mul(r_geo));
-    Ok((beta, chol.inverse()))
+/// The Laurent–Massart bound of χ²ₖ: `P(χ²ₖ ≥ k + 2√(k x) + 2x) ≤ e^{−x}`
+/// (Laurent & Massart 2000, *Ann. Statist.* 28(5), Lemma 1), at
+/// `x = ln(1/α)`: a level-`α` threshold without a quantile function.
+pub(crate) fn chi2_bound(k: usize, alpha: f64) -> f64 {
+    let (k, x) = (k as f64, (1.0 / alpha).ln());
+    k + 2.0 * (k * x).sqrt() + 2.0 * x
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_chi2_bound_is_above_the_quantile_and_not_far() {
+        // 99 % quantiles of χ²ₖ (tables)
+        for (k, q) in [(1, 6.635), (10, 23.209), (23, 41.638), (39, 62.428)] {
+            let b = chi2_bound(k, 0.01);
+            assert!(b >= q, "k {k}: {b} below {q}");
+            assert!(k < 10 || b < 1.5 * q, "k {k}: {b} against {q}");
+        }
+    }
 
     #[test]
     fn periods_span_half_the_range_down_to_the_sampling_limit() {
