@@ -209,18 +209,11 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     )?;
     let model = ErrorModel::load(model_path)?;
     let data = super::read_data(poses)?;
-    model.check_dataset(&data)?;
-    let pred = model.predict_dataset(&data)?;
-    let assumed = model.assumed_direction_sensitivity(&data)?;
-    if assumed > 0.0 {
-        let n = data.n_joints();
-        eprintln!("{}", predict::direction_warning(poses, n, assumed));
-    }
-    let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
-    super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    let noise = model.predictive_noise_std()?;
-    robokrige::dataset::write_predictions(output, &data, &pred.mean, &pred.std, noise)?;
-    let (v, line) = predict::summary(&data, &pred.mean, &coverage, output);
+    let p = model.predict_campaign(&data)?;
+    super::warn(predict::direction_warning(poses, &data, &p));
+    super::print_coverage(&p.coverage, data.len(), data.ids.as_deref());
+    p.write(output, &data)?;
+    let (v, line) = predict::summary(&data, &p, output);
     super::json_to(a.json.as_deref(), &v, "prediction summary")?;
     if let Some(line) = line {
         say!("{line}");
