@@ -138,7 +138,7 @@ fn dispatch(command: Command) -> Result<()> {
 pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
     let Some(path) = path else { return Ok(()) };
     let text = robokrige::output::json_text(value, context)?;
-    if is_stdout(path) {
+    if robokrige::output::is_stdout(path) {
         print!("{text}");
         return Ok(());
     }
@@ -147,11 +147,6 @@ pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Re
 
 /// Check a command's files before any work; `None`s are options not given.
 pub use robokrige::output::check_given as check_files;
-
-/// Whether an output path is `-` (standard output).
-pub fn is_stdout(path: &Path) -> bool {
-    path == Path::new("-")
-}
 
 /// Refuse a fit of `rows` rows that would exceed the memory limit
 /// ([`robokrige::model::check_fit_rows`]: `option` takes fewer rows, if
