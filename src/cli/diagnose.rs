@@ -134,12 +134,9 @@ pub struct DiagnoseArgs {
 }
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
-    let base = robokrige::diagnose::base_params(&a.method, a.seed, !a.no_nugget)?;
-    Ok(DiagnoseOptions::default()
-        .base(&base)
+    Ok(DiagnoseOptions::of_method(&a.method, a.seed, !a.no_nugget)?
         .periodic(robokrige::space::parse_periodic(&a.periodic, &data.q)?)
         .folds(a.folds)
-        .seed(a.seed)
         .permutations(a.permutations)
         .fdr(a.fdr)
         .max_effects(a.max_effects)
@@ -171,9 +168,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let d = with_spinner("diagnose", |pb| {
         base.diagnose(&opts, &|msg| pb.set_message(msg.to_string()))
     })?;
-    let data_name = a.data.display().to_string();
     let names = Names {
-        data: &data_name,
+        data: &a.data,
         method: &a.method,
     };
     say_part!("{}", report::summary(&d, names));
@@ -183,7 +179,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     };
     say_part!("{}", report::plot_lines(a.plots.as_deref(), &plots));
     let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
-    let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
+    let v = report::json(&d, names, compensation.as_ref())?;
     super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
         let extras = Extras {
