@@ -3,7 +3,7 @@
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
 use super::fit::KrigingArgs;
-use super::progress::{steps_of, with_bar};
+use super::progress::{steps, steps_of, with_bar};
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
@@ -122,10 +122,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         ga: a.ga,
     };
     let split = with_bar(extras.models() as u64, "holdout", |pb| {
-        holdout_split(&train, &test, &robot, &base, extras, &|what| {
-            pb.inc(1);
-            pb.set_message(what.to_string());
-        })
+        holdout_split(&train, &test, &robot, &base, extras, &steps(pb))
     })?;
     let sizes = (train.len(), test.len());
     say_part!("{}", report::split(&a.data, sizes, &base, &split));
