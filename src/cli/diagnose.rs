@@ -161,10 +161,8 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
         let line = cal.summary_line();
         say!("calibrated base: {line}; diagnosing its residual");
     }
-    let options = ("--rows", "--scan-rows");
-    if let Some(plan) = DiagnosePlan::check_options(&base.data, &opts, options)? {
-        eprintln!("diagnose: {plan}");
-    }
+    let plan = DiagnosePlan::check_options(&base.data, &opts, ("--rows", "--scan-rows"))?;
+    super::print_plan("diagnose", plan);
     let d = with_spinner("diagnose", |pb| {
         base.diagnose(&opts, &|msg| pb.set_message(msg.to_string()))
     })?;

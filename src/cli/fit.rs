@@ -164,8 +164,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let data = super::read_data(data_path)?;
     let params = a.model.resolve(a.method.as_deref(), &data)?.check()?;
-    let optimizer = params.params().get_kriging().get_optimizer();
-    super::plan_fit("fit", data.len(), optimizer, None)?;
+    super::print_plan("fit", params.params().check_fit_rows(data.len(), None)?);
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => with_spinner(name, |pb| params.fit_with_progress(&data, &ga(pb)))?,

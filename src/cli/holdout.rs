@@ -89,8 +89,7 @@ pub struct HoldoutArgs {
 fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<ErrorModelParams> {
     let o = Overrides::new().seed(a.seed).periodic(a.periodic.as_str());
     let base = params_with(None, &a.kriging.apply(o), rows)?;
-    let optimizer = base.get_kriging().get_optimizer();
-    super::plan_fit("holdout", rows.len(), optimizer, option)?;
+    super::print_plan("holdout", base.check_fit_rows(rows.len(), option)?);
     Ok(base)
 }
 

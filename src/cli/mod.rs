@@ -148,19 +148,12 @@ pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Re
 /// Check a command's files before any work; `None`s are options not given.
 pub use robokrige::output::check_given as check_files;
 
-/// Refuse a fit of `rows` rows that would exceed the memory limit
-/// ([`robokrige::model::check_fit_rows`]: `option` takes fewer rows, if
-/// the command has one); print the plan for large inputs.
-pub fn plan_fit(
-    command: &str,
-    rows: usize,
-    optimizer: robokrige::kriging::OptimizerKind,
-    option: Option<&str>,
-) -> Result<()> {
-    if let Some(plan) = robokrige::model::check_fit_rows(rows, optimizer, option)? {
+/// Print the plan of a large fit or diagnosis, as a command's memory
+/// check returned it ([`robokrige::model::check_fit_rows`]).
+pub fn print_plan(command: &str, plan: Option<impl std::fmt::Display>) {
+    if let Some(plan) = plan {
         eprintln!("{command}: {plan}");
     }
-    Ok(())
 }
 
 /// Read a measurement CSV and print its plausibility warnings on stderr.
