@@ -8,8 +8,8 @@ use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis};
 use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
+use robokrige::study::Targets;
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
-use robokrige::study::{Targets, load_truth};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -211,11 +211,9 @@ fn write_and_compare_models(
     let (Some(robot), Some(traj), Some(truth_path)) = (opts.get_robot(), &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let truth = load_truth(truth_path)?;
     let targets = Targets::read(traj, robot, None, &robot.home)?;
     super::warn(&targets.warnings);
-    let on = (robot, &targets);
-    let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
+    let c = base.compare_compensation(opts, &after, (robot, &targets), truth_path, a.seed)?;
     say!("{}", report::compensation_line(traj, &c));
     Ok(Some(c))
 }
