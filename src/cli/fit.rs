@@ -119,14 +119,11 @@ impl ModelArgs {
     /// The flags given, as the library's overrides.
     fn overrides(&self) -> Result<Overrides> {
         let robot = load_optional_robot(self.robot.as_deref(), self.tool.as_deref())?;
+        let calibration = CalibrationOptions::new(!self.geometric, self.calibration_noise);
         let o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
-            .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
-                noise_mm: self.calibration_noise,
-                joint_harmonics: !self.geometric,
-                ..CalibrationOptions::default()
-            }))
+            .calibrate((!self.no_calibrate).then_some(calibration))
             .with(self.space, Overrides::space)
             .with(self.trend, Overrides::trend)
             .with(self.starts, Overrides::starts)
