@@ -68,12 +68,9 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let mut spec = CampaignSpec::new(a.kind, a.seed);
-    spec.poses = a.poses.unwrap_or(spec.poses);
+    let mut spec = CampaignSpec::new(a.kind, a.seed).sizes(a.poses, a.diameter, a.cycles);
     spec.effects = Effect::parse_all(&a.effects)?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
-    spec.circle_diameter_mm = a.diameter.unwrap_or(spec.circle_diameter_mm);
-    spec.indexing_cycles = a.cycles.unwrap_or(spec.indexing_cycles);
     spec.validate()?;
     let robot = kinematics::load_robot(&a.robot)?;
     robokrige::output::create_folder_of(&a.output)?;
