@@ -134,9 +134,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     commands_out.write(&res)?;
     let text = report::iterations(&res, a.iterative, &model.describe(), secs, &a.output);
     say_part!("{text}");
-    if let Some(w) = report::stop_warning(&res, a.tol, a.max_iter) {
-        eprintln!("{w}");
-    }
+    super::warn(report::stop_warning(&res, a.tol, a.max_iter));
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let (ev, runs) = evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;

@@ -77,9 +77,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     plan.validate(data.len())?;
     let params = params.check()?;
     let (res, subset) = with_bar(0, "folds", |pb| plan.run(&data, &params, &of_total(pb)))?;
-    if let Some(h) = subset {
-        eprint!("{}", report::hyper_subset(&h, data.len()));
-    }
+    eprint!("{}", report::hyper_subset(subset.as_ref(), data.len()));
     let text = report::summary(&res, &plan.folds, (&a.data, data.len()), params.params());
     say_part!("{text}");
     let v = report::json(&res, &a.data, params.params())?;

@@ -157,10 +157,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let opts = options(&a, &data)?;
     let calibrate = (a.calibrate || a.no_calibrate).then_some(a.calibrate);
     let base = DiagnosisBase::new(data, &opts, calibrate)?;
-    if let Some(cal) = &base.calibration {
-        let line = cal.summary_line();
-        say!("calibrated base: {line}; diagnosing its residual");
-    }
+    say_part!("{}", report::calibrated_base(&base));
     let plan = DiagnosePlan::check_options(&base.data, &opts, ("--rows", "--scan-rows"))?;
     super::print_plan("diagnose", plan);
     let d = with_spinner("diagnose", |pb| {

@@ -209,11 +209,8 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     super::warn(predict::direction_warning(poses, &data, &p));
     super::print_coverage(&p.coverage, data.len(), data.ids.as_deref());
     p.write(output, &data)?;
-    let (v, line) = predict::summary(&data, &p, output);
+    let (v, text) = predict::summary(&data, &p, output);
     super::json_to(a.json.as_deref(), &v, "prediction summary")?;
-    if let Some(line) = line {
-        say!("{line}");
-    }
-    say!("wrote {}", output.display());
+    say_part!("{text}");
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 use super::xyz;
 use crate::diagnose::{CvStats, Diagnosis, EffectReport, LeftOut};
-use crate::study::diagnosis::CompensationComparison;
+use crate::study::diagnosis::{CompensationComparison, DiagnosisBase};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -247,6 +247,18 @@ pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
     )];
     out.extend(d.left_by_cap.iter().map(|l| format!("  {}", left_line(l))));
     out
+}
+
+/// The line on the calibration whose residual is diagnosed, if there is
+/// one ([`DiagnosisBase::calibration`]); empty without.
+pub fn calibrated_base(base: &DiagnosisBase) -> String {
+    match &base.calibration {
+        Some(cal) => {
+            let line = cal.summary_line();
+            format!("calibrated base: {line}; diagnosing its residual\n")
+        }
+        None => String::new(),
+    }
 }
 
 /// The plots written into the folder `dir` (`--plots`), one line each; or,

@@ -55,32 +55,34 @@ pub fn direction_warning(poses: &Path, data: &Dataset, p: &CampaignPrediction) -
     })
 }
 
-/// The summary of the prediction `p` of `data`, written to `output`:
-/// the JSON of `predict --json` and, when `data` has measured errors, the
-/// line that compares them before and after subtracting the prediction.
+/// The summary of the prediction `p` of `data`, written to `output`: the
+/// JSON of `predict --json`, and the text `predict` prints: when `data`
+/// has measured errors, a line that compares them before and after
+/// subtracting the prediction; then the file written.
 pub fn summary(
     data: &Dataset,
     p: &CampaignPrediction,
     output: &Path,
-) -> (serde_json::Value, Option<String>) {
+) -> (serde_json::Value, String) {
     let (mean, coverage) = (&p.prediction.mean, &p.coverage);
+    let wrote = format!("wrote {}\n", output.display());
     let Some(e) = &data.errors else {
         let v = serde_json::json!({"poses": data.len(), "output": output,
             "coverage_warnings": coverage});
-        return (v, None);
+        return (v, wrote);
     };
     let before = summarize(e);
     let after = summarize(&residuals(e, mean));
     let v = serde_json::json!({"poses": data.len(), "output": output,
         "measured": before, "after_subtracting_prediction": after,
         "coverage_warnings": coverage});
-    let line = format!(
-        "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
+    let text = format!(
+        "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})\n{wrote}",
         data.len(),
         before.mean_3d_mm,
         after.mean_3d_mm,
         before.max_3d_mm,
         after.max_3d_mm
     );
-    (v, Some(line))
+    (v, text)
 }
