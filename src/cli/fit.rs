@@ -4,6 +4,7 @@ use super::progress::{ga, with_spinner};
 use clap::Args;
 use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
+use robokrige::dataset::Dataset;
 use robokrige::kinematics::load_optional_robot;
 use robokrige::kriging::{CorrChoice, OptimizerKind, TrendKind};
 use robokrige::methods::{Method, Overrides, params_with};
@@ -107,11 +108,7 @@ pub struct ModelArgs {
 impl ModelArgs {
     /// The fit parameters of `method` (`None`: these options) for `data`
     /// ([`params_with`]: the library's rules and defaults).
-    pub fn resolve(
-        &self,
-        method: Option<&str>,
-        data: &robokrige::dataset::Dataset,
-    ) -> Result<ErrorModelParams> {
+    pub fn resolve(&self, method: Option<&str>, data: &Dataset) -> Result<ErrorModelParams> {
         let method = method.map(Method::from_name).transpose()?;
         params_with(method, &self.overrides()?, data)
     }

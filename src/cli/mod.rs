@@ -38,6 +38,7 @@ mod simulate;
 use clap::{Parser, Subcommand};
 use robokrige::Result;
 use robokrige::model::CoverageWarning;
+use robokrige::report::predict;
 use serde::Serialize;
 use std::path::Path;
 
@@ -172,8 +173,5 @@ pub fn warn<W: std::fmt::Display>(warnings: impl IntoIterator<Item = W>) {
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).
 pub fn print_coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String]>) {
-    eprint!(
-        "{}",
-        robokrige::report::predict::coverage(warnings, total, ids)
-    );
+    eprint!("{}", predict::coverage(warnings, total, ids));
 }
