@@ -93,6 +93,17 @@ impl Default for CompensationOptions {
 }
 
 impl CompensationOptions {
+    /// These options with the loop's settings: iterate or stop after the
+    /// single step, the tolerance on the change (mm), the most iterations.
+    pub fn iterations(self, iterative: bool, tol_mm: f64, max_iter: usize) -> Self {
+        CompensationOptions {
+            iterative,
+            tol_mm,
+            max_iter,
+            ..self
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         if self.tol_mm.is_nan() || self.tol_mm <= 0.0 || self.max_iter == 0 {
             return Err(Error::InvalidParameter(format!(

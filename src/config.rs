@@ -39,7 +39,7 @@ pub fn folder(path: &Path) -> PathBuf {
 /// the run then moves into the config's folder; `-` (standard output) and
 /// an absolute path stay as they are.
 pub fn output_path(path: &Path) -> PathBuf {
-    if path == Path::new("-") || path.is_absolute() {
+    if crate::output::is_stdout(path) || path.is_absolute() {
         return path.to_path_buf();
     }
     std::env::current_dir().map_or_else(|_| path.to_path_buf(), |d| d.join(path))

@@ -222,6 +222,14 @@ pub fn largest_training_rows(rows: usize, k: usize) -> usize {
     rows - rows / k.max(1)
 }
 
+/// The memory check of a `k`-fold CV of named methods on `rows` rows
+/// ([`crate::model::check_fit_rows`]): the largest training fold
+/// ([`largest_training_rows`]), sized as a GPS search on all its rows.
+pub fn check_methods_rows(rows: usize, k: usize) -> Result<Option<crate::kriging::FitPlan>> {
+    let train = largest_training_rows(rows, k);
+    crate::model::check_fit_rows(train, crate::kriging::OptimizerKind::Gps, None)
+}
+
 /// K-fold CV of a named method, refitting it ([`Method::params`] with
 /// `seed`, no nugget for the papers' methods) on every training fold, its
 /// trend selection included; the folds come from `seed` too. `fold_done`

@@ -376,16 +376,22 @@ pub struct HoldoutSplit {
 /// nominal, the D-H calibration, the hybrid and the kinematic-trend Kriging
 /// in JS and EJS, and the `extras`. The Kriging fits start from `base`
 /// (Kriging options and periodic joints; space and trend set per model).
-/// `progress(message)` is called before each model.
+/// `progress(done, message)` is called before each model, `done` counting
+/// it (1 to [`SplitExtras::models`]).
 pub fn holdout_split(
     train: &Dataset,
     test: &Dataset,
     robot: &Robot,
     base: &ErrorModelParams,
     extras: SplitExtras,
-    progress: &dyn Fn(&str),
+    progress: &dyn Fn(usize, &str),
 ) -> Result<HoldoutSplit> {
     use crate::methods::{PAPER_GA_FOLDS, PAPER_PCC_THRESHOLD, PAPER_VARIANCE_SHARE};
+    let started = std::cell::Cell::new(0);
+    let progress = |what: &str| {
+        started.set(started.get() + 1);
+        progress(started.get(), what);
+    };
     let truth = test.errors_or_err()?.to_vec();
     let mut rows = vec![score("nominal", &truth, &vec![[0.0; 3]; truth.len()], 0.0)];
     progress("D-H calibration");

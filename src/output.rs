@@ -68,6 +68,17 @@ fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
     b.tempfile_in(folder(path))
 }
 
+/// Whether an output path is `-`: standard output.
+pub fn is_stdout(path: &Path) -> bool {
+    path == Path::new("-")
+}
+
+/// Create the folder a file is written in, and its parents, if missing.
+pub fn create_folder_of(path: &Path) -> Result<()> {
+    let dir = folder(path);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+}
+
 /// The folder a file is written in (`.` for a bare file name).
 fn folder(path: &Path) -> &Path {
     path.parent()
@@ -83,7 +94,7 @@ fn folder(path: &Path) -> &Path {
 /// output) is always fine.
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
     for (k, out) in outputs.iter().enumerate() {
-        if *out == Path::new("-") {
+        if is_stdout(out) {
             continue;
         }
         let r = resolve(out);

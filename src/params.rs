@@ -224,6 +224,18 @@ impl ErrorModelParams {
         self.robot.as_ref()
     }
 
+    /// The memory check of a fit of `rows` rows with these parameters'
+    /// optimiser, as a command makes it before it starts
+    /// ([`crate::model::check_fit_rows`]: `option` is the command's option
+    /// that takes fewer rows, if it has one).
+    pub fn check_fit_rows(
+        &self,
+        rows: usize,
+        option: Option<&str>,
+    ) -> Result<Option<crate::kriging::FitPlan>> {
+        crate::model::check_fit_rows(rows, self.kriging.get_optimizer(), option)
+    }
+
     /// The robot whose identification Jacobian enters the trend (the
     /// kinematic trend, or the kinematic candidates of a selection), if any.
     pub fn kinematic_robot(&self) -> Option<&Robot> {

@@ -105,7 +105,7 @@ fn a_step_confounded_by_an_order_drift_is_added_with_its_row_or_named_not_separa
         let (data, row) = planted(300, seed);
         let d = diagnose(&data, &options(), &|_| {}).unwrap();
         let names = robokrige::report::diagnose::Names {
-            data: "planted",
+            data: std::path::Path::new("planted"),
             method: "ejs",
         };
         eprintln!("{}", robokrige::report::diagnose::summary(&d, names));

@@ -76,6 +76,18 @@ impl Default for CalibrationOptions {
 }
 
 impl CalibrationOptions {
+    /// The default options with the joints' periodic errors identified or
+    /// not (`joint_harmonics`) and the residual noise per coordinate
+    /// (`noise_mm`, mm; `None`: estimated from a first fit): what a front
+    /// end's calibration flags set.
+    pub fn new(joint_harmonics: bool, noise_mm: Option<f64>) -> Self {
+        CalibrationOptions {
+            noise_mm,
+            joint_harmonics,
+            ..CalibrationOptions::default()
+        }
+    }
+
     /// The MD-H, tool and base errors alone, without joint harmonics: the
     /// D-H calibration of the literature.
     pub fn geometric() -> Self {

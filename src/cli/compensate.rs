@@ -3,7 +3,7 @@
 use super::progress::with_spinner;
 use clap::Args;
 use robokrige::Result;
-use robokrige::compensate::{CommandsOutput, CompensationOptions, compensate};
+use robokrige::compensate::{CommandsOutput, compensate};
 use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
@@ -119,17 +119,12 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     super::check_files(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let commands_out = CommandsOutput::new(&a.output, a.format, &robot)?;
-    let model = AnyModel::load(&a.model)?;
-    model.check_robot(&robot, &a.model.display().to_string())?;
+    let model = AnyModel::load_for(&a.model, &robot)?;
     let start = robot.start_or_home(a.start.as_deref())?;
     let targets = Targets::read(&a.traj, &robot, a.orientation.as_deref(), &start)?;
     super::warn(&targets.warnings);
-    let opts = CompensationOptions {
-        iterative: a.iterative,
-        tol_mm: a.tol,
-        max_iter: a.max_iter,
-        ..targets.compensation_options(&start)
-    };
+    let opts = targets.compensation_options(&start);
+    let opts = opts.iterations(a.iterative, a.tol, a.max_iter);
     let t0 = std::time::Instant::now();
     let res = with_spinner("compensate", |_| {
         compensate(&robot, &model, &targets.traj, &opts)
@@ -139,9 +134,7 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     commands_out.write(&res)?;
     let text = report::iterations(&res, a.iterative, &model.describe(), secs, &a.output);
     say_part!("{text}");
-    if let Some(w) = report::stop_warning(&res, a.tol, a.max_iter) {
-        eprintln!("{w}");
-    }
+    super::warn(report::stop_warning(&res, a.tol, a.max_iter));
     let mut eval = None;
     if let Some(tp) = &a.truth {
         let (ev, runs) = evaluate_on_file(tp, &robot, &targets, &res.commands, &start, a.seed)?;

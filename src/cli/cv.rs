@@ -4,8 +4,7 @@ use super::fit::ModelArgs;
 use super::progress::{ga, of_total, with_bar};
 use clap::Args;
 use robokrige::Result;
-use robokrige::cv::{CvMode, CvPlan, Folds, cross_validate_method, largest_training_rows};
-use robokrige::kriging::OptimizerKind;
+use robokrige::cv::{CvMode, CvPlan, Folds, check_methods_rows, cross_validate_method};
 use robokrige::report::cv as report;
 use std::path::PathBuf;
 
@@ -69,7 +68,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     }
     let data = super::read_data(&a.data)?;
     let params = a.model.resolve(None, &data)?;
-    super::plan_fit("cv", data.len(), params.get_kriging().get_optimizer(), None)?;
+    super::print_plan("cv", params.check_fit_rows(data.len(), None)?);
     let plan = CvPlan {
         mode: a.mode,
         folds: Folds::new(a.groups.as_deref(), a.folds, a.cv_seed),
@@ -78,9 +77,7 @@ pub fn run(a: CvArgs) -> Result<()> {
     plan.validate(data.len())?;
     let params = params.check()?;
     let (res, subset) = with_bar(0, "folds", |pb| plan.run(&data, &params, &of_total(pb)))?;
-    if let Some(h) = subset {
-        eprint!("{}", report::hyper_subset(&h, data.len()));
-    }
+    eprint!("{}", report::hyper_subset(subset.as_ref(), data.len()));
     let text = report::summary(&res, &plan.folds, (&a.data, data.len()), params.params());
     say_part!("{text}");
     let v = report::json(&res, &a.data, params.params())?;
@@ -97,8 +94,7 @@ pub fn run(a: CvArgs) -> Result<()> {
 fn run_methods(a: &CvArgs, list: &str) -> Result<()> {
     let methods = robokrige::methods::parse_methods(list)?;
     let data = super::read_data(&a.data)?;
-    let rows = largest_training_rows(data.len(), a.folds);
-    super::plan_fit("cv", rows, OptimizerKind::Gps, None)?;
+    super::print_plan("cv", check_methods_rows(data.len(), a.folds)?);
     say!("{}", report::methods_header(a.folds, data.len(), a.cv_seed));
     let mut results = Vec::new();
     for m in methods {

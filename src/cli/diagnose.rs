@@ -8,8 +8,8 @@ use robokrige::diagnose::{DiagnoseOptions, DiagnosePlan, Diagnosis};
 use robokrige::kinematics::load_optional_robot;
 use robokrige::plot::effect_plots;
 use robokrige::report::diagnose::{self as report, Extras, Names};
+use robokrige::study::Targets;
 use robokrige::study::diagnosis::{CompensationComparison, DiagnosisBase};
-use robokrige::study::{Targets, load_truth};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -134,12 +134,9 @@ pub struct DiagnoseArgs {
 }
 
 fn options(a: &DiagnoseArgs, data: &Dataset) -> Result<DiagnoseOptions> {
-    let base = robokrige::diagnose::base_params(&a.method, a.seed, !a.no_nugget)?;
-    Ok(DiagnoseOptions::default()
-        .base(&base)
+    Ok(DiagnoseOptions::of_method(&a.method, a.seed, !a.no_nugget)?
         .periodic(robokrige::space::parse_periodic(&a.periodic, &data.q)?)
         .folds(a.folds)
-        .seed(a.seed)
         .permutations(a.permutations)
         .fdr(a.fdr)
         .max_effects(a.max_effects)
@@ -160,20 +157,14 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     let opts = options(&a, &data)?;
     let calibrate = (a.calibrate || a.no_calibrate).then_some(a.calibrate);
     let base = DiagnosisBase::new(data, &opts, calibrate)?;
-    if let Some(cal) = &base.calibration {
-        let line = cal.summary_line();
-        say!("calibrated base: {line}; diagnosing its residual");
-    }
-    let options = ("--rows", "--scan-rows");
-    if let Some(plan) = DiagnosePlan::check_options(&base.data, &opts, options)? {
-        eprintln!("diagnose: {plan}");
-    }
+    say_part!("{}", report::calibrated_base(&base));
+    let plan = DiagnosePlan::check_options(&base.data, &opts, ("--rows", "--scan-rows"))?;
+    super::print_plan("diagnose", plan);
     let d = with_spinner("diagnose", |pb| {
         base.diagnose(&opts, &|msg| pb.set_message(msg.to_string()))
     })?;
-    let data_name = a.data.display().to_string();
     let names = Names {
-        data: &data_name,
+        data: &a.data,
         method: &a.method,
     };
     say_part!("{}", report::summary(&d, names));
@@ -183,7 +174,7 @@ pub fn run(a: DiagnoseArgs) -> Result<()> {
     };
     say_part!("{}", report::plot_lines(a.plots.as_deref(), &plots));
     let compensation = write_and_compare_models(&a, &base, &opts, &d)?;
-    let v = report::json(&d, (&a.data, &a.method), compensation.as_ref())?;
+    let v = report::json(&d, names, compensation.as_ref())?;
     super::json_to(a.json.as_deref(), &v, "diagnosis")?;
     if let Some(path) = &a.report {
         let extras = Extras {
@@ -217,11 +208,9 @@ fn write_and_compare_models(
     let (Some(robot), Some(traj), Some(truth_path)) = (opts.get_robot(), &a.traj, &a.truth) else {
         return Ok(None);
     };
-    let truth = load_truth(truth_path)?;
     let targets = Targets::read(traj, robot, None, &robot.home)?;
     super::warn(&targets.warnings);
-    let on = (robot, &targets);
-    let c = base.compare_compensation(opts, &after, on, (truth_path, &truth), a.seed)?;
+    let c = base.compare_compensation(opts, &after, (robot, &targets), truth_path, a.seed)?;
     say!("{}", report::compensation_line(traj, &c));
     Ok(Some(c))
 }

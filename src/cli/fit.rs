@@ -4,6 +4,7 @@ use super::progress::{ga, with_spinner};
 use clap::Args;
 use robokrige::Result;
 use robokrige::calibration::CalibrationOptions;
+use robokrige::dataset::Dataset;
 use robokrige::kinematics::load_optional_robot;
 use robokrige::kriging::{CorrChoice, OptimizerKind, TrendKind};
 use robokrige::methods::{Method, Overrides, params_with};
@@ -107,11 +108,7 @@ pub struct ModelArgs {
 impl ModelArgs {
     /// The fit parameters of `method` (`None`: these options) for `data`
     /// ([`params_with`]: the library's rules and defaults).
-    pub fn resolve(
-        &self,
-        method: Option<&str>,
-        data: &robokrige::dataset::Dataset,
-    ) -> Result<ErrorModelParams> {
+    pub fn resolve(&self, method: Option<&str>, data: &Dataset) -> Result<ErrorModelParams> {
         let method = method.map(Method::from_name).transpose()?;
         params_with(method, &self.overrides()?, data)
     }
@@ -119,14 +116,11 @@ impl ModelArgs {
     /// The flags given, as the library's overrides.
     fn overrides(&self) -> Result<Overrides> {
         let robot = load_optional_robot(self.robot.as_deref(), self.tool.as_deref())?;
+        let calibration = CalibrationOptions::new(!self.geometric, self.calibration_noise);
         let o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
-            .calibrate((!self.no_calibrate).then_some(CalibrationOptions {
-                noise_mm: self.calibration_noise,
-                joint_harmonics: !self.geometric,
-                ..CalibrationOptions::default()
-            }))
+            .calibrate((!self.no_calibrate).then_some(calibration))
             .with(self.space, Overrides::space)
             .with(self.trend, Overrides::trend)
             .with(self.starts, Overrides::starts)
@@ -164,8 +158,7 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let data = super::read_data(data_path)?;
     let params = a.model.resolve(a.method.as_deref(), &data)?.check()?;
-    let optimizer = params.params().get_kriging().get_optimizer();
-    super::plan_fit("fit", data.len(), optimizer, None)?;
+    super::print_plan("fit", params.params().check_fit_rows(data.len(), None)?);
     let t0 = std::time::Instant::now();
     let model = match &a.method {
         Some(name) => with_spinner(name, |pb| params.fit_with_progress(&data, &ga(pb)))?,
@@ -209,22 +202,12 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     )?;
     let model = ErrorModel::load(model_path)?;
     let data = super::read_data(poses)?;
-    model.check_dataset(&data)?;
-    let pred = model.predict_dataset(&data)?;
-    let assumed = model.assumed_direction_sensitivity(&data)?;
-    if assumed > 0.0 {
-        let n = data.n_joints();
-        eprintln!("{}", predict::direction_warning(poses, n, assumed));
-    }
-    let coverage = model.coverage(&data.q, &data.dir, &pred.mean, Some(&pred.std))?;
-    super::print_coverage(&coverage, data.len(), data.ids.as_deref());
-    let noise = model.predictive_noise_std()?;
-    robokrige::dataset::write_predictions(output, &data, &pred.mean, &pred.std, noise)?;
-    let (v, line) = predict::summary(&data, &pred.mean, &coverage, output);
+    let p = model.predict_campaign(&data)?;
+    super::warn(predict::direction_warning(poses, &data, &p));
+    super::print_coverage(&p.coverage, data.len(), data.ids.as_deref());
+    p.write(output, &data)?;
+    let (v, text) = predict::summary(&data, &p, output);
     super::json_to(a.json.as_deref(), &v, "prediction summary")?;
-    if let Some(line) = line {
-        say!("{line}");
-    }
-    say!("wrote {}", output.display());
+    say_part!("{text}");
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! model, universal Kriging with the kinematic trend, in JS and EJS.
 
 use super::fit::KrigingArgs;
-use super::progress::{steps_of, with_bar};
+use super::progress::{steps, steps_of, with_bar};
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
@@ -89,8 +89,7 @@ pub struct HoldoutArgs {
 fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<ErrorModelParams> {
     let o = Overrides::new().seed(a.seed).periodic(a.periodic.as_str());
     let base = params_with(None, &a.kriging.apply(o), rows)?;
-    let optimizer = base.get_kriging().get_optimizer();
-    super::plan_fit("holdout", rows.len(), optimizer, option)?;
+    super::print_plan("holdout", base.check_fit_rows(rows.len(), option)?);
     Ok(base)
 }
 
@@ -122,10 +121,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
         ga: a.ga,
     };
     let split = with_bar(extras.models() as u64, "holdout", |pb| {
-        holdout_split(&train, &test, &robot, &base, extras, &|what| {
-            pb.inc(1);
-            pb.set_message(what.to_string());
-        })
+        holdout_split(&train, &test, &robot, &base, extras, &steps(pb))
     })?;
     let sizes = (train.len(), test.len());
     say_part!("{}", report::split(&a.data, sizes, &base, &split));

@@ -68,11 +68,8 @@ pub struct ImportArgs {
 pub fn run(a: ImportArgs) -> Result<()> {
     let inputs = [Some(a.export.as_path()), a.map_file.as_deref()];
     super::check_files(&inputs, &[Some(a.output.as_path()), a.json.as_deref()])?;
-    let mut spec = ImportSpec::read(a.map_file.as_deref(), &a.map)?;
-    spec.delimiter = a.delimiter.or(spec.delimiter);
-    spec.decimal = a.decimal.or(spec.decimal);
-    spec.angles = a.angles.unwrap_or(spec.angles);
-    spec.lengths = a.lengths.unwrap_or(spec.lengths);
+    let spec = ImportSpec::read(a.map_file.as_deref(), &a.map)?;
+    let spec = spec.overridden(a.delimiter, a.decimal, a.angles, a.lengths);
     let robot = a.robot.as_deref().map(kinematics::load_robot).transpose()?;
     let mut imported = import_for(&a.export, &spec, robot.as_ref())?;
     say_part!("{}", report::read(&imported, &spec, &a.export));

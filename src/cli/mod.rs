@@ -38,6 +38,7 @@ mod simulate;
 use clap::{Parser, Subcommand};
 use robokrige::Result;
 use robokrige::model::CoverageWarning;
+use robokrige::report::predict;
 use serde::Serialize;
 use std::path::Path;
 
@@ -138,7 +139,7 @@ fn dispatch(command: Command) -> Result<()> {
 pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Result<()> {
     let Some(path) = path else { return Ok(()) };
     let text = robokrige::output::json_text(value, context)?;
-    if is_stdout(path) {
+    if robokrige::output::is_stdout(path) {
         print!("{text}");
         return Ok(());
     }
@@ -148,24 +149,12 @@ pub fn json_to(path: Option<&Path>, value: &impl Serialize, context: &str) -> Re
 /// Check a command's files before any work; `None`s are options not given.
 pub use robokrige::output::check_given as check_files;
 
-/// Whether an output path is `-` (standard output).
-pub fn is_stdout(path: &Path) -> bool {
-    path == Path::new("-")
-}
-
-/// Refuse a fit of `rows` rows that would exceed the memory limit
-/// ([`robokrige::model::check_fit_rows`]: `option` takes fewer rows, if
-/// the command has one); print the plan for large inputs.
-pub fn plan_fit(
-    command: &str,
-    rows: usize,
-    optimizer: robokrige::kriging::OptimizerKind,
-    option: Option<&str>,
-) -> Result<()> {
-    if let Some(plan) = robokrige::model::check_fit_rows(rows, optimizer, option)? {
+/// Print the plan of a large fit or diagnosis, as a command's memory
+/// check returned it ([`robokrige::model::check_fit_rows`]).
+pub fn print_plan(command: &str, plan: Option<impl std::fmt::Display>) {
+    if let Some(plan) = plan {
         eprintln!("{command}: {plan}");
     }
-    Ok(())
 }
 
 /// Read a measurement CSV and print its plausibility warnings on stderr.
@@ -184,8 +173,5 @@ pub fn warn<W: std::fmt::Display>(warnings: impl IntoIterator<Item = W>) {
 
 /// Print the points that leave the campaign's coverage (at most 20 listed).
 pub fn print_coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String]>) {
-    eprint!(
-        "{}",
-        robokrige::report::predict::coverage(warnings, total, ids)
-    );
+    eprint!("{}", predict::coverage(warnings, total, ids));
 }

@@ -88,15 +88,8 @@ pub struct PlanArgs {
 }
 
 pub fn run(a: PlanArgs) -> Result<()> {
-    super::check_files(
-        &[
-            a.campaign.as_deref(),
-            a.pool.as_deref(),
-            a.region.as_deref(),
-            a.prior.as_deref(),
-        ],
-        &[Some(a.output.as_path()), a.json.as_deref()],
-    )?;
+    let inputs = [&a.campaign, &a.pool, &a.region, &a.prior].map(Option::as_deref);
+    super::check_files(&inputs, &[Some(a.output.as_path()), a.json.as_deref()])?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     Plan::check_output(&a.output, a.format, &robot)?;
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;
@@ -121,11 +114,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
     })?;
     let forecast = Forecast::of_plan(&plan, campaign.as_ref())?;
     plan.write(&a.output, a.format, &robot)?;
-    super::json_to(
-        a.json.as_deref(),
-        &report::json(&plan, forecast.as_ref()),
-        "plan",
-    )?;
+    let v = report::json(&plan, forecast.as_ref());
+    super::json_to(a.json.as_deref(), &v, "plan")?;
     say_part!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));
     say!("wrote {}", a.output.display());
     Ok(())

@@ -95,7 +95,7 @@ fn show(a: ShowArgs) -> Result<()> {
             robokrige::output::write_text(path, &text)?;
             eprintln!("robot '{}' ({digest}) -> {}", robot.name, path.display());
         }
-        None if !a.json.as_deref().is_some_and(super::is_stdout) => say_part!("{text}"),
+        None if !a.json.as_deref().is_some_and(robokrige::output::is_stdout) => say_part!("{text}"),
         None => {}
     }
     Ok(())

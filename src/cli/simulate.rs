@@ -3,7 +3,7 @@
 use clap::Args;
 use robokrige::report::simulate as report;
 use robokrige::sim::{CampaignKind, CampaignSpec, Effect, parse_ranges, simulate, truth_path_for};
-use robokrige::{Error, Result, kinematics};
+use robokrige::{Result, kinematics};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -68,17 +68,12 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let mut spec = CampaignSpec::new(a.kind, a.seed);
-    spec.poses = a.poses.unwrap_or(spec.poses);
+    let mut spec = CampaignSpec::new(a.kind, a.seed).sizes(a.poses, a.diameter, a.cycles);
     spec.effects = Effect::parse_all(&a.effects)?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
-    spec.circle_diameter_mm = a.diameter.unwrap_or(spec.circle_diameter_mm);
-    spec.indexing_cycles = a.cycles.unwrap_or(spec.indexing_cycles);
     spec.validate()?;
     let robot = kinematics::load_robot(&a.robot)?;
-    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
+    robokrige::output::create_folder_of(&a.output)?;
     let truth_path = a.truth.clone().unwrap_or_else(|| truth_path_for(&a.output));
     let outputs = [Some(&*a.output), Some(&*truth_path), a.json.as_deref()];
     super::check_files(&[], &outputs)?;

@@ -121,6 +121,25 @@ impl ImportSpec {
         Ok(spec)
     }
 
+    /// The spec with the settings given beside the mapping file (the
+    /// command line's `--delimiter`, `--decimal`, `--angles`, `--lengths`):
+    /// each one given replaces the file's.
+    pub fn overridden(
+        self,
+        delimiter: Option<char>,
+        decimal: Option<char>,
+        angles: Option<AngleUnit>,
+        lengths: Option<LengthUnit>,
+    ) -> Self {
+        ImportSpec {
+            delimiter: delimiter.or(self.delimiter),
+            decimal: decimal.or(self.decimal),
+            angles: angles.unwrap_or(self.angles),
+            lengths: lengths.unwrap_or(self.lengths),
+            ..self
+        }
+    }
+
     /// [`ImportSpec::map`] of each list in order: a target named twice
     /// among them all is refused.
     pub fn map_all(&mut self, lists: &[String]) -> Result<()> {

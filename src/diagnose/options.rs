@@ -92,6 +92,15 @@ impl Default for DiagnoseOptions {
 }
 
 impl DiagnoseOptions {
+    /// The default options on the base model `method`
+    /// ([`base_params`](super::base_params): ejs, js, or a paper's method,
+    /// with a nugget if `nugget`), `seed` seeding its fit, the folds and
+    /// the resamples: the set-up of `robokrige diagnose`.
+    pub fn of_method(method: &str, seed: u64, nugget: bool) -> Result<Self> {
+        let base = super::base_params(method, seed, nugget)?;
+        Ok(DiagnoseOptions::default().base(&base).seed(seed))
+    }
+
     /// The options as [`diagnose`](super::diagnose) runs them on a campaign of `rows` rows:
     /// above [`DiagnoseOptions::refit_rows`] (a whole campaign, closed-form
     /// CV) every fit converges ξ on one seeded subset of at most that many

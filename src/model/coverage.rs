@@ -127,7 +127,51 @@ pub struct CheckedPrediction {
     pub flagged: Option<Vec<usize>>,
 }
 
+/// A pose file's prediction as `robokrige predict` writes it
+/// ([`ErrorModel::predict_campaign`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CampaignPrediction {
+    /// Mean and √MSE of every row.
+    pub prediction: super::Prediction,
+    /// The model's noise standard deviation per axis
+    /// ([`ErrorModel::predictive_noise_std`]), mm.
+    pub noise_std: [f64; 3],
+    /// The rows outside the model's coverage ([`ErrorModel::coverage`]).
+    pub coverage: Vec<CoverageWarning>,
+    /// What the assumed direction of the first pose is worth
+    /// ([`ErrorModel::assumed_direction_sensitivity`]), mm; 0 when the
+    /// file gives its directions.
+    pub assumed_direction_mm: f64,
+}
+
+impl CampaignPrediction {
+    /// Write the prediction CSV of `data`'s rows to `path`
+    /// ([`crate::dataset::write_predictions`]).
+    pub fn write(&self, path: &std::path::Path, data: &crate::dataset::Dataset) -> Result<()> {
+        let p = &self.prediction;
+        crate::dataset::write_predictions(path, data, &p.mean, &p.std, self.noise_std)
+    }
+}
+
 impl ErrorModel {
+    /// Predict every row of the pose file `data`, checked to have this
+    /// model's joints, with what a report of it needs: the model's noise,
+    /// the rows outside its coverage and the weight of an assumed first
+    /// direction.
+    pub fn predict_campaign(&self, data: &crate::dataset::Dataset) -> Result<CampaignPrediction> {
+        self.check_dataset(data)?;
+        let prediction = self.predict_dataset(data)?;
+        let assumed_direction_mm = self.assumed_direction_sensitivity(data)?;
+        let (mean, std) = (&prediction.mean, &prediction.std);
+        let coverage = self.coverage(&data.q, &data.dir, mean, Some(std))?;
+        Ok(CampaignPrediction {
+            noise_std: self.predictive_noise_std()?,
+            prediction,
+            coverage,
+            assumed_direction_mm,
+        })
+    }
+
     /// Error unless the poses of `data` have this model's joints.
     pub fn check_dataset(&self, data: &crate::dataset::Dataset) -> Result<()> {
         if data.n_joints() == self.n_joints() {

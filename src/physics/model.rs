@@ -329,6 +329,14 @@ impl AnyModel {
         }
     }
 
+    /// [`AnyModel::load`] of a model for `robot`, refused with the file's
+    /// name when it is for another ([`AnyModel::check_robot`]).
+    pub fn load_for(path: &Path, robot: &Robot) -> Result<Self> {
+        let model = Self::load(path)?;
+        model.check_robot(robot, &path.display().to_string())?;
+        Ok(model)
+    }
+
     /// Error unless the model is for `robot`: a Kriging model checks the
     /// robot it records ([`ErrorModel::check_robot`]), a physics model its
     /// nominal robot's kinematic table and tool (`source_name`: the model

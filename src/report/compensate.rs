@@ -66,16 +66,17 @@ pub fn iterations(
     s
 }
 
-/// The warning for an iterative compensation that did not converge below
-/// `tol` mm within `max_iter` iterations, if it did not.
+/// The warning (without its `warning: ` prefix) for an iterative
+/// compensation that did not converge below `tol` mm within `max_iter`
+/// iterations, if it did not.
 pub fn stop_warning(res: &Compensated, tol: f64, max_iter: usize) -> Option<String> {
     match res.stop {
         Stop::Stalled => Some(format!(
-            "warning: the change stalled above {tol} mm at direction reversals; λ still switching at points {}",
+            "the change stalled above {tol} mm at direction reversals; λ still switching at points {}",
             index_list(&res.unsettled)
         )),
         Stop::MaxIterations => Some(format!(
-            "warning: the change did not fall below {tol} mm in {max_iter} iterations"
+            "the change did not fall below {tol} mm in {max_iter} iterations"
         )),
         Stop::Converged | Stop::SingleStep => None,
     }

@@ -18,8 +18,12 @@ pub fn how(folds: &Folds, k: usize) -> String {
 }
 
 /// The lines of a closed-form CV whose hyperparameters were chosen on a
-/// subset of the campaign's `rows` rows: that fit, and the refit of all rows.
-pub fn hyper_subset(h: &HyperSubset, rows: usize) -> String {
+/// subset of the campaign's `rows` rows: that fit, and the refit of all
+/// rows; empty when they were chosen on all rows (`h` is `None`).
+pub fn hyper_subset(h: Option<&HyperSubset>, rows: usize) -> String {
+    let Some(h) = h else {
+        return String::new();
+    };
     format!(
         "hyperparameters chosen on the first {} rows in {:.1} s\nrefit on all {rows} rows at those values in {:.1} s\n",
         h.rows, h.seconds, h.refit_seconds

@@ -2,24 +2,24 @@
 
 use super::xyz;
 use crate::diagnose::{CvStats, Diagnosis, EffectReport, LeftOut};
-use crate::study::diagnosis::CompensationComparison;
+use crate::study::diagnosis::{CompensationComparison, DiagnosisBase};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The JSON of `diagnose --json`: the diagnosis with the campaign file
-/// `data`, the base `method` and the compensation before and after, if
-/// there was one.
+/// and the base method of `names`, and the compensation before and after,
+/// if there was one.
 pub fn json(
     d: &Diagnosis,
-    (data, method): (&Path, &str),
+    names: Names<'_>,
     compensation: Option<&CompensationComparison>,
 ) -> crate::Result<serde_json::Value> {
     let mut v = serde_json::to_value(d).map_err(|e| crate::Error::Json {
         context: "diagnosis".into(),
         source: e,
     })?;
-    v["data"] = serde_json::json!(data);
-    v["method"] = serde_json::json!(method);
+    v["data"] = serde_json::json!(names.data);
+    v["method"] = serde_json::json!(names.method);
     if let Some(c) = compensation {
         v["compensation"] = serde_json::json!(c);
     }
@@ -31,7 +31,7 @@ pub fn json(
 #[derive(Debug, Clone, Copy)]
 pub struct Names<'a> {
     /// The campaign file, as the user gave it.
-    pub data: &'a str,
+    pub data: &'a Path,
     /// The base model's method name.
     pub method: &'a str,
 }
@@ -44,7 +44,7 @@ pub fn summary(d: &Diagnosis, names: Names<'_>) -> String {
     let _ = writeln!(
         s,
         "{} ({} rows{}): {}-fold {} CV ({}), {} candidates scanning {} parameter values, up to {} resamples, FDR {}, {:.1} s",
-        names.data,
+        names.data.display(),
         d.before.residuals.len(),
         if d.scanned_rows > 0 && d.scanned_rows < d.rows {
             format!(
@@ -249,6 +249,18 @@ pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
     out
 }
 
+/// The line on the calibration whose residual is diagnosed, if there is
+/// one ([`DiagnosisBase::calibration`]); empty without.
+pub fn calibrated_base(base: &DiagnosisBase) -> String {
+    match &base.calibration {
+        Some(cal) => {
+            let line = cal.summary_line();
+            format!("calibrated base: {line}; diagnosing its residual\n")
+        }
+        None => String::new(),
+    }
+}
+
 /// The plots written into the folder `dir` (`--plots`), one line each; or,
 /// when a folder was given but no effect was added, that it holds none.
 pub fn plot_lines(dir: Option<&Path>, plots: &[PathBuf]) -> String {
@@ -353,7 +365,7 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
 
 /// The title and the paragraphs on how the diagnosis ran.
 fn setup_paragraphs(s: &mut String, d: &Diagnosis, names: Names<'_>) {
-    let _ = writeln!(s, "# Diagnosis of `{}`\n", names.data);
+    let _ = writeln!(s, "# Diagnosis of `{}`\n", names.data.display());
     let _ = writeln!(
         s,
         "Base model `{}`; out-of-fold residuals of a {}-fold CV {} (fold seed {}); \

@@ -2,7 +2,7 @@
 //! prediction.
 
 use crate::dataset::Dataset;
-use crate::model::CoverageWarning;
+use crate::model::{CampaignPrediction, CoverageWarning};
 use crate::stats::summarize;
 use crate::vec3::residuals;
 use std::fmt::Write as _;
@@ -38,45 +38,51 @@ pub fn coverage(warnings: &[CoverageWarning], total: usize, ids: Option<&[String
     s
 }
 
-/// The warning for a pose file `poses` of `joints` joints without
-/// direction columns, when reversing the first pose's assumed λ changes its
-/// prediction by `assumed` mm (> 0).
-pub fn direction_warning(poses: &Path, joints: usize, assumed: f64) -> String {
-    format!(
-        "warning: {} has no dir1..dir{joints} columns: λ is derived from the row order, and the \
-         first pose gets λ = +1 on every joint (assumed; a joint that has not moved yet keeps it). \
-         Reversing it changes that pose's prediction by {assumed:.3} mm: give the dir columns, or put \
-         the pose the robot came from first.",
-        poses.display()
-    )
+/// The warning (without its `warning: ` prefix) for a pose file `poses`
+/// without direction columns whose first pose's assumed λ changes its
+/// prediction `p` ([`CampaignPrediction::assumed_direction_mm`]); none when
+/// it does not.
+pub fn direction_warning(poses: &Path, data: &Dataset, p: &CampaignPrediction) -> Option<String> {
+    let (joints, assumed) = (data.n_joints(), p.assumed_direction_mm);
+    (assumed > 0.0).then(|| {
+        format!(
+            "{} has no dir1..dir{joints} columns: λ is derived from the row order, and the \
+             first pose gets λ = +1 on every joint (assumed; a joint that has not moved yet keeps it). \
+             Reversing it changes that pose's prediction by {assumed:.3} mm: give the dir columns, or put \
+             the pose the robot came from first.",
+            poses.display()
+        )
+    })
 }
 
-/// The summary of the prediction `mean` of `data`, written to `output`:
-/// the JSON of `predict --json` and, when `data` has measured errors, the
-/// line that compares them before and after subtracting the prediction.
+/// The summary of the prediction `p` of `data`, written to `output`: the
+/// JSON of `predict --json`, and the text `predict` prints: when `data`
+/// has measured errors, a line that compares them before and after
+/// subtracting the prediction; then the file written.
 pub fn summary(
     data: &Dataset,
-    mean: &[[f64; 3]],
-    coverage: &[CoverageWarning],
+    p: &CampaignPrediction,
     output: &Path,
-) -> (serde_json::Value, Option<String>) {
+) -> (serde_json::Value, String) {
+    let (mean, coverage) = (&p.prediction.mean, &p.coverage);
+    let wrote = format!("wrote {}\n", output.display());
     let Some(e) = &data.errors else {
         let v = serde_json::json!({"poses": data.len(), "output": output,
             "coverage_warnings": coverage});
-        return (v, None);
+        return (v, wrote);
     };
     let before = summarize(e);
     let after = summarize(&residuals(e, mean));
     let v = serde_json::json!({"poses": data.len(), "output": output,
         "measured": before, "after_subtracting_prediction": after,
         "coverage_warnings": coverage});
-    let line = format!(
-        "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})",
+    let text = format!(
+        "{} poses: mean 3D error {:.4} mm; after subtracting the prediction {:.4} mm (max {:.4} → {:.4})\n{wrote}",
         data.len(),
         before.mean_3d_mm,
         after.mean_3d_mm,
         before.max_3d_mm,
         after.max_3d_mm
     );
-    (v, Some(line))
+    (v, text)
 }

@@ -88,6 +88,23 @@ impl CampaignSpec {
         }
     }
 
+    /// The spec with the sizes given (`simulate`'s `--poses`, `--diameter`,
+    /// `--cycles`); each one not given keeps its value, the kind's default
+    /// after [`new`](Self::new).
+    pub fn sizes(
+        self,
+        poses: Option<usize>,
+        circle_diameter_mm: Option<f64>,
+        indexing_cycles: Option<usize>,
+    ) -> Self {
+        CampaignSpec {
+            poses: poses.unwrap_or(self.poses),
+            circle_diameter_mm: circle_diameter_mm.unwrap_or(self.circle_diameter_mm),
+            indexing_cycles: indexing_cycles.unwrap_or(self.indexing_cycles),
+            ..self
+        }
+    }
+
     /// Refuse a setting the kind does not use (it would be silently
     /// ignored): a field the kind ignores must keep the value [`new`](Self::new)
     /// gives it. `poses` is not used by an indexing or cross-talk campaign

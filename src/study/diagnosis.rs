@@ -76,17 +76,18 @@ impl DiagnosisBase {
 
     /// The models before the diagnosis ([`DiagnosisBase::model`] without
     /// extras) and `after` it compared on `targets`
-    /// ([`compare_compensation`]).
+    /// ([`compare_compensation`]) on the simulator truth file `truth_path`.
     pub fn compare_compensation(
         &self,
         opts: &DiagnoseOptions,
         after: &ErrorModel,
         (robot, targets): (&Robot, &Targets),
-        truth: (&Path, &Truth),
+        truth_path: &Path,
         seed: u64,
     ) -> Result<CompensationComparison> {
+        let truth = super::load_truth(truth_path)?;
         let before = self.model(opts, &[])?;
-        compare_compensation(robot, targets, truth, [&before, after], seed)
+        compare_compensation(robot, targets, (truth_path, &truth), [&before, after], seed)
     }
 
     /// The model of the diagnosed rows with `extras` as inputs
