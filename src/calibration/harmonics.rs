@@ -54,7 +54,7 @@
 //!
 //! The coefficients are then fitted to the geometric residual beside the
 //! geometric directions, which are refitted with them, when that lowers
-//! the residual by more than the level-`α` bound of χ²ₖ ([`chi2_bound`],
+//! the residual by more than the level-`α` bound of χ²ₖ (`chi2_bound`,
 //! `k` the directions seen); otherwise beside the backlash alone, the
 //! geometry kept (see `Geometric::with_harmonics` in the parent module).
 //!
