@@ -112,9 +112,8 @@ fn one_file_holds_the_calibration_and_predicts_their_sum() {
 /// `robot calibrated`, through the binary.
 #[test]
 fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
-    let dir = std::env::temp_dir().join(format!("robokrige-calibrated-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = |f: &str| dir.join(f).display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
     let ds_lhs = ds("comau_lhs.csv");
     let fit = |out: &str, extra: &[&str]| quick_fit(&ds_lhs, &p(out), extra);
     let (c, out, err) = fit("cal.json", &[]);
@@ -123,10 +122,12 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
     let (c, _, err) = fit("raw.json", &["--no-calibrate"]);
     assert_eq!(c, 0, "{err}");
     let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("cal.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("cal.json")).unwrap())
+            .unwrap();
     assert_eq!(v["version"], 4);
     let raw: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("raw.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("raw.json")).unwrap())
+            .unwrap();
     assert!(raw.get("calibration").is_none());
     // predict reads it
     let (c, _, err) = rk(&[
@@ -157,7 +158,8 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
         ]);
         assert_eq!(c, 0, "{err}");
         let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join(&json)).unwrap())
+                .unwrap();
         let (b, a) = (
             v["before"]["mean_abs_mm"].as_f64().unwrap(),
             v["after"]["mean_abs_mm"].as_f64().unwrap(),
@@ -192,7 +194,7 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
         assert_eq!(c, 0, "{err}");
         assert_eq!(stdout.contains("calibrated base:"), calibrated, "{stdout}");
         let d: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join(out)).unwrap()).unwrap();
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join(out)).unwrap()).unwrap();
         assert_eq!(
             d["calibration"]["parameters"].is_array(),
             calibrated,
@@ -216,14 +218,12 @@ fn fit_predict_compensate_diagnose_from_one_calibrated_file() {
     let (c, _, err) = rk(&["robot", "calibrated", &p("raw.json"), "-o", &p("x.toml")]);
     assert_eq!(c, 1, "{err}");
     assert!(err.contains("no calibration"), "{err}");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
 fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_the_table() {
-    let dir = std::env::temp_dir().join(format!("robokrige-harmonic-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = |f: &str| dir.join(f).display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
     let data = ds("comau_harmonic.csv");
     let fit = |out: &str, extra: &[&str]| {
         let extra: Vec<&str> = ["--json", "-"].iter().chain(extra).copied().collect();
@@ -247,5 +247,4 @@ fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_th
     );
     let (_, _, err) = rk(&["robot", "calibrated", &p("g.json"), "-o", &p("g.toml")]);
     assert!(!err.contains("joint harmonics"), "{err}");
-    std::fs::remove_dir_all(dir).ok();
 }

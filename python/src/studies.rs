@@ -395,12 +395,9 @@ pub fn diagnose(
     let p = Progress::new(progress, &cancel);
     let step = AtomicUsize::new(0);
     let out = interrupt::run(py, &cancel, || {
-        let base = robokrige::diagnose::base_params(method, seed, nugget)?;
-        let o = DiagnoseOptions::default()
-            .base(&base)
+        let o = DiagnoseOptions::of_method(method, seed, nugget)?
             .periodic(parse_periodic(periodic, &d.q)?)
             .folds(folds)
-            .seed(seed)
             .permutations(permutations)
             .fdr(fdr)
             .max_effects(max_effects)
@@ -413,7 +410,7 @@ pub fn diagnose(
                     .transpose()?,
             )
             .cancel(cancel.clone());
-        let optimizer = crate::access::optimizer(base.get_kriging());
+        let optimizer = crate::access::optimizer(o.get_kriging());
         robokrige::model::check_fit_memory(d.len(), optimizer, |n| {
             format!("e.g. the first {n} rows")
         })?;

@@ -156,6 +156,17 @@ impl JointHarmonic {
     }
 }
 
+/// The harmonics of each joint (1-based), joints in order.
+pub fn by_joint(
+    harmonics: &[JointHarmonic],
+) -> std::collections::BTreeMap<usize, Vec<&JointHarmonic>> {
+    let mut out = std::collections::BTreeMap::<usize, Vec<&JointHarmonic>>::new();
+    for h in harmonics {
+        out.entry(h.joint).or_default().push(h);
+    }
+    out
+}
+
 /// The joint values `q` with every harmonic's deviation added.
 pub fn deviated(harmonics: &[JointHarmonic], q: &[f64]) -> Vec<f64> {
     let mut out = q.to_vec();
@@ -265,7 +276,9 @@ pub(crate) fn backlash_columns(
         .collect()
 }
 
-/// The two stacked columns (3m each) of joint `j` (0-based) at `period`.
+/// The two stacked columns (3m each, x, y, z per pose) of joint `j`
+/// (0-based) at `period`: [`crate::features::jacobian_sin_cos_at`], laid
+/// out as the residual is.
 fn columns(
     jac: &[Matrix3xX<f64>],
     joints: &[Vec<f64>],
@@ -273,17 +286,9 @@ fn columns(
     period: f64,
 ) -> [DVector<f64>; 2] {
     let w = std::f64::consts::TAU / period;
-    let m = joints.len();
-    let mut s = DVector::zeros(3 * m);
-    let mut c = DVector::zeros(3 * m);
-    for (k, (q, jq)) in joints.iter().zip(jac).enumerate() {
-        let (sn, cs) = (w * q[j]).sin_cos();
-        for a in 0..3 {
-            s[3 * k + a] = jq[(a, j)] * sn;
-            c[3 * k + a] = jq[(a, j)] * cs;
-        }
-    }
-    [s, c]
+    let c = crate::features::jacobian_sin_cos_at(jac, joints, j + 1, |q| w * q[j]);
+    let stacked = |f: usize| DVector::from_fn(3 * joints.len(), |i, _| c[3 * f + i % 3][i / 3]);
+    [stacked(0), stacked(1)]
 }
 
 /// `A⁻¹b` of a symmetric 2×2 `A = [a₀ a₁; a₁ a₂]`, or `None` if `A` is

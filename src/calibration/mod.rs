@@ -21,7 +21,8 @@
 //! By default ([`CalibrationOptions::joint_harmonics`]) the calibration
 //! then looks for the periodic transmission errors of the joints' gears on
 //! what the geometric fit leaves ([`harmonics`]), adds those the noise
-//! cannot explain, and refits the geometric directions beside them.
+//! cannot explain, and refits the geometric directions beside them when
+//! that lowers the residual significantly.
 //!
 //! A [`Calibration`] predicts the kinematic part of the error,
 //! `δ̂_cal(q) = P_cal(q + δq(q)) − P_nom(q)` (`δq` the joint harmonics, zero
@@ -218,7 +219,11 @@ pub fn calibrate_both(
     if !opts.joint_harmonics {
         return Ok((geometric.clone(), geometric));
     }
-    let mut full = stage.with_harmonics(Some(&data.dir))?;
+    // the stage fitted with the geometric options: the full one records
+    // the options asked for
+    let mut full = stage
+        .with_harmonics(Some(&data.dir))?
+        .unwrap_or_else(|| geometric.clone());
     full.options = opts.clone();
     Ok((geometric, full))
 }
@@ -289,11 +294,12 @@ impl<'a> Geometric<'a> {
     /// The calibration the options ask for: with the joint harmonics
     /// ([`Geometric::with_harmonics`], `dirs` as there) or geometric.
     fn finish(&self, dirs: Option<&[Vec<f64>]>) -> Result<Calibration> {
-        if self.opts.joint_harmonics {
-            self.with_harmonics(dirs)
+        let found = if self.opts.joint_harmonics {
+            self.with_harmonics(dirs)?
         } else {
-            self.calibration(&self.fit, None)
-        }
+            None
+        };
+        found.map_or_else(|| self.calibration(&self.fit, None), Ok)
     }
 
     /// The joint harmonics searched on the geometric residual (see
@@ -313,14 +319,15 @@ impl<'a> Geometric<'a> {
     /// each joint that reverses (`∂P/∂q_j · λ_j`, a step of the joint
     /// with the direction) is refitted beside each candidate and left to
     /// the Kriging: a harmonic must not take up a direction effect.
-    fn with_harmonics(&self, dirs: Option<&[Vec<f64>]>) -> Result<Calibration> {
+    /// `None` when no harmonic passes: the geometric calibration stands.
+    fn with_harmonics(&self, dirs: Option<&[Vec<f64>]>) -> Result<Option<Calibration>> {
         let (joints, targets, nominal) = (self.joints, self.targets, self.nominal);
         let pjac = harmonics::jacobians(nominal, joints)?;
         let geometric = &self.jac * self.sj.basis(self.k);
         let backlash = harmonics::backlash_columns(&pjac, dirs);
         let found = harmonics::search(nominal, joints, &pjac, &self.fit.r, &geometric, &backlash);
         if found.chosen.is_empty() {
-            return self.calibration(&self.fit, None);
+            return Ok(None);
         }
         let residual = |p: &[f64], h: &[JointHarmonic]| {
             let moved: Vec<Vec<f64>> = joints.iter().map(|q| harmonics::deviated(h, q)).collect();
@@ -347,11 +354,12 @@ impl<'a> Geometric<'a> {
         let mut fit = fit_subspace(nominal, joints, &shifted, &self.sj, &self.fit.u, self.opts)?;
         fit.r = residual(&fit.p, &joint.harmonics);
         let gain = (kept_fit.r.norm_squared() - fit.r.norm_squared()) / found.noise;
-        if gain > harmonics::chi2_bound(self.k, harmonics::FALSE_ALARM) {
-            self.calibration(&fit, Some(joint))
+        let cal = if gain > harmonics::chi2_bound(self.k, harmonics::FALSE_ALARM) {
+            self.calibration(&fit, Some(joint))?
         } else {
-            self.calibration(&kept_fit, Some(kept))
-        }
+            self.calibration(&kept_fit, Some(kept))?
+        };
+        Ok(Some(cal))
     }
 
     /// The calibration of the geometric fit `fit` (this stage's or the
@@ -801,10 +809,9 @@ impl Calibration {
         let harmonics = if self.harmonics.is_empty() {
             String::new()
         } else {
-            let per_joint: Vec<String> = (1..=self.nominal.dof())
-                .map(|j| (j, self.harmonics.iter().filter(|h| h.joint == j).count()))
-                .filter(|(_, k)| *k > 0)
-                .map(|(j, k)| format!("q{j} {k}"))
+            let per_joint: Vec<String> = harmonics::by_joint(&self.harmonics)
+                .iter()
+                .map(|(j, of)| format!("q{j} {}", of.len()))
                 .collect();
             format!(
                 "; {} joint harmonics ({})",

@@ -118,14 +118,9 @@ pub fn calibration(c: &Calibration) -> String {
 /// One line per joint with harmonics: how many, their periods, and the
 /// largest at the joint and at the TCP.
 pub fn joint_harmonics(c: &Calibration) -> Vec<String> {
-    let h = c.harmonics();
-    let mut joints: Vec<usize> = h.iter().map(|h| h.joint).collect();
-    joints.sort_unstable();
-    joints.dedup();
-    joints
+    crate::calibration::harmonics::by_joint(c.harmonics())
         .into_iter()
-        .map(|j| {
-            let of: Vec<_> = h.iter().filter(|h| h.joint == j).collect();
+        .map(|(j, of)| {
             let (lo, hi) = of.iter().fold((f64::INFINITY, 0.0f64), |(a, b), h| {
                 (a.min(h.period_deg), b.max(h.period_deg))
             });
