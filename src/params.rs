@@ -29,8 +29,8 @@ use crate::kinematics::Robot;
 use crate::kriging::{Hyperparameters, KrigingOptions, OptimizerKind, TrainingInputs, Trend};
 use crate::model::{ErrorModel, fit_outputs};
 use crate::selection::{
-    BasisSelector, Candidates, Ga, GaProgress, KINEMATIC_AXIS_TOL, PccPca, Selection,
-    SelectionProblem, kinematic_trend_set_in,
+    BasisSelector, Candidates, Ga, GaProgress, PccPca, Selection, SelectionProblem,
+    shared_kinematic_trends_in,
 };
 use crate::space::Space;
 use crate::{Error, Result};
@@ -452,7 +452,7 @@ impl ValidErrorModelParams {
             }
             TrendSpec::PerAxis(t) => Ok(((**t).clone(), None)),
             TrendSpec::Kinematic(r) => Ok((
-                kinematic_trend_set_in(data, map, x, opts.trend, r, Some(KINEMATIC_AXIS_TOL))?,
+                shared_kinematic_trends_in(data, map, x, opts.trend, r)?,
                 None,
             )),
             TrendSpec::PccPca {

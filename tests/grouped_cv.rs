@@ -49,12 +49,13 @@ fn leave_one_cube_out_never_blows_up_and_flags_the_new_cube() {
         eprintln!("group {f}: {}", w.map(|v| format!("{v:.3}")).join(" / "));
     }
     for (f, w) in cv.fold_max_mm.iter().enumerate() {
-        // the calibrated models (what `fit --robot` deploys) stay within
-        // 1.5× the D-H calibration on a cube they never saw. The
-        // kinematic-trend models (one GLS per axis) do not on a campaign
-        // this small (measured 2.3–5.2×); they flag every row of the new
-        // cube instead (below)
-        for k in 1..=2 {
+        // every Kriging model stays within 1.5× the D-H calibration on a
+        // cube it never saw: the calibrated models (what `fit --robot`
+        // deploys), and the kinematic-trend models, whose parameter errors
+        // are one vector for the three axes, every parameter a term and the
+        // unseen directions held at 0 (measured 0.30–1.08×; with a β per
+        // axis and the first of nearly dependent parameters kept, 2.3–5.3×)
+        for k in 1..CV_MODELS.len() {
             assert!(
                 w[k] <= 1.5 * w[0],
                 "group {f}: {} max {:.3} mm against the D-H calibration's {:.3}",

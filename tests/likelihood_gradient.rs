@@ -7,7 +7,7 @@ use robokrige::dataset::Dataset;
 use robokrige::kinematics;
 use robokrige::kriging::{
     Correlation, KrigingModel, KrigingOptions, KrigingProblem, OptimizerKind, TrainingInputs,
-    Workspace, trend_matrix,
+    Workspace, fit_columns, trend_matrix,
 };
 use robokrige::model::ErrorModel;
 use robokrige::params::{ErrorModelParams, TrendSpec};
@@ -40,7 +40,9 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
     let x = data.x_train();
     let d = data.theta().len();
     let inputs = TrainingInputs::new(x);
-    let f = trend_matrix(data.trend(), x);
+    // the columns a fit keeps (a shared trend is stored whole)
+    let (kept, _) = fit_columns(data.trend(), x);
+    let f = trend_matrix(&data.trend().subset(&kept), x);
     let yn: Vec<f64> = y
         .iter()
         .map(|v| (v - data.y_mean()) / data.y_std())

@@ -6,12 +6,40 @@
 use super::{
     CoefficientPrior, Correlation, FitReport, Hyperparameters, KrigingModel, KrigingOptions,
     KrigingProblem, OptimizerKind, Search, TrainingInputs, Trend, TrendModel, converge_bfgs,
-    independent_columns, ln_psi_objective, optimise, storable_ln_psi, trend_matrix,
+    independent_columns, ln_psi_objective, optimise, storable_ln_psi, supported_columns,
+    trend_matrix,
 };
 use crate::optim::{self, Bounds, HjOptions};
 use crate::space::Normalizer;
 use crate::{Error, Result};
 use std::time::Instant;
+
+/// Relative tolerance of the screen of a shared trend's columns in one
+/// output's fit ([`fit_columns`]): the per-axis screen of the kinematic
+/// trend (`selection::KINEMATIC_AXIS_TOL`).
+const SHARED_SCREEN_TOL: f64 = 1e-3;
+
+/// Rows a shared trend column's new component must be spread over in that
+/// screen (`selection::KINEMATIC_MIN_SUPPORT`).
+const SHARED_SCREEN_SUPPORT: f64 = 10.0;
+
+/// The trend columns one output's fit keeps on the normalised inputs `x`,
+/// and those it drops: the linearly independent ones (relative tolerance
+/// 1e-9). A trend whose coefficients the outputs share
+/// ([`TrendModel::shared_key`]) gets them from all outputs together
+/// ([`super::share_coefficients`]); its own fit only chooses ξ and σ², and
+/// its columns are screened as one output's GLS needs to stay well
+/// conditioned (each kept column independent to 1e-3 and spread over 10
+/// rows, [`supported_columns`]): without it, columns dependent on one axis
+/// but not on three make the likelihood's gradient lose digits.
+pub fn fit_columns(trend: &Trend, x: &[Vec<f64>]) -> (Vec<usize>, Vec<usize>) {
+    let f = trend_matrix(trend, x);
+    if (0..trend.len()).any(|j| trend.shared_key(j).is_some()) {
+        supported_columns(&f, SHARED_SCREEN_TOL, SHARED_SCREEN_SUPPORT)
+    } else {
+        independent_columns(&f, 1e-9)
+    }
+}
 
 /// One output's fit: normalised inputs `x` (m rows; `inputs` holds their
 /// first `inputs.d` columns, the correlation inputs — the others are
@@ -69,7 +97,7 @@ impl Job<'_> {
                 "response has non-finite values".into(),
             ));
         }
-        let (kept, dropped) = independent_columns(&trend_matrix(trend, x), 1e-9);
+        let (kept, dropped) = fit_columns(trend, x);
         if kept.len() >= m {
             return Err(Error::InvalidParameter(format!(
                 "{} independent trend terms need more than {m} rows",

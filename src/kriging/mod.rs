@@ -35,8 +35,9 @@ pub mod trend;
 
 pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
 pub use family::{CorrChoice, FAMILY_FOLDS, FamilyScore};
+pub use fit::fit_columns;
 pub use fused::FusedBasis;
-pub use model::{HeldOut, KrigingModel, KrigingModelData, Pred};
+pub use model::{HeldOut, KrigingModel, KrigingModelData, Pred, share_coefficients};
 pub use options::{FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind};
 pub use params::{Hyperparameters, KrigingParams, Tuning, ValidKrigingParams};
 pub use problem::{KrigingProblem, PsiValue, Solution, Workspace, storable_ln_psi};

@@ -17,7 +17,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 mod held_out;
+mod shared;
 pub use held_out::HeldOut;
+pub use shared::share_coefficients;
 
 /// Points per block in batched prediction.
 const BLOCK: usize = 128;

@@ -28,6 +28,15 @@ pub trait TrendModel: Send + Sync {
     fn prior(&self, _j: usize) -> CoefficientPrior {
         CoefficientPrior::Flat
     }
+    /// The key of coefficient `j` when several outputs share it (one
+    /// physical parameter that moves them all, e.g. a kinematic parameter
+    /// error moving x, y and z): coefficients of the outputs' trends with
+    /// the same key are one unknown
+    /// ([`super::model::share_coefficients`]). `None` (the default): the
+    /// output's own coefficient.
+    fn shared_key(&self, _j: usize) -> Option<usize> {
+        None
+    }
 }
 
 /// The prior of one trend coefficient in Bayesian universal Kriging,
@@ -163,8 +172,11 @@ impl TrendModel for Monomials {
 /// `f(s) = [monomials(s); ∂P_a/∂p_j(θ)]` for output axis `a` and the
 /// identifiable calibration parameters `p_j`
 /// ([`crate::kinematics::calib_names`]). Universal Kriging then estimates
-/// their β — the parameter errors as seen by this axis — by the same GLS
-/// that fits the rest, and Kriging models what the kinematic errors leave.
+/// their β — the parameter errors — by GLS, and Kriging models what the
+/// kinematic errors leave. With [`KinematicTrend::shared`] the three axes'
+/// trends estimate one vector of parameter errors together
+/// ([`super::model::share_coefficients`]); without it (files written
+/// before), each axis its own.
 /// The joint angles are recovered from the normalised joint columns
 /// (`v = s·std + mean`; `θ = v`, or `θ = atan2(sin, cos)` for a periodic
 /// joint, see [`crate::space::Space::encode`]).
@@ -198,6 +210,13 @@ pub struct KinematicTrend {
     /// then sets the prior).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub param_norm: Vec<f64>,
+    /// Whether the parameter errors are one vector for the three axes
+    /// ([`TrendModel::shared_key`]: the parameter's index), solved jointly
+    /// by [`super::model::share_coefficients`], rather than one β per axis.
+    /// False in files written before it existed: they predict, and refit,
+    /// as they were fitted.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub shared: bool,
 }
 
 impl KinematicTrend {
@@ -289,6 +308,13 @@ impl TrendModel for KinematicTrend {
                 .copied()
                 .unwrap_or(0.0),
         )
+    }
+
+    /// With [`KinematicTrend::shared`], a Jacobian column's key is its
+    /// calibration parameter (index into `calib_names`).
+    fn shared_key(&self, j: usize) -> Option<usize> {
+        let k = self.poly.len();
+        (self.shared && j >= k).then(|| self.params[j - k])
     }
 
     fn term_name(&self, j: usize, inputs: &[String]) -> String {
@@ -386,6 +412,10 @@ impl TrendModel for Trend {
 
     fn prior(&self, j: usize) -> CoefficientPrior {
         self.inner().prior(j)
+    }
+
+    fn shared_key(&self, j: usize) -> Option<usize> {
+        self.inner().shared_key(j)
     }
 }
 

@@ -10,9 +10,9 @@ use crate::features::Feature;
 use crate::inputs::InputMap;
 use crate::kriging::{
     FitReport, Hyperparameters, KrigingModel, KrigingOptions, KrigingParams, Monomials, Trend,
-    Tuning,
+    Tuning, share_coefficients,
 };
-use crate::selection::{KINEMATIC_AXIS_TOL, kinematic_trend_set_in};
+use crate::selection::{KINEMATIC_AXIS_TOL, kinematic_trend_set_in, shared_kinematic_trends_in};
 use crate::space::Space;
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -159,6 +159,12 @@ pub(crate) fn fit_outputs(
     };
     let (outputs, reports): (Vec<KrigingModel>, Vec<FitReport>) =
         by_axis(fits)?.into_iter().unzip();
+    let ys: [Vec<f64>; 3] = std::array::from_fn(|a| errors.iter().map(|e| e[a]).collect());
+    let outputs = share_coefficients(
+        outputs,
+        &[&trends[0], &trends[1], &trends[2]],
+        &[&ys[0], &ys[1], &ys[2]],
+    )?;
     Ok(ErrorModel {
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION_UNCALIBRATED,
@@ -204,7 +210,8 @@ pub(crate) fn solve_outputs(
                 .map(|(model, _)| model)
         })
         .collect();
-    by_axis(fits)
+    let ys: [Vec<f64>; 3] = std::array::from_fn(&y);
+    share_coefficients(by_axis(fits)?, trends, &[&ys[0], &ys[1], &ys[2]])
 }
 
 /// `base` with `axes.len()` extra input columns appended after its
@@ -289,6 +296,9 @@ impl ErrorModel {
         self.check_rows(&data.q, &data.dir)?;
         let (map, x) = InputMap::fit(data, self.space(), self.periodic(), &[])?;
         let trends: [Trend; 3] = match &self.outputs[0].data.trend {
+            Trend::Kinematic(k) if k.shared => {
+                shared_kinematic_trends_in(data, &map, &x, self.options.trend, &k.robot)?
+            }
             Trend::Kinematic(k) => kinematic_trend_set_in(
                 data,
                 &map,

@@ -65,6 +65,35 @@ pub fn kinematic_trends(
     kinematic_trend_set(data, space, periodic, opts, robot, Some(KINEMATIC_AXIS_TOL))
 }
 
+/// The kinematic trend whose parameter errors are one vector for the three
+/// axes ([`KinematicTrend::shared`], solved jointly by
+/// [`crate::kriging::share_coefficients`]): every parameter that moves the
+/// TCP on the training poses, each on the axes it moves (step 2 of
+/// [`kinematic_trends`]). No rank revelation or per-axis screen of the
+/// terms (each output's own likelihood search screens its copy,
+/// [`crate::kriging::fit_columns`]): keeping the first of nearly dependent
+/// parameters is a choice of solution that extrapolates badly (on a small
+/// three-cube UR10 campaign, held-out cubes 1.7–5.3× the D-H calibration's
+/// max; with every parameter 0.3–1.1×, `tests/grouped_cv.rs`).
+/// What the campaign does not see is held at 0 by the shared solve's prior
+/// and identifiability rule instead, as the calibration does. On `data`
+/// with the space map `map`, its inputs `x` and monomials of kind `poly`.
+pub fn shared_kinematic_trends_in(
+    data: &Dataset,
+    map: &InputMap,
+    x: &[Vec<f64>],
+    poly: TrendKind,
+    robot: &Robot,
+) -> Result<[Trend; 3]> {
+    let mut trends = kinematic_trend_set_with(data, map, x, poly, robot, None, true)?;
+    for t in &mut trends {
+        if let Trend::Kinematic(k) = t {
+            k.shared = true;
+        }
+    }
+    Ok(trends)
+}
+
 /// The kinematic *candidates* of the basis selections (PCC + PCA, GA): as
 /// [`kinematic_trends`] without the per-axis independence screen (step 3),
 /// which the selections do themselves (PCA fusion, the GA's own screen).
@@ -100,6 +129,22 @@ pub(crate) fn kinematic_trend_set_in(
     robot: &Robot,
     axis_tol: Option<f64>,
 ) -> Result<[Trend; 3]> {
+    kinematic_trend_set_with(data, map, x, poly, robot, axis_tol, false)
+}
+
+/// [`kinematic_trend_set_in`], or with `every` every parameter that moves
+/// the TCP at some training pose in step 1 (no rank revelation: the shared
+/// coefficients' prior and identifiability rule decide what the campaign
+/// sees).
+fn kinematic_trend_set_with(
+    data: &Dataset,
+    map: &InputMap,
+    x: &[Vec<f64>],
+    poly: TrendKind,
+    robot: &Robot,
+    axis_tol: Option<f64>,
+    every: bool,
+) -> Result<[Trend; 3]> {
     use crate::kinematics::{calib_len, identification_jacobian};
     use crate::kriging::{independent_columns, supported_columns};
     let n = data.n_joints();
@@ -119,7 +164,13 @@ pub(crate) fn kinematic_trend_set_in(
             }
         }
     }
-    let (kept, _) = independent_columns(&f, 1e-7);
+    let kept: Vec<usize> = if every {
+        (0..np)
+            .filter(|&k| f.col(k).iter().any(|v| *v != 0.0))
+            .collect()
+    } else {
+        independent_columns(&f, 1e-7).0
+    };
     let norm = map.normalizer();
     let d = map.dim();
     let nj = d - map.space().dim(n) + n; // joint columns
@@ -170,6 +221,7 @@ pub(crate) fn kinematic_trend_set_in(
             periodic: map.periodic().to_vec(),
             poly: poly.clone(),
             param_norm: param_norm.clone(),
+            shared: false,
         }))
     };
     Ok([make(0), make(1), make(2)])

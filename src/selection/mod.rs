@@ -23,11 +23,11 @@ mod screen;
 mod selector;
 
 pub use ga::{Ga, GaProgress};
-pub(crate) use kinematic::kinematic_trend_set_in;
 pub use kinematic::{
     KINEMATIC_AXIS_TOL, KINEMATIC_MIN_SUPPORT, KINEMATIC_ZERO_TOL, kinematic_candidates,
     kinematic_trends,
 };
+pub(crate) use kinematic::{kinematic_trend_set_in, shared_kinematic_trends_in};
 pub use pcc_pca::{PccPca, pcc_pca};
 pub use screen::{CandidateScreen, CandidateSet, Dropped, screen_candidates};
 pub use selector::{BasisSelector, GaSelection, PccPcaReport, Selection, SelectionProblem};
