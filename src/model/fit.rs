@@ -12,7 +12,9 @@ use crate::kriging::{
     FitReport, Hyperparameters, KrigingModel, KrigingOptions, KrigingParams, Monomials, Trend,
     Tuning, share_coefficients,
 };
-use crate::selection::{KINEMATIC_AXIS_TOL, kinematic_trend_set_in, shared_kinematic_trends_in};
+use crate::selection::{
+    KINEMATIC_AXIS_TOL, Terms, kinematic_trend_set_in, shared_kinematic_trends_in,
+};
 use crate::space::Space;
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -305,7 +307,7 @@ impl ErrorModel {
                 &x,
                 self.options.trend,
                 &k.robot,
-                Some(KINEMATIC_AXIS_TOL),
+                Terms::Screened(KINEMATIC_AXIS_TOL),
             )?,
             _ => std::array::from_fn(|a| self.outputs[a].data.trend.clone()),
         };

@@ -62,7 +62,14 @@ pub fn kinematic_trends(
     opts: &KrigingOptions,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    kinematic_trend_set(data, space, periodic, opts, robot, Some(KINEMATIC_AXIS_TOL))
+    kinematic_trend_set(
+        data,
+        space,
+        periodic,
+        opts,
+        robot,
+        Terms::Screened(KINEMATIC_AXIS_TOL),
+    )
 }
 
 /// The kinematic trend whose parameter errors are one vector for the three
@@ -85,7 +92,7 @@ pub fn shared_kinematic_trends_in(
     poly: TrendKind,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    let mut trends = kinematic_trend_set_with(data, map, x, poly, robot, None, true)?;
+    let mut trends = kinematic_trend_set_in(data, map, x, poly, robot, Terms::Every)?;
     for t in &mut trends {
         if let Trend::Kinematic(k) = t {
             k.shared = true;
@@ -104,7 +111,7 @@ pub fn kinematic_candidates(
     opts: &KrigingOptions,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    kinematic_trend_set(data, space, periodic, opts, robot, None)
+    kinematic_trend_set(data, space, periodic, opts, robot, Terms::Candidates)
 }
 
 fn kinematic_trend_set(
@@ -113,38 +120,41 @@ fn kinematic_trend_set(
     periodic: &[usize],
     opts: &KrigingOptions,
     robot: &Robot,
-    axis_tol: Option<f64>,
+    terms: Terms,
 ) -> Result<[Trend; 3]> {
     let (map, x) = InputMap::fit(data, space, periodic, &[])?;
-    kinematic_trend_set_in(data, &map, &x, opts.trend, robot, axis_tol)
+    kinematic_trend_set_in(data, &map, &x, opts.trend, robot, terms)
+}
+
+/// Which of the robot's calibration parameters become terms of the
+/// kinematic trend ([`kinematic_trend_set_in`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Terms {
+    /// Identifiable on the stacked axes, then screened per axis to this
+    /// tolerance (steps 1–3 of [`kinematic_trends`]: a β per axis).
+    Screened(f64),
+    /// Identifiable on the stacked axes (steps 1–2: the selections'
+    /// candidates).
+    Candidates,
+    /// Every parameter that moves the TCP at some training pose, on the
+    /// axes it moves ([`shared_kinematic_trends_in`]).
+    Every,
 }
 
 /// [`kinematic_trend_set`] on the space map `map` of `data` (no extras) and
-/// its inputs `x`, with monomials of kind `poly`.
+/// its inputs `x`, with monomials of kind `poly` and the parameters `terms`.
 pub(crate) fn kinematic_trend_set_in(
     data: &Dataset,
     map: &InputMap,
     x: &[Vec<f64>],
     poly: TrendKind,
     robot: &Robot,
-    axis_tol: Option<f64>,
+    terms: Terms,
 ) -> Result<[Trend; 3]> {
-    kinematic_trend_set_with(data, map, x, poly, robot, axis_tol, false)
-}
-
-/// [`kinematic_trend_set_in`], or with `every` every parameter that moves
-/// the TCP at some training pose in step 1 (no rank revelation: the shared
-/// coefficients' prior and identifiability rule decide what the campaign
-/// sees).
-fn kinematic_trend_set_with(
-    data: &Dataset,
-    map: &InputMap,
-    x: &[Vec<f64>],
-    poly: TrendKind,
-    robot: &Robot,
-    axis_tol: Option<f64>,
-    every: bool,
-) -> Result<[Trend; 3]> {
+    let axis_tol = match terms {
+        Terms::Screened(tol) => Some(tol),
+        Terms::Candidates | Terms::Every => None,
+    };
     use crate::kinematics::{calib_len, identification_jacobian};
     use crate::kriging::{independent_columns, supported_columns};
     let n = data.n_joints();
@@ -164,7 +174,7 @@ fn kinematic_trend_set_with(
             }
         }
     }
-    let kept: Vec<usize> = if every {
+    let kept: Vec<usize> = if terms == Terms::Every {
         (0..np)
             .filter(|&k| f.col(k).iter().any(|v| *v != 0.0))
             .collect()

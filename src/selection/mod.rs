@@ -27,7 +27,7 @@ pub use kinematic::{
     KINEMATIC_AXIS_TOL, KINEMATIC_MIN_SUPPORT, KINEMATIC_ZERO_TOL, kinematic_candidates,
     kinematic_trends,
 };
-pub(crate) use kinematic::{kinematic_trend_set_in, shared_kinematic_trends_in};
+pub(crate) use kinematic::{Terms, kinematic_trend_set_in, shared_kinematic_trends_in};
 pub use pcc_pca::{PccPca, pcc_pca};
 pub use screen::{CandidateScreen, CandidateSet, Dropped, screen_candidates};
 pub use selector::{BasisSelector, GaSelection, PccPcaReport, Selection, SelectionProblem};
@@ -57,7 +57,7 @@ impl Candidates<'_> {
                 Trend::from(Monomials::quadratic(map.dim()))
             })),
             Candidates::Kinematic(robot) => {
-                kinematic_trend_set_in(data, map, x, TrendKind::Quadratic, robot, None)
+                kinematic_trend_set_in(data, map, x, TrendKind::Quadratic, robot, Terms::Candidates)
             }
         }
     }
