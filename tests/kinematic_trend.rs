@@ -4,7 +4,7 @@ mod common;
 
 use robokrige::dataset::read_csv;
 use robokrige::kinematics;
-use robokrige::kriging::{KrigingOptions, OptimizerKind};
+use robokrige::kriging::{KrigingOptions, OptimizerKind, TrendModel};
 use robokrige::model::ErrorModel;
 use robokrige::params::{ErrorModelParams, TrendSpec};
 use robokrige::physics::identify_mdh;
@@ -136,6 +136,12 @@ fn kinematic_trend_captures_geometric_errors() {
     // the trend names say what they are
     let names = &kin.reports()[0].trend_terms;
     assert!(names.iter().any(|t| t.starts_with("dPx/d")), "{names:?}");
+    // and the report lists the model's terms, every parameter the axes
+    // share (each output's search saw a screened copy)
+    for (r, o) in kin.reports().iter().zip(kin.outputs()) {
+        assert_eq!(r.trend_terms.len(), o.data().trend().len());
+        assert!(r.dropped_terms.is_empty());
+    }
 }
 
 /// The public UR10 data, if present: 200 training rows, the next

@@ -10,7 +10,7 @@ use crate::features::Feature;
 use crate::inputs::InputMap;
 use crate::kriging::{
     FitReport, Hyperparameters, KrigingModel, KrigingOptions, KrigingParams, Monomials, Trend,
-    Tuning, share_coefficients,
+    TrendModel, Tuning, share_coefficients,
 };
 use crate::selection::{
     KINEMATIC_AXIS_TOL, Terms, kinematic_trend_set_in, shared_kinematic_trends_in,
@@ -159,7 +159,7 @@ pub(crate) fn fit_outputs(
     } else {
         (0..3).into_par_iter().map(fit_axis).collect()
     };
-    let (outputs, reports): (Vec<KrigingModel>, Vec<FitReport>) =
+    let (outputs, mut reports): (Vec<KrigingModel>, Vec<FitReport>) =
         by_axis(fits)?.into_iter().unzip();
     let ys: [Vec<f64>; 3] = std::array::from_fn(|a| errors.iter().map(|e| e[a]).collect());
     let outputs = share_coefficients(
@@ -167,6 +167,14 @@ pub(crate) fn fit_outputs(
         &[&trends[0], &trends[1], &trends[2]],
         &[&ys[0], &ys[1], &ys[2]],
     )?;
+    // a shared trend's model keeps every term (its search saw a screened copy)
+    for (r, o) in reports.iter_mut().zip(&outputs) {
+        let t = &o.data.trend;
+        if (0..t.len()).any(|j| t.shared_key(j).is_some()) {
+            r.trend_terms = (0..t.len()).map(|j| t.term_name(j, map.names())).collect();
+            r.dropped_terms.clear();
+        }
+    }
     Ok(ErrorModel {
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION_UNCALIBRATED,
