@@ -41,7 +41,7 @@ fn check(out: &KrigingModel, y: &[f64], what: &str) {
     let d = data.theta().len();
     let inputs = TrainingInputs::new(x);
     // the columns a fit keeps (a shared trend is stored whole)
-    let (kept, _) = fit_columns(data.trend(), x);
+    let (kept, _) = fit_columns(data.trend(), &trend_matrix(data.trend(), x));
     let f = trend_matrix(&data.trend().subset(&kept), x);
     let yn: Vec<f64> = y
         .iter()

@@ -15,16 +15,16 @@ use crate::{Error, Result};
 use std::time::Instant;
 
 /// Relative tolerance of the screen of a shared trend's columns in one
-/// output's fit ([`fit_columns`]): the per-axis screen of the kinematic
-/// trend (`selection::KINEMATIC_AXIS_TOL`).
-const SHARED_SCREEN_TOL: f64 = 1e-3;
+/// output's fit ([`fit_columns`]), and of the per-axis screen of the
+/// kinematic trend (`selection::KINEMATIC_AXIS_TOL` is this).
+pub const SHARED_SCREEN_TOL: f64 = 1e-3;
 
 /// Rows a shared trend column's new component must be spread over in that
-/// screen (`selection::KINEMATIC_MIN_SUPPORT`).
-const SHARED_SCREEN_SUPPORT: f64 = 10.0;
+/// screen (`selection::KINEMATIC_MIN_SUPPORT` is this).
+pub const SHARED_SCREEN_SUPPORT: f64 = 10.0;
 
-/// The trend columns one output's fit keeps on the normalised inputs `x`,
-/// and those it drops: the linearly independent ones (relative tolerance
+/// The columns of `trend`'s matrix `f` on the training rows that one
+/// output's fit keeps, and those it drops: the linearly independent ones (relative tolerance
 /// 1e-9). A trend whose coefficients the outputs share
 /// ([`TrendModel::shared_key`]) gets them from all outputs together
 /// ([`super::share_coefficients`]); its own fit only chooses ξ and σ², and
@@ -32,12 +32,11 @@ const SHARED_SCREEN_SUPPORT: f64 = 10.0;
 /// conditioned (each kept column independent to 1e-3 and spread over 10
 /// rows, [`supported_columns`]): without it, columns dependent on one axis
 /// but not on three make the likelihood's gradient lose digits.
-pub fn fit_columns(trend: &Trend, x: &[Vec<f64>]) -> (Vec<usize>, Vec<usize>) {
-    let f = trend_matrix(trend, x);
-    if (0..trend.len()).any(|j| trend.shared_key(j).is_some()) {
-        supported_columns(&f, SHARED_SCREEN_TOL, SHARED_SCREEN_SUPPORT)
+pub fn fit_columns(trend: &Trend, f: &faer::Mat<f64>) -> (Vec<usize>, Vec<usize>) {
+    if trend.has_shared() {
+        supported_columns(f, SHARED_SCREEN_TOL, SHARED_SCREEN_SUPPORT)
     } else {
-        independent_columns(&f, 1e-9)
+        independent_columns(f, 1e-9)
     }
 }
 
@@ -97,7 +96,8 @@ impl Job<'_> {
                 "response has non-finite values".into(),
             ));
         }
-        let (kept, dropped) = fit_columns(trend, x);
+        let f = trend_matrix(trend, x);
+        let (kept, dropped) = fit_columns(trend, &f);
         if kept.len() >= m {
             return Err(Error::InvalidParameter(format!(
                 "{} independent trend terms need more than {m} rows",
@@ -114,7 +114,7 @@ impl Job<'_> {
         };
         Ok(Prepared {
             prior: (0..trend_kept.len()).map(|j| trend_kept.prior(j)).collect(),
-            f: trend_matrix(&trend_kept, x),
+            f: faer::Mat::from_fn(m, kept.len(), |i, j| f[(i, kept[j])]),
             y_norm: y.iter().map(|v| (v - y_mean) / y_std).collect(),
             y_mean,
             y_std,

@@ -35,7 +35,7 @@ pub mod trend;
 
 pub use corr::{Correlation, CorrelationModel, Gaussian, TrainingInputs};
 pub use family::{CorrChoice, FAMILY_FOLDS, FamilyScore};
-pub use fit::fit_columns;
+pub use fit::{SHARED_SCREEN_SUPPORT, SHARED_SCREEN_TOL, fit_columns};
 pub use fused::FusedBasis;
 pub use model::{HeldOut, KrigingModel, KrigingModelData, Pred, share_coefficients};
 pub use options::{FitReport, KrigingOptions, MIN_CONVERGE_ROWS, OptimizerKind, TrendKind};

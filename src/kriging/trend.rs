@@ -37,6 +37,10 @@ pub trait TrendModel: Send + Sync {
     fn shared_key(&self, _j: usize) -> Option<usize> {
         None
     }
+    /// Whether some coefficient is shared ([`TrendModel::shared_key`]).
+    fn has_shared(&self) -> bool {
+        (0..self.len()).any(|j| self.shared_key(j).is_some())
+    }
 }
 
 /// The prior of one trend coefficient in Bayesian universal Kriging,

@@ -170,7 +170,7 @@ pub(crate) fn fit_outputs(
     // a shared trend's model keeps every term (its search saw a screened copy)
     for (r, o) in reports.iter_mut().zip(&outputs) {
         let t = &o.data.trend;
-        if (0..t.len()).any(|j| t.shared_key(j).is_some()) {
+        if t.has_shared() {
             r.trend_terms = (0..t.len()).map(|j| t.term_name(j, map.names())).collect();
             r.dropped_terms.clear();
         }

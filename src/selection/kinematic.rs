@@ -18,12 +18,12 @@ use rayon::prelude::*;
 /// wide-range campaigns of `tests/kinematic_trend_conditioning.rs`, against
 /// 10⁷–10¹⁰ without the screen). A column whose independent share is r has
 /// its β amplified ~1/r.
-pub const KINEMATIC_AXIS_TOL: f64 = 1e-3;
+pub const KINEMATIC_AXIS_TOL: f64 = crate::kriging::SHARED_SCREEN_TOL;
 
 /// Rows a kinematic trend column's new component must be spread over, on
 /// its axis, to be kept ([`crate::kriging::supported_columns`]): the rule of
 /// thumb of ten observations per coefficient.
-pub const KINEMATIC_MIN_SUPPORT: f64 = 10.0;
+pub const KINEMATIC_MIN_SUPPORT: f64 = crate::kriging::SHARED_SCREEN_SUPPORT;
 
 /// Share of a parameter's 3-axis Jacobian norm below which one axis's
 /// column counts as zero: the parameter does not move that axis, and what
@@ -92,13 +92,7 @@ pub fn shared_kinematic_trends_in(
     poly: TrendKind,
     robot: &Robot,
 ) -> Result<[Trend; 3]> {
-    let mut trends = kinematic_trend_set_in(data, map, x, poly, robot, Terms::Every)?;
-    for t in &mut trends {
-        if let Trend::Kinematic(k) = t {
-            k.shared = true;
-        }
-    }
-    Ok(trends)
+    kinematic_trend_set_in(data, map, x, poly, robot, Terms::Every)
 }
 
 /// The kinematic *candidates* of the basis selections (PCC + PCA, GA): as
@@ -137,7 +131,8 @@ pub(crate) enum Terms {
     /// candidates).
     Candidates,
     /// Every parameter that moves the TCP at some training pose, on the
-    /// axes it moves ([`shared_kinematic_trends_in`]).
+    /// axes it moves, the coefficients shared by the axes
+    /// ([`shared_kinematic_trends_in`]).
     Every,
 }
 
@@ -231,7 +226,7 @@ pub(crate) fn kinematic_trend_set_in(
             periodic: map.periodic().to_vec(),
             poly: poly.clone(),
             param_norm: param_norm.clone(),
-            shared: false,
+            shared: terms == Terms::Every,
         }))
     };
     Ok([make(0), make(1), make(2)])

@@ -87,6 +87,10 @@ struct Reduced {
     y_norm: f64,
     /// The response's scale (original units per normalised unit).
     y_std: f64,
+    /// `F̃ = C⁻¹F` (m × p), for the model's γ and kept factors.
+    ftilde: Mat<f64>,
+    /// `ỹ = C⁻¹y`, normalised.
+    ytilde: Vec<f64>,
 }
 
 /// The outputs `models` (fitted on the same training inputs) with the
@@ -112,9 +116,7 @@ pub fn share_coefficients(
             models.len()
         )));
     }
-    let any_shared = trends
-        .iter()
-        .any(|t| (0..t.len()).any(|j| t.shared_key(j).is_some()));
+    let any_shared = trends.iter().any(|t| t.has_shared());
     // a constant output (σ² = 0) has nothing to weigh its rows by
     if !any_shared || models.iter().any(|k| k.data.sigma2 <= 0.0) {
         return Ok(models);
@@ -127,23 +129,19 @@ pub fn share_coefficients(
         .collect::<Result<_>>()?;
     let unknowns = unknowns(&reduced);
     let prior = prior_rows(&reduced, &unknowns, &priors(&reduced, &unknowns));
+    let solved: Vec<(Vec<f64>, Mat<f64>)> = (0..reduced.len())
+        .map(|a| marginal(&reduced, &unknowns, &prior, a))
+        .collect::<Result<_>>()?;
     models
         .into_iter()
-        .enumerate()
-        .map(|(a, k)| {
-            let (beta, g) = marginal(&reduced, &unknowns, &prior, a)?;
-            k.with_coefficients(trends[a], beta, g, ys[a])
-        })
+        .zip(reduced)
+        .zip(solved)
+        .zip(trends)
+        .map(|(((k, r), (beta, g)), t)| k.with_coefficients(t, r, beta, g))
         .collect()
 }
 
 impl KrigingModel {
-    /// This output's normalised response.
-    fn normalised(&self, y: &[f64]) -> Vec<f64> {
-        let d = &self.data;
-        y.iter().map(|v| (v - d.y_mean) / d.y_std).collect()
-    }
-
     /// The output's GLS with the trend `trend` reduced to its p rows: the
     /// QR of `[F̃ ỹ]`.
     fn reduced(&self, trend: &Trend, y: &[f64]) -> Result<Reduced> {
@@ -162,18 +160,19 @@ impl KrigingModel {
                 y.len()
             )));
         }
-        let yn = self.normalised(y);
+        let yn: Vec<f64> = y.iter().map(|v| (v - d.y_mean) / d.y_std).collect();
         let f = trend_matrix(trend, &d.x_train);
-        let aug = self.with_factors(|c, _, _| {
+        // w = C⁻¹[F y]
+        let w = self.with_factors(|c, _, _| {
             let mut w = Mat::<f64>::from_fn(m, p + 1, |i, j| if j < p { f[(i, j)] } else { yn[i] });
             solve_lower_triangular_in_place(c.as_ref(), w.as_mut(), Par::Seq);
-            // fewer rows than columns: zero rows below leave the least
-            // squares as they are and give the QR its p + 1 rows
-            let mut aug = Mat::<f64>::zeros(m.max(p + 1), p + 1);
-            aug.as_mut().subrows_mut(0, m).copy_from(w.as_ref());
-            qr(&mut aug);
-            Ok(aug)
+            Ok(w)
         })?;
+        // fewer rows than columns: zero rows below leave the least squares
+        // as they are and give the QR its p + 1 rows
+        let mut aug = Mat::<f64>::zeros(m.max(p + 1), p + 1);
+        aug.as_mut().subrows_mut(0, m).copy_from(w.as_ref());
+        qr(&mut aug);
         Ok(Reduced {
             g: Mat::from_fn(p, p, |i, j| if i <= j { aug[(i, j)] } else { 0.0 }),
             b: (0..p).map(|i| aug[(i, p)]).collect(),
@@ -185,28 +184,28 @@ impl KrigingModel {
                 .collect(),
             y_norm: yn.iter().map(|v| v * v).sum::<f64>().sqrt(),
             y_std: d.y_std,
+            ftilde: w.subcols(0, p).to_owned(),
+            ytilde: (0..m).map(|i| w[(i, p)]).collect(),
         })
     }
 
-    /// This output with the trend `trend`, its coefficients β and factor G
-    /// (normalised units): `γ = C⁻ᵀ C⁻¹(y − Fβ)`; ξ, ν, σ², ln ψ and C as
-    /// they were.
+    /// This output with the trend `trend` (reduced to `r`), its
+    /// coefficients β and factor G (normalised units): `γ = C⁻ᵀ(ỹ − F̃β)`;
+    /// ξ, ν, σ², ln ψ and C as they were.
     fn with_coefficients(
         self,
         trend: &Trend,
+        r: Reduced,
         beta: Vec<f64>,
         g: Mat<f64>,
-        y: &[f64],
     ) -> Result<Self> {
-        let yn = self.normalised(y);
         let d = &self.data;
         let m = d.x_train.len();
-        let f = trend_matrix(trend, &d.x_train);
+        let (ft, yt) = (&r.ftilde, &r.ytilde);
         let (c, gamma) = self.with_factors(|c, _, _| {
             let mut e = Mat::from_fn(m, 1, |i, _| {
-                yn[i] - (0..beta.len()).map(|j| f[(i, j)] * beta[j]).sum::<f64>()
+                yt[i] - (0..beta.len()).map(|j| ft[(i, j)] * beta[j]).sum::<f64>()
             });
-            solve_lower_triangular_in_place(c.as_ref(), e.as_mut(), Par::Seq);
             solve_upper_triangular_in_place(c.transpose(), e.as_mut(), Par::Seq);
             Ok((c.clone(), (0..m).map(|i| e[(i, 0)]).collect::<Vec<_>>()))
         })?;
@@ -224,8 +223,9 @@ impl KrigingModel {
             gamma,
         };
         let d = self.data;
-        KrigingModel::from_solution(
+        KrigingModel::from_parts(
             sol,
+            Some(r.ftilde),
             trend.clone(),
             d.corr,
             d.theta,
@@ -259,6 +259,8 @@ fn unknowns(reduced: &[Reduced]) -> Vec<Unknown> {
 /// unknown's own units (normalised for an own coefficient, the response's
 /// units for a shared one): see the module doc.
 fn priors(reduced: &[Reduced], unknowns: &[Unknown]) -> Vec<Option<f64>> {
+    // ‖Y‖², the stacked centred responses in their units
+    let y2: f64 = reduced.iter().map(|r| (r.y_norm * r.y_std).powi(2)).sum();
     unknowns
         .iter()
         .map(|u| match *u {
@@ -271,9 +273,8 @@ fn priors(reduced: &[Reduced], unknowns: &[Unknown]) -> Vec<Option<f64>> {
                 (fj > 0.0 && r.y_norm > 0.0).then(|| fj / r.y_norm)
             }
             Unknown::Shared(key) => {
-                let (mut f2, mut y2, mut n, mut seen) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+                let (mut f2, mut n, mut seen) = (0.0f64, 0.0f64, 0.0f64);
                 for r in reduced {
-                    y2 += (r.y_norm * r.y_std).powi(2);
                     if let Some(j) = r.column_of(key) {
                         f2 += r.col_norm[j].powi(2);
                         seen += 1.0;
