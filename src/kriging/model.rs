@@ -323,26 +323,6 @@ impl KrigingModel {
         y_mean: f64,
         y_std: f64,
     ) -> Result<Self> {
-        KrigingModel::from_parts(
-            sol, None, trend, corr, theta, nugget, x_train, y_mean, y_std,
-        )
-    }
-
-    /// [`KrigingModel::from_solution`] with `F̃ = C⁻¹F` when the caller has
-    /// it (kept with the factor up to [`KEEP_FACTOR_MAX_M`] rows; computed
-    /// when `None`).
-    #[allow(clippy::too_many_arguments)]
-    fn from_parts(
-        sol: Solution,
-        ftilde_known: Option<Mat<f64>>,
-        trend: Trend,
-        corr: Correlation,
-        theta: Vec<f64>,
-        nugget: f64,
-        x_train: Vec<Vec<f64>>,
-        y_mean: f64,
-        y_std: f64,
-    ) -> Result<Self> {
         let m = x_train.len();
         let p = trend.len();
         let mut g_upper = Vec::with_capacity(p * (p + 1) / 2);
@@ -372,7 +352,8 @@ impl KrigingModel {
         )
         .inspect(|model| {
             if m <= KEEP_FACTOR_MAX_M {
-                let ftilde = ftilde_known
+                let ftilde = sol
+                    .ftilde
                     .unwrap_or_else(|| ftilde(&sol.c, &model.data.trend, &model.data.x_train));
                 let _ = model.factors.set(Ok(Factors { c: sol.c, ftilde }));
             }

@@ -126,6 +126,9 @@ pub struct Solution {
     pub beta: Vec<f64>,
     /// `γ = R⁻¹(y − Fβ)` for the predictor (eq 10), length m.
     pub gamma: Vec<f64>,
+    /// `F̃ = C⁻¹F` when the solver kept it (the model computes it from C
+    /// otherwise).
+    pub ftilde: Option<Mat<f64>>,
 }
 
 impl KrigingProblem<'_> {
@@ -390,6 +393,7 @@ impl KrigingProblem<'_> {
             g,
             beta,
             gamma: resid.iter().copied().collect(),
+            ftilde: None,
         })
     }
 }

@@ -221,11 +221,11 @@ impl KrigingModel {
             g,
             beta,
             gamma,
+            ftilde: Some(r.ftilde),
         };
         let d = self.data;
-        KrigingModel::from_parts(
+        KrigingModel::from_solution(
             sol,
-            Some(r.ftilde),
             trend.clone(),
             d.corr,
             d.theta,
