@@ -22,7 +22,8 @@ mod presets;
 mod robot_file;
 
 pub use calib::{
-    apply_errors, calib_len, calib_names, identification_jacobian, identification_jacobian_cols,
+    ErrorChain, apply_errors, calib_len, calib_names, identification_jacobian,
+    identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
 pub use locate::{TrackerFit, errors_from_positions, import_for, locate_imported, locate_tracker};
