@@ -420,3 +420,42 @@ fn levenberg_marquardt_errors() {
         Err(Error::Numerical(_))
     ));
 }
+
+/// Rosenbrock as a `LeastSquares` problem that counts its Jacobians.
+struct CountedRosenbrock {
+    jacobians: usize,
+}
+
+impl robokrige::optim::LeastSquares for CountedRosenbrock {
+    fn residual(&mut self, x: &[f64]) -> robokrige::Result<DVector<f64>> {
+        Ok(rosenbrock(x)?.0)
+    }
+
+    fn jacobian(&mut self, x: &[f64]) -> robokrige::Result<DMatrix<f64>> {
+        self.jacobians += 1;
+        Ok(rosenbrock(x)?.1)
+    }
+}
+
+#[test]
+fn a_least_squares_problem_takes_the_same_steps_with_jacobians_only_where_accepted() {
+    // a start far away and little damping, so that some trials are rejected
+    let opts = LmOptions {
+        lambda0: 1e-6,
+        ..LmOptions::default()
+    };
+    let x0 = [-3.0, -4.0];
+    let together = levenberg_marquardt(rosenbrock, &x0, &opts).unwrap();
+    let mut problem = CountedRosenbrock { jacobians: 0 };
+    let apart = robokrige::optim::levenberg_marquardt_on(&mut problem, &x0, &opts).unwrap();
+    assert_eq!(apart.x, together.x);
+    assert_eq!(apart.cost.to_bits(), together.cost.to_bits());
+    assert_eq!(apart.evaluations, together.evaluations);
+    assert_eq!(apart.stop, together.stop);
+    assert!(
+        problem.jacobians < together.evaluations,
+        "{} Jacobians for {} evaluations",
+        problem.jacobians,
+        together.evaluations
+    );
+}

@@ -37,7 +37,7 @@ pub use identifiability::{Identifiability, ParameterReport};
 
 use crate::dataset::Dataset;
 use crate::kinematics::{ErrorChain, Robot, apply_errors, calib_names, identification_jacobian};
-use crate::optim::{LmOptions, levenberg_marquardt};
+use crate::optim::{LeastSquares, LmOptions, levenberg_marquardt_on};
 use crate::vec3::residuals;
 use crate::{Error, Result};
 use identifiability::{ScaledJacobian, rms};
@@ -425,7 +425,6 @@ fn fit_subspace(
 ) -> Result<SubspaceFit> {
     let k = u0.len();
     let t = sj.basis(k);
-    let params = |u: &[f64]| -> Vec<f64> { (&t * DVector::from_column_slice(u)).data.into() };
     if k == 0 {
         let p = vec![0.0; t.nrows()];
         return Ok(SubspaceFit {
@@ -436,19 +435,14 @@ fn fit_subspace(
             stop: "nothing identifiable".into(),
         });
     }
-    // the Jacobian in the parameters' own units (steps of 1e-4 degree or
-    // mm, as the identification Jacobian), then onto the directions: a
-    // step in the directions' prior units could be large for a weakly
-    // seen parameter
-    let res = levenberg_marquardt(
-        |u| {
-            let p = params(u);
-            let jp = residual_jacobian(nominal, &p, RESIDUAL_STEP, joints, targets);
-            Ok((
-                position_residual(&apply_errors(nominal, &p), joints, targets),
-                jp * &t,
-            ))
-        },
+    let mut problem = Subspace {
+        nominal,
+        joints,
+        targets,
+        t,
+    };
+    let res = levenberg_marquardt_on(
+        &mut problem,
         u0,
         &LmOptions {
             max_iter: opts.max_iter,
@@ -457,7 +451,7 @@ fn fit_subspace(
             ..LmOptions::default()
         },
     )?;
-    let p = params(&res.x);
+    let p = problem.params(&res.x);
     Ok(SubspaceFit {
         r: position_residual(&apply_errors(nominal, &p), joints, targets),
         u: res.x,
@@ -465,6 +459,41 @@ fn fit_subspace(
         iterations: res.iterations,
         stop: format!("{:?}", res.stop),
     })
+}
+
+/// The least squares of [`fit_subspace`]: the residual of the errors
+/// `p = T u` over the coordinates `u` of the directions `T`.
+struct Subspace<'a> {
+    nominal: &'a Robot,
+    joints: &'a [Vec<f64>],
+    targets: &'a [Vector3<f64>],
+    t: DMatrix<f64>,
+}
+
+impl Subspace<'_> {
+    fn params(&self, u: &[f64]) -> Vec<f64> {
+        (&self.t * DVector::from_column_slice(u)).data.into()
+    }
+}
+
+impl LeastSquares for Subspace<'_> {
+    fn residual(&mut self, u: &[f64]) -> Result<DVector<f64>> {
+        let p = self.params(u);
+        Ok(position_residual(
+            &apply_errors(self.nominal, &p),
+            self.joints,
+            self.targets,
+        ))
+    }
+
+    /// In the parameters' own units (steps of 1e-4 degree or mm, as the
+    /// identification Jacobian), then onto the directions: a step in the
+    /// directions' prior units could be large for a weakly seen parameter.
+    fn jacobian(&mut self, u: &[f64]) -> Result<DMatrix<f64>> {
+        let p = self.params(u);
+        let jp = residual_jacobian(self.nominal, &p, RESIDUAL_STEP, self.joints, self.targets);
+        Ok(jp * &self.t)
+    }
 }
 
 /// `targets − FK(robot; joints)`, stacked x, y, z per pose.

@@ -4,7 +4,10 @@
 //! problem: it takes a closure returning the residual vector `r(x)` (length
 //! `m`) and its Jacobian `J(x)` (`m × n`), a start `x0` and an
 //! [`LmOptions`]. [`numerical_jacobian`] builds `J` by central differences
-//! when no analytic Jacobian is at hand.
+//! when no analytic Jacobian is at hand. A problem whose Jacobian costs far
+//! more than its residual implements [`LeastSquares`] instead
+//! ([`levenberg_marquardt_on`]): its Jacobian is then evaluated only at the
+//! points the method accepts, not at every trial step.
 //!
 //! # The step
 //!
@@ -224,13 +227,68 @@ where
 /// Jacobian that is not finite at `x0`, or a residual/Jacobian size mismatch
 /// at any point; errors returned by the closure are passed on.
 pub fn levenberg_marquardt<F>(
-    mut residual_and_jacobian: F,
+    residual_and_jacobian: F,
     x0: &[f64],
     opts: &LmOptions,
 ) -> Result<LmResult>
 where
     F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
 {
+    levenberg_marquardt_on(
+        &mut Together {
+            f: residual_and_jacobian,
+            jacobian: None,
+        },
+        x0,
+        opts,
+    )
+}
+
+/// A nonlinear least-squares problem `min_x ½‖r(x)‖²` for
+/// [`levenberg_marquardt_on`], whose Jacobian is asked for separately: only
+/// at `x0` and at the points the method accepts.
+pub trait LeastSquares {
+    /// `r(x)`, of the same length `m` at every point.
+    fn residual(&mut self, x: &[f64]) -> Result<DVector<f64>>;
+    /// `J(x)` (`m × x.len()`), asked for right after `residual(x)` at the
+    /// same `x`.
+    fn jacobian(&mut self, x: &[f64]) -> Result<DMatrix<f64>>;
+}
+
+/// A closure returning `(r, J)` together, as a [`LeastSquares`]: the
+/// Jacobian of the last residual is kept until it is asked for.
+struct Together<F> {
+    f: F,
+    jacobian: Option<DMatrix<f64>>,
+}
+
+impl<F> LeastSquares for Together<F>
+where
+    F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
+{
+    fn residual(&mut self, x: &[f64]) -> Result<DVector<f64>> {
+        let (r, j) = (self.f)(x)?;
+        check_sizes(&r, &j, r.len(), x.len())?;
+        self.jacobian = Some(j);
+        Ok(r)
+    }
+
+    fn jacobian(&mut self, x: &[f64]) -> Result<DMatrix<f64>> {
+        match self.jacobian.take() {
+            Some(j) => Ok(j),
+            None => Ok((self.f)(x)?.1),
+        }
+    }
+}
+
+/// [`levenberg_marquardt`] on a [`LeastSquares`] problem: the same steps
+/// and results, with the Jacobian evaluated only where a step is accepted
+/// (a rejected trial costs one residual).
+pub fn levenberg_marquardt_on<P: LeastSquares>(
+    problem: &mut P,
+    x0: &[f64],
+    opts: &LmOptions,
+) -> Result<LmResult> {
     let n = x0.len();
     if n == 0 {
         return Err(invalid("x0 is empty"));
@@ -239,7 +297,7 @@ where
         return Err(invalid("x0 is not finite"));
     }
     validate_options(opts)?;
-    let (r, jac) = start(&mut residual_and_jacobian, x0)?;
+    let (r, jac) = start(problem, x0)?;
 
     // Marquardt scaling and the identifiable subset, both from J(x0).
     let mut d: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
@@ -265,7 +323,7 @@ where
         let Some(lin) = st.linearise(&free, opts) else {
             break LmStop::SmallGradient;
         };
-        if let Some(stop) = st.trial_steps(&mut residual_and_jacobian, &lin, &free, opts)? {
+        if let Some(stop) = st.trial_steps(problem, &lin, &free, opts)? {
             break stop;
         }
     };
@@ -289,11 +347,9 @@ where
 
 /// The residual and Jacobian at `x0`, checked: a non-empty residual, sizes
 /// that agree, finite values.
-fn start<F>(residual_and_jacobian: &mut F, x0: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>
-where
-    F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
-{
-    let (r, jac) = residual_and_jacobian(x0)?;
+fn start<P: LeastSquares>(problem: &mut P, x0: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)> {
+    let r = problem.residual(x0)?;
+    let jac = problem.jacobian(x0)?;
     let m = r.len();
     if m == 0 {
         return Err(invalid("the residual vector is empty"));
@@ -360,16 +416,13 @@ impl LmState {
 
     /// Trial steps at this linearisation until one is accepted (`None`: go
     /// on from the new point) or a stopping rule holds (`Some`).
-    fn trial_steps<F>(
+    fn trial_steps<P: LeastSquares>(
         &mut self,
-        residual_and_jacobian: &mut F,
+        problem: &mut P,
         lin: &Linearisation,
         free: &[usize],
         opts: &LmOptions,
-    ) -> Result<Option<LmStop>>
-    where
-        F: FnMut(&[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>,
-    {
+    ) -> Result<Option<LmStop>> {
         let (m, n) = (self.r.len(), self.x.len());
         loop {
             if self.iterations >= opts.max_iter {
@@ -392,15 +445,27 @@ impl LmState {
                 x_new[j] += u[c] / self.d[j];
             }
             self.iterations += 1;
-            let (r_new, jac_new) = residual_and_jacobian(&x_new)?;
+            let r_new = problem.residual(&x_new)?;
             self.evaluations += 1;
-            check_sizes(&r_new, &jac_new, m, n)?;
-            let finite =
-                r_new.iter().all(|v| v.is_finite()) && jac_new.iter().all(|v| v.is_finite());
-            if finite {
+            if r_new.len() != m {
+                return Err(invalid(format_args!(
+                    "the residual has {} entries, expected {m}",
+                    r_new.len()
+                )));
+            }
+            if r_new.iter().all(|v| v.is_finite()) {
                 let cost_new = 0.5 * r_new.norm_squared();
                 let actual = self.cost - cost_new;
-                if actual > 0.0 && predicted > 0.0 {
+                // the Jacobian only where the step would be accepted; a
+                // Jacobian that is not finite rejects it
+                let jac_new = if actual > 0.0 && predicted > 0.0 {
+                    let jac = problem.jacobian(&x_new)?;
+                    check_sizes(&r_new, &jac, m, n)?;
+                    Some(jac).filter(|j| j.iter().all(|v| v.is_finite()))
+                } else {
+                    None
+                };
+                if let Some(jac_new) = jac_new {
                     let cost = self.cost;
                     let small = actual <= opts.tol_cost * cost && predicted <= opts.tol_cost * cost;
                     let rho = actual / predicted;

@@ -31,7 +31,10 @@ pub use bfgs::{BfgsOptions, bfgs};
 pub use ga::{GaOptions, GaResult, ga};
 pub use gps::{GpsOptions, gps};
 pub use hooke_jeeves::{HjOptions, hooke_jeeves};
-pub use lm::{LmOptions, LmResult, LmStop, levenberg_marquardt, numerical_jacobian};
+pub use lm::{
+    LeastSquares, LmOptions, LmResult, LmStop, levenberg_marquardt, levenberg_marquardt_on,
+    numerical_jacobian,
+};
 pub use quasi_newton::{QuasiNewtonOptions, quasi_newton, quasi_newton_resume, quasi_newton_warm};
 
 use rand::RngExt;
