@@ -444,6 +444,32 @@ impl KrigingModel {
             .collect()
     }
 
+    /// For each point (normalised inputs), the training row the model
+    /// correlates it with most, `argmax_i R(s, s_i)`, and that correlation
+    /// (the process's, without the nugget): the measurement its prediction
+    /// leans on most.
+    pub fn nearest_training(&self, s: &[Vec<f64>]) -> Vec<(usize, f64)> {
+        let d = &self.data;
+        let m = d.x_train.len();
+        s.par_chunks(BLOCK)
+            .flat_map_iter(|blk| {
+                let mut acc = vec![0.0; m];
+                blk.iter()
+                    .map(|x| {
+                        d.corr.fill_row(&d.theta, &self.xt, x, &mut acc);
+                        acc.iter()
+                            .copied()
+                            .enumerate()
+                            .fold(
+                                (0, f64::NEG_INFINITY),
+                                |b, (i, r)| if r > b.1 { (i, r) } else { b },
+                            )
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
     /// The trend-only prediction `f(s)ᵀβ` at normalised inputs, original
     /// units (what the model says without its Kriging correction).
     pub fn predict_trend(&self, s: &[Vec<f64>]) -> Vec<f64> {

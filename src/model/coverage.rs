@@ -1,6 +1,7 @@
 //! Where a prediction leaves what the training campaign covers: joint
-//! ranges, predictive intervals that reach a gross error, and Kriging
-//! corrections far from the trend.
+//! ranges, predictive intervals that reach a gross error, Kriging
+//! corrections far from the trend, and training measurements the model
+//! leans on but cannot reproduce.
 
 use super::{AXES, ErrorModel};
 use crate::Result;
@@ -49,6 +50,25 @@ pub enum CoverageIssue {
         /// The process standard deviation σ of that output, mm.
         process_std_mm: f64,
     },
+    /// A training measurement the prediction leans on most (the training
+    /// row of largest process correlation, at least [`LEAN_CORRELATION`],
+    /// for some output) is one the model cannot reproduce: its
+    /// leave-one-out 3D residual exceeds [`GROSS_FACTOR`] times the model's
+    /// leave-one-out 3D RMS, the gross-error rule of `cv` and `holdout`.
+    /// The campaign contradicts itself there (a configuration measured
+    /// twice with different errors, a bad reading) or has a local effect
+    /// the model lacks; either way the model is confident where its data
+    /// are not.
+    Contradicted {
+        /// The training row, 0-based among the model's training rows.
+        row: usize,
+        /// The process correlation between the point and that row.
+        correlation: f64,
+        /// That row's leave-one-out residual x, y, z, mm.
+        loo_residual_mm: [f64; 3],
+        /// The RMS of the model's leave-one-out 3D residuals, mm.
+        loo_rmse_mm: f64,
+    },
 }
 
 impl std::fmt::Display for CoverageIssue {
@@ -84,6 +104,19 @@ impl std::fmt::Display for CoverageIssue {
                 AXES[*axis],
                 correction_mm.abs() / process_std_mm
             ),
+            CoverageIssue::Contradicted {
+                row,
+                correlation,
+                loo_residual_mm,
+                loo_rmse_mm,
+            } => {
+                let e = loo_residual_mm.iter().map(|v| v * v).sum::<f64>().sqrt();
+                write!(
+                    f,
+                    "leans on training row {row} (correlation {correlation:.2}), whose measurement the model misses by {e:.3} mm left out ({:.1}× its leave-one-out RMS {loo_rmse_mm:.4} mm)",
+                    e / loo_rmse_mm
+                )
+            }
         }
     }
 }
@@ -111,6 +144,10 @@ pub const Z95: f64 = 1.959_963_984_540_054;
 pub const LOO_SAMPLE: usize = 256;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;
+/// The correlation at which a prediction leans on a training measurement
+/// ([`CoverageIssue::Contradicted`]): that measurement weighs more in it
+/// than what the process leaves independent of it.
+pub const LEAN_CORRELATION: f64 = 0.5;
 
 /// A prediction with what an honest report needs: the standard deviation
 /// of a new measurement and the points outside the model's coverage.
@@ -232,9 +269,10 @@ impl ErrorModel {
 
     /// The points of a prediction that leave what the training data
     /// covers: a joint outside the campaign's range, a 95 % predictive
-    /// interval that reaches a gross error ([`CoverageIssue::Uncertain`]), or a
+    /// interval that reaches a gross error ([`CoverageIssue::Uncertain`]), a
     /// Kriging correction more than [`TREND_SIGMAS`] process σ from the
-    /// trend-only prediction. `mean` is this model's predicted mean at `q`,
+    /// trend-only prediction, or a training measurement it leans on that the
+    /// model cannot reproduce ([`CoverageIssue::Contradicted`]). `mean` is this model's predicted mean at `q`,
     /// `dir`; `std` its standard deviations when they were computed (the
     /// std check is skipped without them, so a caller that needs only the
     /// mean, like compensation, never pays for the m × m factor). Only
@@ -260,6 +298,10 @@ impl ErrorModel {
             None => [f64::INFINITY; 3],
         };
         let noise = self.predictive_noise_std()?;
+        let contradicted = match std {
+            Some(_) => self.contradicted(&s, &loo)?,
+            None => vec![None; q.len()],
+        };
         let mut out = Vec::new();
         for (k, qk) in q.iter().enumerate() {
             let mut issues = Vec::new();
@@ -294,10 +336,58 @@ impl ErrorModel {
                     });
                 }
             }
+            if let Some(issue) = contradicted[k].clone() {
+                issues.push(issue);
+            }
             if !issues.is_empty() {
                 out.push(CoverageWarning { index: k, issues });
             }
         }
         Ok(out)
+    }
+
+    /// Per point (normalised inputs `s`), the
+    /// [`CoverageIssue::Contradicted`] of a training row it leans on most
+    /// (for some output), if any: the leave-one-out residuals of those rows
+    /// alone (one multi-column triangular solve per output), against
+    /// `loo`, the leave-one-out RMS per axis.
+    fn contradicted(&self, s: &[Vec<f64>], loo: &[f64; 3]) -> Result<Vec<Option<CoverageIssue>>> {
+        let near: Vec<Vec<(usize, f64)>> =
+            self.outputs.iter().map(|o| o.nearest_training(s)).collect();
+        let mut rows: Vec<usize> = near
+            .iter()
+            .flatten()
+            .filter(|(_, r)| *r >= LEAN_CORRELATION)
+            .map(|(i, _)| *i)
+            .collect();
+        rows.sort_unstable();
+        rows.dedup();
+        if rows.is_empty() {
+            return Ok(vec![None; s.len()]);
+        }
+        let blocks: Vec<Vec<usize>> = rows.iter().map(|&i| vec![i]).collect();
+        let e: Vec<Vec<f64>> = self
+            .outputs
+            .iter()
+            .map(|o| o.held_out_residuals(&blocks))
+            .collect::<Result<_>>()?;
+        let rmse = loo.iter().map(|v| v * v).sum::<f64>().sqrt();
+        Ok((0..s.len())
+            .map(|k| {
+                near.iter().find_map(|n| {
+                    let (row, correlation) = n[k];
+                    let r: [f64; 3] = std::array::from_fn(|a| e[a][row]);
+                    let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    (correlation >= LEAN_CORRELATION && norm > GROSS_FACTOR * rmse).then_some(
+                        CoverageIssue::Contradicted {
+                            row,
+                            correlation,
+                            loo_residual_mm: r,
+                            loo_rmse_mm: rmse,
+                        },
+                    )
+                })
+            })
+            .collect())
     }
 }

@@ -13,7 +13,8 @@ mod interval;
 mod record;
 
 pub use coverage::{
-    CampaignPrediction, CoverageIssue, CoverageWarning, GROSS_FACTOR, LOO_SAMPLE, TREND_SIGMAS, Z95,
+    CampaignPrediction, CoverageIssue, CoverageWarning, GROSS_FACTOR, LEAN_CORRELATION, LOO_SAMPLE,
+    TREND_SIGMAS, Z95,
 };
 pub use fit::{check_fit_memory, check_fit_rows};
 pub(crate) use fit::{fit_outputs, solve_outputs, with_linear_columns};
