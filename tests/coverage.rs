@@ -167,8 +167,8 @@ fn a_prediction_that_leans_on_a_contradicted_measurement_is_flagged() {
                 )
         })
     };
-    for k in 0..bad.len() {
-        assert!(contradicted(k), "contradicted row {}: {warnings:?}", bad[k]);
+    for (k, row) in bad.iter().enumerate() {
+        assert!(contradicted(k), "contradicted row {row}: {warnings:?}");
     }
     let false_alarms = (bad.len()..points.len())
         .filter(|&k| contradicted(k))
