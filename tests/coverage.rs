@@ -8,17 +8,35 @@ use robokrige::model::{CoverageIssue, ErrorModel};
 use robokrige::space::Space;
 use std::path::Path;
 
-#[test]
-fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
-    let d = read_csv(Path::new(concat!(
+/// The shipped 300-pose COMAU campaign.
+fn comau_lhs() -> robokrige::dataset::Dataset {
+    read_csv(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/datasets/comau_lhs.csv"
     )))
-    .unwrap();
-    let opts = KrigingOptions::default()
+    .unwrap()
+}
+
+/// A quick Hooke–Jeeves search with a nugget.
+fn hooke_jeeves(evals: usize) -> KrigingOptions {
+    KrigingOptions::default()
         .optimizer(OptimizerKind::HookeJeeves)
-        .max_evals(100)
-        .nugget(true);
+        .max_evals(evals)
+        .nugget(true)
+}
+
+/// A reading 10–20 times `scale` off on every axis, in a random direction.
+fn knock_off(e: &mut [f64; 3], scale: [f64; 3], rng: &mut impl rand::RngExt) {
+    for (v, s) in e.iter_mut().zip(scale) {
+        let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+        *v += sign * s * rng.random_range(10.0..20.0);
+    }
+}
+
+#[test]
+fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
+    let d = comau_lhs();
+    let opts = hooke_jeeves(100);
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let (lo, hi) = model.joint_range()[0];
     assert!(lo < hi && hi < 170.0, "campaign range of q1: [{lo}, {hi}]");
@@ -60,15 +78,8 @@ fn a_pose_far_outside_the_campaign_is_flagged_and_inside_ones_are_not() {
 fn intervals_cover_95_percent_of_held_out_rows_despite_wild_readings() {
     use rand::RngExt;
     use robokrige::stats::{kfold_partition, predictive_scores};
-    let mut d = read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .unwrap();
-    let opts = KrigingOptions::default()
-        .optimizer(OptimizerKind::HookeJeeves)
-        .max_evals(150)
-        .nugget(true);
+    let mut d = comau_lhs();
+    let opts = hooke_jeeves(150);
     let noise = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap().noise_std();
     // 2.5 % of the rows, seeded at random, get a reading 10–20 times the
     // noise off on every axis
@@ -77,10 +88,7 @@ fn intervals_cover_95_percent_of_held_out_rows_despite_wild_readings() {
     let errors = d.errors.as_mut().unwrap();
     for _ in 0..m / 40 {
         let i = rng.random_range(0..m);
-        for a in 0..3 {
-            let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-            errors[i][a] += sign * noise[a] * rng.random_range(10.0..20.0);
-        }
+        knock_off(&mut errors[i], noise, &mut rng);
     }
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let fold = kfold_partition(m, 5, 1).unwrap();
@@ -120,15 +128,8 @@ fn intervals_cover_95_percent_of_held_out_rows_despite_wild_readings() {
 #[test]
 fn a_prediction_that_leans_on_a_contradicted_measurement_is_flagged() {
     use rand::RngExt;
-    let mut d = read_csv(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/comau_lhs.csv"
-    )))
-    .unwrap();
-    let opts = KrigingOptions::default()
-        .optimizer(OptimizerKind::HookeJeeves)
-        .max_evals(100)
-        .nugget(true);
+    let mut d = comau_lhs();
+    let opts = hooke_jeeves(100);
     let loo = ErrorModel::fit(&d, Space::Ejs, &opts)
         .unwrap()
         .loo_check()
@@ -145,10 +146,7 @@ fn a_prediction_that_leans_on_a_contradicted_measurement_is_flagged() {
     }
     let errors = d.errors.as_mut().unwrap();
     for &i in &bad {
-        for (v, s) in errors[i].iter_mut().zip(loo) {
-            let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-            *v += sign * s * rng.random_range(10.0..20.0);
-        }
+        knock_off(&mut errors[i], loo, &mut rng);
     }
     let model = ErrorModel::fit(&d, Space::Ejs, &opts).unwrap();
     let clean: Vec<usize> = (0..m).filter(|i| !bad.contains(i)).step_by(5).collect();
