@@ -185,7 +185,10 @@ fn a_prediction_that_leans_on_a_contradicted_measurement_is_flagged() {
         .unwrap()
         .to_string();
     assert!(
-        text.contains(&format!("leans on training row {}", bad[0])),
+        text.contains(&format!(
+            "leans on the training campaign's data row {}",
+            bad[0] + 1
+        )),
         "{text}"
     );
 }

@@ -60,7 +60,8 @@ pub enum CoverageIssue {
     /// the model lacks; either way the model is confident where its data
     /// are not.
     Contradicted {
-        /// The training row, 0-based among the model's training rows.
+        /// The training row, 0-based among the model's training rows (the
+        /// message counts data rows from 1, as `predict` does).
         row: usize,
         /// The process correlation between the point and that row.
         correlation: f64,
@@ -113,7 +114,8 @@ impl std::fmt::Display for CoverageIssue {
                 let e = loo_residual_mm.iter().map(|v| v * v).sum::<f64>().sqrt();
                 write!(
                     f,
-                    "leans on training row {row} (correlation {correlation:.2}), whose measurement the model misses by {e:.3} mm left out ({:.1}× its leave-one-out RMS {loo_rmse_mm:.4} mm)",
+                    "leans on the training campaign's data row {} (correlation {correlation:.2}), whose measurement the model misses by {e:.3} mm left out ({:.1}× its leave-one-out RMS {loo_rmse_mm:.4} mm)",
+                    row + 1,
                     e / loo_rmse_mm
                 )
             }
