@@ -274,11 +274,12 @@ impl ErrorModel {
     /// interval that reaches a gross error ([`CoverageIssue::Uncertain`]), a
     /// Kriging correction more than [`TREND_SIGMAS`] process σ from the
     /// trend-only prediction, or a training measurement it leans on that the
-    /// model cannot reproduce ([`CoverageIssue::Contradicted`]). `mean` is this model's predicted mean at `q`,
-    /// `dir`; `std` its standard deviations when they were computed (the
-    /// std check is skipped without them, so a caller that needs only the
-    /// mean, like compensation, never pays for the m × m factor). Only
-    /// points with an issue are listed, in order.
+    /// model cannot reproduce ([`CoverageIssue::Contradicted`]). `mean` is
+    /// this model's predicted mean at `q`, `dir`; `std` its standard
+    /// deviations when they were computed (the std and contradiction checks
+    /// are skipped without them, so a caller that needs only the mean, like
+    /// compensation, never pays for the m × m factor). Only points with an
+    /// issue are listed, in order.
     pub fn coverage(
         &self,
         q: &[Vec<f64>],
