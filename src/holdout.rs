@@ -83,6 +83,10 @@ pub struct HoldoutCv {
     pub fold_max_covered_mm: Vec<[f64; 5]>,
     /// Rows each of the [`CV_MODELS`] flagged when they were held out.
     pub flagged: Vec<Vec<usize>>,
+    /// Rows where each of the [`CV_MODELS`] made a gross error held out
+    /// (3D error over [`GROSS_FACTOR`] × its held-out 3D RMS,
+    /// [`crate::stats::gross_rows`]).
+    pub gross: Vec<Vec<usize>>,
     /// Folds (random or one per group).
     pub folds: usize,
     /// Rows the Kriging hyperparameters were chosen on (the first ones).
@@ -232,6 +236,10 @@ pub fn holdout_cv(
         flagged: got
             .iter()
             .map(|g| (0..m).filter(|&i| g.flagged[i]).collect())
+            .collect(),
+        gross: got
+            .iter()
+            .map(|g| crate::stats::gross_rows(errors, &g.mean, GROSS_FACTOR))
             .collect(),
         folds: k,
         hyper_rows: first.len(),
@@ -539,6 +547,7 @@ mod tests {
             fold_max_mm: Vec::new(),
             fold_max_covered_mm: vec![[1.0, 0.5, 0.0, 2.0, 0.1], [0.5, 0.7, 0.0, 1.0, 0.3]],
             flagged: vec![Vec::new(); 5],
+            gross: vec![Vec::new(); 5],
             hyper_rows: 10,
             hyper_seconds: 0.0,
         };

@@ -341,6 +341,29 @@ pub struct PredictiveScores {
     pub gross_rows: usize,
 }
 
+/// The rows whose 3D error `‖truth − mean‖` exceeds `gross_factor` × its
+/// 3D RMS over all rows: the gross errors of [`PredictiveScores`].
+pub fn gross_rows(truth: &[[f64; 3]], mean: &[[f64; 3]], gross_factor: f64) -> Vec<usize> {
+    let mut sq = 0.0;
+    for (t, m) in truth.iter().zip(mean) {
+        for a in 0..3 {
+            let e = t[a] - m[a];
+            sq += e * e;
+        }
+    }
+    let rms3 = (sq / truth.len().max(1) as f64).sqrt();
+    truth
+        .iter()
+        .zip(mean)
+        .enumerate()
+        .filter(|(_, (t, m))| {
+            let d: f64 = (0..3).map(|a| (t[a] - m[a]).powi(2)).sum();
+            d.sqrt() > gross_factor * rms3
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
 /// [`PredictiveScores`] of predictions `mean ± std` (std of a new
 /// measurement, per axis) against the measured `truth`, with the rows the
 /// model flagged (`flagged[i]`). `gross_factor` × the 3D RMS of `truth −
@@ -356,7 +379,6 @@ pub fn predictive_scores(
     let z95 = 1.959_963_984_540_054;
     let mut inside = [0usize; 3];
     let mut nlpd = 0.0;
-    let mut sq = 0.0;
     for ((t, m), s) in truth.iter().zip(mean).zip(std) {
         for a in 0..3 {
             let e = t[a] - m[a];
@@ -365,20 +387,9 @@ pub fn predictive_scores(
                 inside[a] += 1;
             }
             nlpd += 0.5 * (2.0 * std::f64::consts::PI * v).ln() + e * e / (2.0 * v);
-            sq += e * e;
         }
     }
-    let rms3 = (sq / n).sqrt();
-    let gross: Vec<usize> = truth
-        .iter()
-        .zip(mean)
-        .enumerate()
-        .filter(|(_, (t, m))| {
-            let d: f64 = (0..3).map(|a| (t[a] - m[a]).powi(2)).sum();
-            d.sqrt() > gross_factor * rms3
-        })
-        .map(|(i, _)| i)
-        .collect();
+    let gross = gross_rows(truth, mean, gross_factor);
     let caught = gross.iter().filter(|&&i| flagged[i]).count();
     PredictiveScores {
         coverage_95: inside.map(|c| c as f64 / n),

@@ -139,9 +139,10 @@ pub fn cv_tail(cv: &HoldoutCv) -> String {
         "worst Kriging model's max over the D-H calibration's max, per fold: {}\n",
         worst.join(" ")
     );
-    for (name, (rows, worst)) in CV_MODELS
+    for (k, (name, (rows, worst))) in CV_MODELS
         .iter()
         .zip(cv.flagged.iter().zip(cv.max_covered_mm()))
+        .enumerate()
         .skip(1)
     {
         if !rows.is_empty() {
@@ -149,6 +150,22 @@ pub fn cv_tail(cv: &HoldoutCv) -> String {
                 s,
                 "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
                 rows.len()
+            );
+        }
+        // the gross errors the warning missed, counted from 1 as data rows
+        let missed: Vec<String> = cv
+            .gross
+            .get(k)
+            .into_iter()
+            .flatten()
+            .filter(|i| !rows.contains(i))
+            .map(|i| (i + 1).to_string())
+            .collect();
+        if !missed.is_empty() {
+            let _ = writeln!(
+                s,
+                "{name}: gross errors not flagged at data row(s) {}",
+                missed.join(", ")
             );
         }
     }
@@ -165,5 +182,36 @@ pub fn joint_list(periodic: &[usize]) -> String {
             .map(|j| format!("q{}", j + 1))
             .collect::<Vec<_>>()
             .join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tail_lists_the_gross_errors_the_warning_missed_from_row_1() {
+        let mut gross = vec![Vec::new(); 5];
+        gross[2] = vec![3, 7];
+        gross[3] = vec![4];
+        let mut flagged = vec![Vec::new(); 5];
+        flagged[2] = vec![3, 5];
+        flagged[3] = vec![4];
+        let cv = HoldoutCv {
+            rows: Vec::new(),
+            scores: Vec::new(),
+            folds: 1,
+            fold_max_mm: vec![[1.0, 1.2, 0.5, 0.9, 0.4]],
+            fold_max_covered_mm: vec![[1.0, 1.2, 0.5, 0.9, 0.4]],
+            flagged,
+            gross,
+            hyper_rows: 10,
+            hyper_seconds: 0.0,
+        };
+        let tail = cv_tail(&cv);
+        let missed: Vec<&str> = tail.lines().filter(|l| l.contains("not flagged")).collect();
+        assert_eq!(missed.len(), 1, "{tail}");
+        assert!(missed[0].starts_with(CV_MODELS[2]), "{tail}");
+        assert!(missed[0].ends_with("data row(s) 8"), "{tail}");
     }
 }
