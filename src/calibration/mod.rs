@@ -36,7 +36,9 @@ pub use harmonics::JointHarmonic;
 pub use identifiability::{Identifiability, ParameterReport};
 
 use crate::dataset::Dataset;
-use crate::kinematics::{ErrorChain, Robot, apply_errors, calib_names, identification_jacobian};
+use crate::kinematics::{
+    ErrorChain, IDENTIFICATION_STEP, Robot, apply_errors, calib_names, identification_jacobian,
+};
 use crate::optim::{LeastSquares, LmOptions, levenberg_marquardt_on};
 use crate::vec3::residuals;
 use crate::{Error, Result};
@@ -486,12 +488,18 @@ impl LeastSquares for Subspace<'_> {
         ))
     }
 
-    /// In the parameters' own units (steps of 1e-4 degree or mm, as the
-    /// identification Jacobian), then onto the directions: a step in the
+    /// In the parameters' own units (steps of [`IDENTIFICATION_STEP`], as
+    /// the identification Jacobian), then onto the directions: a step in the
     /// directions' prior units could be large for a weakly seen parameter.
     fn jacobian(&mut self, u: &[f64]) -> Result<DMatrix<f64>> {
         let p = self.params(u);
-        let jp = residual_jacobian(self.nominal, &p, RESIDUAL_STEP, self.joints, self.targets);
+        let jp = residual_jacobian(
+            self.nominal,
+            &p,
+            IDENTIFICATION_STEP,
+            self.joints,
+            self.targets,
+        );
         Ok(jp * &self.t)
     }
 }
@@ -509,16 +517,13 @@ fn position_residual(robot: &Robot, joints: &[Vec<f64>], targets: &[Vector3<f64>
     )
 }
 
-/// The step of [`residual_jacobian`]'s central differences, degrees or mm.
-const RESIDUAL_STEP: f64 = 1e-4;
-
 /// `∂r/∂p` of [`position_residual`] at the errors `p` (3m × P): central
 /// differences of step `h`, column j `(r(p + h e_j) − r(p − h e_j)) / w_j`
 /// with `w_j = (p_j + h) − (p_j − h)`, the distance the two points are
 /// apart after rounding. The same numbers as
-/// `optim::numerical_jacobian(r, p, [h; P])`, bit for bit, at a sixth of
-/// the cost: each moved parameter recomputes its own link and the
-/// products after it ([`ErrorChain`]).
+/// `optim::numerical_jacobian(r, p, [h; P])`, bit for bit, but each moved
+/// parameter recomputes only its own link and the products after it
+/// ([`ErrorChain`]), not a whole forward kinematics.
 fn residual_jacobian(
     nominal: &Robot,
     p: &[f64],
@@ -920,10 +925,10 @@ mod tests {
                 ))
             },
             &p,
-            &vec![RESIDUAL_STEP; np],
+            &vec![IDENTIFICATION_STEP; np],
         )
         .unwrap();
-        let fast = residual_jacobian(&robot, &p, RESIDUAL_STEP, &data.q, &targets);
+        let fast = residual_jacobian(&robot, &p, IDENTIFICATION_STEP, &data.q, &targets);
         assert_eq!(fast.shape(), generic.shape());
         assert!(
             fast.iter()

@@ -119,13 +119,6 @@ impl<'a> ErrorChain<'a> {
         }
     }
 
-    /// The TCP position of `apply_errors(nominal, x)`.
-    pub fn position(&self) -> Vector3<f64> {
-        (self.prefix[self.links.len()] * self.tool)
-            .translation
-            .vector
-    }
-
     /// The TCP position of `apply_errors(nominal, x′)`, where `x′` is `x`
     /// with parameter `k` set to `value`.
     pub fn moved(&self, k: usize, value: f64) -> Vector3<f64> {
@@ -159,7 +152,12 @@ impl<'a> ErrorChain<'a> {
     }
 }
 
-/// `∂P/∂p` at joints `q` (central differences, step 1e-4 deg / mm): three
+/// The step of the identification Jacobian's central differences, degrees
+/// or mm: [`identification_jacobian`] and the calibration's residual
+/// Jacobian.
+pub const IDENTIFICATION_STEP: f64 = 1e-4;
+
+/// `∂P/∂p` at joints `q` (central differences, step [`IDENTIFICATION_STEP`]): three
 /// rows (x, y, z) of [`calib_len`] columns, mm per degree or mm per mm.
 pub fn identification_jacobian(robot: &Robot, q: &[f64]) -> [Vec<f64>; 3] {
     let all: Vec<usize> = (0..calib_len(robot.dof())).collect();
@@ -168,7 +166,7 @@ pub fn identification_jacobian(robot: &Robot, q: &[f64]) -> [Vec<f64>; 3] {
 
 /// The columns `cols` of [`identification_jacobian`].
 pub fn identification_jacobian_cols(robot: &Robot, q: &[f64], cols: &[usize]) -> [Vec<f64>; 3] {
-    let h = 1e-4;
+    let h = IDENTIFICATION_STEP;
     let x = vec![0.0; calib_len(robot.dof())];
     let chain = ErrorChain::new(robot, &x, q);
     let mut out = [
@@ -217,7 +215,14 @@ mod tests {
                     .collect();
                 let chain = ErrorChain::new(&robot, &x, &q);
                 let whole = |x: &[f64]| apply_errors(&robot, x).fk_unchecked(&q).translation.vector;
-                assert_eq!(chain.position(), whole(&x));
+                // every parameter at its own value: the unmoved robot
+                for (k, &v) in x.iter().enumerate() {
+                    assert_eq!(
+                        chain.moved(k, v),
+                        whole(&x),
+                        "{name}, parameter {k} unmoved"
+                    );
+                }
                 for k in 0..np {
                     let v = x[k] + rng.random_range(-1e-3..1e-3);
                     let mut moved = x.clone();

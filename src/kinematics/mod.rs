@@ -22,7 +22,7 @@ mod presets;
 mod robot_file;
 
 pub use calib::{
-    ErrorChain, apply_errors, calib_len, calib_names, identification_jacobian,
+    ErrorChain, IDENTIFICATION_STEP, apply_errors, calib_len, calib_names, identification_jacobian,
     identification_jacobian_cols,
 };
 pub use ik::{IkOptions, IkTarget};
