@@ -12,6 +12,13 @@
 //!   parameters are within `tol` rows / 3 %). **named**: some added effect's
 //!   `confounded_with` names the planted family (the text of its label).
 //! - **missed**: nothing new added.
+//! - A block added as two steps, one at each edge (within `tol`), is
+//!   right: the two step columns span the block's (its coverage: each
+//!   step's row interval covers its edge, and its coefficient the planted
+//!   offset, + at the first edge and − at the second).
+//! - **left by the cap**: for a proxy or a miss, the planted family is
+//!   among the significant candidates the report lists as left out by the
+//!   cap of effects ([`Diagnosis::left_by_cap`]), with what it would add.
 //!
 //! Coverage (for the right ones): the 95 % support interval of a step's
 //! row (a block's two edges, a harmonic's period) covers the planted value;
@@ -53,6 +60,8 @@ pub struct Score {
     pub added: Vec<String>,
     /// For a right one: what it found (parameters, their intervals, sizes).
     pub detail: String,
+    /// Not right, and the planted family is listed as left by the cap.
+    pub left_by_cap: bool,
 }
 
 pub fn tolerance(m: usize) -> usize {
@@ -105,6 +114,48 @@ fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
                     .is_some_and(|p| (p - period_deg).abs() <= 0.03 * period_deg)
         }
     }
+}
+
+/// Where the planted family stood in each round of `d`: its best candidate's
+/// rank among the round's reports (by evidence, 1 = first), evidence, q
+/// value and status, and whether the cap left it out; "-" when the family
+/// was not among the reported candidates.
+pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
+    let text = family_text(shape);
+    let mut out = Vec::new();
+    let rounds = d.effects.iter().map(|e| e.round).max().unwrap_or(0);
+    for round in 1..=rounds {
+        let mut of_round: Vec<&EffectReport> =
+            d.effects.iter().filter(|e| e.round == round).collect();
+        of_round.sort_by(|a, b| b.evidence.total_cmp(&a.evidence));
+        let found = of_round
+            .iter()
+            .enumerate()
+            .find(|(_, e)| e.label.contains(&text));
+        out.push(match found {
+            Some((k, e)) => format!(
+                "r{round} #{} ev {:.3} q {:.4}{}{}",
+                k + 1,
+                e.evidence,
+                e.q_value,
+                if e.accepted {
+                    " ADDED"
+                } else if e.significant {
+                    " sig"
+                } else {
+                    ""
+                },
+                e.refit_gain
+                    .map(|g| format!(" refit {:+.1} %", -100.0 * g))
+                    .unwrap_or_default()
+            ),
+            None => format!("r{round} -"),
+        });
+    }
+    if let Some(l) = d.left_by_cap.iter().find(|l| l.label.contains(&text)) {
+        out.push(format!("left by the cap (evidence {:.3})", l.evidence));
+    }
+    out.join("; ")
 }
 
 /// The text that names the planted family in a `confounded_with` entry.
@@ -244,6 +295,9 @@ pub fn score(
         .filter(|e| !base.iter().any(|b| same(e, b, tol)))
         .collect();
     let added = new.iter().map(with_params).collect();
+    if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
+        return Score { added, ..sc };
+    }
     if let Some(e) = new.iter().find(|e| is_right(e, shape, tol)) {
         let (row_covered, targets) = coverage(e, shape, p);
         let own_values = own(&targets);
@@ -255,6 +309,7 @@ pub fn score(
             own_covered: nonempty(own_values.and_then(|o| covers(e, &targets, &o))),
             added,
             detail: detail(e, p),
+            left_by_cap: false,
         };
     }
     let text = family_text(shape);
@@ -275,7 +330,56 @@ pub fn score(
         own_covered: None,
         added,
         detail: String::new(),
+        left_by_cap: d.left_by_cap.iter().any(|l| l.label.contains(&text)),
     }
+}
+
+/// A planted block that `new` holds as two steps, one at each edge: right,
+/// scored edge by edge (module docs). `None` for any other plant or when
+/// an edge has no step.
+fn block_as_steps(
+    new: &[EffectReport],
+    shape: &Shape,
+    p: &Planted,
+    tol: usize,
+    own: &dyn Fn(&[Target]) -> Option<Vec<f64>>,
+) -> Option<Score> {
+    let Shape::Block { from, to, dir } = shape else {
+        return None;
+    };
+    let step_at = |row: usize| {
+        new.iter()
+            .find(|e| is_right(e, &Shape::Step { row, dir: *dir }, tol))
+    };
+    let edges = [(step_at(*from)?, *from, 1.0), (step_at(*to)?, *to, -1.0)];
+    let (mut rows, mut coef, mut own_cov, mut details) =
+        (true, Vec::new(), Some(Vec::new()), Vec::new());
+    for (e, row, sign) in edges {
+        let (covered, targets) = coverage(e, &Shape::Step { row, dir: *dir }, p);
+        let targets: Vec<Target> = targets
+            .into_iter()
+            .map(|(c, a, v)| (c, a, sign * v))
+            .collect();
+        rows &= covered.unwrap_or(false);
+        coef.extend(covers(e, &targets, &[]).unwrap_or_default());
+        own_cov = own_cov
+            .zip(own(&targets).and_then(|o| covers(e, &targets, &o)))
+            .map(|(mut a, b)| {
+                a.extend(b);
+                a
+            });
+        details.push(detail(e, p));
+    }
+    let nonempty = |v: Option<Vec<bool>>| v.filter(|v| !v.is_empty());
+    Some(Score {
+        outcome: Outcome::Right,
+        row_covered: Some(rows),
+        coef_covered: nonempty(Some(coef)),
+        own_covered: nonempty(own_cov),
+        added: Vec::new(),
+        detail: format!("as two steps: {}", details.join(" | ")),
+        left_by_cap: false,
+    })
 }
 
 /// Its label and parameters, e.g. "harmonic of q1 (period_deg 6.3)".
