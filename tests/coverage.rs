@@ -98,13 +98,22 @@ fn intervals_cover_95_percent_of_held_out_rows_despite_wild_readings() {
     for f in 0..5 {
         let (test, train): (Vec<usize>, Vec<usize>) = (0..m).partition(|&i| fold[i] == f);
         let fitted = model.refit(&d.select(&train)).unwrap();
-        let c = fitted.interval_scale().unwrap();
-        let p = fitted.predict_checked(&d.select(&test)).unwrap();
+        let held = d.select(&test);
+        let p = fitted.predict_checked(&held).unwrap();
+        // the stated (uncalibrated) standard deviation of a new
+        // measurement: √(MSE + noise²) of the Kriging outputs
+        let s = fitted.input_map().encode(&held.q, &held.dir).unwrap();
+        let noise = fitted.noise_std();
+        let stated: Vec<Vec<f64>> = fitted
+            .outputs()
+            .iter()
+            .map(|o| o.predict(&s).unwrap().iter().map(|p| p.mse).collect())
+            .collect();
         let flags = p.flagged.unwrap();
         for (j, &i) in test.iter().enumerate() {
             mean[i] = p.prediction.mean[j];
             std[i] = p.std_new[j];
-            raw[i] = std::array::from_fn(|a| p.std_new[j][a] / c[a]);
+            raw[i] = std::array::from_fn(|a| (stated[a][j] + noise[a] * noise[a]).sqrt());
             flagged[i] = flags.contains(&j);
         }
     }

@@ -42,15 +42,20 @@ fn close(w: f64, g: f64) -> bool {
 /// Every mean and standard deviation of `model`'s prediction `p` as
 /// `expected` to [`REL`] (`{"mean": [[x, y, z], …], "std": …}`). The
 /// fixture's std is the √MSE of the code that wrote it; today's is that
-/// times the model's interval scale ([`ErrorModel::interval_scale`]).
+/// MSE calibrated on the model's leave-one-out residuals
+/// ([`robokrige::model::LooCheck::mean_std`]).
 fn assert_close_predictions(model: &ErrorModel, p: &Prediction, expected: &Value) {
-    let c = model.interval_scale().unwrap();
+    let check = model.loo_check().unwrap();
     for (key, got) in [("mean", &p.mean), ("std", &p.std)] {
         let want: Vec<[f64; 3]> = serde_json::from_value(expected[key].clone()).unwrap();
         assert_eq!(want.len(), got.len(), "{key}");
         for (w, g) in want.iter().zip(got) {
             for a in 0..3 {
-                let w = if key == "std" { w[a] * c[a] } else { w[a] };
+                let w = if key == "std" {
+                    check.mean_std(a, w[a] * w[a])
+                } else {
+                    w[a]
+                };
                 assert!(close(w, g[a]), "{key}: {w} vs {}", g[a]);
             }
         }

@@ -382,13 +382,13 @@ impl ErrorModel {
                 .map(|o| o.predict(s))
                 .collect::<Result<_>>()?
         };
-        let c = self.interval_scale()?;
+        let check = self.loo_check()?;
         let mut mean = vec![[0.0; 3]; s.len()];
         let mut std = vec![[0.0; 3]; s.len()];
         for (a, preds) in per_axis.iter().enumerate() {
             for (k, p) in preds.iter().enumerate() {
                 mean[k][a] = p.mean;
-                std[k][a] = c[a] * p.mse.sqrt();
+                std[k][a] = check.mean_std(a, p.mse);
             }
         }
         Ok(Prediction { mean, std })
