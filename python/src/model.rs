@@ -274,9 +274,9 @@ impl Model {
     }
 
     /// The measurement-noise standard deviation per axis (mm) the nugget
-    /// attributes, times the model's interval scale (as the predicted std
-    /// is): add it in quadrature to a predicted std for a new
-    /// measurement's.
+    /// attributes, times the model's interval scale (the predicted std is
+    /// calibrated on the same leave-one-out residuals): add it in
+    /// quadrature to a predicted std for a new measurement's.
     fn noise_std(&self) -> PyResult<[f64; 3]> {
         self.inner.predictive_noise_std().map_err(to_py)
     }

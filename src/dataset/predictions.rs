@@ -7,7 +7,7 @@
 //! | column | meaning |
 //! |---|---|
 //! | `pred_a` | predicted error `δ̂_a`, mm |
-//! | `std_a` | `√MSE` of the predicted error (the calibration's uncertainty included, measurement noise not), mm |
+//! | `std_a` | `√MSE` of the predicted error, calibrated on the model's leave-one-out residuals (the calibration's uncertainty included, measurement noise not), mm |
 //! | `std_new_a` | of a new measurement: `√(std_a² + σ_a²)`, `σ_a` the model's noise standard deviation (from its nugget), mm |
 //! | `a` | the measured error, when the dataset has errors |
 //!

@@ -24,7 +24,7 @@ pub enum CoverageIssue {
     },
     /// The 95 % predictive interval of a new measurement reaches a gross
     /// error: `1.96 √(MSE + noise²)`, calibrated on the model's
-    /// leave-one-out residuals ([`ErrorModel::interval_scale`]), exceeds
+    /// leave-one-out residuals ([`ErrorModel::loo_check`]), exceeds
     /// [`GROSS_FACTOR`] times the RMS of those residuals on that axis (no
     /// training pose is near enough for the model to vouch for the point).
     /// With a calibration, its variance beyond its largest at a measured
@@ -144,7 +144,7 @@ pub const Z95: f64 = 1.959_963_984_540_054;
 /// for all of them). The power lives in the tail of the stated variances,
 /// and a few hundred rows hold too little of it: on the 2 773 rows of UR10
 /// series C, 256 or 512 rows spread over the campaign gave κ = 0.2, 1 024
-/// gave 0.7 and all rows 0.6.
+/// about 0.75 and all rows 0.6.
 pub const LOO_SAMPLE: usize = 1024;
 /// Process σ's by which the Kriging correction may depart from the trend.
 pub const TREND_SIGMAS: f64 = 6.0;

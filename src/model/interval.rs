@@ -41,8 +41,10 @@
 //! from the data, is not searched); `c`, per output, then puts 95 % of the
 //! standardised residuals inside the 95 % interval, as the jackknife does.
 //! The model's standard deviations are then `c √(s (s/μ)^κ)` for a mean
-//! of MSE `s` ([`LooCheck::mean_std`]) and `c τ` for the noise of a new
-//! measurement. They are functions of the fitted model alone (no file
+//! of MSE `s` ([`LooCheck::mean_std`]), with `s` held to the range of the
+//! `s_i` inside the power (the power law is not extrapolated: far from the
+//! data the standard deviation grows as `√s` again), and `c τ` for the
+//! noise of a new measurement. They are functions of the fitted model alone (no file
 //! field), computed on the first request and kept.
 
 use super::{ErrorModel, LOO_SAMPLE, Z95};
@@ -60,6 +62,10 @@ pub struct LooCheck {
     /// The reference `μ` of the power per output: the median Kriging MSE
     /// of the held-out means, mm² (0 when there is none).
     pub reference_mse: [f64; 3],
+    /// The smallest and largest Kriging MSE of the held-out means per
+    /// output, mm²: the range the power was fitted on, to which a stated
+    /// MSE is held for its growth (the power is not extrapolated).
+    pub mse_range: [[f64; 2]; 3],
     /// The RMS of the leave-one-out residuals, mm.
     pub loo_rmse: [f64; 3],
     /// The model's own expectation of it before the scale,
@@ -121,6 +127,8 @@ struct AxisSample {
     s: Vec<f64>,
     tau2: f64,
     mu: f64,
+    /// The smallest and largest `s_i`.
+    range: [f64; 2],
 }
 
 impl AxisSample {
@@ -137,12 +145,22 @@ impl AxisSample {
         let mut sorted = s.clone();
         sorted.sort_by(f64::total_cmp);
         let mu = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-        AxisSample { e, s, tau2, mu }
+        let range = [
+            sorted.first().copied().unwrap_or(0.0),
+            sorted.last().copied().unwrap_or(0.0),
+        ];
+        AxisSample {
+            e,
+            s,
+            tau2,
+            mu,
+            range,
+        }
     }
 
     /// The variance `t_i²` of row `i` at power `kappa` (module docs).
     fn t2(&self, i: usize, kappa: f64) -> f64 {
-        variance_at(self.s[i], self.tau2, self.mu, kappa)
+        self.tau2 + self.s[i] * growth(self.s[i], self.mu, self.range, kappa)
     }
 
     /// The profile log-likelihood of the residuals at power `kappa`, the
@@ -168,26 +186,31 @@ impl AxisSample {
     }
 }
 
-/// `τ² + s (s/μ)^κ`: the calibrated variance before the scale, of a mean
-/// of MSE `s` plus the noise (module docs); `s` alone when `μ` is 0.
-fn variance_at(s: f64, tau2: f64, mu: f64, kappa: f64) -> f64 {
-    let grow = if mu > 0.0 && kappa > 0.0 {
-        (s / mu).powf(kappa)
+/// `(s/μ)^κ` with `s` held to `range`, the MSEs the power was fitted on
+/// (module docs); 1 when `μ` or `κ` is 0.
+fn growth(s: f64, mu: f64, range: [f64; 2], kappa: f64) -> f64 {
+    if mu > 0.0 && kappa > 0.0 && range[0] <= range[1] {
+        (s.clamp(range[0], range[1]) / mu).powf(kappa)
     } else {
         1.0
-    };
-    tau2 + s * grow
+    }
 }
 
 /// The power `κ` on the grid `0, POWER_STEP, …, POWER_MAX` that maximises
-/// the pooled profile likelihood of the outputs (module docs); 0 when no
-/// power gives every output a likelihood.
+/// the pooled profile likelihood of the outputs (module docs); an output
+/// without one (no held-out row, every residual 0) is left out, and 0 when
+/// none has one or no power gives every other a likelihood.
 fn power_of(axes: &[AxisSample]) -> f64 {
     let steps = (POWER_MAX / POWER_STEP).round() as usize;
+    let usable: Vec<&AxisSample> = axes.iter().filter(|a| a.profile(0.0).is_some()).collect();
+    if usable.is_empty() {
+        return 0.0;
+    }
     (0..=steps)
         .map(|k| k as f64 * POWER_STEP)
         .filter_map(|kappa| {
-            axes.iter()
+            usable
+                .iter()
                 .map(|a| a.profile(kappa))
                 .sum::<Option<f64>>()
                 .map(|l| (kappa, l))
@@ -201,11 +224,17 @@ fn power_of(axes: &[AxisSample]) -> f64 {
 
 impl LooCheck {
     /// The calibrated standard deviation of a Kriging mean whose stated MSE
-    /// on output `axis` is `mse` (mm²): `c √(s (s/μ)^κ)` (module docs), mm.
+    /// on output `axis` is `mse` (mm²): `c √(s (s/μ)^κ)`, with `s/μ` held
+    /// to the range the power was fitted on (module docs), mm.
     pub fn mean_std(&self, axis: usize, mse: f64) -> f64 {
         let s = mse.max(0.0);
-        self.interval_scale[axis]
-            * variance_at(s, 0.0, self.reference_mse[axis], self.interval_power).sqrt()
+        let g = growth(
+            s,
+            self.reference_mse[axis],
+            self.mse_range[axis],
+            self.interval_power,
+        );
+        self.interval_scale[axis] * (s * g).sqrt()
     }
 }
 
@@ -220,6 +249,7 @@ impl ErrorModel {
                 interval_scale: [1.0; 3],
                 interval_power: 0.0,
                 reference_mse: [0.0; 3],
+                mse_range: [[0.0; 2]; 3],
                 loo_rmse: [0.0; 3],
                 expected_loo_rmse: [0.0; 3],
                 rows: blocks.len(),
@@ -246,6 +276,7 @@ impl ErrorModel {
             for (a, x) in axes.iter().enumerate() {
                 out.interval_scale[a] = x.scale(out.interval_power);
                 out.reference_mse[a] = x.mu;
+                out.mse_range[a] = x.range;
             }
             Ok(out)
         });
@@ -311,7 +342,7 @@ mod tests {
                 .iter()
                 .map(|&si| {
                     let z: f64 = StandardNormal.sample(&mut rng);
-                    z * variance_at(si, tau2, mu, kappa0).sqrt()
+                    z * (tau2 + si * (si / mu).powf(kappa0)).sqrt()
                 })
                 .collect();
             let v: Vec<f64> = s.iter().map(|si| si + tau2).collect();
@@ -324,6 +355,31 @@ mod tests {
                 .count();
             assert!((inside as f64 / n as f64 - 0.95).abs() < 0.002, "{inside}");
         }
+    }
+
+    /// The power is not extrapolated: a stated MSE outside the range it
+    /// was fitted on grows (or shrinks) as `√s` again beyond it.
+    #[test]
+    fn the_power_holds_the_mse_to_the_range_it_was_fitted_on() {
+        let check = LooCheck {
+            interval_scale: [2.0; 3],
+            interval_power: 1.0,
+            reference_mse: [2.0; 3],
+            mse_range: [[1.0, 4.0]; 3],
+            loo_rmse: [1.0; 3],
+            expected_loo_rmse: [1.0; 3],
+            rows: 10,
+        };
+        let want = |s: f64, g: f64| 2.0 * (s * g).sqrt();
+        assert_eq!(check.mean_std(0, 3.0), want(3.0, 1.5));
+        assert_eq!(check.mean_std(1, 16.0), want(16.0, 2.0));
+        assert_eq!(check.mean_std(2, 0.25), want(0.25, 0.5));
+        assert_eq!(check.mean_std(0, 0.0), 0.0);
+        let plain = LooCheck {
+            interval_power: 0.0,
+            ..check
+        };
+        assert_eq!(plain.mean_std(0, 16.0), 8.0);
     }
 
     #[test]

@@ -99,10 +99,10 @@ pub const SOFTWARE: &str = concat!("robokrige ", env!("CARGO_PKG_VERSION"));
 pub struct Prediction {
     /// Predicted error `[δx, δy, δz]` per point, mm.
     pub mean: Vec<[f64; 3]>,
-    /// Its standard deviation per axis (the √MSE of the mean, without the
-    /// measurement noise), mm: the Kriging part times the model's
-    /// [`ErrorModel::interval_scale`], and with a calibration its variance
-    /// away from the campaign.
+    /// Its standard deviation per axis (of the mean, without the
+    /// measurement noise), mm: the Kriging part's √MSE calibrated on the
+    /// model's leave-one-out residuals ([`super::LooCheck::mean_std`]), and
+    /// with a calibration its variance away from the campaign.
     pub std: Vec<[f64; 3]>,
 }
 
