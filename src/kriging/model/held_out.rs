@@ -7,7 +7,12 @@ use crate::kriging::trend::TrendModel;
 use crate::{Error, Result};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat, MatRef, Par};
+
+/// Held-out rows of one row each solved together ([`KrigingModel::held_out`]):
+/// each chunk, in increasing row order, is solved on the trailing block of
+/// the factor from its first row, and holds an m × `UNIT_CHUNK` matrix.
+const UNIT_CHUNK: usize = 128;
 impl KrigingModel {
     /// Closed-form leave-block-out residuals at fixed ξ (Dubrule 1983): for
     /// each block I of training rows, `e_I = y_I − ŷ_I` where ŷ_I is the
@@ -59,7 +64,7 @@ impl KrigingModel {
                     "held-out block of {k} rows does not fit {m} training rows and {p} trend terms"
                 )));
             }
-            let (z, qz) = unit_columns(m, block, c, ftilde, g, Par::Seq);
+            let (z, qz) = unit_columns(block, c.as_ref(), ftilde.as_ref(), g, Par::Seq);
             let mut b = Mat::<f64>::zeros(k, k);
             matmul(
                 b.as_mut(),
@@ -104,8 +109,13 @@ impl KrigingModel {
 
 impl KrigingModel {
     /// [`KrigingModel::held_out_with`] for blocks of one row each, `rows`:
-    /// `Z = C⁻¹ E` for all of them in one multi-column solve, then per row
-    /// `B_ii = ‖z_i‖² − ‖G⁻ᵀ F̃ᵀ z_i‖²` and `e_i = γ_i / B_ii`.
+    /// `Z = C⁻¹ E` for them in multi-column solves, then per row
+    /// `B_ii = ‖z_i‖² − ‖G⁻ᵀ F̃ᵀ z_i‖²` and `e_i = γ_i / B_ii`. Since `C` is
+    /// lower triangular, `C⁻¹ e_i` is 0 above row `i`: the rows go in
+    /// increasing order in chunks of [`UNIT_CHUNK`], each solved on the
+    /// trailing block `C[i₀.., i₀..]` from its first row `i₀` (with `F̃`'s rows
+    /// from `i₀`), about 40 % of the solve on the whole factor for rows
+    /// spread over the campaign.
     fn held_out_rows(
         &self,
         rows: &[usize],
@@ -120,17 +130,30 @@ impl KrigingModel {
                 "held-out rows do not fit {m} training rows and {p} trend terms"
             )));
         }
-        let (z, qz) = unit_columns(m, rows, c, ftilde, g, Par::rayon(0));
+        let mut sorted = rows.to_vec();
+        sorted.sort_unstable();
         let mut out = vec![f64::NAN; m];
         let mut variances = vec![f64::NAN; m];
         let mut inv_b = 0.0;
-        for (j, &i) in rows.iter().enumerate() {
-            let zz: f64 = z.col(j).iter().map(|v| v * v).sum();
-            let qq: f64 = qz.col(j).iter().map(|v| v * v).sum();
-            let b = zz - qq;
-            inv_b += 1.0 / b;
-            out[i] = d.gamma[i] / b * d.y_std;
-            variances[i] = d.sigma2 / b * d.y_std * d.y_std;
+        for chunk in sorted.chunks(UNIT_CHUNK) {
+            let i0 = chunk[0];
+            let k = m - i0;
+            let local: Vec<usize> = chunk.iter().map(|&i| i - i0).collect();
+            let (z, qz) = unit_columns(
+                &local,
+                c.as_ref().submatrix(i0, i0, k, k),
+                ftilde.as_ref().subrows(i0, k),
+                g,
+                Par::rayon(0),
+            );
+            for (j, &i) in chunk.iter().enumerate() {
+                let zz: f64 = z.col(j).iter().map(|v| v * v).sum();
+                let qq: f64 = qz.col(j).iter().map(|v| v * v).sum();
+                let b = zz - qq;
+                inv_b += 1.0 / b;
+                out[i] = d.gamma[i] / b * d.y_std;
+                variances[i] = d.sigma2 / b * d.y_std * d.y_std;
+            }
         }
         if out.iter().any(|v| v.is_infinite()) {
             return Err(Error::Numerical(
@@ -145,21 +168,21 @@ impl KrigingModel {
     }
 }
 
-/// `Z = C⁻¹ E_rows` (m × k, `E_rows` the unit columns of `rows`) and
-/// `Qᵀ Z = G⁻ᵀ F̃ᵀ Z` (p × k): what `B_II = ZᵀZ − (QᵀZ)ᵀ(QᵀZ)` is made of.
+/// `Z = C⁻¹ E_rows` (m × k, `E_rows` the unit columns of `rows`, m the
+/// order of `c`) and `Qᵀ Z = G⁻ᵀ F̃ᵀ Z` (p × k): what
+/// `B_II = ZᵀZ − (QᵀZ)ᵀ(QᵀZ)` is made of.
 fn unit_columns(
-    m: usize,
     rows: &[usize],
-    c: &Mat<f64>,
-    ftilde: &Mat<f64>,
+    c: MatRef<'_, f64>,
+    ftilde: MatRef<'_, f64>,
     g: &Mat<f64>,
     par: Par,
 ) -> (Mat<f64>, Mat<f64>) {
-    let mut z = Mat::<f64>::zeros(m, rows.len());
+    let mut z = Mat::<f64>::zeros(c.nrows(), rows.len());
     for (j, &i) in rows.iter().enumerate() {
         z[(i, j)] = 1.0;
     }
-    solve_lower_triangular_in_place(c.as_ref(), z.as_mut(), par);
+    solve_lower_triangular_in_place(c, z.as_mut(), par);
     let mut qz = Mat::<f64>::zeros(g.nrows(), rows.len());
     matmul(
         qz.as_mut(),
