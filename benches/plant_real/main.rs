@@ -329,7 +329,7 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
                 pct(count(Outcome::ProxyNamed)),
                 pct(count(Outcome::Proxy)),
                 pct(count(Outcome::Missed)),
-                sel.iter().filter(|r| r.score.left_by_cap).count(),
+                pct(sel.iter().filter(|r| r.score.left_by_cap).count()),
                 cov(|s| s.row_covered),
                 cov(|s| s.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
                 frac(

@@ -122,6 +122,11 @@ fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
 /// was not among the reported candidates.
 pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
     let text = family_text(shape);
+    // a block may be found as its two edges' steps
+    let also = match shape {
+        Shape::Block { .. } => Some("step in the measurement order"),
+        _ => None,
+    };
     let mut out = Vec::new();
     let rounds = d.effects.iter().map(|e| e.round).max().unwrap_or(0);
     for round in 1..=rounds {
@@ -131,10 +136,15 @@ pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
         let found = of_round
             .iter()
             .enumerate()
-            .find(|(_, e)| e.label.contains(&text));
+            .find(|(_, e)| e.label.contains(&text) || also.is_some_and(|t| e.label.contains(t)));
         out.push(match found {
             Some((k, e)) => format!(
-                "r{round} #{} ev {:.3} q {:.4}{}{}",
+                "r{round} {}#{} ev {:.3} q {:.4}{}{}",
+                if also.is_some() {
+                    format!("{} ", e.label.split(' ').next().unwrap_or(""))
+                } else {
+                    String::new()
+                },
                 k + 1,
                 e.evidence,
                 e.q_value,
@@ -295,9 +305,6 @@ pub fn score(
         .filter(|e| !base.iter().any(|b| same(e, b, tol)))
         .collect();
     let added = new.iter().map(with_params).collect();
-    if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
-        return Score { added, ..sc };
-    }
     if let Some(e) = new.iter().find(|e| is_right(e, shape, tol)) {
         let (row_covered, targets) = coverage(e, shape, p);
         let own_values = own(&targets);
@@ -311,6 +318,9 @@ pub fn score(
             detail: detail(e, p),
             left_by_cap: false,
         };
+    }
+    if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
+        return Score { added, ..sc };
     }
     let text = family_text(shape);
     let named = d
@@ -347,34 +357,52 @@ fn block_as_steps(
     let Shape::Block { from, to, dir } = shape else {
         return None;
     };
-    let step_at = |row: usize| {
-        new.iter()
-            .find(|e| is_right(e, &Shape::Step { row, dir: *dir }, tol))
-    };
-    let edges = [(step_at(*from)?, *from, 1.0), (step_at(*to)?, *to, -1.0)];
-    let (mut rows, mut coef, mut own_cov, mut details) =
-        (true, Vec::new(), Some(Vec::new()), Vec::new());
-    for (e, row, sign) in edges {
-        let (covered, targets) = coverage(e, &Shape::Step { row, dir: *dir }, p);
-        let targets: Vec<Target> = targets
-            .into_iter()
-            .map(|(c, a, v)| (c, a, sign * v))
-            .collect();
-        rows &= covered.unwrap_or(false);
-        coef.extend(covers(e, &targets, &[]).unwrap_or_default());
-        own_cov = own_cov
-            .zip(own(&targets).and_then(|o| covers(e, &targets, &o)))
-            .map(|(mut a, b)| {
+    let step = |row: usize| Shape::Step { row, dir: *dir };
+    let first = new.iter().position(|e| is_right(e, &step(*from), tol))?;
+    // the other edge's step is another effect
+    let second = new
+        .iter()
+        .enumerate()
+        .position(|(k, e)| k != first && is_right(e, &step(*to), tol))?;
+    let edges = [(&new[first], *from, 1.0), (&new[second], *to, -1.0)];
+    // each edge's targets (the planted offset, + then −) and row coverage
+    let scored: Vec<(&EffectReport, Option<bool>, Vec<Target>)> = edges
+        .iter()
+        .map(|&(e, row, sign)| {
+            let (covered, targets) = coverage(e, &step(row), p);
+            let targets = targets
+                .into_iter()
+                .map(|(c, a, v)| (c, a, sign * v))
+                .collect();
+            (e, covered, targets)
+        })
+        .collect();
+    let rows = scored.iter().all(|(_, c, _)| *c == Some(true));
+    let all: Vec<Target> = scored.iter().flat_map(|(_, _, t)| t.clone()).collect();
+    // one refit of the unplanted campaign for both edges' coefficients
+    let own_all = own(&all);
+    let mut offset = 0;
+    let (mut coef, mut own_cov) = (Some(Vec::new()), Some(Vec::new()));
+    for (e, _, targets) in &scored {
+        let own_values = own_all
+            .as_ref()
+            .map(|o| o[offset..offset + targets.len()].to_vec());
+        offset += targets.len();
+        let join = |acc: Option<Vec<bool>>, got: Option<Vec<bool>>| {
+            acc.zip(got).map(|(mut a, b)| {
                 a.extend(b);
                 a
-            });
-        details.push(detail(e, p));
+            })
+        };
+        coef = join(coef, covers(e, targets, &[]));
+        own_cov = join(own_cov, own_values.and_then(|o| covers(e, targets, &o)));
     }
     let nonempty = |v: Option<Vec<bool>>| v.filter(|v| !v.is_empty());
+    let details: Vec<String> = scored.iter().map(|(e, _, _)| detail(e, p)).collect();
     Some(Score {
         outcome: Outcome::Right,
         row_covered: Some(rows),
-        coef_covered: nonempty(Some(coef)),
+        coef_covered: nonempty(coef),
         own_covered: nonempty(own_cov),
         added: Vec::new(),
         detail: format!("as two steps: {}", details.join(" | ")),
