@@ -101,7 +101,7 @@ pub struct Prediction {
     pub mean: Vec<[f64; 3]>,
     /// Its standard deviation per axis (of the mean, without the
     /// measurement noise), mm: the Kriging part's √MSE calibrated on the
-    /// model's leave-one-out residuals ([`super::LooCheck::mean_std`]), and
+    /// model's leave-one-out residuals ([`LooCheck::mean_std`]), and
     /// with a calibration its variance away from the campaign.
     pub std: Vec<[f64; 3]>,
 }
