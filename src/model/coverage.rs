@@ -353,29 +353,32 @@ impl ErrorModel {
 
     /// Per point (normalised inputs `s`), the
     /// [`CoverageIssue::Contradicted`] of a training row it leans on most
-    /// (for some output), if any: the leave-one-out residuals of those rows
-    /// alone (one multi-column triangular solve per output), against
-    /// `loo`, the leave-one-out RMS per axis.
+    /// (for some output), if any: those rows' leave-one-out residuals, read
+    /// from the model's [`LooCheck`](super::LooCheck) where its sample holds
+    /// them and solved for the others (one multi-column triangular solve
+    /// per output), against `loo`, the leave-one-out RMS per axis.
     fn contradicted(&self, s: &[Vec<f64>], loo: &[f64; 3]) -> Result<Vec<Option<CoverageIssue>>> {
         let near: Vec<Vec<(usize, f64)>> =
             self.outputs.iter().map(|o| o.nearest_training(s)).collect();
-        let mut rows: Vec<usize> = near
+        let check = self.loo_check()?;
+        let mut e = check.residuals;
+        let mut missing: Vec<usize> = near
             .iter()
             .flatten()
-            .filter(|(_, r)| *r >= LEAN_CORRELATION)
+            .filter(|&&(i, r)| r >= LEAN_CORRELATION && e.iter().any(|ea| ea[i].is_nan()))
             .map(|(i, _)| *i)
             .collect();
-        rows.sort_unstable();
-        rows.dedup();
-        if rows.is_empty() {
-            return Ok(vec![None; s.len()]);
+        missing.sort_unstable();
+        missing.dedup();
+        if !missing.is_empty() {
+            let blocks: Vec<Vec<usize>> = missing.iter().map(|&i| vec![i]).collect();
+            for (ea, o) in e.iter_mut().zip(&self.outputs) {
+                let got = o.held_out_residuals(&blocks)?;
+                for &i in &missing {
+                    ea[i] = got[i];
+                }
+            }
         }
-        let blocks: Vec<Vec<usize>> = rows.iter().map(|&i| vec![i]).collect();
-        let e: Vec<Vec<f64>> = self
-            .outputs
-            .iter()
-            .map(|o| o.held_out_residuals(&blocks))
-            .collect::<Result<_>>()?;
         let rmse = loo.iter().map(|v| v * v).sum::<f64>().sqrt();
         Ok((0..s.len())
             .map(|k| {

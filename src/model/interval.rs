@@ -53,7 +53,7 @@ use std::sync::OnceLock;
 
 /// What the leave-one-out residuals of a fitted model say about its
 /// stated uncertainty, per output axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LooCheck {
     /// The factor `c` on the model's standard deviations (module docs).
     pub interval_scale: [f64; 3],
@@ -73,6 +73,10 @@ pub struct LooCheck {
     pub expected_loo_rmse: [f64; 3],
     /// Training rows the residuals were taken at.
     pub rows: usize,
+    /// The leave-one-out residual per output at every training row, mm
+    /// (NaN at a row outside the sample): what a check of one training row
+    /// reads instead of solving for it again.
+    pub residuals: [Vec<f64>; 3],
 }
 
 /// The [`LooCheck`] of a model, computed once (it is a function of the
@@ -253,6 +257,7 @@ impl ErrorModel {
                 loo_rmse: [0.0; 3],
                 expected_loo_rmse: [0.0; 3],
                 rows: blocks.len(),
+                residuals: Default::default(),
             };
             let mut axes = Vec::with_capacity(self.outputs.len());
             for (a, k) in self.outputs.iter().enumerate() {
@@ -266,6 +271,7 @@ impl ErrorModel {
                 out.loo_rmse[a] =
                     (held.iter().map(|r| r * r).sum::<f64>() / held.len().max(1) as f64).sqrt();
                 out.expected_loo_rmse[a] = h.expected_loo_rmse;
+                out.residuals[a] = h.residuals.clone();
                 axes.push(AxisSample::new(
                     &h.residuals,
                     &h.variances,
@@ -369,6 +375,7 @@ mod tests {
             loo_rmse: [1.0; 3],
             expected_loo_rmse: [1.0; 3],
             rows: 10,
+            residuals: Default::default(),
         };
         let want = |s: f64, g: f64| 2.0 * (s * g).sqrt();
         assert_eq!(check.mean_std(0, 3.0), want(3.0, 1.5));
@@ -377,7 +384,7 @@ mod tests {
         assert_eq!(check.mean_std(0, 0.0), 0.0);
         let plain = LooCheck {
             interval_power: 0.0,
-            ..check
+            ..check.clone()
         };
         assert_eq!(plain.mean_std(0, 16.0), 8.0);
     }
