@@ -221,11 +221,16 @@ fn main() {
                 let own = |t: &[score::Target]| own_coefficients(&control_rows, &o, &d, t);
                 let sc = score::score(&d, &control, (&shape, &p), m, &own);
                 println!(
-                    "plant {i:>2} {k}× {:<26} {:<10}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
+                    "plant {i:>2} {k}× {:<26} {:<10}{}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
                     shape.describe(),
                     format!("{:?}", sc.outcome),
                     if sc.left_by_cap {
                         " (left by the cap)"
+                    } else {
+                        ""
+                    },
+                    if sc.outcome != Outcome::Right && !sc.seen {
+                        " (never significant)"
                     } else {
                         ""
                     },
@@ -296,9 +301,9 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
+            "| kind | plants | right | proxy, named | proxy, not named | (of which the planted family never significant) | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
         kinds.dedup();
         kinds.sort();
@@ -324,10 +329,13 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             };
             let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
             println!(
-                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
                 pct(count(Outcome::Right)),
                 pct(count(Outcome::ProxyNamed)),
                 pct(count(Outcome::Proxy)),
+                sel.iter()
+                    .filter(|r| r.score.outcome == Outcome::Proxy && !r.score.seen)
+                    .count(),
                 pct(count(Outcome::Missed)),
                 pct(sel.iter().filter(|r| r.score.left_by_cap).count()),
                 cov(|s| s.row_covered),

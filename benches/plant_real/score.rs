@@ -10,7 +10,12 @@
 //! - **proxy**: not right, but something the control did not add was added
 //!   (an effect is "the same" as a control's when its label matches and its
 //!   parameters are within `tol` rows / 3 %). **named**: some added effect's
-//!   `confounded_with` names the planted family (the text of its label).
+//!   `confounded_with` names the planted family (the text of its label; a
+//!   block's also a step in the measurement order, its edge), a step or
+//!   block at the planted place (a row within `tol` of a planted edge).
+//!   **seen**: the planted family was significant, at its place, in some
+//!   round (a proxy of a family never significant cannot be named from
+//!   the data).
 //! - **missed**: nothing new added.
 //! - A block added as two steps, one at each edge (within `tol`), is
 //!   right: the two step columns span the block's (its coverage: each
@@ -18,7 +23,8 @@
 //!   offset, + at the first edge and − at the second).
 //! - **left by the cap**: for a proxy or a miss, the planted family is
 //!   among the significant candidates the report lists as left out by the
-//!   cap of effects ([`Diagnosis::left_by_cap`]), with what it would add.
+//!   cap of effects ([`Diagnosis::left_by_cap`]), with what it would add
+//!   (a block's family includes the step at an edge; at the planted place).
 //!
 //! Coverage (for the right ones): the 95 % support interval of a step's
 //! row (a block's two edges, a harmonic's period) covers the planted value;
@@ -62,6 +68,8 @@ pub struct Score {
     pub detail: String,
     /// Not right, and the planted family is listed as left by the cap.
     pub left_by_cap: bool,
+    /// The planted family was significant in some round.
+    pub seen: bool,
 }
 
 pub fn tolerance(m: usize) -> usize {
@@ -121,12 +129,8 @@ fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
 /// value and status, and whether the cap left it out; "-" when the family
 /// was not among the reported candidates.
 pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
-    let text = family_text(shape);
-    // a block may be found as its two edges' steps
-    let also = match shape {
-        Shape::Block { .. } => Some("step in the measurement order"),
-        _ => None,
-    };
+    let texts = family_texts(shape);
+    let also = texts.len() > 1;
     let mut out = Vec::new();
     let rounds = d.effects.iter().map(|e| e.round).max().unwrap_or(0);
     for round in 1..=rounds {
@@ -136,11 +140,11 @@ pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
         let found = of_round
             .iter()
             .enumerate()
-            .find(|(_, e)| e.label.contains(&text) || also.is_some_and(|t| e.label.contains(t)));
+            .find(|(_, e)| of_family(&e.label, &texts));
         out.push(match found {
             Some((k, e)) => format!(
                 "r{round} {}#{} ev {:.3} q {:.4}{}{}",
-                if also.is_some() {
+                if also {
                     format!("{} ", e.label.split(' ').next().unwrap_or(""))
                 } else {
                     String::new()
@@ -162,21 +166,72 @@ pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
             None => format!("r{round} -"),
         });
     }
-    if let Some(l) = d.left_by_cap.iter().find(|l| l.label.contains(&text)) {
+    if let Some(l) = d.left_by_cap.iter().find(|l| of_family(&l.label, &texts)) {
         out.push(format!("left by the cap (evidence {:.3})", l.evidence));
     }
     out.join("; ")
 }
 
-/// The text that names the planted family in a `confounded_with` entry.
-fn family_text(shape: &Shape) -> String {
+/// The texts that name the planted family in a label or a
+/// `confounded_with` entry: a block is also found as a step at an edge.
+fn family_texts(shape: &Shape) -> Vec<String> {
     match shape {
-        Shape::Step { .. } => "step in the measurement order".into(),
-        Shape::Block { .. } => "block of rows".into(),
-        Shape::Drift { .. } => "temp_c".into(),
-        Shape::Lag { joint } => format!("moves of q{joint} "),
-        Shape::Harmonic { joint, .. } => format!("harmonic of q{joint}"),
+        Shape::Step { .. } => vec!["step in the measurement order".into()],
+        Shape::Block { .. } => vec![
+            "block of rows".into(),
+            "step in the measurement order".into(),
+        ],
+        Shape::Drift { .. } => vec!["temp_c".into()],
+        Shape::Lag { joint } => vec![format!("moves of q{joint} ")],
+        Shape::Harmonic { joint, .. } => vec![format!("harmonic of q{joint}")],
     }
+}
+
+/// Does `text` name one of the family's `texts`.
+fn of_family(text: &str, texts: &[String]) -> bool {
+    texts.iter().any(|t| text.contains(t.as_str()))
+}
+
+/// Are the `rows` (a candidate's row parameters) at the planted place: for
+/// a step or block, one within `tol` of a planted edge; any other kind has
+/// no place in the order.
+fn at_place(rows: &[f64], shape: &Shape, tol: usize) -> bool {
+    let edges: Vec<usize> = match shape {
+        Shape::Step { row, .. } => vec![*row],
+        Shape::Block { from, to, .. } => vec![*from, *to],
+        _ => return true,
+    };
+    rows.iter()
+        .any(|r| edges.iter().any(|&e| (r - e as f64).abs() <= tol as f64))
+}
+
+/// The row parameters of a report.
+fn row_params(params: &std::collections::BTreeMap<String, f64>) -> Vec<f64> {
+    params
+        .iter()
+        .filter(|(k, _)| k.ends_with("row"))
+        .map(|(_, v)| *v)
+        .collect()
+}
+
+/// The row parameters written in a `confounded_with` entry ("row 373.000",
+/// "from_row 229.000, to_row 491.000").
+fn rows_in_text(text: &str) -> Vec<f64> {
+    text.match_indices("row ")
+        .filter_map(|(i, _)| {
+            let rest = &text[i + 4..];
+            let end = rest
+                .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .unwrap_or(rest.len());
+            rest[..end].parse().ok()
+        })
+        .collect()
+}
+
+/// Does `entry` (a `confounded_with` text) name the planted family at its
+/// place.
+fn names_plant(entry: &str, texts: &[String], shape: &Shape, tol: usize) -> bool {
+    of_family(entry, texts) && at_place(&rows_in_text(entry), shape, tol)
 }
 
 fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
@@ -317,17 +372,25 @@ pub fn score(
             added,
             detail: detail(e, p),
             left_by_cap: false,
+            seen: true,
         };
     }
     if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
         return Score { added, ..sc };
     }
-    let text = family_text(shape);
+    let texts = family_texts(shape);
     let named = d
         .effects
         .iter()
         .filter(|e| e.accepted)
-        .any(|e| e.confounded_with.iter().any(|c| c.contains(&text)));
+        .any(|e| {
+            e.confounded_with
+                .iter()
+                .any(|c| names_plant(c, &texts, shape, tol))
+        });
+    let seen = d.effects.iter().any(|e| {
+        e.significant && of_family(&e.label, &texts) && at_place(&row_params(&e.params), shape, tol)
+    });
     let outcome = match (new.is_empty(), named) {
         (true, _) => Outcome::Missed,
         (false, true) => Outcome::ProxyNamed,
@@ -340,7 +403,10 @@ pub fn score(
         own_covered: None,
         added,
         detail: String::new(),
-        left_by_cap: d.left_by_cap.iter().any(|l| l.label.contains(&text)),
+        left_by_cap: d.left_by_cap.iter().any(|l| {
+            of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol)
+        }),
+        seen,
     }
 }
 
@@ -407,6 +473,7 @@ fn block_as_steps(
         added: Vec::new(),
         detail: format!("as two steps: {}", details.join(" | ")),
         left_by_cap: false,
+        seen: true,
     })
 }
 

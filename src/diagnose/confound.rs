@@ -26,6 +26,14 @@
 //! whatever the model still misses, so "within noise" errs towards naming
 //! a competitor.
 //!
+//! **Explained away.** Two candidates can also explain the same residual
+//! when one is clearly ahead: the one added then takes the other's
+//! evidence. The round after an effect is added tests every candidate
+//! again inside the model with it; a candidate of another source that was
+//! significant before and is no longer, with at most half its evidence
+//! left ([`EXPLAINED_AWAY`]), was explained by the effect added
+//! ([`explained_away`]), and the effect's report names it.
+//!
 //! **Region of the joint space.** A step or block of rows is a region of
 //! the joint space when the poses were measured region by region: its
 //! indicator is then predicted by the indicator of each row's nearest
@@ -40,6 +48,10 @@ use super::scan::{EffectKind, Family, Tested, is_time_column};
 /// same residual (and of a step or block with its region of the joint
 /// space).
 pub const SAME_RESIDUAL: f64 = 0.7;
+
+/// Share of its evidence a candidate keeps, at most, once an effect is
+/// added for that effect to have explained it away ([`explained_away`]).
+pub const EXPLAINED_AWAY: f64 = 0.5;
 
 /// Nearest poses in joint space a row's region indicator is averaged over.
 pub const NEIGHBOURS: usize = 5;
@@ -123,20 +135,65 @@ pub(super) fn not_separable(
 /// A competitor as the report names it: label (with its parameters),
 /// score, evidence and the correlation of the fitted contributions.
 pub(super) fn competitor_text(r: &EffectReport, correlation: f64) -> String {
+    format!(
+        "{}{} (score {:.3}, evidence {:.3}, within noise; correlation of the fitted contributions {:.2})",
+        r.label,
+        params_text(r),
+        r.score,
+        r.evidence,
+        correlation
+    )
+}
+
+/// The candidates the effect `added` explained away (module docs): in
+/// `before` (the reports of the round it was added in) significant, not
+/// added, and of another source and label; in `after` (the next round's
+/// reports, inside the model with it) the same family, no longer
+/// significant, with at most [`EXPLAINED_AWAY`] of its evidence. Each is
+/// named with its evidence before and after, most evidence lost first.
+pub(super) fn explained_away(
+    added: &EffectReport,
+    before: &[EffectReport],
+    after: &[EffectReport],
+) -> Vec<String> {
+    let mut out: Vec<(f64, String)> = before
+        .iter()
+        .filter(|b| b.significant && !b.accepted && b.evidence > 0.0)
+        .filter(|b| b.source != added.source && b.label != added.label)
+        .filter_map(|b| {
+            let a = after
+                .iter()
+                .find(|a| a.label == b.label && a.source == b.source)?;
+            (!a.significant && a.evidence <= EXPLAINED_AWAY * b.evidence).then(|| {
+                let text = format!(
+                    "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after: explained away by it)",
+                    b.label,
+                    params_text(b),
+                    b.evidence,
+                    b.q_value,
+                    a.evidence,
+                    a.q_value
+                );
+                (b.evidence - a.evidence, text)
+            })
+        })
+        .collect();
+    out.sort_by(|x, y| y.0.total_cmp(&x.0));
+    out.into_iter().map(|(_, t)| t).collect()
+}
+
+/// A report's parameters as " (name value, …)", or nothing.
+fn params_text(r: &EffectReport) -> String {
     let params: Vec<String> = r
         .params
         .iter()
         .map(|(k, v)| format!("{k} {v:.3}"))
         .collect();
-    let params = if params.is_empty() {
+    if params.is_empty() {
         String::new()
     } else {
         format!(" ({})", params.join(", "))
-    };
-    format!(
-        "{}{params} (score {:.3}, evidence {:.3}, correlation of the fitted contributions {:.2})",
-        r.label, r.score, r.evidence, correlation
-    )
+    }
 }
 
 /// Whether a candidate is an anonymous order effect (a drift, a step or a
@@ -230,6 +287,47 @@ fn correlation(x: &[f64], y: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A report of `label` from `source`, its evidence and significance.
+    fn report(label: &str, source: &str, evidence: f64, significant: bool) -> EffectReport {
+        serde_json::from_str(&format!(
+            r#"{{"round": 1, "kind": "order", "source": ["{source}"], "label": "{label}",
+                "params": {{}}, "score": 0.1, "explained": 0.1, "p_value": 0.01,
+                "q_value": 0.02, "evidence": {evidence}, "significant": {significant},
+                "accepted": false}}"#
+        ))
+        .unwrap()
+    }
+
+    /// An effect names the candidates it took the evidence of, not one that
+    /// kept its evidence, one that was not significant before, or one of
+    /// its own source.
+    #[test]
+    fn an_added_effect_names_the_candidates_it_explained_away() {
+        let mut added = report("q4's last move", "q4", 0.08, true);
+        added.accepted = true;
+        let before = vec![
+            added.clone(),
+            report("step in the measurement order", "row", 0.047, true),
+            report("drift over the measurement order", "row", 0.030, true),
+            report("moves of q3 into the pose", "q3", 0.010, false),
+            report("q4's direction history", "q4", 0.040, true),
+            report("harmonic of q2", "q2", 0.020, true),
+        ];
+        let after = vec![
+            report("step in the measurement order", "row", 0.011, false),
+            // lost significance, but kept most of its evidence
+            report("drift over the measurement order", "row", 0.020, false),
+            report("moves of q3 into the pose", "q3", 0.001, false),
+            report("q4's direction history", "q4", 0.001, false),
+            // still significant
+            report("harmonic of q2", "q2", 0.005, true),
+        ];
+        let named = explained_away(&added, &before, &after);
+        assert_eq!(named.len(), 1, "{named:?}");
+        assert!(named[0].starts_with("step in the measurement order (evidence 0.047"));
+        assert!(named[0].contains("0.011"));
+    }
 
     /// A block of rows measured in its own corner of the joint space is a
     /// region; the same rows spread over the space are not.

@@ -94,7 +94,9 @@ pub struct EffectReport {
     /// `diagnose::confound`), and for a step or block of rows the region
     /// of the joint space its rows were measured in, when they were.
     /// Filled for the candidates a round compares for adding, and for a
-    /// significant candidate left out by the cap.
+    /// significant candidate left out by the cap. An added effect also
+    /// names the candidates it explained away: significant before it was
+    /// added, not after, with at most half their evidence left.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub confounded_with: Vec<String>,
     /// What it adds on the refitted model: the drop (share) of the pooled

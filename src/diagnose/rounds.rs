@@ -5,6 +5,7 @@
 
 use super::accept::{CONFIRMATIONS, Worth, after_check};
 use super::choose::{self, Round};
+use super::confound;
 use super::fit::{closed_form_rmse, cross_validated, refit_closed_form};
 use super::gls;
 use super::options::{DiagnoseOptions, min_resamples};
@@ -172,6 +173,7 @@ impl Rounds {
         };
         let compared = choose::compared(&r);
         choose::mark_competitors(&mut reports, &r, &compared);
+        self.name_explained_away(&reports, round);
         self.check_last_effect(&reports, level, round);
         let added =
             self.add_confirmed(c, &mut reports, &r, compared, round, &judge.worth, progress)?;
@@ -249,6 +251,20 @@ impl Rounds {
             progress,
         )?;
         Ok((tested, level))
+    }
+
+    /// The effect added last round names the candidates it explained away
+    /// ([`confound::explained_away`]), now that this round's `reports`
+    /// tested them inside the model with it.
+    fn name_explained_away(&mut self, reports: &[EffectReport], round: usize) {
+        let Some(index) = self.pending.as_ref().map(|p| p.index) else {
+            return;
+        };
+        // a round's reports are contiguous, in round order
+        let start = self.effects.partition_point(|e| e.round + 1 < round);
+        let before = &self.effects[start..];
+        let named = confound::explained_away(&self.effects[index], before, reports);
+        self.effects[index].confounded_with.extend(named);
     }
 
     /// The "after" check of the effect added last round, now that this

@@ -202,7 +202,7 @@ pub fn effect_lines(e: &EffectReport) -> Vec<String> {
 /// from.
 fn not_separable(competitors: &[String]) -> String {
     format!(
-        "not separable on this campaign from: {} (each explains the same residual, its evidence within noise of this one's)",
+        "not separable on this campaign from: {} (each explains the same residual as this one)",
         competitors.join("; ")
     )
 }
