@@ -379,15 +379,11 @@ pub fn score(
         return Score { added, ..sc };
     }
     let texts = family_texts(shape);
-    let named = d
-        .effects
-        .iter()
-        .filter(|e| e.accepted)
-        .any(|e| {
-            e.confounded_with
-                .iter()
-                .any(|c| names_plant(c, &texts, shape, tol))
-        });
+    let named = d.effects.iter().filter(|e| e.accepted).any(|e| {
+        e.confounded_with
+            .iter()
+            .any(|c| names_plant(c, &texts, shape, tol))
+    });
     let seen = d.effects.iter().any(|e| {
         e.significant && of_family(&e.label, &texts) && at_place(&row_params(&e.params), shape, tol)
     });
@@ -403,9 +399,10 @@ pub fn score(
         own_covered: None,
         added,
         detail: String::new(),
-        left_by_cap: d.left_by_cap.iter().any(|l| {
-            of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol)
-        }),
+        left_by_cap: d
+            .left_by_cap
+            .iter()
+            .any(|l| of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol)),
         seen,
     }
 }
