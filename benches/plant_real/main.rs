@@ -6,10 +6,11 @@
 //!
 //! Run: `cargo bench --bench plant_real -- [--series b|c|b,c] [--rows N]
 //! [--plants N] [--seed S] [--sizes 1,2] [--kinds step,block,drift,lag,harmonic]
-//! [--minutes M] [--no-calibrate]`. Defaults: both series, all rows, 20
+//! [--minutes M] [--no-calibrate] [--json DIR]`. Defaults: both series, all rows, 20
 //! plants (the kinds in turn), seed 1, sizes 1 and 2, every kind, no time
 //! limit (`--minutes`: no plant starts after M minutes; the table has what
-//! ran).
+//! ran; `--json DIR`: each diagnosis's JSON written there, as
+//! `<series>-control.json` and `<series>-<plant>-<size>x.json`).
 //!
 //! `diagnose` runs as `robokrige diagnose FILE --robot ur10 --tool
 //! -0.14,0.30,92.82` would: the library entry point with the CLI's
@@ -43,6 +44,8 @@ struct Args {
     minutes: Option<f64>,
     /// `Some(false)` with `--no-calibrate`, else the CLI's default.
     calibrate: Option<bool>,
+    /// Where each diagnosis's JSON is written (`--json DIR`).
+    json: Option<PathBuf>,
 }
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
@@ -65,6 +68,7 @@ fn args() -> Args {
         kinds: KINDS.iter().map(|k| k.to_string()).collect(),
         minutes: None,
         calibrate: None,
+        json: None,
     };
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let mut it = argv.iter();
@@ -91,6 +95,7 @@ fn args() -> Args {
             "--kinds" => a.kinds = list(&v()),
             "--minutes" => a.minutes = Some(v().parse().expect("--minutes M")),
             "--no-calibrate" => a.calibrate = Some(false),
+            "--json" => a.json = Some(PathBuf::from(v())),
             other => panic!("unknown option {other}"),
         }
     }
@@ -101,6 +106,15 @@ fn args() -> Args {
         );
     }
     a
+}
+
+/// Write `d` as `<name>.json` in the `--json` directory, if any.
+fn save(a: &Args, name: &str, d: &Diagnosis) {
+    if let Some(dir) = &a.json {
+        std::fs::create_dir_all(dir).expect("--json directory");
+        let text = serde_json::to_string_pretty(d).expect("diagnosis JSON");
+        std::fs::write(dir.join(format!("{name}.json")), text).expect("writing the JSON");
+    }
 }
 
 fn file(series: char) -> PathBuf {
@@ -168,6 +182,7 @@ fn main() {
         let o = options(&data);
         let robot = o.get_robot().expect("robot").clone();
         let (control, control_rows) = run(&data, &o, a.calibrate);
+        save(&a, &format!("{s}-control"), &control);
         let sigma = control.before.cv_rmse_mm;
         let pooled = control.before.pooled_rmse_mm;
         println!(
@@ -244,8 +259,9 @@ fn main() {
                         sc.added.join("; ")
                     }
                 );
+                save(&a, &format!("{s}-{i}-{k}x"), &d);
                 println!("           all added: {}", added(&d));
-                println!("           planted family: {}", score::trace(&d, &shape));
+                println!("           planted family: {}", score::trace(&d, &shape, m));
                 if !sc.detail.is_empty() {
                     println!("           found: {}", sc.detail);
                 }

@@ -126,9 +126,11 @@ fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
 
 /// Where the planted family stood in each round of `d`: its best candidate's
 /// rank among the round's reports (by evidence, 1 = first), evidence, q
-/// value and status, and whether the cap left it out; "-" when the family
-/// was not among the reported candidates.
-pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
+/// value and status (a step or block with its rows, "@elsewhere" when not
+/// at the planted place), and whether the cap left it out at the planted
+/// place; "-" when the family was not among the reported candidates.
+pub fn trace(d: &Diagnosis, shape: &Shape, m: usize) -> String {
+    let tol = tolerance(m);
     let texts = family_texts(shape);
     let also = texts.len() > 1;
     let mut out = Vec::new();
@@ -143,7 +145,7 @@ pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
             .find(|(_, e)| of_family(&e.label, &texts));
         out.push(match found {
             Some((k, e)) => format!(
-                "r{round} {}#{} ev {:.3} q {:.4}{}{}",
+                "r{round} {}#{} ev {:.3} q {:.4}{}{}{}",
                 if also {
                     format!("{} ", e.label.split(' ').next().unwrap_or(""))
                 } else {
@@ -161,12 +163,17 @@ pub fn trace(d: &Diagnosis, shape: &Shape) -> String {
                 },
                 e.refit_gain
                     .map(|g| format!(" refit {:+.1} %", -100.0 * g))
-                    .unwrap_or_default()
+                    .unwrap_or_default(),
+                place(&row_params(&e.params), shape, tol)
             ),
             None => format!("r{round} -"),
         });
     }
-    if let Some(l) = d.left_by_cap.iter().find(|l| of_family(&l.label, &texts)) {
+    if let Some(l) = d
+        .left_by_cap
+        .iter()
+        .find(|l| of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol))
+    {
         out.push(format!("left by the cap (evidence {:.3})", l.evidence));
     }
     out.join("; ")
@@ -203,6 +210,24 @@ fn at_place(rows: &[f64], shape: &Shape, tol: usize) -> bool {
     };
     rows.iter()
         .any(|r| edges.iter().any(|&e| (r - e as f64).abs() <= tol as f64))
+}
+
+/// A step or block candidate's rows in a trace: " @r" or " @a–b", and
+/// "(elsewhere)" when not at the planted place.
+fn place(rows: &[f64], shape: &Shape, tol: usize) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let r: Vec<String> = rows.iter().map(|r| format!("{r:.0}")).collect();
+    format!(
+        " @{}{}",
+        r.join("–"),
+        if at_place(rows, shape, tol) {
+            ""
+        } else {
+            " (elsewhere)"
+        }
+    )
 }
 
 /// The row parameters of a report.

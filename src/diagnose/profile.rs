@@ -74,9 +74,8 @@ pub(super) fn across_period(report: &EffectReport) -> Vec<Vec<Feature>> {
             Feature::Harmonic { .. } | Feature::HarmonicJacobian { .. }
         )
     };
-    if !(lo.is_finite() && hi.is_finite() && hi > lo && lo > 0.0)
-        || !report.add.iter().any(periodic)
-    {
+    let interval = lo.is_finite() && hi.is_finite() && hi > lo && lo > 0.0;
+    if !interval || !report.add.iter().any(periodic) {
         return Vec::new();
     }
     (0..PERIOD_POINTS)
