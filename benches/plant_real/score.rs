@@ -9,13 +9,15 @@
 //!   within 3 % for a harmonic. `tol` = max(5, 2 % of the rows).
 //! - **proxy**: not right, but something the control did not add was added
 //!   (an effect is "the same" as a control's when its label matches and its
-//!   parameters are within `tol` rows / 3 %). **named**: some added effect's
-//!   `confounded_with` names the planted family (the text of its label; a
-//!   block's also a step in the measurement order, its edge), a step or
-//!   block at the planted place (a row within `tol` of a planted edge).
+//!   parameters are within `tol` rows / 3 %). **named**: the
+//!   `confounded_with` of an effect the control did not add names the
+//!   planted family (the text of its label; a block's also a step in the
+//!   measurement order, at an edge) at the planted place (a step's row
+//!   within `tol` of the planted one or of a planted block's edge, a
+//!   block's two edges each within `tol`, a harmonic's period within 3 %).
 //!   **seen**: the planted family was significant, at its place, in some
-//!   round (a proxy of a family never significant cannot be named from
-//!   the data).
+//!   round (a proxy whose family never was cannot be named by a rule that
+//!   names significant candidates).
 //! - **missed**: nothing new added.
 //! - A block added as two steps, one at each edge (within `tol`), is
 //!   right: the two step columns span the block's (its coverage: each
@@ -164,7 +166,7 @@ pub fn trace(d: &Diagnosis, shape: &Shape, m: usize) -> String {
                 e.refit_gain
                     .map(|g| format!(" refit {:+.1} %", -100.0 * g))
                     .unwrap_or_default(),
-                place(&row_params(&e.params), shape, tol)
+                place(&e.params, shape, tol)
             ),
             None => format!("r{round} -"),
         });
@@ -172,7 +174,7 @@ pub fn trace(d: &Diagnosis, shape: &Shape, m: usize) -> String {
     if let Some(l) = d
         .left_by_cap
         .iter()
-        .find(|l| of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol))
+        .find(|l| of_family(&l.label, &texts) && at_place(&l.params, shape, tol))
     {
         out.push(format!("left by the cap (evidence {:.3})", l.evidence));
     }
@@ -199,30 +201,50 @@ fn of_family(text: &str, texts: &[String]) -> bool {
     texts.iter().any(|t| text.contains(t.as_str()))
 }
 
-/// Are the `rows` (a candidate's row parameters) at the planted place: for
-/// a step or block, one within `tol` of a planted edge; any other kind has
-/// no place in the order.
-fn at_place(rows: &[f64], shape: &Shape, tol: usize) -> bool {
-    let edges: Vec<usize> = match shape {
-        Shape::Step { row, .. } => vec![*row],
-        Shape::Block { from, to, .. } => vec![*from, *to],
-        _ => return true,
+type Params = std::collections::BTreeMap<String, f64>;
+
+/// Is a candidate with parameters `params` at the planted place: a step
+/// candidate's row within `tol` of the planted step or of a planted block's
+/// edge; a block candidate's two edges each within `tol` of the planted
+/// block's; a harmonic's period within 3 % of the planted one. A drift or
+/// lag has no place beyond its family.
+fn at_place(params: &Params, shape: &Shape, tol: usize) -> bool {
+    let near = |k: &str, v: usize| {
+        params
+            .get(k)
+            .is_some_and(|r| (r - v as f64).abs() <= tol as f64)
     };
-    rows.iter()
-        .any(|r| edges.iter().any(|&e| (r - e as f64).abs() <= tol as f64))
+    match shape {
+        Shape::Step { row, .. } => near("row", *row),
+        Shape::Block { from, to, .. } => {
+            (near("from_row", *from) && near("to_row", *to))
+                || near("row", *from)
+                || near("row", *to)
+        }
+        Shape::Harmonic { period_deg, .. } => params
+            .get("period_deg")
+            .is_some_and(|p| (p - period_deg).abs() <= 0.03 * period_deg),
+        _ => true,
+    }
 }
 
-/// A step or block candidate's rows in a trace: " @r" or " @a–b", and
-/// "(elsewhere)" when not at the planted place.
-fn place(rows: &[f64], shape: &Shape, tol: usize) -> String {
-    if rows.is_empty() {
+/// A step or block candidate's rows in a trace, " @r" or " @a–b" (a
+/// harmonic's period, " @P°"), and " (elsewhere)" when not at the planted
+/// place.
+fn place(params: &Params, shape: &Shape, tol: usize) -> String {
+    let shown: Vec<String> = params
+        .iter()
+        .filter(|(k, _)| k.ends_with("row"))
+        .map(|(_, v)| format!("{v:.0}"))
+        .chain(params.get("period_deg").map(|p| format!("{p:.2}°")))
+        .collect();
+    if shown.is_empty() {
         return String::new();
     }
-    let r: Vec<String> = rows.iter().map(|r| format!("{r:.0}")).collect();
     format!(
         " @{}{}",
-        r.join("–"),
-        if at_place(rows, shape, tol) {
+        shown.join("–"),
+        if at_place(params, shape, tol) {
             ""
         } else {
             " (elsewhere)"
@@ -230,33 +252,34 @@ fn place(rows: &[f64], shape: &Shape, tol: usize) -> String {
     )
 }
 
-/// The row parameters of a report.
-fn row_params(params: &std::collections::BTreeMap<String, f64>) -> Vec<f64> {
-    params
-        .iter()
-        .filter(|(k, _)| k.ends_with("row"))
-        .map(|(_, v)| *v)
-        .collect()
-}
-
-/// The row parameters written in a `confounded_with` entry ("row 373.000",
-/// "from_row 229.000, to_row 491.000").
-fn rows_in_text(text: &str) -> Vec<f64> {
-    text.match_indices("row ")
-        .filter_map(|(i, _)| {
-            let rest = &text[i + 4..];
+/// The parameters written in a `confounded_with` entry's first parentheses
+/// ("(row 373.000)", "(from_row 229.000, to_row 491.000)", "(period_deg
+/// 21.500)"): the place parameters only.
+fn params_in_text(text: &str) -> Params {
+    let mut out = Params::new();
+    for key in ["from_row", "to_row", "row", "period_deg"] {
+        let pattern = format!("{key} ");
+        for (i, _) in text.match_indices(&pattern) {
+            // "row" must not be the end of "from_row" or "to_row"
+            if i > 0 && !matches!(text.as_bytes()[i - 1], b'(' | b' ') {
+                continue;
+            }
+            let rest = &text[i + pattern.len()..];
             let end = rest
-                .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
                 .unwrap_or(rest.len());
-            rest[..end].parse().ok()
-        })
-        .collect()
+            if let Ok(v) = rest[..end].parse() {
+                out.entry(key.to_string()).or_insert(v);
+            }
+        }
+    }
+    out
 }
 
 /// Does `entry` (a `confounded_with` text) name the planted family at its
 /// place.
 fn names_plant(entry: &str, texts: &[String], shape: &Shape, tol: usize) -> bool {
-    of_family(entry, texts) && at_place(&rows_in_text(entry), shape, tol)
+    of_family(entry, texts) && at_place(&params_in_text(entry), shape, tol)
 }
 
 fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
@@ -404,14 +427,16 @@ pub fn score(
         return Score { added, ..sc };
     }
     let texts = family_texts(shape);
-    let named = d.effects.iter().filter(|e| e.accepted).any(|e| {
+    // the effects the control added too name the campaign's own
+    let named = new.iter().any(|e| {
         e.confounded_with
             .iter()
             .any(|c| names_plant(c, &texts, shape, tol))
     });
-    let seen = d.effects.iter().any(|e| {
-        e.significant && of_family(&e.label, &texts) && at_place(&row_params(&e.params), shape, tol)
-    });
+    let seen = d
+        .effects
+        .iter()
+        .any(|e| e.significant && of_family(&e.label, &texts) && at_place(&e.params, shape, tol));
     let outcome = match (new.is_empty(), named) {
         (true, _) => Outcome::Missed,
         (false, true) => Outcome::ProxyNamed,
@@ -427,7 +452,7 @@ pub fn score(
         left_by_cap: d
             .left_by_cap
             .iter()
-            .any(|l| of_family(&l.label, &texts) && at_place(&row_params(&l.params), shape, tol)),
+            .any(|l| of_family(&l.label, &texts) && at_place(&l.params, shape, tol)),
         seen,
     }
 }

@@ -21,9 +21,7 @@
 //!   competitors refitted ([`super::profile`]).
 
 use super::confound::{self, SAME_RESIDUAL, competitor_text, not_separable, region_overlap};
-use super::profile::{
-    across_period, drift_columns, feature_columns, widen_coefficients, widen_rows,
-};
+use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_rows};
 use super::rank::alike;
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
@@ -215,18 +213,14 @@ pub(super) fn widen_intervals(
 ) {
     let m = residuals.len();
     let rows = widen_rows(report, residuals, &competitors.columns, step_rows(m));
-    let periods = across_period(report);
     let coefs = widen_coefficients(
         &mut report.size,
         data,
         residuals,
-        (&report.add, &periods),
+        &report.add,
         (&competitors.columns, competitors.calibration.as_ref()),
     );
     let mut names = competitors.names.clone();
-    if coefs && !periods.is_empty() {
-        names.push("the period across its 95 % interval (the coefficients)".into());
-    }
     if coefs && let Some(d) = &competitors.calibration {
         names.push(format!(
             "the {} directions the calibration saw (the coefficients)",

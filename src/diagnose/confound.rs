@@ -28,11 +28,19 @@
 //!
 //! **Explained away.** Two candidates can also explain the same residual
 //! when one is clearly ahead: the one added then takes the other's
-//! evidence. The round after an effect is added tests every candidate
-//! again inside the model with it; a candidate of another source that was
-//! significant before and is no longer, with at most half its evidence
-//! left ([`EXPLAINED_AWAY`]), was explained by the effect added
-//! ([`explained_away`]), and the effect's report names it.
+//! evidence. An effect explained a candidate away when
+//! 1. its columns take what the candidate fits: on the residuals of the
+//!    round it was added in, of the candidate's least-squares fitted sum of
+//!    squares (noise units, pooled over the axes) at most
+//!    [`EXPLAINED_AWAY`] is left once the effect's columns are fitted
+//!    first ([`share_left`]); and
+//! 2. the model with it says so: the next round tests every candidate
+//!    again inside the model with the effect, and the candidate, significant
+//!    before, is no longer (q over the FDR, or a drop no longer worth an
+//!    effect), with at most [`EXPLAINED_AWAY`] of its evidence left
+//!    ([`explained_away`]).
+//!
+//! The effect's report then names it.
 //!
 //! **Region of the joint space.** A step or block of rows is a region of
 //! the joint space when the poses were measured region by region: its
@@ -40,17 +48,18 @@
 //! poses in joint space ([`region_overlap`]: the correlation of the
 //! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
 
-use super::rank::{fitted, similarity};
+use super::rank::{fitted, orthonormal, similarity};
 use super::report::EffectReport;
-use super::scan::{EffectKind, Family, Tested, is_time_column};
+use super::scan::{EffectKind, Family, GridPoint, Tested, is_time_column};
 
 /// Correlation of two fitted contributions from which they explain the
 /// same residual (and of a step or block with its region of the joint
 /// space).
 pub const SAME_RESIDUAL: f64 = 0.7;
 
-/// Share of its evidence a candidate keeps, at most, once an effect is
-/// added for that effect to have explained it away ([`explained_away`]).
+/// Share of its least-squares fit, and of its evidence, a candidate keeps
+/// at most once an effect is added for that effect to have explained it
+/// away ([`share_left`], [`explained_away`]).
 pub const EXPLAINED_AWAY: f64 = 0.5;
 
 /// Nearest poses in joint space a row's region indicator is averaged over.
@@ -145,34 +154,107 @@ pub(super) fn competitor_text(r: &EffectReport, correlation: f64) -> String {
     )
 }
 
-/// The candidates the effect `added` explained away (module docs): in
-/// `before` (the reports of the round it was added in) significant, not
-/// added, and of another source and label; in `after` (the next round's
-/// reports, inside the model with it) the same family, no longer
-/// significant, with at most [`EXPLAINED_AWAY`] of its evidence. Each is
-/// named with its evidence before and after, most evidence lost first.
+/// What is left of candidate `b`'s fit of the `residuals` once the
+/// columns of `a` are fitted first: per axis, with `Q` an orthonormal basis
+/// of the centred columns on that axis, `(‖Q_{ab}ᵀr‖² − ‖Q_aᵀr‖²)/‖Q_bᵀr‖²`,
+/// the sums in noise units and pooled over the axes. 0: `a`'s columns fit
+/// all that `b`'s do; 1: none of it. `None` when `b` fits nothing.
+pub(super) fn share_left(a: &GridPoint, b: &GridPoint, residuals: &[[f64; 3]]) -> Option<f64> {
+    let s2 = noise(residuals);
+    let fit = |q: &[Vec<f64>], r: &[f64]| -> f64 {
+        q.iter()
+            .map(|v| v.iter().zip(r).map(|(x, y)| x * y).sum::<f64>().powi(2))
+            .sum()
+    };
+    let (mut after, mut alone) = (0.0, 0.0);
+    for axis in 0..3 {
+        let r: Vec<f64> = residuals.iter().map(|x| x[axis]).collect();
+        let (ca, cb) = (a.on_axis(axis), b.on_axis(axis));
+        let both: Vec<&[f64]> = ca.iter().chain(&cb).copied().collect();
+        let (qa, qb, qab) = (orthonormal(&ca), orthonormal(&cb), orthonormal(&both));
+        after += (fit(&qab, &r) - fit(&qa, &r)).max(0.0) / s2[axis];
+        alone += fit(&qb, &r) / s2[axis];
+    }
+    (alone > 0.0).then(|| after / alone)
+}
+
+/// A candidate whose fit an added effect's columns take ([`share_left`] at
+/// most [`EXPLAINED_AWAY`]): its family's label and source, and the share
+/// left.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Shared {
+    pub label: String,
+    pub source: Vec<String>,
+    pub left: f64,
+}
+
+/// The significant candidates of another source and label than candidate
+/// `k` of `tested` whose fit of the `residuals` `k`'s columns take
+/// (condition 1 of the module docs).
+pub(super) fn sharing(
+    tested: &[Tested],
+    fams: &[Family],
+    residuals: &[[f64; 3]],
+    k: usize,
+    significant: &dyn Fn(&Tested) -> bool,
+) -> Vec<Shared> {
+    let top = &fams[tested[k].family];
+    let point = tested[k].point(top);
+    (0..tested.len())
+        .filter(|&i| i != k && significant(&tested[i]))
+        .filter_map(|i| {
+            let f = &fams[tested[i].family];
+            if f.source == top.source || f.label == top.label {
+                return None;
+            }
+            let left = share_left(point, tested[i].point(f), residuals)?;
+            (left <= EXPLAINED_AWAY).then(|| Shared {
+                label: f.label.clone(),
+                source: f.source.clone(),
+                left,
+            })
+        })
+        .collect()
+}
+
+/// The candidates the effect `added` explained away (module docs): of
+/// `before` (the reports of the round it was added in) those it shares
+/// the residual with (`shared`, [`sharing`]), significant and not added;
+/// in `after` (the next round's reports, inside the model with it) the
+/// same family, not significant, with q over the `fdr` or the drop no
+/// longer worth an effect, and at most [`EXPLAINED_AWAY`] of its evidence.
+/// Those `added` already names as a competitor are not named twice. Each
+/// is named with its evidence and q before and after and the share of its
+/// fit the effect's columns leave, most evidence lost first.
 pub(super) fn explained_away(
     added: &EffectReport,
-    before: &[EffectReport],
-    after: &[EffectReport],
+    (before, after): (&[&EffectReport], &[EffectReport]),
+    shared: &[Shared],
 ) -> Vec<String> {
+    let named = |b: &EffectReport| {
+        let head = format!("{}{} (", b.label, params_text(b));
+        added.confounded_with.iter().any(|c| c.starts_with(&head))
+    };
     let mut out: Vec<(f64, String)> = before
         .iter()
-        .filter(|b| b.significant && !b.accepted && b.evidence > 0.0)
-        .filter(|b| b.source != added.source && b.label != added.label)
+        .filter(|b| b.significant && !b.accepted && !named(b))
         .filter_map(|b| {
+            let s = shared
+                .iter()
+                .find(|s| s.label == b.label && s.source == b.source)?;
             let a = after
                 .iter()
                 .find(|a| a.label == b.label && a.source == b.source)?;
             (!a.significant && a.evidence <= EXPLAINED_AWAY * b.evidence).then(|| {
                 let text = format!(
-                    "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after: explained away by it)",
+                    "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after; its columns leave {:.0} % of what this one fits: explained away by it)",
                     b.label,
                     params_text(b),
                     b.evidence,
                     b.q_value,
                     a.evidence,
-                    a.q_value
+                    a.q_value,
+                    100.0 * s.left
                 );
                 (b.evidence - a.evidence, text)
             })
@@ -299,34 +381,80 @@ mod tests {
         .unwrap()
     }
 
-    /// An effect names the candidates it took the evidence of, not one that
-    /// kept its evidence, one that was not significant before, or one of
-    /// its own source.
+    /// An effect names the candidates it took the evidence of and whose fit
+    /// its columns take, not one that kept its evidence, one that was not
+    /// significant before, one whose fit it does not take, or one it
+    /// already names as a competitor.
     #[test]
     fn an_added_effect_names_the_candidates_it_explained_away() {
         let mut added = report("q4's last move", "q4", 0.08, true);
         added.accepted = true;
-        let before = vec![
+        added
+            .confounded_with
+            .push("harmonic of q1 (score 0.1, evidence 0.03, within noise)".into());
+        let before = [
             added.clone(),
             report("step in the measurement order", "row", 0.047, true),
             report("drift over the measurement order", "row", 0.030, true),
             report("moves of q3 into the pose", "q3", 0.010, false),
-            report("q4's direction history", "q4", 0.040, true),
             report("harmonic of q2", "q2", 0.020, true),
+            report("q5 × q6", "q5", 0.040, true),
+            report("harmonic of q1", "q1", 0.030, true),
         ];
         let after = vec![
             report("step in the measurement order", "row", 0.011, false),
             // lost significance, but kept most of its evidence
             report("drift over the measurement order", "row", 0.020, false),
             report("moves of q3 into the pose", "q3", 0.001, false),
-            report("q4's direction history", "q4", 0.001, false),
             // still significant
             report("harmonic of q2", "q2", 0.005, true),
+            // its fit is not the added effect's (not shared)
+            report("q5 × q6", "q5", 0.001, false),
+            report("harmonic of q1", "q1", 0.001, false),
         ];
-        let named = explained_away(&added, &before, &after);
+        let shared: Vec<Shared> = [
+            "step in the measurement order",
+            "drift over the measurement order",
+            "moves of q3 into the pose",
+            "harmonic of q2",
+            "harmonic of q1",
+        ]
+        .iter()
+        .zip(["row", "row", "q3", "q2", "q1"])
+        .map(|(l, s)| Shared {
+            label: l.to_string(),
+            source: vec![s.to_string()],
+            left: 0.2,
+        })
+        .collect();
+        let before: Vec<&EffectReport> = before.iter().collect();
+        let named = explained_away(&added, (&before, &after), &shared);
         assert_eq!(named.len(), 1, "{named:?}");
         assert!(named[0].starts_with("step in the measurement order (evidence 0.047"));
-        assert!(named[0].contains("0.011"));
+        assert!(named[0].contains("0.011") && named[0].contains("leave 20 %"));
+    }
+
+    /// What a candidate fits is left in full by columns orthogonal to its
+    /// own, and taken by columns that span them.
+    #[test]
+    fn the_share_left_is_what_the_added_columns_do_not_fit() {
+        let m = 200;
+        let x: Vec<f64> = (0..m)
+            .map(|i| ((i * 37) % 101) as f64 / 101.0 - 0.5)
+            .collect();
+        let y: Vec<f64> = (0..m)
+            .map(|i| if (i / 10) % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let residuals: Vec<[f64; 3]> = (0..m).map(|i| [x[i], 0.5 * x[i], y[i] * 0.01]).collect();
+        let point = |cols: Vec<Vec<f64>>| GridPoint::new(Default::default(), cols, Vec::new());
+        let b = point(vec![x.clone()]);
+        // a spans b's column (and more): nothing left
+        let spans = point(vec![x.iter().map(|v| 2.0 * v + 1.0).collect(), y.clone()]);
+        assert!(share_left(&spans, &b, &residuals).unwrap() < 1e-9);
+        // a is (nearly) orthogonal to b: all of it left
+        let other = point(vec![y.clone()]);
+        let left = share_left(&other, &b, &residuals).unwrap();
+        assert!(left > 0.9, "{left}");
     }
 
     /// A block of rows measured in its own corner of the joint space is a

@@ -29,14 +29,6 @@
 //!   calibration was identified with the effect in the errors and took up
 //!   its projection on them, which the effect's estimate alone misses and
 //!   the estimate with them refitted gives back (Frisch–Waugh).
-//! - **Coefficients of a harmonic** ([`across_period`]): they are
-//!   conditional on the period found, and a period a little off turns the
-//!   phase over the joint's range, and the sin and cos coefficients with
-//!   it. The interval is the union, over [`PERIOD_POINTS`] periods evenly
-//!   across the period's 95 % interval, of the interval with the
-//!   competitors refitted at that period (the shift `Δ` then measured from
-//!   the estimate alone at the period found): a projection of the joint
-//!   region of period and coefficients, each at 95 %.
 
 use super::rank::orthonormal;
 use super::report::{Coefficient, EffectReport};
@@ -55,51 +47,6 @@ use nalgebra::{DMatrix, DVector};
 /// regular parameter's threshold, undercovers a change point: its profile
 /// is not quadratic, and a clear step's is one row wide.
 const CHANGE_95: f64 = 7.377_758_908_227_871;
-
-/// Periods across a harmonic's 95 % period interval at which its
-/// coefficients are refitted ([`across_period`]).
-pub const PERIOD_POINTS: usize = 17;
-
-/// The effect's features at [`PERIOD_POINTS`] periods evenly across the 95 %
-/// interval of its period (`params_ci["period_deg"]`), ends included: one
-/// feature list per period, its harmonics at that period. Empty when the
-/// effect has no period or its interval is a point.
-pub(super) fn across_period(report: &EffectReport) -> Vec<Vec<Feature>> {
-    let Some(&[lo, hi]) = report.params_ci.get("period_deg") else {
-        return Vec::new();
-    };
-    let periodic = |f: &Feature| {
-        matches!(
-            f,
-            Feature::Harmonic { .. } | Feature::HarmonicJacobian { .. }
-        )
-    };
-    let interval = lo.is_finite() && hi.is_finite() && hi > lo && lo > 0.0;
-    if !interval || !report.add.iter().any(periodic) {
-        return Vec::new();
-    }
-    (0..PERIOD_POINTS)
-        .map(|k| {
-            let p = lo + (hi - lo) * k as f64 / (PERIOD_POINTS - 1) as f64;
-            report
-                .add
-                .iter()
-                .map(|f| match f {
-                    Feature::Harmonic { joint, .. } => Feature::Harmonic {
-                        joint: *joint,
-                        period_deg: p,
-                    },
-                    Feature::HarmonicJacobian { robot, joint, .. } => Feature::HarmonicJacobian {
-                        robot: robot.clone(),
-                        joint: *joint,
-                        period_deg: p,
-                    },
-                    other => other.clone(),
-                })
-                .collect()
-        })
-        .collect()
-}
 
 /// `v` centred and with its projection on `q` (orthonormal, centred) taken off.
 fn residualise(v: &[f64], q: &[Vec<f64>]) -> Vec<f64> {
@@ -272,16 +219,13 @@ fn least_squares(
 /// (columns named like its coefficients) by what refitting the
 /// `competitors` alongside it does to each estimate on the CV `residuals`
 /// of `data` (all rows): columns of every axis, and columns per axis (a
-/// calibration's directions, [`crate::calibration::Calibration::seen_displacements`]),
-/// and, for each of `alternatives` (the effect's features at other
-/// parameter values within their 95 % interval, [`across_period`]), by what
-/// refitting it with the competitors does. Returns whether any interval
-/// widened.
+/// calibration's directions, [`crate::calibration::Calibration::seen_displacements`]).
+/// Returns whether any interval widened.
 pub(super) fn widen_coefficients(
     size: &mut [Coefficient],
     data: &Dataset,
     residuals: &[[f64; 3]],
-    (add, alternatives): (&[Feature], &[Vec<Feature>]),
+    add: &[Feature],
     (competitors, per_axis): (&[Vec<f64>], Option<&Displacements>),
 ) -> bool {
     let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
@@ -303,36 +247,22 @@ pub(super) fn widen_coefficients(
         })
         .collect();
     let none: &[Vec<f64>] = &[];
-    let q = [&basis[0][..], &basis[1][..], &basis[2][..]];
-    let (Some((alone, v0)), Some(with)) = (
+    let (Some((alone, v0)), Some((with, v1))) = (
         least_squares(&cols, &axes, &ys, [none; 3]),
-        least_squares(&cols, &axes, &ys, q),
+        least_squares(&cols, &axes, &ys, [&basis[0], &basis[1], &basis[2]]),
     ) else {
         return false;
     };
-    // the fits with the competitors: at the effect's own parameters, then
-    // at each alternative's (same columns in the same order)
-    let mut fits = vec![with];
-    for alt in alternatives {
-        let c = feature_columns(data, alt);
-        if c.len() == cols.len()
-            && let Some(fit) = least_squares(&c, &axes, &ys, q)
-        {
-            fits.push(fit);
-        }
-    }
     let mut widened = false;
     for c in size.iter_mut() {
         let Some(i) = names.iter().position(|n| n == &c.column) else {
             continue;
         };
         for a in (0..3).filter(|&a| axes[i].is_none_or(|b| b == a)) {
+            let inflation = (v1[i][a] / v0[i][a]).max(1.0).sqrt();
+            let delta = (with[i][a] - alone[i][a]).abs();
             let h = c.ci95[a];
-            let wide = fits.iter().fold(h, |w, (with, v1)| {
-                let inflation = (v1[i][a] / v0[i][a]).max(1.0).sqrt();
-                let delta = (with[i][a] - alone[i][a]).abs();
-                w.max(delta + h * inflation)
-            });
+            let wide = h.max(delta + h * inflation);
             widened |= wide > h;
             c.ci95[a] = wide;
         }
@@ -343,73 +273,6 @@ pub(super) fn widen_coefficients(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A harmonic found a little off its period: its coefficients at the
-    /// period found miss the true ones; refitted across the period's 95 %
-    /// interval they cover them.
-    #[test]
-    fn a_harmonics_coefficients_cover_the_truth_across_its_period_interval() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
-        let data = crate::dataset::read_csv(path.as_ref()).unwrap();
-        let m = data.len();
-        let (p0, found) = (13.7, 13.7 * 1.012);
-        let (a0, b0) = (0.08, -0.05);
-        let noise = |i: usize| (((i * 7919) % 101) as f64 / 101.0 - 0.5) * 0.02;
-        let res: Vec<[f64; 3]> = (0..m)
-            .map(|i| {
-                let t = 2.0 * std::f64::consts::PI * data.q[i][2] / p0;
-                let v = a0 * t.sin() + b0 * t.cos();
-                [v + noise(i), noise(i + 7), noise(i + 13)]
-            })
-            .collect();
-        // joint 3 is at −150° to −100°: 1.2 % off the period turns the
-        // phase by 0.7 rad at the middle
-        let add = vec![Feature::Harmonic {
-            joint: 3,
-            period_deg: found,
-        }];
-        // the model's own estimate at the period found: least squares, 1.96 SE
-        let cols = feature_columns(&data, &add);
-        let ys: Vec<Vec<f64>> = (0..3).map(|a| res.iter().map(|r| r[a]).collect()).collect();
-        let none: &[Vec<f64>] = &[];
-        let (b, v) = least_squares(&cols, &[None, None], &ys, [none; 3]).unwrap();
-        let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
-        let size = |k: usize| Coefficient {
-            column: names[k].clone(),
-            estimate: b[k],
-            ci95: std::array::from_fn(|a| 1.96 * (v[k][a] * 0.02f64.powi(2) / 12.0).sqrt()),
-            axis: None,
-        };
-        let covers = |c: &[Coefficient]| {
-            (c[0].estimate[0] - a0).abs() <= c[0].ci95[0]
-                && (c[1].estimate[0] - b0).abs() <= c[1].ci95[0]
-        };
-        let mut report: EffectReport = serde_json::from_str(
-            r#"{"round": 1, "kind": "harmonic", "source": ["q3"], "label": "harmonic of q3",
-                "params": {}, "score": 0.5, "explained": 0.5, "p_value": 0.001,
-                "q_value": 0.01, "significant": true, "accepted": true}"#,
-        )
-        .unwrap();
-        report.add = add.clone();
-        report
-            .params_ci
-            .insert("period_deg".into(), [13.7 * 0.995, 13.7 * 1.02]);
-        let periods = across_period(&report);
-        assert_eq!(periods.len(), PERIOD_POINTS);
-        let mut alone = vec![size(0), size(1)];
-        assert!(!covers(&alone), "{alone:?}");
-        widen_coefficients(&mut alone, &data, &res, (&add, &[]), (&[], None));
-        assert!(!covers(&alone), "at the period found alone: {alone:?}");
-        let mut across = vec![size(0), size(1)];
-        assert!(widen_coefficients(
-            &mut across,
-            &data,
-            &res,
-            (&add, &periods),
-            (&[], None)
-        ));
-        assert!(covers(&across), "{across:?}");
-    }
 
     /// A step at a row no grid favours is inside its profile interval, and
     /// the drift refitted alongside widens that interval.

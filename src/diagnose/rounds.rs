@@ -47,6 +47,9 @@ struct Pending {
     achieved: f64,
     /// The CV with it.
     after: CvStats,
+    /// The candidates of its round whose fit its columns take
+    /// ([`confound::sharing`]).
+    shared: Vec<confound::Shared>,
 }
 
 /// What the loop carries from round to round.
@@ -257,14 +260,14 @@ impl Rounds {
     /// ([`confound::explained_away`]), now that this round's `reports`
     /// tested them inside the model with it.
     fn name_explained_away(&mut self, reports: &[EffectReport], round: usize) {
-        let Some(index) = self.pending.as_ref().map(|p| p.index) else {
-            return;
-        };
-        // a round's reports are contiguous, in round order
-        let start = self.effects.partition_point(|e| e.round + 1 < round);
-        let before = &self.effects[start..];
-        let named = confound::explained_away(&self.effects[index], before, reports);
-        self.effects[index].confounded_with.extend(named);
+        let Some(p) = &self.pending else { return };
+        let before: Vec<&EffectReport> = self
+            .effects
+            .iter()
+            .filter(|e| e.round + 1 == round)
+            .collect();
+        let named = confound::explained_away(&self.effects[p.index], (&before, reports), &p.shared);
+        self.effects[p.index].confounded_with.extend(named);
     }
 
     /// The "after" check of the effect added last round, now that this
@@ -328,6 +331,7 @@ impl Rounds {
             let (now, then) = (self.current.pooled_rmse_mm, after.pooled_rmse_mm);
             if worth.counts(now.powi(2), then.powi(2)) {
                 let competitors = choose::competitor_columns(c.data, c.calibration, r, k, reports);
+                let shared = confound::sharing(r.tested, r.fams, r.residuals, k, r.significant);
                 let index = self.effects.len() + k;
                 self.accept(
                     c,
@@ -335,7 +339,7 @@ impl Rounds {
                     index,
                     (trial, trial_model),
                     after,
-                    &competitors,
+                    (&competitors, shared),
                 );
                 return Ok(true);
             }
@@ -388,7 +392,7 @@ impl Rounds {
         index: usize,
         (extras, model): (Vec<Feature>, ErrorModel),
         after: CvStats,
-        competitors: &choose::Competitors,
+        (competitors, shared): (&choose::Competitors, Vec<confound::Shared>),
     ) {
         report.accepted = true;
         self.added_kinds.push(report.kind);
@@ -399,6 +403,7 @@ impl Rounds {
             promised: 1.0 - (1.0 - report.score.clamp(0.0, 1.0)).sqrt(),
             achieved: 1.0 - after.pooled_rmse_mm / self.current.pooled_rmse_mm,
             after: after.clone(),
+            shared,
         });
         self.extras = extras;
         self.model = model;
