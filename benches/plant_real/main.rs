@@ -10,7 +10,8 @@
 //! plants (the kinds in turn), seed 1, sizes 1 and 2, every kind, no time
 //! limit (`--minutes`: no plant starts after M minutes; the table has what
 //! ran; `--json DIR`: each diagnosis's JSON written there, as
-//! `<series>-control.json` and `<series>-<plant>-<size>x.json`).
+//! `<series>-control.json` and `<series>-<plant>-<size>x.json`, `-raw`
+//! before `.json` with `--no-calibrate`).
 //!
 //! `diagnose` runs as `robokrige diagnose FILE --robot ur10 --tool
 //! -0.14,0.30,92.82` would: the library entry point with the CLI's
@@ -113,7 +114,12 @@ fn save(a: &Args, name: &str, d: &Diagnosis) {
     if let Some(dir) = &a.json {
         std::fs::create_dir_all(dir).expect("--json directory");
         let text = serde_json::to_string_pretty(d).expect("diagnosis JSON");
-        std::fs::write(dir.join(format!("{name}.json")), text).expect("writing the JSON");
+        let raw = if a.calibrate == Some(false) {
+            "-raw"
+        } else {
+            ""
+        };
+        std::fs::write(dir.join(format!("{name}{raw}.json")), text).expect("writing the JSON");
     }
 }
 
@@ -244,7 +250,7 @@ fn main() {
                     } else {
                         ""
                     },
-                    if sc.outcome != Outcome::Right && !sc.seen {
+                    if sc.outcome == Outcome::Proxy && !sc.seen {
                         " (never significant)"
                     } else {
                         ""

@@ -198,12 +198,34 @@ pub fn effect_lines(e: &EffectReport) -> Vec<String> {
     out
 }
 
+/// Competing explanations a report line names; the JSON's
+/// `confounded_with` holds them all.
+const NAMED_SHOWN: usize = 5;
+
+/// The first [`NAMED_SHOWN`] of `competitors`, and how many more.
+fn named_list(competitors: &[String]) -> String {
+    let mut out = competitors
+        .iter()
+        .take(NAMED_SHOWN)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join("; ");
+    if competitors.len() > NAMED_SHOWN {
+        let _ = write!(
+            out,
+            "; and {} more (the JSON's confounded_with lists them)",
+            competitors.len() - NAMED_SHOWN
+        );
+    }
+    out
+}
+
 /// The line that names the explanations the data cannot tell an effect
 /// from.
 fn not_separable(competitors: &[String]) -> String {
     format!(
         "not separable on this campaign from: {} (each explains the same residual as this one)",
-        competitors.join("; ")
+        named_list(competitors)
     )
 }
 
@@ -457,7 +479,7 @@ fn round_tables(s: &mut String, d: &Diagnosis) {
             } else {
                 format!(
                     "{status}; not separable on this campaign from {}",
-                    e.confounded_with.join("; ")
+                    named_list(&e.confounded_with)
                 )
             };
             let _ = writeln!(
@@ -472,5 +494,24 @@ fn round_tables(s: &mut String, d: &Diagnosis) {
                 e.evidence
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A long list of competing explanations is cut to the first few, with
+    /// how many more the JSON holds.
+    #[test]
+    fn a_long_list_of_competitors_names_the_first_and_counts_the_rest() {
+        let named: Vec<String> = (1..=7).map(|i| format!("candidate {i}")).collect();
+        let line = not_separable(&named);
+        assert!(line.contains("candidate 5; and 2 more"), "{line}");
+        assert!(!line.contains("candidate 6"), "{line}");
+        assert_eq!(
+            named_list(&named[..2]),
+            "candidate 1; candidate 2".to_string()
+        );
     }
 }
