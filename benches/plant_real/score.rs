@@ -70,7 +70,7 @@ pub struct Score {
     pub detail: String,
     /// Not right, and the planted family is listed as left by the cap.
     pub left_by_cap: bool,
-    /// The planted family was significant in some round.
+    /// The planted family was significant, at its place, in some round.
     pub seen: bool,
 }
 
@@ -101,10 +101,10 @@ fn same(a: &EffectReport, b: &EffectReport, tol: usize) -> bool {
 
 fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
     match shape {
-        Shape::Step { row, .. } => {
+        Shape::Step { .. } => {
             e.kind == EffectKind::Order
                 && e.label.starts_with("step")
-                && near_rows(param(e, "row"), *row, tol)
+                && at_place(&e.params, shape, tol)
         }
         Shape::Block { from, to, .. } => {
             e.kind == EffectKind::Order
@@ -115,22 +115,18 @@ fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
             e.kind == EffectKind::Covariate && e.source.iter().any(|s| s == "temp_c")
         }
         Shape::Lag { joint } => e.label.starts_with(&format!("moves of q{joint} ")),
-        Shape::Harmonic {
-            joint, period_deg, ..
-        } => {
+        Shape::Harmonic { joint, .. } => {
             e.kind == EffectKind::Harmonic
                 && e.source == [format!("q{joint}")]
-                && param(e, "period_deg")
-                    .is_some_and(|p| (p - period_deg).abs() <= 0.03 * period_deg)
+                && at_place(&e.params, shape, tol)
         }
     }
 }
 
 /// Where the planted family stood in each round of `d`: its best candidate's
 /// rank among the round's reports (by evidence, 1 = first), evidence, q
-/// value and status (a step or block with its rows, "@elsewhere" when not
-/// at the planted place), and whether the cap left it out at the planted
-/// place; "-" when the family was not among the reported candidates.
+/// value and status (with its rows or period, [`place`]), and whether the
+/// cap left it out at the planted place; "-" when the family was not among the reported candidates.
 pub fn trace(d: &Diagnosis, shape: &Shape, m: usize) -> String {
     let tol = tolerance(m);
     let texts = family_texts(shape);
@@ -174,7 +170,7 @@ pub fn trace(d: &Diagnosis, shape: &Shape, m: usize) -> String {
     if let Some(l) = d
         .left_by_cap
         .iter()
-        .find(|l| of_family(&l.label, &texts) && at_place(&l.params, shape, tol))
+        .find(|l| is_plant(&l.label, &l.params, &texts, shape, tol))
     {
         out.push(format!("left by the cap (evidence {:.3})", l.evidence));
     }
@@ -276,10 +272,16 @@ fn params_in_text(text: &str) -> Params {
     out
 }
 
+/// Is a candidate labelled `label` with `params` the planted family at
+/// its place.
+fn is_plant(label: &str, params: &Params, texts: &[String], shape: &Shape, tol: usize) -> bool {
+    of_family(label, texts) && at_place(params, shape, tol)
+}
+
 /// Does `entry` (a `confounded_with` text) name the planted family at its
 /// place.
 fn names_plant(entry: &str, texts: &[String], shape: &Shape, tol: usize) -> bool {
-    of_family(entry, texts) && at_place(&params_in_text(entry), shape, tol)
+    is_plant(entry, &params_in_text(entry), texts, shape, tol)
 }
 
 fn within(ci: Option<&[f64; 2]>, v: f64) -> Option<bool> {
@@ -436,7 +438,7 @@ pub fn score(
     let seen = d
         .effects
         .iter()
-        .any(|e| e.significant && of_family(&e.label, &texts) && at_place(&e.params, shape, tol));
+        .any(|e| e.significant && is_plant(&e.label, &e.params, &texts, shape, tol));
     let outcome = match (new.is_empty(), named) {
         (true, _) => Outcome::Missed,
         (false, true) => Outcome::ProxyNamed,
@@ -452,7 +454,7 @@ pub fn score(
         left_by_cap: d
             .left_by_cap
             .iter()
-            .any(|l| of_family(&l.label, &texts) && at_place(&l.params, shape, tol)),
+            .any(|l| is_plant(&l.label, &l.params, &texts, shape, tol)),
         seen,
     }
 }

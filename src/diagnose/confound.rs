@@ -221,8 +221,8 @@ pub(super) fn sharing(
 /// `before` (the reports of the round it was added in) those it shares
 /// the residual with (`shared`, [`sharing`]), significant and not added;
 /// in `after` (the next round's reports, inside the model with it) the
-/// same family, not significant, with q over the `fdr` or the drop no
-/// longer worth an effect, and at most [`EXPLAINED_AWAY`] of its evidence.
+/// same family, not significant (q over the FDR, or a drop no longer
+/// worth an effect), with at most [`EXPLAINED_AWAY`] of its evidence.
 /// Those `added` already names as a competitor are not named twice. Each
 /// is named with its evidence and q before and after and the share of its
 /// fit the effect's columns leave, most evidence lost first.

@@ -95,7 +95,8 @@ pub struct EffectReport {
     /// of the joint space its rows were measured in, when they were.
     /// Filled for the candidates a round compares for adding, and for a
     /// significant candidate left out by the cap. An added effect also
-    /// names the candidates it explained away: significant before it was
+    /// names the candidates it explained away: its columns take at least
+    /// half of what they fit, and they were significant before it was
     /// added, not after, with at most half their evidence left.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub confounded_with: Vec<String>,
