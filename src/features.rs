@@ -48,12 +48,21 @@ pub enum Feature {
         /// 0-based row where the step begins.
         row: usize,
     },
-    /// `sin` and `cos` of `2π θ_j / P` (1-based joint j, period P in degrees).
+    /// `sin` and `cos` of `2π (θ_j − c) / P` (1-based joint j, period P and
+    /// phase reference c in degrees).
     Harmonic {
         /// 1-based joint j.
         joint: usize,
         /// Period P in joint units (degrees; mm for a prismatic joint), > 0.
         period_deg: f64,
+        /// The joint value c where the phase is counted from (0 in files
+        /// written before it existed). `diagnose` puts it at the campaign's
+        /// mean of the joint: a period found 1 % off then moves the phase by
+        /// 1 % of a cycle per period *from the data's centre*, not from
+        /// θ = 0, which may lie many periods away, and the sin and cos
+        /// coefficients describe the effect where it was measured.
+        #[serde(default, skip_serializing_if = "is_zero")]
+        centre_deg: f64,
     },
     /// `θ_a · θ_b` (1-based joints).
     Interaction {
@@ -162,8 +171,8 @@ pub enum Feature {
         /// 1-based joint k whose angle drives the deviation.
         from: usize,
     },
-    /// A harmonic of joint j mapped to the TCP: `∂P/∂θ_j(q) · sin(2π θ_j / P)`
-    /// and `· cos(2π θ_j / P)`, the displacement a periodic deviation of
+    /// A harmonic of joint j mapped to the TCP: `∂P/∂θ_j(q) · sin(2π (θ_j − c) / P)`
+    /// and `· cos(2π (θ_j − c) / P)`, the displacement a periodic deviation of
     /// joint j (a gear's error over its turn) causes (six columns: x, y, z
     /// of each). Where the Jacobian varies over the campaign, a joint's
     /// periodic error is not a pure harmonic of its angle at the TCP, and
@@ -176,7 +185,26 @@ pub enum Feature {
         joint: usize,
         /// Period P in joint units (degrees; mm for a prismatic joint), > 0.
         period_deg: f64,
+        /// The phase reference c, degrees ([`Feature::Harmonic`]'s).
+        #[serde(default, skip_serializing_if = "is_zero")]
+        centre_deg: f64,
     },
+}
+
+/// Serde: leave a zero phase reference out of a file (the files written
+/// before it existed read back the same).
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// `2π (θ − c) / P`'s argument text for a column name: `q{j}` or
+/// `(q{j}−c°)`, then `/P°`.
+fn harmonic_arg(joint: usize, period_deg: f64, centre_deg: f64) -> String {
+    if centre_deg == 0.0 {
+        format!("2π·q{joint}/{period_deg:.4}°")
+    } else {
+        format!("2π·(q{joint}{:+.2}°)/{period_deg:.4}°", -centre_deg)
+    }
 }
 
 /// The memory of a joint's moves counted in time ([`Feature::Moves`]): each
@@ -252,10 +280,14 @@ impl Feature {
             Feature::Covariate { name, .. } => vec![name.clone()],
             Feature::Row => vec!["row".into()],
             Feature::Step { row } => vec![format!("step@{row}")],
-            Feature::Harmonic { joint, period_deg } => vec![
-                format!("sin(2π·q{joint}/{period_deg:.4}°)"),
-                format!("cos(2π·q{joint}/{period_deg:.4}°)"),
-            ],
+            Feature::Harmonic {
+                joint,
+                period_deg,
+                centre_deg,
+            } => {
+                let arg = harmonic_arg(*joint, *period_deg, *centre_deg);
+                vec![format!("sin({arg})"), format!("cos({arg})")]
+            }
             Feature::Interaction { a, b } => vec![format!("q{a}*q{b}")],
             Feature::PreviousDirection { joint } => vec![format!("prev_dir{joint}")],
             Feature::SinceReversal { joint } => vec![format!("since_reversal{joint}")],
@@ -264,14 +296,17 @@ impl Feature {
                 .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}(q{from})")))
                 .collect(),
             Feature::HarmonicJacobian {
-                joint, period_deg, ..
-            } => ["sin", "cos"]
-                .iter()
-                .flat_map(|f| {
-                    ["x", "y", "z"]
-                        .map(|a| format!("J{a}{joint}·{f}(2π·q{joint}/{period_deg:.4}°)"))
-                })
-                .collect(),
+                joint,
+                period_deg,
+                centre_deg,
+                ..
+            } => {
+                let arg = harmonic_arg(*joint, *period_deg, *centre_deg);
+                ["sin", "cos"]
+                    .iter()
+                    .flat_map(|f| ["x", "y", "z"].map(|a| format!("J{a}{joint}·{f}({arg})")))
+                    .collect()
+            }
             Feature::Moves {
                 joint,
                 tau_poses,
@@ -298,6 +333,20 @@ impl Feature {
                 ]
             }
             Feature::Lagged { of, lag } => vec![format!("{}[-{lag}]", of.names().concat())],
+        }
+    }
+
+    /// Whether the feature (or one it is built from) is a harmonic whose
+    /// phase is counted from a joint value other than 0: a model file with
+    /// one needs a build that reads `centre_deg`
+    /// ([`crate::model::MODEL_VERSION`]).
+    pub fn has_phase_reference(&self) -> bool {
+        match self {
+            Feature::Harmonic { centre_deg, .. } | Feature::HarmonicJacobian { centre_deg, .. } => {
+                *centre_deg != 0.0
+            }
+            Feature::Times { of, .. } | Feature::Lagged { of, .. } => of.has_phase_reference(),
+            _ => false,
         }
     }
 
@@ -342,7 +391,9 @@ impl Feature {
     /// Check joint indices against `n` joints.
     pub fn validate(&self, n: usize) -> Result<()> {
         let joints: Vec<usize> = match self {
-            Feature::Harmonic { joint, period_deg }
+            Feature::Harmonic {
+                joint, period_deg, ..
+            }
             | Feature::HarmonicJacobian {
                 joint, period_deg, ..
             } => {
@@ -540,12 +591,14 @@ impl Feature {
                 times(of.columns_from_poses(q, dir)?.remove(0), *centre, q, *joint)
             }
             Feature::Lagged { of, lag } => vec![lagged(&of.columns_from_poses(q, dir)?[0], *lag)],
-            Feature::Harmonic { joint, period_deg } => {
+            Feature::Harmonic {
+                joint,
+                period_deg,
+                centre_deg,
+            } => {
                 let w = std::f64::consts::TAU / period_deg;
-                vec![
-                    col(&|i| (w * q[i][joint - 1]).sin()),
-                    col(&|i| (w * q[i][joint - 1]).cos()),
-                ]
+                let phase = |i: usize| w * (q[i][joint - 1] - centre_deg);
+                vec![col(&|i| phase(i).sin()), col(&|i| phase(i).cos())]
             }
             Feature::Interaction { a, b } => vec![col(&|i| q[i][a - 1] * q[i][b - 1])],
             Feature::PreviousDirection { joint } => {
@@ -560,9 +613,10 @@ impl Feature {
                 robot: r,
                 joint,
                 period_deg,
+                centre_deg,
             } => {
                 let w = std::f64::consts::TAU / period_deg;
-                jacobian_sin_cos(r, q, *joint, |qi| w * qi[joint - 1])?
+                jacobian_sin_cos(r, q, *joint, |qi| w * (qi[joint - 1] - centre_deg))?
             }
             Feature::SinceReversal { joint } => {
                 let j = joint - 1;

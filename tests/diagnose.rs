@@ -140,11 +140,21 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
     // the planted period
     let [lo, hi] = jacobian.params_ci["period_deg"];
     assert!(lo <= 7.5 && 7.5 <= hi, "{jacobian:?}");
-    // its columns: ∂P/∂θ₂ times sin and cos of 2π θ₂ / P
+    // its phase is counted from q2's mean on the campaign
+    let mean = data.q.iter().map(|r| r[1]).sum::<f64>() / data.len() as f64;
+    match &jacobian.add[..] {
+        [Feature::HarmonicJacobian { centre_deg, .. }] => {
+            assert!((centre_deg - mean).abs() <= 0.005, "{centre_deg} {mean}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // its columns: ∂P/∂θ₂ times sin and cos of 2π (θ₂ − c) / P
+    let c = 12.5;
     let f = Feature::HarmonicJacobian {
         robot: Box::new(robot.clone()),
         joint: 2,
         period_deg: p,
+        centre_deg: c,
     };
     assert!(f.trend_only());
     let f_names = f.names();
@@ -152,7 +162,7 @@ fn a_gear_harmonic_is_a_candidate_through_the_jacobian_with_the_robot() {
     assert_eq!(cols.len(), 6);
     for i in [0, 77, 199] {
         let jac = robot.position_jacobian(&data.q[i]).unwrap();
-        let th = std::f64::consts::TAU * data.q[i][1] / p;
+        let th = std::f64::consts::TAU * (data.q[i][1] - c) / p;
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * (1.0 + y.abs());
         for a in 0..3 {
             assert!(close(cols[a][i], jac[(a, 1)] * th.sin()), "row {i}");
@@ -242,6 +252,7 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
         Feature::Harmonic {
             joint: 2,
             period_deg: 7.5,
+            centre_deg: 0.0,
         },
         Feature::SinceReversal { joint: 3 },
     ];
@@ -301,6 +312,7 @@ fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
     let bad = vec![Feature::Harmonic {
         joint: 9,
         period_deg: 5.0,
+        centre_deg: 0.0,
     }];
     assert!(matches!(
         ErrorModelParams::new()
@@ -480,6 +492,7 @@ fn motion_history_features_follow_the_sequence() {
             of: Box::new(Feature::Harmonic {
                 joint: 1,
                 period_deg: 5.0,
+                centre_deg: 0.0,
             }),
             joint: 1,
             centre: 0.0,

@@ -179,6 +179,7 @@ fn a_refit_with_todays_code_writes_the_same_model() {
             Feature::Harmonic {
                 joint: 2,
                 period_deg: 30.0,
+                centre_deg: 0.0,
             },
             Feature::PreviousDirection { joint: 1 },
         ])
@@ -267,4 +268,56 @@ fn a_large_model_does_not_keep_the_factors_of_a_closed_form_cv() {
         );
     }
     assert_eq!(transient.expected_loo_rmse, kept.expected_loo_rmse);
+}
+
+/// A harmonic whose phase is counted from a joint value other than 0 (what
+/// `diagnose` adds) makes a version-5 file, which a build before that field
+/// refuses instead of reading its columns from θ = 0; it loads back and
+/// predicts the same. Without one, the file stays version 3.
+#[test]
+fn a_phase_referenced_harmonic_is_a_version_5_file() {
+    let data = read_csv(&repo("datasets/comau_harmonic.csv"))
+        .unwrap()
+        .head(60);
+    let fit = |centre_deg: f64| {
+        ErrorModelParams::new()
+            .space(Space::Js)
+            .kriging(
+                KrigingOptions::default()
+                    .optimizer(OptimizerKind::HookeJeeves)
+                    .max_evals(40),
+            )
+            .extras(vec![Feature::Harmonic {
+                joint: 2,
+                period_deg: 20.0,
+                centre_deg,
+            }])
+            .check()
+            .and_then(|p| p.fit(&data))
+            .unwrap()
+    };
+    let plain = fit(0.0);
+    assert_eq!(plain.version(), MODEL_VERSION_UNCALIBRATED);
+    assert!(!plain.to_json().unwrap().contains("centre_deg"));
+    let centred = fit(-31.25);
+    assert_eq!(centred.version(), robokrige::model::MODEL_VERSION);
+    let text = centred.to_json().unwrap();
+    let head: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(head["version"], 5);
+    assert_eq!(head["inputs"]["extras"][0]["centre_deg"], -31.25);
+    let back = ErrorModel::from_json(&text, "centred.json").unwrap();
+    assert_eq!(back.extras(), centred.extras());
+    assert_eq!(
+        back.predict(&data.q, &data.dir).unwrap().mean,
+        centred.predict(&data.q, &data.dir).unwrap().mean
+    );
+    // the column names say where the phase is counted from
+    assert!(
+        centred
+            .input_names()
+            .iter()
+            .any(|n| n == "sin(2π·(q2+31.25°)/20.0000°)"),
+        "{:?}",
+        centred.input_names()
+    );
 }

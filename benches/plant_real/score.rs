@@ -42,6 +42,7 @@
 
 use crate::plant::{Planted, Shape};
 use robokrige::diagnose::{Diagnosis, EffectKind, EffectReport};
+use robokrige::features::Feature;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Outcome {
@@ -355,31 +356,32 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<
             (tau_covered, targets)
         }
         Shape::Harmonic {
-            joint,
             period_deg,
             phase_rad,
+            ..
         } => {
             // through the Jacobian, the trend columns of axis a are
-            // `J_a,j(q)·sin(2π θ_j/P)` and `·cos` (J per radian): a planted
-            // `A sin(2π θ_j/P + φ)` (A in degrees) is A·cos φ and A·sin φ
-            // radians on each axis's own columns. A plain harmonic's
-            // per-axis coefficients have no planted value.
-            let found = param(e, "period_deg").unwrap_or(f64::NAN);
-            let targets = if e.label.ends_with("(via the Jacobian)") {
-                let a = p.value[0].to_radians();
-                ["x", "y", "z"]
-                    .iter()
-                    .enumerate()
-                    .flat_map(|(k, axis)| {
-                        let col = |f: &str| format!("J{axis}{joint}·{f}(2π·q{joint}/{found:.4}°)");
-                        [
-                            (col("sin"), k, a * phase_rad.cos()),
-                            (col("cos"), k, a * phase_rad.sin()),
-                        ]
-                    })
-                    .collect()
-            } else {
-                Vec::new()
+            // `J_a,j(q)·sin(2π (θ_j − c)/P)` and `·cos` (J per radian, c
+            // the effect's phase reference): a planted `A sin(2π θ_j/P + φ)`
+            // (A in degrees) is `A sin(2π (θ_j − c)/P + φ')` with
+            // φ' = φ + 2π c/P, i.e. A·cos φ' and A·sin φ' radians on each
+            // axis's own columns (named as the effect names them). A plain
+            // harmonic's per-axis coefficients have no planted value.
+            let targets = match e.add.first() {
+                Some(f @ Feature::HarmonicJacobian { centre_deg, .. }) => {
+                    let a = p.value[0].to_radians();
+                    let phi = phase_rad + std::f64::consts::TAU * centre_deg / period_deg;
+                    let names = f.names();
+                    (0..3)
+                        .flat_map(|k| {
+                            [
+                                (names[k].clone(), k, a * phi.cos()),
+                                (names[3 + k].clone(), k, a * phi.sin()),
+                            ]
+                        })
+                        .collect()
+                }
+                _ => Vec::new(),
             };
             (within(e.params_ci.get("period_deg"), *period_deg), targets)
         }

@@ -183,15 +183,24 @@ impl EffectReport {
     pub fn traced_variable(&self, data: &Dataset) -> (String, Vec<f64>) {
         match self.add.first() {
             Some(
-                Feature::Harmonic { joint, period_deg }
+                Feature::Harmonic {
+                    joint,
+                    period_deg,
+                    centre_deg,
+                }
                 | Feature::HarmonicJacobian {
-                    joint, period_deg, ..
+                    joint,
+                    period_deg,
+                    centre_deg,
+                    ..
                 },
             ) => (
-                format!("phase of q{joint} in its {period_deg:.3}° period (deg)"),
+                format!(
+                    "phase of q{joint} from {centre_deg:.2}° in its {period_deg:.3}° period (deg)"
+                ),
                 data.q
                     .iter()
-                    .map(|r| r[joint - 1].rem_euclid(*period_deg))
+                    .map(|r| (r[joint - 1] - centre_deg).rem_euclid(*period_deg))
                     .collect(),
             ),
             Some(Feature::Row | Feature::Step { .. }) => (

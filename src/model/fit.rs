@@ -175,7 +175,7 @@ pub(crate) fn fit_outputs(
             r.dropped_terms.clear();
         }
     }
-    Ok(ErrorModel {
+    let mut model = ErrorModel {
         format: MODEL_FORMAT.into(),
         version: MODEL_VERSION_UNCALIBRATED,
         inputs: map.clone(),
@@ -189,7 +189,9 @@ pub(crate) fn fit_outputs(
         software: SOFTWARE.into(),
         calibration: None,
         loo: Default::default(),
-    })
+    };
+    model.version = model.file_version();
+    Ok(model)
 }
 
 /// The three outputs solved at given hyperparameters, no search: output
@@ -350,7 +352,7 @@ impl ErrorModel {
         reports: Vec<FitReport>,
         joint_range: Vec<(f64, f64)>,
     ) -> Self {
-        ErrorModel {
+        let mut model = ErrorModel {
             format: self.format.clone(),
             version: self.version,
             inputs,
@@ -363,7 +365,9 @@ impl ErrorModel {
             software: self.software.clone(),
             calibration: self.calibration.clone(),
             loo: Default::default(),
-        }
+        };
+        model.version = model.file_version();
+        model
     }
 
     /// Each output's correlation family.

@@ -40,9 +40,16 @@ pub const MODEL_FORMAT: &str = "robokrige-error-model";
 /// at the top level and the periodic joints in the options, and still load.
 /// Version 2 stopped storing the Cholesky factor (O(m·d) files; it is
 /// recomputed when first needed).
-pub const MODEL_VERSION: u32 = 4;
-/// The version a model without a calibration is written as: such a file
-/// is a version-3 model, readable by the builds before calibration.
+/// Version 5 may hold a harmonic whose phase is counted from a joint value
+/// other than 0 ([`Feature::Harmonic`]'s `centre_deg`), which a build
+/// before it would ignore.
+pub const MODEL_VERSION: u32 = 5;
+/// The version a model with a calibration and no phase-referenced
+/// harmonic is written as, readable by the builds before that field.
+pub const MODEL_VERSION_CALIBRATED: u32 = 4;
+/// The version a model without a calibration (and no phase-referenced
+/// harmonic) is written as: such a file is a version-3 model, readable by
+/// the builds before calibration.
 pub const MODEL_VERSION_UNCALIBRATED: u32 = 3;
 /// Oldest model-file version that loads.
 pub const MODEL_VERSION_MIN: u32 = 1;
@@ -307,11 +314,14 @@ impl ErrorModel {
             .map_or_else(Default::default, |c| c.options().clone())
     }
 
-    /// The file version this model is written as: 4 with a calibration, 3
-    /// without.
-    fn file_version(&self) -> u32 {
-        if self.calibration.is_some() {
+    /// The file version this model is written as: the oldest that holds
+    /// it. 5 with a phase-referenced harmonic, else 4 with a calibration
+    /// and 3 without.
+    pub(crate) fn file_version(&self) -> u32 {
+        if self.extras().iter().any(Feature::has_phase_reference) {
             MODEL_VERSION
+        } else if self.calibration.is_some() {
+            MODEL_VERSION_CALIBRATED
         } else {
             MODEL_VERSION_UNCALIBRATED
         }

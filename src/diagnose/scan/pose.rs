@@ -1,9 +1,10 @@
 //! Candidates that are functions of the pose alone (the kinds the GP can
 //! soak up by shortening its length scales, [`EffectKind::pose_function`]),
 //! added as trend terms:
-//! - a harmonic of joint j, `sin(2π θ_j / P)` and `cos(2π θ_j / P)`, with the
-//!   period P scanned from half the joint's range down to 2° in steps of a
-//!   tenth of a cycle over the range ([`Feature::Harmonic`]);
+//! - a harmonic of joint j, `sin(2π (θ_j − c) / P)` and `cos(2π (θ_j − c) / P)`,
+//!   with the period P scanned from half the joint's range down to 2° in
+//!   steps of a tenth of a cycle over the range and the phase counted from
+//!   the joint's mean c on the campaign ([`Feature::Harmonic`]);
 //! - the product of two z-scored joint angles, `u_a · u_b`
 //!   ([`Feature::Interaction`]);
 //! - with a robot, joint j deviating with `sin θ_k` and `cos θ_k`, mapped
@@ -31,6 +32,13 @@ fn joint_range(data: &Dataset, j: usize) -> f64 {
     hi - lo
 }
 
+/// Joint `j`'s mean on `data`, to 0.01°: where a harmonic's phase is
+/// counted from ([`Feature::Harmonic`]'s `centre_deg`).
+fn joint_centre(data: &Dataset, j: usize) -> f64 {
+    let mean = data.q.iter().map(|r| r[j]).sum::<f64>() / data.len().max(1) as f64;
+    (mean * 100.0).round() / 100.0
+}
+
 /// The periods a harmonic of joint `j` is scanned at: those of the
 /// calibration's joint harmonics ([`scan_periods`]) from half its range on
 /// `data` down to 2°.
@@ -47,17 +55,29 @@ fn zoom_harmonic(point: &GridPoint, rows: &ScanRows, data: &Dataset) -> Vec<Grid
     let (Some(&period), Some(first)) = (point.params.get("period_deg"), point.add.first()) else {
         return Vec::new();
     };
-    let (joint, robot) = match first {
-        Feature::Harmonic { joint, .. } => (*joint, None),
-        Feature::HarmonicJacobian { robot, joint, .. } => (*joint, Some(robot)),
+    let (joint, centre_deg, robot) = match first {
+        Feature::Harmonic {
+            joint, centre_deg, ..
+        } => (*joint, *centre_deg, None),
+        Feature::HarmonicJacobian {
+            robot,
+            joint,
+            centre_deg,
+            ..
+        } => (*joint, *centre_deg, Some(robot)),
         _ => return Vec::new(),
     };
     let with_period = |period_deg: f64| match robot {
-        None => Feature::Harmonic { joint, period_deg },
+        None => Feature::Harmonic {
+            joint,
+            period_deg,
+            centre_deg,
+        },
         Some(robot) => Feature::HarmonicJacobian {
             robot: robot.clone(),
             joint,
             period_deg,
+            centre_deg,
         },
     };
     zoom_periods(joint_range(data, joint - 1), period)
@@ -100,16 +120,19 @@ fn push_harmonics(
 pub(super) fn harmonic_families(data: &Dataset, out: &mut Sink) {
     for j in 0..data.n_joints() {
         let label = format!("harmonic of q{}", j + 1);
+        let centre_deg = joint_centre(data, j);
         push_harmonics(out, data, j, label, |period| {
             let w = std::f64::consts::TAU / period;
-            let s: Vec<f64> = data.q.iter().map(|r| (w * r[j]).sin()).collect();
-            let c: Vec<f64> = data.q.iter().map(|r| (w * r[j]).cos()).collect();
+            let phase: Vec<f64> = data.q.iter().map(|r| w * (r[j] - centre_deg)).collect();
+            let s: Vec<f64> = phase.iter().map(|p| p.sin()).collect();
+            let c: Vec<f64> = phase.iter().map(|p| p.cos()).collect();
             GridPoint::new(
                 params(&[("period_deg", period)]),
                 vec![zscore(&s), zscore(&c)],
                 vec![Feature::Harmonic {
                     joint: j + 1,
                     period_deg: period,
+                    centre_deg,
                 }],
             )
         });
@@ -129,9 +152,10 @@ pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mu
     };
     for j in 0..data.n_joints() {
         let label = format!("harmonic of q{} (via the Jacobian)", j + 1);
+        let centre_deg = joint_centre(data, j);
         push_harmonics(out, data, j, label, |period| {
             let w = std::f64::consts::TAU / period;
-            let columns = jacobian_sin_cos_at(&jac, &data.q, j + 1, |qi| w * qi[j]);
+            let columns = jacobian_sin_cos_at(&jac, &data.q, j + 1, |qi| w * (qi[j] - centre_deg));
             GridPoint::of_features(
                 params(&[("period_deg", period)]),
                 z_all(columns),
@@ -139,6 +163,7 @@ pub(super) fn harmonic_jacobian_families(data: &Dataset, robot: &Robot, out: &mu
                     robot: Box::new(robot.clone()),
                     joint: j + 1,
                     period_deg: period,
+                    centre_deg,
                 }],
             )
         });
