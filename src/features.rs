@@ -338,8 +338,7 @@ impl Feature {
 
     /// Whether the feature (or one it is built from) is a harmonic whose
     /// phase is counted from a joint value other than 0: a model file with
-    /// one needs a build that reads `centre_deg`
-    /// ([`crate::model::MODEL_VERSION`]).
+    /// one needs a build that reads `centre_deg` (file version 5).
     pub fn has_phase_reference(&self) -> bool {
         match self {
             Feature::Harmonic { centre_deg, .. } | Feature::HarmonicJacobian { centre_deg, .. } => {

@@ -365,8 +365,10 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<
             // the effect's phase reference): a planted `A sin(2π θ_j/P + φ)`
             // (A in degrees) is `A sin(2π (θ_j − c)/P + φ')` with
             // φ' = φ + 2π c/P, i.e. A·cos φ' and A·sin φ' radians on each
-            // axis's own columns (named as the effect names them). A plain
-            // harmonic's per-axis coefficients have no planted value.
+            // axis's own columns (named as the effect names them). An axis
+            // the joint cannot move (q1's z: its Jacobian row is zero, and
+            // the engine drops the column) has no coefficient to check. A
+            // plain harmonic's per-axis coefficients have no planted value.
             let targets = match e.add.first() {
                 Some(f @ Feature::HarmonicJacobian { centre_deg, .. }) => {
                     let a = p.value[0].to_radians();
@@ -379,6 +381,7 @@ fn coverage(e: &EffectReport, shape: &Shape, p: &Planted) -> (Option<bool>, Vec<
                                 (names[3 + k].clone(), k, a * phi.sin()),
                             ]
                         })
+                        .filter(|(column, ..)| e.size.iter().any(|c| &c.column == column))
                         .collect()
                 }
                 _ => Vec::new(),
