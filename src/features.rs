@@ -197,8 +197,8 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
-/// `2π (θ − c) / P`'s argument text for a column name: `q{j}` or
-/// `(q{j}−c°)`, then `/P°`.
+/// `2π (θ − c) / P`'s argument text for a column name: `2π·q{j}/P°`, or
+/// with a reference `2π·(q{j}±|c|°)/P°` (the sign that of −c).
 fn harmonic_arg(joint: usize, period_deg: f64, centre_deg: f64) -> String {
     if centre_deg == 0.0 {
         format!("2π·q{joint}/{period_deg:.4}°")
@@ -391,14 +391,24 @@ impl Feature {
     pub fn validate(&self, n: usize) -> Result<()> {
         let joints: Vec<usize> = match self {
             Feature::Harmonic {
-                joint, period_deg, ..
+                joint,
+                period_deg,
+                centre_deg,
             }
             | Feature::HarmonicJacobian {
-                joint, period_deg, ..
+                joint,
+                period_deg,
+                centre_deg,
+                ..
             } => {
                 if period_deg.is_nan() || *period_deg <= 0.0 {
                     return Err(Error::InvalidParameter(format!(
                         "harmonic period must be > 0, got {period_deg}"
+                    )));
+                }
+                if !centre_deg.is_finite() {
+                    return Err(Error::InvalidParameter(format!(
+                        "harmonic phase reference must be finite, got {centre_deg}"
                     )));
                 }
                 vec![*joint]

@@ -311,6 +311,21 @@ fn a_phase_referenced_harmonic_is_a_version_5_file() {
         back.predict(&data.q, &data.dir).unwrap().mean,
         centred.predict(&data.q, &data.dir).unwrap().mean
     );
+    // a reference that is not a number is refused
+    let bad = ErrorModelParams::new()
+        .extras(vec![Feature::Harmonic {
+            joint: 2,
+            period_deg: 20.0,
+            centre_deg: f64::NAN,
+        }])
+        .check()
+        .and_then(|p| p.fit(&data));
+    assert!(
+        bad.as_ref()
+            .is_err_and(|e| e.to_string().contains("phase reference")),
+        "{:?}",
+        bad.map(|_| ())
+    );
     // the column names say where the phase is counted from
     assert!(
         centred

@@ -36,7 +36,8 @@
 //! = −offset; drift: the `temp_c` coefficient, mm/K; lag: its memory τ
 //! (planted 0) and the coefficient of each axis's `J·move` column, −g·π/180).
 //! A harmonic through the Jacobian: the coefficients of each axis's own
-//! `J·sin` and `J·cos` columns, A·cos φ and A·sin φ radians. A plain
+//! `J·sin` and `J·cos` columns, A·cos φ' and A·sin φ' radians with
+//! φ' = φ + 2π c/P at the effect's phase reference c. A plain
 //! harmonic's coefficients are per-axis sin/cos trend terms, not the
 //! joint's amplitude: only its period is scored.
 
