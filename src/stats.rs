@@ -341,6 +341,10 @@ pub struct PredictiveScores {
     pub gross_rows: usize,
 }
 
+/// The 97.5 % quantile of the standard normal: half-width of a 95 %
+/// interval in standard deviations.
+pub const Z95: f64 = 1.959_963_984_540_054;
+
 /// The rows whose 3D error `‖truth − mean‖` exceeds `gross_factor` × its
 /// 3D RMS over all rows: the gross errors of [`PredictiveScores`].
 pub fn gross_rows(truth: &[[f64; 3]], mean: &[[f64; 3]], gross_factor: f64) -> Vec<usize> {
@@ -376,14 +380,13 @@ pub fn predictive_scores(
     gross_factor: f64,
 ) -> PredictiveScores {
     let n = truth.len().max(1) as f64;
-    let z95 = 1.959_963_984_540_054;
     let mut inside = [0usize; 3];
     let mut nlpd = 0.0;
     for ((t, m), s) in truth.iter().zip(mean).zip(std) {
         for a in 0..3 {
             let e = t[a] - m[a];
             let v = (s[a] * s[a]).max(f64::MIN_POSITIVE);
-            if e.abs() <= z95 * s[a] {
+            if e.abs() <= Z95 * s[a] {
                 inside[a] += 1;
             }
             nlpd += 0.5 * (2.0 * std::f64::consts::PI * v).ln() + e * e / (2.0 * v);

@@ -129,7 +129,7 @@ pub(super) fn not_separable(
                 .zip(&other.fit)
                 .map(|(x, y)| (0..3).map(|a| (x[a] - y[a]).powi(2) / s2[a]).sum::<f64>())
                 .sum();
-            let within = (top.e - other.e).abs() <= 1.96 * 2.0 * d2.sqrt();
+            let within = (top.e - other.e).abs() <= crate::stats::Z95 * 2.0 * d2.sqrt();
             (correlation >= SAME_RESIDUAL && within).then_some(Competitor {
                 index: i,
                 correlation,

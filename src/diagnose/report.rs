@@ -346,7 +346,7 @@ pub(super) fn coefficients(model: &ErrorModel, add: &[Feature]) -> Vec<Coefficie
             let c = model.trend_coefficient(&column)?;
             Some(Coefficient {
                 estimate: c.map(|(b, _)| b),
-                ci95: c.map(|(_, se)| 1.96 * se),
+                ci95: c.map(|(_, se)| crate::stats::Z95 * se),
                 column,
                 axis,
             })

@@ -134,9 +134,7 @@ pub struct CoverageWarning {
 
 /// A gross error: this many times the model's leave-one-out RMS.
 pub const GROSS_FACTOR: f64 = 3.0;
-/// The 97.5 % quantile of the standard normal: half-width of a 95 %
-/// interval in standard deviations.
-pub const Z95: f64 = 1.959_963_984_540_054;
+pub use crate::stats::Z95;
 /// Training rows sampled (evenly over the campaign) for the model's
 /// leave-one-out residuals ([`ErrorModel::loo_check`]): the interval
 /// scale and power and the RMS of the [`CoverageIssue::Uncertain`] rule,
