@@ -424,9 +424,9 @@ pub fn score(
             outcome: Outcome::Right,
             row_covered,
             coef_covered: nonempty(covers(e, &targets, &[])),
-            own_covered: nonempty(own_values.and_then(|o| covers(e, &targets, &o))),
+            own_covered: nonempty(own_values.as_ref().and_then(|o| covers(e, &targets, o))),
             added,
-            detail: detail(e, p),
+            detail: detail(e, p, &targets, own_values.as_deref()),
             left_by_cap: false,
             seen: true,
         };
@@ -519,7 +519,10 @@ fn block_as_steps(
         own_cov = join(own_cov, own_values.and_then(|o| covers(e, targets, &o)));
     }
     let nonempty = |v: Option<Vec<bool>>| v.filter(|v| !v.is_empty());
-    let details: Vec<String> = scored.iter().map(|(e, _, _)| detail(e, p)).collect();
+    let details: Vec<String> = scored
+        .iter()
+        .map(|(e, _, _)| detail(e, p, &[], None))
+        .collect();
     Some(Score {
         outcome: Outcome::Right,
         row_covered: Some(rows),
@@ -546,8 +549,10 @@ pub fn with_params(e: &EffectReport) -> String {
 }
 
 /// The found parameters with their intervals, and the size coefficients
-/// against the planted value.
-fn detail(e: &EffectReport, p: &Planted) -> String {
+/// against the planted value: with planted `targets`, each one's estimate
+/// and interval against the planted value (and the campaign's own,
+/// `own`, beside it).
+fn detail(e: &EffectReport, p: &Planted, targets: &[Target], own: Option<&[f64]>) -> String {
     let mut out: Vec<String> = e
         .params
         .iter()
@@ -556,6 +561,23 @@ fn detail(e: &EffectReport, p: &Planted) -> String {
             None => format!("{k} {v:.1}"),
         })
         .collect();
+    if !targets.is_empty() {
+        for (k, (column, a, v)) in targets.iter().enumerate() {
+            let Some(c) = e.size.iter().find(|c| &c.column == column) else {
+                continue;
+            };
+            let own = own
+                .and_then(|o| o.get(k))
+                .map_or(String::new(), |o| format!(" + own {o:+.3e}"));
+            out.push(format!(
+                "{column} [{}] {:+.3e}±{:.2e} (planted {v:+.3e}{own})",
+                ["x", "y", "z"][*a],
+                c.estimate[*a],
+                c.ci95[*a]
+            ));
+        }
+        return out.join(", ");
+    }
     for c in e.size.iter().take(2) {
         let f = |a: usize| format!("{:+.3e}±{:.2e}", c.estimate[a], c.ci95[a]);
         out.push(format!("{} {}/{}/{}", c.column, f(0), f(1), f(2)));
