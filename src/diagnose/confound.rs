@@ -33,7 +33,7 @@
 //!    round it was added in, of the candidate's least-squares fitted sum of
 //!    squares (noise units, pooled over the axes) at most
 //!    [`EXPLAINED_AWAY`] is left once the effect's columns are fitted
-//!    first ([`share_left`]); and
+//!    first ([`Taken::share_left`]); and
 //! 2. the model with it says so: the next round tests every candidate
 //!    again inside the model with the effect, and the candidate, significant
 //!    before, is no longer (q over the FDR, or a drop no longer worth an
@@ -48,7 +48,7 @@
 //! poses in joint space ([`region_overlap`]: the correlation of the
 //! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
 
-use super::rank::{fitted, orthonormal, similarity};
+use super::rank::{extend_orthonormal, fitted, orthonormal, similarity};
 use super::report::EffectReport;
 use super::scan::{EffectKind, Family, GridPoint, Tested, is_time_column};
 
@@ -59,7 +59,7 @@ pub const SAME_RESIDUAL: f64 = 0.7;
 
 /// Share of its least-squares fit, and of its evidence, a candidate keeps
 /// at most once an effect is added for that effect to have explained it
-/// away ([`share_left`], [`explained_away`]).
+/// away ([`Taken::share_left`], [`explained_away`]).
 pub const EXPLAINED_AWAY: f64 = 0.5;
 
 /// Nearest poses in joint space a row's region indicator is averaged over.
@@ -154,31 +154,51 @@ pub(super) fn competitor_text(r: &EffectReport, correlation: f64) -> String {
     )
 }
 
-/// What is left of candidate `b`'s fit of the `residuals` once the
-/// columns of `a` are fitted first: per axis, with `Q` an orthonormal basis
-/// of the centred columns on that axis, `(‖Q_{ab}ᵀr‖² − ‖Q_aᵀr‖²)/‖Q_bᵀr‖²`,
-/// the sums in noise units and pooled over the axes. 0: `a`'s columns fit
-/// all that `b`'s do; 1: none of it. `None` when `b` fits nothing.
-pub(super) fn share_left(a: &GridPoint, b: &GridPoint, residuals: &[[f64; 3]]) -> Option<f64> {
-    let s2 = noise(residuals);
-    let fit = |q: &[Vec<f64>], r: &[f64]| -> f64 {
-        q.iter()
-            .map(|v| v.iter().zip(r).map(|(x, y)| x * y).sum::<f64>().powi(2))
-            .sum()
-    };
-    let (mut after, mut alone) = (0.0, 0.0);
-    for axis in 0..3 {
-        let r: Vec<f64> = residuals.iter().map(|x| x[axis]).collect();
-        let (ca, cb) = (a.on_axis(axis), b.on_axis(axis));
-        let both: Vec<&[f64]> = ca.iter().chain(&cb).copied().collect();
-        let (qa, qb, qab) = (orthonormal(&ca), orthonormal(&cb), orthonormal(&both));
-        after += (fit(&qab, &r) - fit(&qa, &r)).max(0.0) / s2[axis];
-        alone += fit(&qb, &r) / s2[axis];
-    }
-    (alone > 0.0).then(|| after / alone)
+/// An added effect's columns on one round's residuals, for
+/// [`Taken::share_left`]: per axis, the residual and an orthonormal basis
+/// of the effect's centred columns, and the noise.
+pub(super) struct Taken {
+    s2: [f64; 3],
+    r: [Vec<f64>; 3],
+    qa: [Vec<Vec<f64>>; 3],
 }
 
-/// A candidate whose fit an added effect's columns take ([`share_left`] at
+impl Taken {
+    /// Effect `a`'s columns against the `residuals`.
+    pub(super) fn new(a: &GridPoint, residuals: &[[f64; 3]]) -> Self {
+        Taken {
+            s2: noise(residuals),
+            r: std::array::from_fn(|axis| residuals.iter().map(|x| x[axis]).collect()),
+            qa: std::array::from_fn(|axis| orthonormal(&a.on_axis(axis))),
+        }
+    }
+
+    /// What is left of candidate `b`'s fit of the residuals once the
+    /// effect's columns are fitted first: per axis, with `Q` an orthonormal
+    /// basis of the centred columns on that axis,
+    /// `(‖Q_{ab}ᵀr‖² − ‖Q_aᵀr‖²)/‖Q_bᵀr‖²` (the numerator is the fit of the
+    /// part of `b`'s columns orthogonal to the effect's), the sums in noise
+    /// units and pooled over the axes. 0: the effect's columns fit all that
+    /// `b`'s do; 1: none of it. `None` when `b` fits nothing.
+    pub(super) fn share_left(&self, b: &GridPoint) -> Option<f64> {
+        let fit = |q: &[Vec<f64>], r: &[f64]| -> f64 {
+            q.iter()
+                .map(|v| v.iter().zip(r).map(|(x, y)| x * y).sum::<f64>().powi(2))
+                .sum()
+        };
+        let (mut after, mut alone) = (0.0, 0.0);
+        for axis in 0..3 {
+            let (r, qa) = (&self.r[axis], &self.qa[axis]);
+            let cb = b.on_axis(axis);
+            let qab = extend_orthonormal(qa.clone(), &cb);
+            after += fit(&qab[qa.len()..], r) / self.s2[axis];
+            alone += fit(&orthonormal(&cb), r) / self.s2[axis];
+        }
+        (alone > 0.0).then(|| after / alone)
+    }
+}
+
+/// A candidate whose fit an added effect's columns take ([`Taken::share_left`] at
 /// most [`EXPLAINED_AWAY`]): its family's label and source, and the share
 /// left.
 #[derive(Debug, Clone, PartialEq)]
@@ -199,7 +219,7 @@ pub(super) fn sharing(
     significant: &dyn Fn(&Tested) -> bool,
 ) -> Vec<Shared> {
     let top = &fams[tested[k].family];
-    let point = tested[k].point(top);
+    let taken = Taken::new(tested[k].point(top), residuals);
     (0..tested.len())
         .filter(|&i| i != k && significant(&tested[i]))
         .filter_map(|i| {
@@ -207,7 +227,7 @@ pub(super) fn sharing(
             if f.source == top.source || f.label == top.label {
                 return None;
             }
-            let left = share_left(point, tested[i].point(f), residuals)?;
+            let left = taken.share_left(tested[i].point(f))?;
             (left <= EXPLAINED_AWAY).then(|| Shared {
                 label: f.label.clone(),
                 source: f.source.clone(),
@@ -450,10 +470,10 @@ mod tests {
         let b = point(vec![x.clone()]);
         // a spans b's column (and more): nothing left
         let spans = point(vec![x.iter().map(|v| 2.0 * v + 1.0).collect(), y.clone()]);
-        assert!(share_left(&spans, &b, &residuals).unwrap() < 1e-9);
+        assert!(Taken::new(&spans, &residuals).share_left(&b).unwrap() < 1e-9);
         // a is (nearly) orthogonal to b: all of it left
         let other = point(vec![y.clone()]);
-        let left = share_left(&other, &b, &residuals).unwrap();
+        let left = Taken::new(&other, &residuals).share_left(&b).unwrap();
         assert!(left > 0.9, "{left}");
     }
 

@@ -98,7 +98,16 @@ const SAME_SCORE: f64 = 0.8;
 /// Orthonormal basis (modified Gram–Schmidt, twice) of centred columns;
 /// dependent columns are dropped (the intercept is implied).
 pub(super) fn orthonormal<C: AsRef<[f64]>>(columns: &[C]) -> Vec<Vec<f64>> {
-    let mut basis: Vec<Vec<f64>> = Vec::new();
+    extend_orthonormal(Vec::new(), columns)
+}
+
+/// `basis` (orthonormal, centred) extended by the columns' centred parts
+/// orthogonal to it, as [`orthonormal`] does column by column: the
+/// vectors after `basis.len()` span what the columns add to it.
+pub(super) fn extend_orthonormal<C: AsRef<[f64]>>(
+    mut basis: Vec<Vec<f64>>,
+    columns: &[C],
+) -> Vec<Vec<f64>> {
     for c in columns {
         let c = c.as_ref();
         let mu = c.iter().sum::<f64>() / c.len() as f64;
