@@ -330,6 +330,10 @@ impl Rounds {
             let (after, trial_model) = cross_validated(c.data, &trial, o, Some(&self.model))?;
             let (now, then) = (self.current.pooled_rmse_mm, after.pooled_rmse_mm);
             if worth.counts(now.powi(2), then.powi(2)) {
+                progress(&format!(
+                    "'{}' confirmed: naming its competitors and its intervals",
+                    reports[k].label
+                ));
                 let competitors = choose::competitor_columns(c.data, c.calibration, r, k, reports);
                 let shared = confound::sharing(r.tested, r.fams, r.residuals, k, r.significant);
                 let index = self.effects.len() + k;

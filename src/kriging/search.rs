@@ -288,18 +288,27 @@ fn optimise_bfgs(
     r
 }
 
-/// The log-likelihood gain (nats) below which an iteration on a large
-/// campaign no longer counts: ξ moving along a flat valley, the predictor
-/// unchanged.
+/// The log-likelihood gain (nats) below which an iteration of a search
+/// from a known basin no longer counts: ξ moving along a flat valley, the
+/// predictor unchanged.
 const LN_L_TOL: f64 = 0.01;
 
-/// Tolerances of the convergence on `rows` rows of a large campaign, where
-/// one evaluation costs about a second at m = 2 773: an iteration that
-/// raises the log-likelihood `ln L = −(m/2)(ln ψ + const)` by less than
-/// [`LN_L_TOL`] stops it, i.e. lowers ln ψ by less than `2·LN_L_TOL/m`
-/// (7e-6 at 2 773 rows; earlier 1e-7·|ln ψ|, which let the last ~10
-/// iterations per output crawl for 0.1 nats in all).
-fn full_data_tolerance(rows: usize) -> optim::QuasiNewtonOptions {
+/// Tolerances of a BFGS started in a known basin ([`converge_bfgs`]: a
+/// warm start, or the optimum of a large campaign's subset) on `rows`
+/// rows: an iteration that raises the log-likelihood
+/// `ln L = −(m/2)(ln ψ + const)` by less than [`LN_L_TOL`] stops it, i.e.
+/// lowers ln ψ by less than `2·LN_L_TOL/m` (3e-5 at 600 rows, 7e-6 at
+/// 2 773), far inside the likelihood's own uncertainty (a 95 % interval of
+/// one parameter spans 1.92 nats). Without it the last iterations crawl:
+/// earlier `1e-7·|ln ψ|` on large campaigns let them crawl for 0.1 nats in
+/// all per output, and on small ones the default `ftol` made the fold
+/// refits of a `diagnose` CV on 600 rows of UR10 series C take 50–164
+/// evaluations on z once harmonic trend terms were in (3–28 with this).
+/// The price: a flat stretch before a further descent stops it there (a
+/// warm fold refit on 180 rows of `comau_lhs` ended 0.12 nats below the
+/// cold multistart on one output, its held-out predictions 8 % of their
+/// RMS error apart; `tests/warm_start.rs`).
+fn basin_tolerance(rows: usize) -> optim::QuasiNewtonOptions {
     optim::QuasiNewtonOptions {
         gtol: 1e-4,
         ftol: 1e-7,
@@ -318,8 +327,8 @@ pub(super) struct Search {
 }
 
 /// BFGS from `x0` (inverse Hessian `hinv`, or the identity) to convergence
-/// on all rows, or on a seeded subset of `opts.converge_rows` rows when there are
-/// more (one start).
+/// ([`basin_tolerance`]) on all rows, or on a seeded subset of
+/// `opts.converge_rows` rows when there are more (one start).
 pub(super) fn converge_bfgs(
     problem: &KrigingProblem,
     x0: &[f64],
@@ -331,11 +340,7 @@ pub(super) fn converge_bfgs(
     let m = problem.m();
     let full = optim::QuasiNewtonOptions {
         max_evals: opts.max_evals,
-        ..if m > SEARCH_ROWS {
-            full_data_tolerance(m.min(opts.converge_rows))
-        } else {
-            optim::QuasiNewtonOptions::default()
-        }
+        ..basin_tolerance(m.min(opts.converge_rows))
     };
     let refine_rows = m.min(opts.converge_rows);
     let refine_sub = converge_subset(m, opts).map(|rows| SubsetData::new(problem, &rows));
