@@ -32,8 +32,7 @@ fn a_warm_fold_refit_matches_the_cold_one_at_a_fraction_of_the_cost() {
     let rms = |d: &dyn Fn(usize) -> f64| {
         ((0..held.len()).map(|i| d(i).powi(2)).sum::<f64>() / held.len() as f64).sqrt()
     };
-    for a in 0..3 {
-        let (rw, rc) = (&w.reports()[a], &c.reports()[a]);
+    for (a, (rw, rc)) in w.reports().iter().zip(c.reports()).enumerate() {
         // the search stops once an iteration gains < 0.01 nats: within a
         // fraction of a nat of the cold optimum (m/2 · Δln ψ)
         let nats = (rw.ln_psi - rc.ln_psi) * fold.len() as f64 / 2.0;
