@@ -294,8 +294,8 @@ fn optimise_bfgs(
 const LN_L_TOL: f64 = 0.01;
 
 /// Tolerances of a BFGS started in a known basin ([`converge_bfgs`]: a
-/// warm start, or the optimum of a large campaign's subset) on `rows`
-/// rows: an iteration that raises the log-likelihood
+/// warm start with its curvature, or the optimum of a large campaign's
+/// subset) on `rows` rows: an iteration that raises the log-likelihood
 /// `ln L = −(m/2)(ln ψ + const)` by less than [`LN_L_TOL`] stops it, i.e.
 /// lowers ln ψ by less than `2·LN_L_TOL/m` (3e-5 at 600 rows, 7e-6 at
 /// 2 773), far inside the likelihood's own uncertainty (a 95 % interval of
@@ -327,8 +327,14 @@ pub(super) struct Search {
 }
 
 /// BFGS from `x0` (inverse Hessian `hinv`, or the identity) to convergence
-/// ([`basin_tolerance`]) on all rows, or on a seeded subset of
-/// `opts.converge_rows` rows when there are more (one start).
+/// on all rows, or on a seeded subset of `opts.converge_rows` rows when
+/// there are more (one start). Over [`SEARCH_ROWS`] rows, or from a start
+/// with its curvature (`hinv`: a converged search's optimum on nearby
+/// data), it stops at [`basin_tolerance`]; a start without one (a new
+/// input's ξ set by hand) runs to the default tolerance, for such a
+/// search begins on a flat stretch (ξ small: the input barely matters),
+/// where the basin tolerance stopped it before it had moved (hysteresis
+/// in `diagnose_table` refused, after/without 1.00 → 1.07–1.09).
 pub(super) fn converge_bfgs(
     problem: &KrigingProblem,
     x0: &[f64],
@@ -338,9 +344,16 @@ pub(super) fn converge_bfgs(
     opts: &KrigingOptions,
 ) -> Search {
     let m = problem.m();
+    // a start with its curvature is a converged search's optimum, moved
+    // little (a fold, one more trend term): its basin is known
+    let known_basin = m > SEARCH_ROWS || hinv.is_some();
     let full = optim::QuasiNewtonOptions {
         max_evals: opts.max_evals,
-        ..basin_tolerance(m.min(opts.converge_rows))
+        ..if known_basin {
+            basin_tolerance(m.min(opts.converge_rows))
+        } else {
+            optim::QuasiNewtonOptions::default()
+        }
     };
     let refine_rows = m.min(opts.converge_rows);
     let refine_sub = converge_subset(m, opts).map(|rows| SubsetData::new(problem, &rows));
