@@ -302,7 +302,7 @@ const LN_L_TOL: f64 = 0.01;
 /// one parameter spans 1.92 nats). Without it the last iterations crawl:
 /// earlier `1e-7·|ln ψ|` on large campaigns let them crawl for 0.1 nats in
 /// all per output, and on small ones the default `ftol` made the fold
-/// refits of a `diagnose` CV on 600 rows of UR10 series C take 50–164
+/// refits of a `diagnose` CV on 600 rows of UR10 series C take 33–164
 /// evaluations on z once harmonic trend terms were in (3–28 with this).
 /// The price: a flat stretch before a further descent stops it there (a
 /// warm fold refit on 180 rows of `comau_lhs` ended 0.12 nats below the
@@ -334,7 +334,7 @@ pub(super) struct Search {
 /// input's ξ set by hand) runs to the default tolerance, for such a
 /// search begins on a flat stretch (ξ small: the input barely matters),
 /// where the basin tolerance stopped it before it had moved (hysteresis
-/// in `diagnose_table` refused, after/without 1.00 → 1.07–1.09).
+/// in `diagnose_table` refused, after/without 1.00–1.04 → 1.05–1.09).
 pub(super) fn converge_bfgs(
     problem: &KrigingProblem,
     x0: &[f64],
@@ -345,7 +345,8 @@ pub(super) fn converge_bfgs(
 ) -> Search {
     let m = problem.m();
     // a start with its curvature is a converged search's optimum, moved
-    // little (a fold, one more trend term): its basin is known
+    // little (a fold, one more trend term): its basin is known; a large
+    // campaign's evaluations cost too much to crawl in any case
     let known_basin = m > SEARCH_ROWS || hinv.is_some();
     let full = optim::QuasiNewtonOptions {
         max_evals: opts.max_evals,
