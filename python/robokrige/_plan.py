@@ -32,8 +32,9 @@ class Plan(NamedTuple):
     #: "campaign", "prior", "spacefilling"), ``candidates``, ``chosen``,
     #: ``measure``, ``imse_curve_mm2`` (the region's integrated MSE before
     #: and after each chosen pose), ``unrealised``, ``notes``, ``forecast``
-    #: (with a measured campaign: ``cv_mean_3d_mm``, ``floor_mean_3d_mm``,
-    #: ``mean_3d_mm`` after each planned pose), and ``text``, its report.
+    #: (with a measured campaign: ``cv_mean_3d_mm`` at the campaign's poses,
+    #: ``region_ratio``, ``floor_mean_3d_mm``, ``mean_3d_mm`` over the region
+    #: now and after each planned pose), and ``text``, its report.
     summary: Dict[str, Any]
     #: The model whose hyperparameters the plan used (None for a
     #: space-filling first batch).

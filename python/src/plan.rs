@@ -10,7 +10,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use robokrige::cancel::Cancel;
 use robokrige::plan::stop::Forecast;
-use robokrige::plan::{HyperSource, PlanInputs, PlanParams, PoseSet, Region, TrackerView};
+use robokrige::plan::{PlanInputs, PlanParams, PoseSet, Region, TrackerView};
 use robokrige::program::{ProgramFormat, ProgramOptions};
 use robokrige::{Error, Result};
 use std::path::PathBuf;
@@ -136,12 +136,7 @@ pub fn plan<'py>(
             pool,
             region: &region,
         })?;
-        let forecast = match (&plan.model, plan.source, campaign) {
-            (Some(m), HyperSource::Campaign, Some(c)) => {
-                Some(Forecast::new(m, c, &plan.imse_curve)?)
-            }
-            _ => None,
-        };
+        let forecast = Forecast::of_plan(&plan, &robot, campaign)?;
         if let Some(path) = &output {
             plan.write(path, format, &robot)?;
         }

@@ -112,7 +112,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         pool: pool.as_ref(),
         region: &region,
     })?;
-    let forecast = Forecast::of_plan(&plan, campaign.as_ref())?;
+    let forecast = Forecast::of_plan(&plan, &robot, campaign.as_ref())?;
     plan.write(&a.output, a.format, &robot)?;
     let v = report::json(&plan, forecast.as_ref());
     super::json_to(a.json.as_deref(), &v, "plan")?;

@@ -81,6 +81,12 @@ fn outer3(x: &[f64], y: &[f64], np: usize) -> Matrix3<f64> {
     })
 }
 
+/// The calibration's share of the MSE averaged over `points` (joints in the
+/// robot's units): `tr(Σ M)`, mm² summed over the axes.
+pub(super) fn mean_variance(cal: &Calibration, points: &[Vec<f64>]) -> Result<f64> {
+    CalibrationDesign::new(cal, &[], points).map(|d| d.imse())
+}
+
 impl CalibrationDesign {
     /// The state for `cal` with candidates `cand` and region `region`
     /// (joints in the robot's units).

@@ -202,6 +202,11 @@ pub struct Plan {
     /// The region's integrated MSE (mm², summed over x, y, z) before the
     /// plan and after each chosen pose (empty for a space-filling batch).
     pub imse_curve: Vec<f64>,
+    /// The Kriging outputs' share of `imse_curve[0]` (mm²; the rest is the
+    /// calibration's share, when counted): what the stopping rule compares
+    /// with the same outputs' held-out MSE on the campaign
+    /// ([`stop::Forecast`]). `None` for a space-filling batch.
+    pub kriging_imse: Option<f64>,
     /// Candidates considered (after the tracker's line of sight).
     pub candidates: usize,
     /// Measured poses whose planned λ the order could not realise (a joint
@@ -252,10 +257,12 @@ impl ValidPlanParams {
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
         p.cancel.check()?;
-        let (chosen, imse_curve) = match &model {
+        let (chosen, imse_curve, kriging_imse) = match &model {
             Some(m) => {
                 let k = p.budget.min(cand.len());
-                choose_by_imse(m, &cand, &region, k, p.calibration_share, &p.cancel)?
+                let (chosen, curve, kriging) =
+                    choose_by_imse(m, &cand, &region, k, p.calibration_share, &p.cancel)?;
+                (chosen, curve, Some(kriging))
             }
             None => {
                 let k = p.budget.min(p.first_batch);
@@ -267,7 +274,7 @@ impl ValidPlanParams {
                     ));
                 }
                 let chosen = candidates::covering(&cand, &region, &measured, &ranges, k);
-                (chosen, Vec::new())
+                (chosen, Vec::new(), None)
             }
         };
         if chosen.len() < p.budget && model.is_some() {
@@ -294,6 +301,7 @@ impl ValidPlanParams {
             poses,
             source,
             imse_curve,
+            kriging_imse,
             candidates: cand.len(),
             unrealised,
             model,
@@ -448,7 +456,7 @@ fn choose_by_imse(
     k: usize,
     calibration_share: bool,
     cancel: &Cancel,
-) -> Result<(Vec<usize>, Vec<f64>)> {
+) -> Result<(Vec<usize>, Vec<f64>, f64)> {
     let map = model.input_map();
     if !map.extras().is_empty() {
         return Err(Error::InvalidParameter(
@@ -470,6 +478,7 @@ fn choose_by_imse(
     let imse = |axes: &[AxisDesign], cal: &Option<CalibrationDesign>| {
         axes.iter().map(AxisDesign::imse).sum::<f64>() + cal.as_ref().map_or(0.0, |c| c.imse())
     };
+    let kriging = axes.iter().map(AxisDesign::imse).sum::<f64>();
     let mut curve = vec![imse(&axes, &cal)];
     let mut chosen = Vec::with_capacity(k);
     let mut taken = vec![false; cand.len()];
@@ -494,5 +503,5 @@ fn choose_by_imse(
         }
         curve.push(imse(&axes, &cal));
     }
-    Ok((chosen, curve))
+    Ok((chosen, curve, kriging))
 }

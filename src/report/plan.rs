@@ -35,10 +35,12 @@ pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) ->
     }
     if let Some(f) = forecast {
         s += &format!(
-            "held-out mean 3D error: {:.4} mm now ({} poses, closed-form 10-fold CV), \
-             forecast {:.4} mm after the plan; floor (repeatability) {:.4} mm\n",
+            "held-out mean 3D error: {:.4} mm at the {} poses measured (10-fold CV), \
+             {:.4} mm over the region now, forecast {:.4} mm after the plan; \
+             floor (repeatability) {:.4} mm\n",
             f.cv_mean_3d,
             f.measured,
+            f.now_mean_3d(),
             f.mean_3d.last().copied().unwrap_or(f.cv_mean_3d),
             f.floor_mean_3d
         );
@@ -84,6 +86,7 @@ pub fn json(plan: &Plan, forecast: Option<&Forecast>) -> serde_json::Value {
         "forecast": forecast.map(|f| serde_json::json!({
             "measured": f.measured,
             "cv_mean_3d_mm": f.cv_mean_3d,
+            "region_ratio": f.region_ratio,
             "floor_mean_3d_mm": f.floor_mean_3d,
             "mean_3d_mm": f.mean_3d,
         })),
