@@ -19,7 +19,8 @@
 //! `../shared/data/ipa-ur10/` (skips cleanly without it).
 //!
 //! `-- --timing` instead times one batch of 50 from 10 000 drawn
-//! candidates with 400 simulated poses measured (UR10), fit included.
+//! candidates with 400 simulated poses measured (UR10), fit included, and
+//! then its forecast (the stopping rule's CV).
 
 use robokrige::dataset::{Dataset, read_csv};
 use robokrige::kinematics::{self, Robot};
@@ -230,10 +231,16 @@ fn timing() {
             region: &Region::WorkRange,
         })
         .unwrap();
+    let planned = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let f = Forecast::new(&plan, &nominal, &campaign).unwrap();
     println!(
-        "one batch of {} from {} candidates, 400 measured, 1000 region points: {:.2} s (fit included)",
+        "one batch of {} from {} candidates, 400 measured, 1000 region points: {planned:.2} s \
+         (fit included); its forecast {:.2} s ({:.4} mm now over the region); {:.2} s in all",
         plan.chosen.len(),
         plan.candidates,
+        t1.elapsed().as_secs_f64(),
+        f.now_mean_3d(),
         t0.elapsed().as_secs_f64()
     );
 }
