@@ -44,14 +44,9 @@ fn default_model(robot: &Robot, data: &Dataset) -> ErrorModel {
         .unwrap()
 }
 
-/// Mean 3D error of `model` on the pool rows not in `train`.
-fn score(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
-    let mut held = vec![true; pool.len()];
-    for &i in train {
-        held[i] = false;
-    }
-    let rows: Vec<usize> = (0..pool.len()).filter(|&i| held[i]).collect();
-    let test = pool.select(&rows);
+/// Mean 3D error of `model` on the pool rows `rows`.
+fn mean_3d_on(model: &ErrorModel, pool: &Dataset, rows: &[usize]) -> f64 {
+    let test = pool.select(rows);
     let p = model.predict_dataset(&test).unwrap();
     let e = test.errors.as_ref().unwrap();
     p.mean
@@ -60,6 +55,16 @@ fn score(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
         .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
         .sum::<f64>()
         / rows.len() as f64
+}
+
+/// Mean 3D error of `model` on the pool rows not in `train`.
+fn score(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
+    let mut held = vec![true; pool.len()];
+    for &i in train {
+        held[i] = false;
+    }
+    let rows: Vec<usize> = (0..pool.len()).filter(|&i| held[i]).collect();
+    mean_3d_on(model, pool, &rows)
 }
 
 /// A held-out row within this many degrees of a chosen pose on every
@@ -79,15 +84,7 @@ fn score_new(model: &ErrorModel, pool: &Dataset, train: &[usize]) -> f64 {
         })
     };
     let rows: Vec<usize> = (0..pool.len()).filter(|&i| !repeats(i)).collect();
-    let test = pool.select(&rows);
-    let p = model.predict_dataset(&test).unwrap();
-    let e = test.errors.as_ref().unwrap();
-    p.mean
-        .iter()
-        .zip(e)
-        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
-        .sum::<f64>()
-        / rows.len() as f64
+    mean_3d_on(model, pool, &rows)
 }
 
 fn pool_poses(pool: &Dataset) -> PoseSet {
