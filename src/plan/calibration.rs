@@ -81,10 +81,55 @@ fn outer3(x: &[f64], y: &[f64], np: usize) -> Matrix3<f64> {
     })
 }
 
-/// The calibration's share of the MSE averaged over `points` (joints in the
-/// robot's units): `tr(Σ M)`, mm² summed over the axes.
-pub(super) fn mean_variance(cal: &Calibration, points: &[Vec<f64>]) -> Result<f64> {
-    CalibrationDesign::new(cal, &[], points).map(|d| d.imse())
+/// The calibration's share of the MSE at the campaign's poses `q`, each
+/// held out with its block (a CV's folds), averaged over the poses: mm²
+/// summed over the axes. The posterior without block f's rows is the
+/// downdate (Woodbury; `s²` the calibration's noise, `G_f` the block's
+/// stacked identification Jacobians)
+///
+/// ```text
+/// Σ_f = Σ + Σ G_fᵀ S_f⁻¹ G_f Σ,   S_f = s² I − G_f Σ G_fᵀ,
+/// Σ_{i∈f} tr(G_i Σ_f G_iᵀ) = tr(A_f) + tr(A_f S_f⁻¹ A_f),   A_f = G_f Σ G_fᵀ,
+/// ```
+///
+/// which is larger than the variance at a pose that was measured, by its
+/// leverage. A block whose `S_f` is not positive definite (a noise-free
+/// calibration) counts its in-sample `tr(A_f)`.
+pub(super) fn held_out_variance(
+    cal: &Calibration,
+    q: &[Vec<f64>],
+    blocks: &[Vec<usize>],
+) -> Result<f64> {
+    let sigma = cal.parameter_covariance();
+    let np = sigma.nrows();
+    let noise = cal.identifiability().noise_mm;
+    if !noise.is_finite() || q.is_empty() {
+        return Err(Error::InvalidParameter(
+            "the calibration's held-out share needs a finite noise and poses".into(),
+        ));
+    }
+    let g = jacobians(cal, q);
+    let total: f64 = blocks
+        .iter()
+        .map(|block| {
+            let gf = DMatrix::from_fn(3 * block.len(), np, |r, c| {
+                g[block[r / 3] * 3 * np + (r % 3) * np + c]
+            });
+            held_out_trace(&gf, &sigma, noise * noise)
+        })
+        .sum();
+    Ok(total / q.len() as f64)
+}
+
+/// `Σ_{i∈f} tr(G_i Σ_f G_iᵀ) = tr(A) + tr(A S⁻¹ A)` for one block's
+/// stacked Jacobian rows `gf` ([`held_out_variance`]); `tr(A)` alone when
+/// `S = s² I − A` is not positive definite.
+fn held_out_trace(gf: &DMatrix<f64>, sigma: &DMatrix<f64>, s2: f64) -> f64 {
+    let a = gf * sigma * gf.transpose();
+    let s = DMatrix::identity(a.nrows(), a.nrows()) * s2 - &a;
+    a.trace()
+        + s.cholesky()
+            .map_or(0.0, |chol| a.component_mul(&chol.solve(&a)).sum())
 }
 
 impl CalibrationDesign {
@@ -241,5 +286,31 @@ mod tests {
         let mut again = vec![0.0; cand.len()];
         d.gains(&mut again);
         assert!(again[x] < gain[x] && again[x] >= 0.0);
+    }
+
+    /// The downdate gives what the posterior refitted without the block
+    /// gives: `Σ = (I + GᵀG/s²)⁻¹`, then `(I + G₋fᵀG₋f/s²)⁻¹` directly.
+    #[test]
+    fn the_held_out_trace_is_the_posterior_without_the_block() {
+        let (rows, np, s2) = (12, 5, 0.04);
+        let g = DMatrix::from_fn(rows, np, |r, c| ((r * 7 + c * 3) as f64 * 0.37).sin());
+        let post = |m: &DMatrix<f64>| {
+            (DMatrix::identity(np, np) + m.transpose() * m / s2)
+                .try_inverse()
+                .unwrap()
+        };
+        let sigma = post(&g);
+        let block: Vec<usize> = vec![3, 4, 5, 9, 10, 11];
+        let gf = g.select_rows(&block);
+        let rest: Vec<usize> = (0..rows).filter(|r| !block.contains(r)).collect();
+        let sigma_f = post(&g.select_rows(&rest));
+        let direct = (&gf * &sigma_f * gf.transpose()).trace();
+        let downdated = held_out_trace(&gf, &sigma, s2);
+        assert!(
+            (direct - downdated).abs() < 1e-10 * direct,
+            "{direct} vs {downdated}"
+        );
+        // larger than where the block was measured
+        assert!(downdated > (&gf * &sigma * gf.transpose()).trace() * 1.01);
     }
 }

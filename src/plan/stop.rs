@@ -26,8 +26,9 @@
 //!   of the planner's IMSE: `MSE_cv`, its latent MSE at each held-out row —
 //!   the Kriging outputs' from the row's fold complement (the closed-form
 //!   `σ² / B_ii` of the same folds, less the noise) plus, when the plan
-//!   counts it, the calibration's share at the row (`tr(G Σ Gᵀ)`, Σ of the
-//!   whole campaign) — and `IMSE(m)` over the region.
+//!   counts it, the calibration's share at the row (`tr(G Σ_f Gᵀ)`, the
+//!   parameters' posterior without the row's fold, by a Woodbury downdate)
+//!   — and `IMSE(m)` over the region.
 //!
 //! The forecast
 //!
@@ -108,11 +109,16 @@ impl Forecast {
         let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         // the calibration's share is in the curve when it exceeds the
         // Kriging outputs' alone
+        let k = FORECAST_FOLDS.min(campaign.len());
+        let blocks =
+            crate::stats::fold_blocks(&crate::stats::kfold_partition(campaign.len(), k, 1)?);
         let share = match model.calibration() {
-            Some(c) if imse0 > kriging => super::calibration::mean_variance(c, &campaign.q)?,
+            Some(c) if imse0 > kriging => {
+                super::calibration::held_out_variance(c, &campaign.q, &blocks)?
+            }
             _ => 0.0,
         };
-        let held_mse = held_out_mse(model, campaign.len())? + share;
+        let held_mse = held_out_mse(model, &blocks)? + share;
         // a model with no latent variance at its rows says nothing of where
         // they are: the CV then stands for the region as it is
         let mse_cv = if held_mse > 0.0 { held_mse } else { imse0 };
@@ -192,19 +198,18 @@ fn cv_error(model: &ErrorModel, robot: &Robot, campaign: &Dataset) -> Result<(f6
     Ok((rms, if rms > 0.0 { s.mean_3d_mm / rms } else { 1.0 }))
 }
 
-/// The Kriging outputs' share of `MSE_cv`: their latent MSE at the campaign's rows, each
-/// predicted from the other folds of the forecast's CV (the closed-form
-/// `σ² / B_ii` at the model's hyperparameters, less the noise), summed over
-/// the outputs and averaged over the rows, mm².
-fn held_out_mse(model: &ErrorModel, rows: usize) -> Result<f64> {
-    let k = FORECAST_FOLDS.min(rows);
-    let blocks = crate::stats::fold_blocks(&crate::stats::kfold_partition(rows, k, 1)?);
+/// The Kriging outputs' share of `MSE_cv`: their latent MSE at the
+/// campaign's rows, each predicted from the rows outside its block of the
+/// forecast's CV (the closed-form `σ² / B_ii` at the model's
+/// hyperparameters, less the noise), summed over the outputs and averaged
+/// over the rows, mm².
+fn held_out_mse(model: &ErrorModel, blocks: &[Vec<usize>]) -> Result<f64> {
+    let rows: usize = blocks.iter().map(Vec::len).sum();
     let noise = model.noise_std();
     let mut total = 0.0;
     for (out, s) in model.outputs.iter().zip(noise) {
-        let v = out.held_out(&blocks)?.variances;
-        let mean = v.iter().map(|v| (v - s * s).max(0.0)).sum::<f64>() / rows.max(1) as f64;
-        total += mean;
+        let v = out.held_out(blocks)?.variances;
+        total += v.iter().map(|v| (v - s * s).max(0.0)).sum::<f64>() / rows.max(1) as f64;
     }
     Ok(total)
 }
