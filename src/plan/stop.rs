@@ -176,7 +176,7 @@ impl Forecast {
 /// - Up to [`FULL_REFIT_ROWS`] rows every training fold is fitted as the
 ///   model was, ξ and ν searched anew. (Not warm-started from the model's
 ///   own: a search from there stops in the basin the held-out rows helped
-///   shape, and on simulated UR10 campaigns of 60 poses that CV was 15–20 %
+///   shape, and on simulated UR10 campaigns of 60 poses that CV was 14–19 %
 ///   below the cold one.)
 /// - Above, a calibrated model's folds re-identify the calibration and
 ///   refit the Kriging outputs at the model's ξ and ν
