@@ -147,7 +147,11 @@ fn the_forecast_now_meets_the_error_on_new_poses_and_falls_with_the_plan() {
                 region: &region,
             })
             .unwrap();
-        let f = Forecast::new(&plan, &nominal, &data).unwrap();
+        let f = Forecast::new(&plan, &nominal, &data, &robokrige::cancel::Cancel::new()).unwrap();
+        // a campaign the plan's model was not fitted on is refused
+        let other = fresh.select(&(0..data.len()).collect::<Vec<_>>());
+        let cancel = robokrige::cancel::Cancel::new();
+        assert!(Forecast::new(&plan, &nominal, &other, &cancel).is_err());
         let model = plan.model.as_ref().unwrap();
         let p = model.predict_dataset(&fresh).unwrap();
         let e = fresh.errors.as_ref().unwrap();

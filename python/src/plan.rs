@@ -129,14 +129,14 @@ pub fn plan<'py>(
     let cancel = Cancel::new();
     let params = params.cancel(cancel.clone());
     let out = interrupt::run(py, &cancel, || {
-        let plan = params.check()?.plan(&PlanInputs {
+        let mut plan = params.check()?.plan(&PlanInputs {
             robot: &robot,
             campaign,
             prior,
             pool,
             region: &region,
         })?;
-        let forecast = Forecast::of_plan(&plan, &robot, campaign)?;
+        let forecast = Forecast::of_plan(&mut plan, &robot, campaign, &cancel)?;
         if let Some(path) = &output {
             plan.write(path, format, &robot)?;
         }

@@ -3,6 +3,7 @@
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
+use robokrige::cancel::Cancel;
 use robokrige::model::ErrorModel;
 use robokrige::plan::stop::Forecast;
 use robokrige::plan::{Plan, PlanInputs, PlanParams, Region, TrackerView};
@@ -105,15 +106,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
         .via_step(a.via_step)
         .seed(a.seed)
         .tracker(view);
-    let plan = params.check()?.plan(&PlanInputs {
+    let mut plan = params.check()?.plan(&PlanInputs {
         robot: &robot,
         campaign: campaign.as_ref(),
         prior: prior.as_ref(),
         pool: pool.as_ref(),
         region: &region,
     })?;
-    let forecast = Forecast::of_plan(&plan, &robot, campaign.as_ref())?;
     plan.write(&a.output, a.format, &robot)?;
+    let forecast = Forecast::of_plan(&mut plan, &robot, campaign.as_ref(), &Cancel::new())?;
     let v = report::json(&plan, forecast.as_ref());
     super::json_to(a.json.as_deref(), &v, "plan")?;
     say_part!("{}", report::text(&plan, forecast.as_ref(), a.target_mm));

@@ -24,8 +24,10 @@
 //!   region's: the CV of a planned campaign was 1.27–1.58× the error on
 //!   the pool's other poses on series B, 1.09–1.18× on series C. The model states both, in the units
 //!   of the planner's IMSE: `MSE_cv`, its latent MSE at each held-out row —
-//!   the Kriging outputs' from the row's fold complement (the closed-form
-//!   `σ² / B_ii` of the same folds, less the noise) plus, when the plan
+//!   the Kriging outputs' from the row's fold complement (the diagonal of
+//!   the closed-form `σ² B_II⁻¹` of the same folds, less the noise; it
+//!   counts the trend coefficients' uncertainty, which the IMSE leaves
+//!   out, so a model with many trend terms reads a little optimistic) plus, when the plan
 //!   counts it, the calibration's share at the row (`tr(G Σ_f Gᵀ)`, the
 //!   parameters' posterior without the row's fold, by a Woodbury downdate)
 //!   — and `IMSE(m)` over the region.
@@ -43,6 +45,7 @@
 //! `√ν²·ratio` is unreachable by more poses.
 
 use super::{HyperSource, Plan};
+use crate::cancel::Cancel;
 use crate::cv::{cross_validate_closed_form, cross_validate_refit};
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
@@ -82,7 +85,7 @@ pub struct Forecast {
 /// What the forecast says of a target.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Verdict {
-    /// Already met by the campaign measured.
+    /// Already met: the estimate over the region now is at or below it.
     Met,
     /// Met after this many more poses of the plan.
     After(usize),
@@ -96,8 +99,8 @@ impl Forecast {
     /// The forecast of `plan` for `robot`, whose hyperparameters were
     /// estimated on exactly the rows of `campaign`: its model, IMSE curve
     /// and the Kriging outputs' share of the IMSE now (the rest, if any, is
-    /// the calibration's).
-    pub fn new(plan: &Plan, robot: &Robot, campaign: &Dataset) -> Result<Self> {
+    /// the calibration's). The CV's fits stop at `cancel`.
+    pub fn new(plan: &Plan, robot: &Robot, campaign: &Dataset, cancel: &Cancel) -> Result<Self> {
         let (Some(model), Some(&imse0), Some(kriging)) =
             (&plan.model, plan.imse_curve.first(), plan.kriging_imse)
         else {
@@ -105,7 +108,14 @@ impl Forecast {
                 "a forecast needs the planner's IMSE curve (a plan by the model)".into(),
             ));
         };
-        let (rms, ratio) = cv_error(model, robot, campaign)?;
+        let fitted_on = model.outputs.first().map(|o| &o.data.x_train);
+        if fitted_on != Some(&model.input_map().encode_dataset(campaign)?) {
+            return Err(Error::InvalidParameter(format!(
+                "a forecast needs the plan's model fitted on exactly the {} rows of the campaign",
+                campaign.len()
+            )));
+        }
+        let (rms, ratio) = cv_error(model, robot, campaign, cancel)?;
         let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         // the calibration's share is in the curve when it exceeds the
         // Kriging outputs' alone
@@ -138,13 +148,27 @@ impl Forecast {
     }
 
     /// The forecast of `plan` when its hyperparameters were re-estimated on
-    /// `campaign` ([`Forecast::new`]); `None` otherwise.
-    pub fn of_plan(plan: &Plan, robot: &Robot, campaign: Option<&Dataset>) -> Result<Option<Self>> {
-        match (plan.source, campaign) {
-            (HyperSource::Campaign, Some(c)) if plan.model.is_some() => {
-                Forecast::new(plan, robot, c).map(Some)
+    /// `campaign` ([`Forecast::new`]); `None` otherwise. A forecast that
+    /// fails (a fold whose calibration cannot be identified) leaves the
+    /// plan as it is, with a note saying why there is no forecast; only an
+    /// interruption is an error.
+    pub fn of_plan(
+        plan: &mut Plan,
+        robot: &Robot,
+        campaign: Option<&Dataset>,
+        cancel: &Cancel,
+    ) -> Result<Option<Self>> {
+        let c = match (plan.source, campaign) {
+            (HyperSource::Campaign, Some(c)) if plan.model.is_some() => c,
+            _ => return Ok(None),
+        };
+        match Forecast::new(plan, robot, c, cancel) {
+            Ok(f) => Ok(Some(f)),
+            Err(e) if e.is_interrupted() => Err(e),
+            Err(e) => {
+                plan.notes.push(format!("no forecast: {e}"));
+                Ok(None)
             }
-            _ => Ok(None),
         }
     }
 
@@ -183,13 +207,23 @@ impl Forecast {
 ///   ([`ErrorModel::refit`]); a model without one is CV'd in closed form
 ///   ([`cross_validate_closed_form`]: ξ and ν held, β re-estimated per
 ///   fold).
-fn cv_error(model: &ErrorModel, robot: &Robot, campaign: &Dataset) -> Result<(f64, f64)> {
+fn cv_error(
+    model: &ErrorModel,
+    robot: &Robot,
+    campaign: &Dataset,
+    cancel: &Cancel,
+) -> Result<(f64, f64)> {
     let k = FORECAST_FOLDS.min(campaign.len());
     let s = if campaign.len() <= FULL_REFIT_ROWS {
-        let params = default_params(robot, campaign)?.check()?;
+        let params = default_params(robot, campaign)?
+            .cancel(cancel.clone())
+            .check()?;
         cross_validate_refit(campaign, k, 1, |train| params.fit(train))?
     } else if model.calibration().is_some() {
-        cross_validate_refit(campaign, k, 1, |train| model.refit(train))?
+        cross_validate_refit(campaign, k, 1, |train| {
+            cancel.check()?;
+            model.refit(train)
+        })?
     } else {
         cross_validate_closed_form(campaign, model, k, 1)?
     }
@@ -200,9 +234,9 @@ fn cv_error(model: &ErrorModel, robot: &Robot, campaign: &Dataset) -> Result<(f6
 
 /// The Kriging outputs' share of `MSE_cv`: their latent MSE at the
 /// campaign's rows, each predicted from the rows outside its block of the
-/// forecast's CV (the closed-form `σ² / B_ii` at the model's
-/// hyperparameters, less the noise), summed over the outputs and averaged
-/// over the rows, mm².
+/// forecast's CV (the diagonal of the closed-form `σ² B_II⁻¹` at the
+/// model's hyperparameters, [`crate::kriging::HeldOut::variances`], less
+/// the noise), summed over the outputs and averaged over the rows, mm².
 fn held_out_mse(model: &ErrorModel, blocks: &[Vec<usize>]) -> Result<f64> {
     let rows: usize = blocks.iter().map(Vec::len).sum();
     let noise = model.noise_std();
