@@ -147,21 +147,20 @@ fn the_forecast_now_meets_the_error_on_new_poses_and_falls_with_the_plan() {
                 region: &region,
             })
             .unwrap();
-        let f = Forecast::new(&plan, &nominal, &data, &robokrige::cancel::Cancel::new()).unwrap();
+        let cancel = robokrige::cancel::Cancel::new();
+        let f = Forecast::new(&plan, &nominal, &data, &cancel).unwrap();
         // a campaign the plan's model was not fitted on is refused
         let other = fresh.select(&(0..data.len()).collect::<Vec<_>>());
-        let cancel = robokrige::cancel::Cancel::new();
         assert!(Forecast::new(&plan, &nominal, &other, &cancel).is_err());
         let model = plan.model.as_ref().unwrap();
         let p = model.predict_dataset(&fresh).unwrap();
-        let e = fresh.errors.as_ref().unwrap();
-        let held = p
+        let residuals: Vec<[f64; 3]> = p
             .mean
             .iter()
-            .zip(e)
-            .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
-            .sum::<f64>()
-            / e.len() as f64;
+            .zip(fresh.errors.as_ref().unwrap())
+            .map(|(a, b)| std::array::from_fn(|k| b[k] - a[k]))
+            .collect();
+        let held = position_error_table(&residuals).mean_abs_mm;
         let now = f.now_mean_3d();
         eprintln!(
             "seed {seed}: forecast now {now:.4} mm (CV {:.4}, ρ {:.3}), new poses {held:.4} mm",

@@ -202,11 +202,11 @@ pub struct Plan {
     /// The region's integrated MSE (mm², summed over x, y, z) before the
     /// plan and after each chosen pose (empty for a space-filling batch).
     pub imse_curve: Vec<f64>,
-    /// The Kriging outputs' share of `imse_curve[0]` (mm²; the rest is the
-    /// calibration's share, when counted): what the stopping rule compares
-    /// with the same outputs' held-out MSE on the campaign
-    /// ([`stop::Forecast`]). `None` for a space-filling batch.
-    pub kriging_imse: Option<f64>,
+    /// Whether `imse_curve` counts the calibration's share (a calibrated
+    /// model planned with [`PlanParams::calibration_share`]) besides the
+    /// Kriging outputs': the stopping rule ([`stop::Forecast`]) then counts
+    /// it in the held-out MSE it compares the curve with.
+    pub imse_counts_calibration: bool,
     /// Candidates considered (after the tracker's line of sight).
     pub candidates: usize,
     /// Measured poses whose planned λ the order could not realise (a joint
@@ -257,12 +257,10 @@ impl ValidPlanParams {
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
         p.cancel.check()?;
-        let (chosen, imse_curve, kriging_imse) = match &model {
+        let (chosen, imse_curve, imse_counts_calibration) = match &model {
             Some(m) => {
                 let k = p.budget.min(cand.len());
-                let (chosen, curve, kriging) =
-                    choose_by_imse(m, &cand, &region, k, p.calibration_share, &p.cancel)?;
-                (chosen, curve, Some(kriging))
+                choose_by_imse(m, &cand, &region, k, p.calibration_share, &p.cancel)?
             }
             None => {
                 let k = p.budget.min(p.first_batch);
@@ -274,7 +272,7 @@ impl ValidPlanParams {
                     ));
                 }
                 let chosen = candidates::covering(&cand, &region, &measured, &ranges, k);
-                (chosen, Vec::new(), None)
+                (chosen, Vec::new(), false)
             }
         };
         if chosen.len() < p.budget && model.is_some() {
@@ -301,7 +299,7 @@ impl ValidPlanParams {
             poses,
             source,
             imse_curve,
-            kriging_imse,
+            imse_counts_calibration,
             candidates: cand.len(),
             unrealised,
             model,
@@ -456,7 +454,7 @@ fn choose_by_imse(
     k: usize,
     calibration_share: bool,
     cancel: &Cancel,
-) -> Result<(Vec<usize>, Vec<f64>, f64)> {
+) -> Result<(Vec<usize>, Vec<f64>, bool)> {
     let map = model.input_map();
     if !map.extras().is_empty() {
         return Err(Error::InvalidParameter(
@@ -478,7 +476,6 @@ fn choose_by_imse(
     let imse = |axes: &[AxisDesign], cal: &Option<CalibrationDesign>| {
         axes.iter().map(AxisDesign::imse).sum::<f64>() + cal.as_ref().map_or(0.0, |c| c.imse())
     };
-    let kriging = axes.iter().map(AxisDesign::imse).sum::<f64>();
     let mut curve = vec![imse(&axes, &cal)];
     let mut chosen = Vec::with_capacity(k);
     let mut taken = vec![false; cand.len()];
@@ -503,5 +500,5 @@ fn choose_by_imse(
         }
         curve.push(imse(&axes, &cal));
     }
-    Ok((chosen, curve, kriging))
+    Ok((chosen, curve, cal.is_some()))
 }

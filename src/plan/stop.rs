@@ -46,7 +46,7 @@
 
 use super::{HyperSource, Plan};
 use crate::cancel::Cancel;
-use crate::cv::{cross_validate_closed_form, cross_validate_refit};
+use crate::cv::{cross_validate_closed_form, cross_validate_folds};
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
 use crate::methods::default_params;
@@ -55,6 +55,9 @@ use crate::{Error, Result};
 
 /// Folds of the CV that anchors the forecast.
 pub const FORECAST_FOLDS: usize = 10;
+
+/// Seed of the forecast's fold partition.
+const FOLD_SEED: u64 = 1;
 
 /// Up to this many measured rows the forecast's CV searches ξ and ν again
 /// in every fold; above, it holds them (the cost of a fold's search grows
@@ -97,13 +100,10 @@ pub enum Verdict {
 
 impl Forecast {
     /// The forecast of `plan` for `robot`, whose hyperparameters were
-    /// estimated on exactly the rows of `campaign`: its model, IMSE curve
-    /// and the Kriging outputs' share of the IMSE now (the rest, if any, is
-    /// the calibration's). The CV's fits stop at `cancel`.
+    /// estimated on exactly the rows of `campaign`: its model and IMSE
+    /// curve. The CV's fits stop at `cancel`.
     pub fn new(plan: &Plan, robot: &Robot, campaign: &Dataset, cancel: &Cancel) -> Result<Self> {
-        let (Some(model), Some(&imse0), Some(kriging)) =
-            (&plan.model, plan.imse_curve.first(), plan.kriging_imse)
-        else {
+        let (Some(model), Some(&imse0)) = (&plan.model, plan.imse_curve.first()) else {
             return Err(Error::InvalidParameter(
                 "a forecast needs the planner's IMSE curve (a plan by the model)".into(),
             ));
@@ -115,15 +115,14 @@ impl Forecast {
                 campaign.len()
             )));
         }
-        let (rms, ratio) = cv_error(model, robot, campaign, cancel)?;
-        let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
-        // the calibration's share is in the curve when it exceeds the
-        // Kriging outputs' alone
+        // one partition for the CV and the model's held-out MSE
         let k = FORECAST_FOLDS.min(campaign.len());
-        let blocks =
-            crate::stats::fold_blocks(&crate::stats::kfold_partition(campaign.len(), k, 1)?);
+        let fold = crate::stats::kfold_partition(campaign.len(), k, FOLD_SEED)?;
+        let blocks = crate::stats::fold_blocks(&fold);
+        let (rms, ratio) = cv_error(model, robot, campaign, &fold, cancel)?;
+        let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         let share = match model.calibration() {
-            Some(c) if imse0 > kriging => {
+            Some(c) if plan.imse_counts_calibration => {
                 super::calibration::held_out_variance(c, &campaign.q, &blocks)?
             }
             _ => 0.0,
@@ -206,26 +205,29 @@ impl Forecast {
 ///   refit the Kriging outputs at the model's ξ and ν
 ///   ([`ErrorModel::refit`]); a model without one is CV'd in closed form
 ///   ([`cross_validate_closed_form`]: ξ and ν held, β re-estimated per
-///   fold).
+///   fold; the same partition, from the same seed).
+///
+/// `fold[i]` is row i's fold.
 fn cv_error(
     model: &ErrorModel,
     robot: &Robot,
     campaign: &Dataset,
+    fold: &[usize],
     cancel: &Cancel,
 ) -> Result<(f64, f64)> {
-    let k = FORECAST_FOLDS.min(campaign.len());
     let s = if campaign.len() <= FULL_REFIT_ROWS {
         let params = default_params(robot, campaign)?
             .cancel(cancel.clone())
             .check()?;
-        cross_validate_refit(campaign, k, 1, |train| params.fit(train))?
+        cross_validate_folds(campaign, fold, |train| params.fit(train))?
     } else if model.calibration().is_some() {
-        cross_validate_refit(campaign, k, 1, |train| {
+        cross_validate_folds(campaign, fold, |train| {
             cancel.check()?;
             model.refit(train)
         })?
     } else {
-        cross_validate_closed_form(campaign, model, k, 1)?
+        let k = crate::stats::fold_count(fold, campaign.len())?;
+        cross_validate_closed_form(campaign, model, k, FOLD_SEED)?
     }
     .summary;
     let rms = s.rms_mm.iter().map(|r| r * r).sum::<f64>().sqrt();
