@@ -13,7 +13,7 @@
 //! cores); `-- NAME` runs the campaigns whose name contains NAME.
 
 use robokrige::cv::kfold_partition;
-use robokrige::holdout::{CV_MODELS, HoldoutCv, holdout_cv};
+use robokrige::holdout::{CV_MODELS, HoldoutCv, HyperRows, holdout_cv};
 use robokrige::kinematics::{JointKind, Robot, load_robot};
 use robokrige::kriging::KrigingOptions;
 use robokrige::params::ErrorModelParams;
@@ -200,10 +200,24 @@ fn main() -> robokrige::Result<()> {
             .kriging(KrigingOptions::default().nugget(true));
         let random = kfold_partition(data.len(), 10, c.seed)?;
         let t_cv = std::time::Instant::now();
-        let cv = holdout_cv(&data, &c.robot, &base, &random, data.len(), &|_, _| {})?;
+        let cv = holdout_cv(
+            &data,
+            &c.robot,
+            &base,
+            &random,
+            HyperRows::First(data.len()),
+            &|_, _| {},
+        )?;
         let label = format!("random 10-fold, {:.1} s", t_cv.elapsed().as_secs_f64());
         print(&label, &cv);
-        let cv = holdout_cv(&data, &c.robot, &base, &camp.cube, data.len(), &|_, _| {})?;
+        let cv = holdout_cv(
+            &data,
+            &c.robot,
+            &base,
+            &camp.cube,
+            HyperRows::EachFold,
+            &|_, _| {},
+        )?;
         print("leave one cube out", &cv);
         println!("  ({:.0} s)", t.elapsed().as_secs_f64());
     }

@@ -1171,6 +1171,12 @@ fn command_cases() -> Vec<Case> {
             fail(&["--train 5"]),
         ),
         case(
+            "holdout_each_fold_without_folds",
+            &["holdout", &d, "--robot", "comau-nj220", "--each-fold"],
+            &[data],
+            fail(&["--each-fold", "--cv K or --groups COLUMN"]),
+        ),
+        case(
             "holdout_unknown_robot",
             &["holdout", &d, "--robot", "r2d2"],
             &[data],

@@ -7,7 +7,7 @@ mod common;
 use common::rk;
 use robokrige::cv::{cross_validate_folds, group_partition, kfold_partition};
 use robokrige::dataset::{Dataset, TextColumn};
-use robokrige::holdout::{CV_MODELS, holdout_cv};
+use robokrige::holdout::{CV_MODELS, HyperRows, holdout_cv};
 use robokrige::kinematics::{JointKind, Robot, load_robot};
 use robokrige::kriging::KrigingOptions;
 use robokrige::params::ErrorModelParams;
@@ -43,21 +43,27 @@ fn leave_one_cube_out_never_blows_up_and_flags_the_new_cube() {
     let base = ErrorModelParams::new()
         .periodic(periodic)
         .kriging(KrigingOptions::default().nugget(true).starts(4));
-    let cv = holdout_cv(&data, &robot, &base, &cube, data.len(), &|_, _| {}).unwrap();
+    // the hyperparameters chosen on each fold's training rows, as
+    // `holdout --groups` does by default
+    let cv = holdout_cv(&data, &robot, &base, &cube, HyperRows::EachFold, &|_, _| {}).unwrap();
     assert_eq!(cv.folds, 4);
+    assert_eq!(cv.hyper, HyperRows::EachFold);
     for (f, w) in cv.fold_max_mm.iter().enumerate() {
         eprintln!("group {f}: {}", w.map(|v| format!("{v:.3}")).join(" / "));
     }
     for (f, w) in cv.fold_max_mm.iter().enumerate() {
-        // every Kriging model stays within 1.5× the D-H calibration on a
-        // cube it never saw: the calibrated models (what `fit --robot`
-        // deploys), and the kinematic-trend models, whose parameter errors
-        // are one vector for the three axes, every parameter a term and the
-        // unseen directions held at 0 (measured 0.30–1.08×; with a β per
-        // axis and the first of nearly dependent parameters kept, 2.3–5.3×)
+        // no Kriging model blows up on a cube it never saw: the calibrated
+        // models (what `fit --robot` deploys), and the kinematic-trend
+        // models, whose parameter errors are one vector for the three axes,
+        // every parameter a term and the unseen directions held at 0.
+        // Measured 0.70–1.58× the D-H calibration's max with ξ chosen on
+        // the 80-odd rows of the other cubes (0.30–1.29× with ξ chosen on
+        // all rows, the held-out cube's included); with a β per axis and
+        // the first of nearly dependent parameters kept, 2.3–5.3×. The
+        // stress bench holds the full-size campaigns to 1.5×.
         for k in 1..CV_MODELS.len() {
             assert!(
-                w[k] <= 1.5 * w[0],
+                w[k] <= 1.75 * w[0],
                 "group {f}: {} max {:.3} mm against the D-H calibration's {:.3}",
                 CV_MODELS[k],
                 w[k],
@@ -71,7 +77,8 @@ fn leave_one_cube_out_never_blows_up_and_flags_the_new_cube() {
     }
     // and random folds are not: the flag is the exception there
     let random = kfold_partition(data.len(), 5, 1).unwrap();
-    let cv = holdout_cv(&data, &robot, &base, &random, data.len(), &|_, _| {}).unwrap();
+    let all = HyperRows::First(data.len());
+    let cv = holdout_cv(&data, &robot, &base, &random, all, &|_, _| {}).unwrap();
     for (name, s) in CV_MODELS.iter().zip(&cv.scores).skip(1) {
         eprintln!("{name}: {s:?}");
         // measured 0.14–0.15 on this small campaign (its 4 out-of-cube
@@ -81,6 +88,42 @@ fn leave_one_cube_out_never_blows_up_and_flags_the_new_cube() {
             assert!(c > 0.85, "{name}: {s:?}");
         }
     }
+}
+
+/// With the hyperparameters chosen per fold, a held-out cube is predicted
+/// by models that saw nothing of it: the same errors as choosing them once
+/// on the other cubes' rows, put first, and holding the cube out.
+#[test]
+fn each_fold_chooses_the_hyperparameters_without_the_held_out_group() {
+    let robot = ur10();
+    let (data, cube) = campaign(&robot, 5);
+    let base = ErrorModelParams::new()
+        .periodic(periodic_joints(&data.q))
+        .kriging(KrigingOptions::default().nugget(true).starts(2));
+    let each = holdout_cv(&data, &robot, &base, &cube, HyperRows::EachFold, &|_, _| {}).unwrap();
+    let held = 1;
+    let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| cube[i] == held);
+    let order: Vec<usize> = train.iter().chain(&test).copied().collect();
+    let reordered = data.select(&order);
+    let fold: Vec<usize> = order
+        .iter()
+        .map(|&i| usize::from(cube[i] == held))
+        .collect();
+    let first = HyperRows::First(train.len());
+    let once = holdout_cv(&reordered, &robot, &base, &fold, first, &|_, _| {}).unwrap();
+    assert_eq!(once.hyper, first);
+    for (k, name) in CV_MODELS.iter().enumerate() {
+        let (a, b) = (each.fold_max_mm[held][k], once.fold_max_mm[1][k]);
+        assert!(
+            (a - b).abs() <= 1e-9 * b.max(1.0),
+            "{name}: {a} against {b}"
+        );
+    }
+    // and the first rows need to be enough to choose them on
+    let err = holdout_cv(&data, &robot, &base, &cube, HyperRows::First(5), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("at least 10 rows"), "{err}");
 }
 
 #[test]

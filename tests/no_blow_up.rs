@@ -12,7 +12,7 @@ mod tool_down;
 
 use robokrige::cv::kfold_partition;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{CV_MODELS, holdout_cv};
+use robokrige::holdout::{CV_MODELS, HyperRows, holdout_cv};
 use robokrige::kriging::KrigingOptions;
 use robokrige::params::ErrorModelParams;
 use robokrige::sim::{PoseContext, gaussian, rng_for};
@@ -46,7 +46,15 @@ fn no_fold_of_a_wide_range_campaign_blows_up() {
     assert_eq!(periodic, vec![0, 1, 2, 3, 5]);
     let base = ErrorModelParams::new().periodic(periodic).kriging(opts);
     let fold = kfold_partition(data.len(), 10, 3).unwrap();
-    let cv = holdout_cv(&data, &robot, &base, &fold, 300, &|_, _| {}).unwrap();
+    let cv = holdout_cv(
+        &data,
+        &robot,
+        &base,
+        &fold,
+        HyperRows::First(300),
+        &|_, _| {},
+    )
+    .unwrap();
     for (f, (worst, covered)) in cv
         .fold_max_mm
         .iter()

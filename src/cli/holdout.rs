@@ -9,7 +9,7 @@ use clap::Args;
 use robokrige::Result;
 use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
-use robokrige::holdout::{SplitExtras, holdout_cv_folds, holdout_split, split_rows};
+use robokrige::holdout::{HyperRows, SplitExtras, holdout_cv_folds, holdout_split, split_rows};
 use robokrige::kinematics::Robot;
 use robokrige::methods::{Overrides, params_with};
 use robokrige::params::ErrorModelParams;
@@ -42,12 +42,18 @@ pub struct HoldoutArgs {
     /// computed with one.
     #[arg(long)]
     tool: Option<String>,
-    /// Training rows (the first ones) [default: 600]; with --cv, the first
-    /// rows the Kriging hyperparameters are chosen on [default: all rows:
-    /// on UR10 series C that lowers every Kriging row's CV error by
-    /// 0.01–0.04 mm against 600, at about 3× the time].
+    /// Training rows (the first ones) [default: 600]; with --cv or
+    /// --groups, the first rows the Kriging hyperparameters are chosen on,
+    /// once [default with --cv: all rows: on UR10 series C that lowers
+    /// every Kriging row's CV error by 0.01–0.04 mm against 600, at about
+    /// 3× the time].
     #[arg(long)]
     train: Option<usize>,
+    /// With --cv or --groups: choose the Kriging hyperparameters on each
+    /// fold's training rows (one search per fold), so that no held-out row
+    /// is seen [default with --groups].
+    #[arg(long, conflicts_with = "train")]
+    each_fold: bool,
     /// Held-out rows after the training ones (without --cv) [default: 300].
     #[arg(long)]
     test: Option<usize>,
@@ -69,13 +75,15 @@ pub struct HoldoutArgs {
     #[arg(long)]
     pca: bool,
     /// Instead: K-fold CV on all rows (D-H calibration refitted per fold;
-    /// Kriging at the ξ chosen on all rows, or the first --train rows, refitted per fold).
+    /// Kriging at the ξ chosen on all rows, the first --train rows, or with
+    /// --each-fold each fold's training rows, refitted per fold).
     /// Not with --test, --ga or --pca.
     #[arg(long, conflicts_with_all = ["test", "ga", "pca"])]
     cv: Option<usize>,
     /// Leave-one-group-out instead of random folds: one fold per value of
     /// this column (a cube, a cell, a day), as scikit-learn's
-    /// LeaveOneGroupOut.
+    /// LeaveOneGroupOut. The Kriging hyperparameters are chosen on each
+    /// fold's training rows unless --train N says once on the first N.
     #[arg(long, value_name = "COLUMN", conflicts_with_all = ["cv", "test", "ga", "pca"])]
     groups: Option<String>,
     /// Write the table (and with --cv the per-fold figures) as JSON to FILE ("-": standard output).
@@ -93,11 +101,21 @@ fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<
     Ok(base)
 }
 
+/// Where `a` asks the CV to choose the hyperparameters (`None`: the
+/// default for its folds, [`HyperRows::default_for`]).
+fn hyper_rows(a: &HoldoutArgs) -> Option<HyperRows> {
+    if a.each_fold {
+        Some(HyperRows::EachFold)
+    } else {
+        a.train.map(HyperRows::First)
+    }
+}
+
 /// K-fold CV on all rows ([`robokrige::holdout::holdout_cv_folds`]).
 fn run_cv(a: &HoldoutArgs, data: &Dataset, robot: &Robot, folds: &Folds) -> Result<()> {
     let base = base_params(a, data, None)?;
     let cv = with_bar(0, "cv", |pb| {
-        holdout_cv_folds(data, robot, &base, folds, a.train, &steps_of(pb))
+        holdout_cv_folds(data, robot, &base, folds, hyper_rows(a), &steps_of(pb))
     })?;
     say_part!("{}", report::cv(&a.data, (folds, data.len()), &base, &cv));
     super::json_to(a.json.as_deref(), &cv, "cv table")?;
@@ -109,6 +127,12 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let data = read_data(&a.data)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
+    if a.each_fold && a.cv.is_none() && a.groups.is_none() {
+        return Err(robokrige::Error::InvalidParameter(
+            "--each-fold chooses the hyperparameters per fold: it needs --cv K or --groups COLUMN"
+                .into(),
+        ));
+    }
     if a.cv.is_some() || a.groups.is_some() {
         // --groups and --cv exclude each other (clap)
         let folds = Folds::new(a.groups.as_deref(), a.cv.unwrap_or_default(), a.seed);

@@ -2,7 +2,7 @@
 //! worst folds and flagged rows.
 
 use crate::cv::Folds;
-use crate::holdout::{CV_MODELS, HoldoutCv, HoldoutRow, HoldoutSplit};
+use crate::holdout::{CV_MODELS, HoldoutCv, HoldoutRow, HoldoutSplit, HyperRows};
 use crate::kriging::OptimizerKind;
 use crate::params::ErrorModelParams;
 use crate::stats::PredictiveScores;
@@ -55,15 +55,23 @@ pub fn cv(
         Folds::Random { k, seed } => format!("{k}-fold CV (fold seed {seed})"),
         Folds::Groups(_) => super::cv::how(folds, cv.folds),
     };
+    let chosen = match cv.hyper {
+        HyperRows::First(n) => format!(
+            "on the first {n} rows ({:.1} s), refitted per fold at those values",
+            cv.hyper_seconds
+        ),
+        HyperRows::EachFold => format!(
+            "on each fold's training rows ({:.1} s in all)",
+            cv.hyper_seconds
+        ),
+    };
     format!(
-        "{data}: {how} on all {rows_all} rows; Kriging ξ{} chosen on the first {} rows ({:.1} s), refitted per fold at those values; periodic joints: {}\n{}{}{}",
+        "{data}: {how} on all {rows_all} rows; Kriging ξ{} chosen {chosen}; periodic joints: {}\n{}{}{}",
         if base.get_kriging().get_nugget() {
             " and nugget"
         } else {
             ""
         },
-        cv.hyper_rows,
-        cv.hyper_seconds,
         joint_list(base.get_periodic()),
         rows(&cv.rows),
         scores(&cv.scores),
@@ -205,7 +213,7 @@ mod tests {
             fold_max_covered_mm: vec![[1.0, 1.2, 0.5, 0.9, 0.4]],
             flagged,
             gross,
-            hyper_rows: 10,
+            hyper: HyperRows::First(10),
             hyper_seconds: 0.0,
         };
         let tail = cv_tail(&cv);
