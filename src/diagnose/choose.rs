@@ -21,7 +21,9 @@
 //!   competitors refitted ([`super::profile`]).
 
 use super::confound::{self, SAME_RESIDUAL, competitor_text, not_separable, region_overlap};
-use super::profile::{drift_columns, feature_columns, widen_coefficients, widen_rows};
+use super::profile::{
+    across_period, drift_columns, feature_columns, profile_period, widen_coefficients, widen_rows,
+};
 use super::rank::alike;
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
@@ -213,11 +215,13 @@ pub(super) fn widen_intervals(
 ) {
     let m = residuals.len();
     let rows = widen_rows(report, residuals, &competitors.columns, step_rows(m));
+    let period = profile_period(report, data, residuals, &competitors.columns);
+    let alternatives = across_period(report);
     let coefs = widen_coefficients(
         &mut report.size,
         data,
         residuals,
-        &report.add,
+        (&report.add, &alternatives),
         (&competitors.columns, competitors.calibration.as_ref()),
     );
     let mut names = competitors.names.clone();
@@ -227,7 +231,13 @@ pub(super) fn widen_intervals(
             d[0].len()
         ));
     }
-    if (rows || coefs) && !names.is_empty() {
+    if period {
+        report.add_note(format!(
+            "the period's 95 % interval from the profile of the evidence over the period (±{:.0} %)",
+            100.0 * super::profile::PERIOD_SPAN
+        ));
+    }
+    if (rows || period || coefs) && !names.is_empty() {
         report.add_note(format!(
             "95 % intervals with {} refitted alongside it",
             names.join(", ")
