@@ -2,14 +2,15 @@
 //! (the UR10 with five or six joints wider than 180°, the COMAU NJ220, and
 //! the ABB IRB 2600 from its robot file), some with home and check poses
 //! out of the cubes, cross-validated by `holdout_cv` with random 10-fold
-//! and leave-one-cube-out folds.
+//! (hyperparameters chosen once on all rows) and leave-one-cube-out folds
+//! (chosen on each fold's training cubes, as `holdout --groups` does).
 //!
 //! Per campaign and fold kind, per model: mean and max 3D error, the worst
 //! fold's max over the D-H calibration's max in that fold, the 95 %
 //! interval coverage per axis, and the flag rate and recall of gross
 //! errors.
 //!
-//! Run: `cargo bench --bench stress_campaigns` (about 10 minutes on 2
+//! Run: `cargo bench --bench stress_campaigns` (about 5 minutes on 2
 //! cores); `-- NAME` runs the campaigns whose name contains NAME.
 
 use robokrige::cv::kfold_partition;

@@ -124,7 +124,7 @@ pub enum HyperRows {
     /// has seen the held-out group may pick length scales that only its
     /// rows justify (on a simulated ABB campaign of four cubes, one cube
     /// held out, the universal-Kriging JS model's max error went from
-    /// 1.84× the D-H calibration's to 1.02×).
+    /// 1.84× the D-H calibration's to 1.03×).
     EachFold,
 }
 
@@ -211,6 +211,15 @@ pub fn holdout_cv(
             (Some(models), HyperRows::First(first.len()))
         }
         HyperRows::EachFold => {
+            for f in 0..k {
+                let n = fold.iter().filter(|&&g| g != f).count();
+                if n < 10 {
+                    return Err(Error::InvalidParameter(format!(
+                        "fold {} of {k} (numbered by first appearance) leaves {n} training rows: choosing the hyperparameters on each fold's training rows needs at least 10 (choose them once on the first rows instead, e.g. --train {m})",
+                        f + 1
+                    )));
+                }
+            }
             progress(0, "hyperparameters on each fold's training rows");
             (None, HyperRows::EachFold)
         }

@@ -44,9 +44,10 @@ pub struct HoldoutArgs {
     tool: Option<String>,
     /// Training rows (the first ones) [default: 600]; with --cv or
     /// --groups, the first rows the Kriging hyperparameters are chosen on,
-    /// once [default with --cv: all rows: on UR10 series C that lowers
-    /// every Kriging row's CV error by 0.01–0.04 mm against 600, at about
-    /// 3× the time].
+    /// once, held-out rows included [default with --cv: all rows: on UR10
+    /// series C that lowers every Kriging row's CV error by 0.01–0.04 mm
+    /// against 600, at about 3× the time; with --groups: each fold's
+    /// training rows].
     #[arg(long)]
     train: Option<usize>,
     /// With --cv or --groups: choose the Kriging hyperparameters on each

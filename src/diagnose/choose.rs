@@ -215,7 +215,12 @@ pub(super) fn widen_intervals(
 ) {
     let m = residuals.len();
     let rows = widen_rows(report, residuals, &competitors.columns, step_rows(m));
-    let period = profile_period(report, data, residuals, &competitors.columns);
+    let period = profile_period(
+        report,
+        data,
+        residuals,
+        (&competitors.columns, competitors.calibration.as_ref()),
+    );
     let alternatives = across_period(report);
     let coefs = widen_coefficients(
         &mut report.size,

@@ -136,36 +136,40 @@ pub(super) fn across_period(report: &EffectReport) -> Vec<Vec<Feature>> {
 
 /// The 95 % interval of the period of a harmonic effect (`report.add`)
 /// from the profile of the evidence over the period (module docs), with
-/// the `competitors` refitted on the CV `residuals` of `data`, joined with
-/// its own interval. Returns whether the interval changed.
+/// the `competitors` refitted on the CV `residuals` of `data` (columns of
+/// every axis, and per axis the calibration's directions, as for the
+/// coefficients), joined with its own interval. Returns whether the
+/// interval changed.
 pub(super) fn profile_period(
     report: &mut EffectReport,
     data: &Dataset,
     residuals: &[[f64; 3]],
-    competitors: &[Vec<f64>],
+    (competitors, per_axis): (&[Vec<f64>], Option<&Displacements>),
 ) -> bool {
     let Some(found) = period_of(&report.add) else {
         return false;
     };
     let m = residuals.len();
     let axes: Vec<Option<usize>> = report.add.iter().flat_map(Feature::column_axes).collect();
-    let q = orthonormal(competitors);
+    let basis = competitor_basis(competitors, per_axis);
+    let q = [&basis[0][..], &basis[1][..], &basis[2][..]];
     let ys: Vec<Vec<f64>> = (0..3)
-        .map(|a| residualise(&residuals.iter().map(|r| r[a]).collect::<Vec<_>>(), &q))
+        .map(|a| residualise(&residuals.iter().map(|r| r[a]).collect::<Vec<_>>(), q[a]))
         .collect();
-    // the fitted sum of squares per axis, and the columns on that axis, at period p
+    // the fitted sum of squares per axis, and the columns fitted on that
+    // axis, at period p
     let fitted = |p: f64| -> Option<([f64; 3], [usize; 3])> {
         let cols = feature_columns(data, &at_period(&report.add, p));
         if cols.len() != axes.len() || cols.is_empty() {
             return None;
         }
-        let (beta, _) = least_squares(&cols, &axes, &ys, [&q[..], &q[..], &q[..]])?;
+        let (beta, _) = least_squares(&cols, &axes, &ys, q)?;
         let mut ss = [0.0; 3];
         let mut k = [0usize; 3];
         for (a, y) in ys.iter().enumerate() {
             for (i, c) in cols.iter().enumerate() {
-                if axes[i].is_none_or(|b| b == a) {
-                    let xr = residualise(c, &q);
+                if axes[i].is_none_or(|b| b == a) && beta[i][a] != 0.0 {
+                    let xr = residualise(c, q[a]);
                     ss[a] += beta[i][a] * xr.iter().zip(y).map(|(u, v)| u * v).sum::<f64>();
                     k[a] += 1;
                 }
@@ -188,13 +192,21 @@ pub(super) fn profile_period(
     };
     let s2: [f64; 3] = std::array::from_fn(|a| {
         let base: f64 = ys[a].iter().map(|v| v * v).sum();
-        let dof = (m as f64 - q.len() as f64 - k[a] as f64 - 1.0).max(1.0);
+        let dof = (m as f64 - q[a].len() as f64 - k[a] as f64 - 1.0).max(1.0);
         ((base - best[a]) / dof).max(f64::MIN_POSITIVE)
     });
+    // the deviance from its own minimum (the unweighted best is not
+    // always the weighted one)
+    let deviance: Vec<f64> = profile
+        .iter()
+        .map(|(_, ss, _)| (0..3).map(|a| (best[a] - ss[a]) / s2[a]).sum::<f64>())
+        .collect();
+    let least = deviance.iter().copied().fold(f64::INFINITY, f64::min);
     let within: Vec<f64> = profile
         .iter()
-        .filter(|(_, ss, _)| (0..3).map(|a| (best[a] - ss[a]) / s2[a]).sum::<f64>() <= CHI2_1_95)
-        .map(|(p, _, _)| *p)
+        .zip(&deviance)
+        .filter(|(_, d)| **d - least <= CHI2_1_95)
+        .map(|((p, _, _), _)| *p)
         .collect();
     let (Some(&p_lo), Some(&p_hi)) = (
         within.iter().min_by(|a, b| a.total_cmp(b)),
@@ -202,6 +214,13 @@ pub(super) fn profile_period(
     ) else {
         return false;
     };
+    let ends = (profile.first().map(|x| x.0), profile.get(steps - 1).map(|x| x.0));
+    if ends.0 == Some(p_lo) || ends.1 == Some(p_hi) {
+        report.add_note(format!(
+            "the period's profile is within its 95 % threshold at ±{:.0} % of the period found: its interval may be wider",
+            100.0 * PERIOD_SPAN
+        ));
+    }
     let ci = report
         .params_ci
         .entry("period_deg".to_string())
@@ -210,6 +229,21 @@ pub(super) fn profile_period(
     let changed = new != *ci;
     *ci = new;
     changed
+}
+
+/// Per axis, an orthonormal basis of the `competitors` (every axis) and of
+/// that axis's rows of the calibration's directions (`per_axis`).
+fn competitor_basis(
+    competitors: &[Vec<f64>],
+    per_axis: Option<&Displacements>,
+) -> [Vec<Vec<f64>>; 3] {
+    std::array::from_fn(|a| {
+        let mut c: Vec<&[f64]> = competitors.iter().map(Vec::as_slice).collect();
+        if let Some(p) = per_axis {
+            c.extend(p[a].iter().map(Vec::as_slice));
+        }
+        orthonormal(&c)
+    })
 }
 
 /// `v` centred and with its projection on `q` (orthonormal, centred) taken off.
@@ -289,10 +323,18 @@ pub(super) fn profile_rows(
         .max_by(|x, y| x.1.iter().sum::<f64>().total_cmp(&y.1.iter().sum::<f64>()))?;
     let dof = (m as f64 - q.len() as f64 - 2.0).max(1.0);
     let s2: [f64; 3] = std::array::from_fn(|a| ((base[a] - best[a]) / dof).max(f64::MIN_POSITIVE));
+    // the deviance from its own minimum (the unweighted best is not
+    // always the weighted one)
+    let deviance: Vec<f64> = gains
+        .iter()
+        .map(|(_, g)| (0..3).map(|a| (best[a] - g[a]) / s2[a]).sum::<f64>())
+        .collect();
+    let least = deviance.iter().copied().fold(f64::INFINITY, f64::min);
     let within: Vec<usize> = gains
         .iter()
-        .filter(|(_, g)| (0..3).map(|a| (best[a] - g[a]) / s2[a]).sum::<f64>() <= CHANGE_95)
-        .map(|(t, _)| *t)
+        .zip(&deviance)
+        .filter(|(_, d)| **d - least <= CHANGE_95)
+        .map(|((t, _), _)| *t)
         .collect();
     Some([*within.first()?, *within.last()?])
 }
@@ -347,7 +389,9 @@ pub(super) fn widen_rows(
 /// `q[a]`-residualised `x` columns that are regressors of axis `a`
 /// (`axes[i]` `None` or `Some(a)`, [`Feature::column_axes`]), and the
 /// diagonal of `(XᵀX)⁻¹` of each axis's fit (by solves); a column off an
-/// axis has 0 there. `None` when an axis's fit is singular.
+/// axis, or nothing once residualised (a joint that cannot move that axis:
+/// q1's harmonic through the Jacobian on z), has 0 there. `None` when an
+/// axis's fit is singular.
 #[allow(clippy::type_complexity)]
 fn least_squares(
     x: &[Vec<f64>],
@@ -359,14 +403,20 @@ fn least_squares(
     let mut beta = vec![[0.0; 3]; x.len()];
     let mut diag = vec![[0.0; 3]; x.len()];
     for (a, y) in ys.iter().enumerate() {
-        let on: Vec<usize> = (0..x.len())
-            .filter(|&i| axes[i].is_none_or(|b| b == a))
-            .collect();
+        let mut on = Vec::new();
+        let mut xr: Vec<Vec<f64>> = Vec::new();
+        for i in (0..x.len()).filter(|&i| axes[i].is_none_or(|b| b == a)) {
+            let scale: f64 = x[i].iter().map(|v| v * v).sum();
+            let r = residualise(&x[i], q[a]);
+            if dot(&r, &r) > 1e-20 * scale.max(f64::MIN_POSITIVE) {
+                on.push(i);
+                xr.push(r);
+            }
+        }
         let k = on.len();
         if k == 0 {
             continue;
         }
-        let xr: Vec<Vec<f64>> = on.iter().map(|&i| residualise(&x[i], q[a])).collect();
         let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[i], &xr[j]));
         let chol = g.cholesky()?;
         let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[i], y)));
@@ -404,15 +454,7 @@ pub(super) fn widen_coefficients(
     let ys: Vec<Vec<f64>> = (0..3)
         .map(|a| residuals.iter().map(|r| r[a]).collect())
         .collect();
-    let basis: Vec<Vec<Vec<f64>>> = (0..3)
-        .map(|a| {
-            let mut c: Vec<&[f64]> = competitors.iter().map(Vec::as_slice).collect();
-            if let Some(p) = per_axis {
-                c.extend(p[a].iter().map(Vec::as_slice));
-            }
-            orthonormal(&c)
-        })
-        .collect();
+    let basis = competitor_basis(competitors, per_axis);
     let none: &[Vec<f64>] = &[];
     let q = [&basis[0][..], &basis[1][..], &basis[2][..]];
     let (Some((alone, v0)), Some(with)) = (
@@ -490,6 +532,25 @@ mod tests {
         (data, res, report, [a0, b0])
     }
 
+    /// A column that is nothing on an axis (q1's harmonic through the
+    /// Jacobian on z) is left out of that axis's fit, not a singular one.
+    #[test]
+    fn a_column_that_is_nothing_on_an_axis_is_left_out_there() {
+        let m = 50;
+        let x: Vec<f64> = (0..m).map(|i| ((i * 13) % 17) as f64).collect();
+        let y: Vec<f64> = (0..m).map(|i| ((i * 7) % 11) as f64).collect();
+        let ys: Vec<Vec<f64>> = (0..3)
+            .map(|a| x.iter().zip(&y).map(|(u, v)| u * (a + 1) as f64 + 0.1 * v).collect())
+            .collect();
+        // one column per axis, z's all zero
+        let cols = vec![x.clone(), x.clone(), vec![0.0; m]];
+        let axes = [Some(0), Some(1), Some(2)];
+        let none: &[Vec<f64>] = &[];
+        let (beta, diag) = least_squares(&cols, &axes, &ys, [none; 3]).unwrap();
+        assert!((beta[0][0] - 1.0).abs() < 0.05 && (beta[1][1] - 2.0).abs() < 0.05);
+        assert_eq!((beta[2][2], diag[2][2]), (0.0, 0.0));
+    }
+
     /// A harmonic found a little off its period, with a support interval
     /// that misses the true one: the profile over the period covers it,
     /// and stays within a few per cent.
@@ -498,7 +559,8 @@ mod tests {
         let p0 = 13.7;
         let found = p0 * 1.02;
         let (data, res, mut report, _) = harmonic_case(p0, found, [found * 0.999, found * 1.001]);
-        assert!(profile_period(&mut report, &data, &res, &drift_columns(data.len())));
+        let drift = drift_columns(data.len());
+        assert!(profile_period(&mut report, &data, &res, (&drift, None)));
         let [lo, hi] = report.params_ci["period_deg"];
         assert!(lo <= p0 && p0 <= hi, "[{lo}, {hi}]");
         assert!(hi / lo < 1.1, "[{lo}, {hi}]");
@@ -506,7 +568,7 @@ mod tests {
         let mut step = report.clone();
         step.add = vec![Feature::Step { row: 10 }];
         step.params_ci.clear();
-        assert!(!profile_period(&mut step, &data, &res, &[]));
+        assert!(!profile_period(&mut step, &data, &res, (&[], None)));
         assert!(step.params_ci.is_empty());
     }
 

@@ -57,11 +57,16 @@ pub fn cv(
     };
     let chosen = match cv.hyper {
         HyperRows::First(n) => format!(
-            "on the first {n} rows ({:.1} s), refitted per fold at those values",
+            "once on the first {n} rows{} ({:.1} s), refitted per fold at those values",
+            if matches!(folds, Folds::Groups(_)) {
+                ", held-out groups included"
+            } else {
+                ""
+            },
             cv.hyper_seconds
         ),
         HyperRows::EachFold => format!(
-            "on each fold's training rows ({:.1} s in all)",
+            "on each fold's training rows ({:.1} s of searches, summed over folds run side by side)",
             cv.hyper_seconds
         ),
     };
