@@ -125,6 +125,22 @@ fn each_fold_chooses_the_hyperparameters_without_the_held_out_group() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("at least 10 rows"), "{err}");
+    // as does every fold's training rows: a group of all rows but 6
+    let lopsided: Vec<usize> = (0..data.len()).map(|i| usize::from(i >= 6)).collect();
+    let err = holdout_cv(
+        &data,
+        &robot,
+        &base,
+        &lopsided,
+        HyperRows::EachFold,
+        &|_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("fold 2 of 2") && err.contains("leaves 6 training rows"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -38,8 +38,8 @@
 //!   the scan's own support interval. The period is a regular parameter
 //!   near its optimum; the hull also takes in side lobes within the
 //!   threshold. The scan's grid and support interval alone were too
-//!   narrow: on planted real campaigns (UR10 series C) three of nine
-//!   harmonics found 0.3–2 % off their period were outside them.
+//!   narrow: on planted real campaigns (UR10 series C) four of nine
+//!   harmonics found 0.3–2.2 % off their period were outside them.
 //! - **Coefficients of a harmonic** ([`across_period`]): they are
 //!   conditional on the period found, and a period a little off turns the
 //!   phase over the joint's range, and the sin and cos coefficients with
@@ -104,8 +104,8 @@ fn at_period(add: &[Feature], p: f64) -> Vec<Feature> {
     add.iter()
         .map(|f| {
             let mut f = f.clone();
-            if let Feature::Harmonic { period_deg, .. } | Feature::HarmonicJacobian { period_deg, .. } =
-                &mut f
+            if let Feature::Harmonic { period_deg, .. }
+            | Feature::HarmonicJacobian { period_deg, .. } = &mut f
             {
                 *period_deg = p;
             }
@@ -214,7 +214,10 @@ pub(super) fn profile_period(
     ) else {
         return false;
     };
-    let ends = (profile.first().map(|x| x.0), profile.get(steps - 1).map(|x| x.0));
+    let ends = (
+        profile.first().map(|x| x.0),
+        profile.get(steps - 1).map(|x| x.0),
+    );
     if ends.0 == Some(p_lo) || ends.1 == Some(p_hi) {
         report.add_note(format!(
             "the period's profile is within its 95 % threshold at ±{:.0} % of the period found: its interval may be wider",
@@ -540,7 +543,12 @@ mod tests {
         let x: Vec<f64> = (0..m).map(|i| ((i * 13) % 17) as f64).collect();
         let y: Vec<f64> = (0..m).map(|i| ((i * 7) % 11) as f64).collect();
         let ys: Vec<Vec<f64>> = (0..3)
-            .map(|a| x.iter().zip(&y).map(|(u, v)| u * (a + 1) as f64 + 0.1 * v).collect())
+            .map(|a| {
+                x.iter()
+                    .zip(&y)
+                    .map(|(u, v)| u * (a + 1) as f64 + 0.1 * v)
+                    .collect()
+            })
             .collect();
         // one column per axis, z's all zero
         let cols = vec![x.clone(), x.clone(), vec![0.0; m]];
