@@ -195,19 +195,8 @@ pub(super) fn profile_period(
         let dof = (m as f64 - q[a].len() as f64 - k[a] as f64 - 1.0).max(1.0);
         ((base - best[a]) / dof).max(f64::MIN_POSITIVE)
     });
-    // the deviance from its own minimum (the unweighted best is not
-    // always the weighted one)
-    let deviance: Vec<f64> = profile
-        .iter()
-        .map(|(_, ss, _)| (0..3).map(|a| (best[a] - ss[a]) / s2[a]).sum::<f64>())
-        .collect();
-    let least = deviance.iter().copied().fold(f64::INFINITY, f64::min);
-    let within: Vec<f64> = profile
-        .iter()
-        .zip(&deviance)
-        .filter(|(_, d)| **d - least <= CHI2_1_95)
-        .map(|((p, _, _), _)| *p)
-        .collect();
+    let fits: Vec<(f64, [f64; 3])> = profile.iter().map(|(p, ss, _)| (*p, *ss)).collect();
+    let within = within_deviance(&fits, best, &s2, CHI2_1_95);
     let (Some(&p_lo), Some(&p_hi)) = (
         within.iter().min_by(|a, b| a.total_cmp(b)),
         within.iter().max_by(|a, b| a.total_cmp(b)),
@@ -232,6 +221,28 @@ pub(super) fn profile_period(
     let changed = new != *ci;
     *ci = new;
     changed
+}
+
+/// The points of a profile (each with its fitted sum of squares per axis)
+/// whose deviance `Σ_a (best_a − fit_a)/σ²_a`, counted from its own
+/// minimum (the largest unweighted fit `best` need not be the largest
+/// weighted one), is within `threshold`.
+fn within_deviance<T: Copy>(
+    fits: &[(T, [f64; 3])],
+    best: &[f64; 3],
+    s2: &[f64; 3],
+    threshold: f64,
+) -> Vec<T> {
+    let deviance: Vec<f64> = fits
+        .iter()
+        .map(|(_, f)| (0..3).map(|a| (best[a] - f[a]) / s2[a]).sum::<f64>())
+        .collect();
+    let least = deviance.iter().copied().fold(f64::INFINITY, f64::min);
+    fits.iter()
+        .zip(&deviance)
+        .filter(|(_, d)| **d - least <= threshold)
+        .map(|((t, _), _)| *t)
+        .collect()
 }
 
 /// Per axis, an orthonormal basis of the `competitors` (every axis) and of
@@ -326,19 +337,7 @@ pub(super) fn profile_rows(
         .max_by(|x, y| x.1.iter().sum::<f64>().total_cmp(&y.1.iter().sum::<f64>()))?;
     let dof = (m as f64 - q.len() as f64 - 2.0).max(1.0);
     let s2: [f64; 3] = std::array::from_fn(|a| ((base[a] - best[a]) / dof).max(f64::MIN_POSITIVE));
-    // the deviance from its own minimum (the unweighted best is not
-    // always the weighted one)
-    let deviance: Vec<f64> = gains
-        .iter()
-        .map(|(_, g)| (0..3).map(|a| (best[a] - g[a]) / s2[a]).sum::<f64>())
-        .collect();
-    let least = deviance.iter().copied().fold(f64::INFINITY, f64::min);
-    let within: Vec<usize> = gains
-        .iter()
-        .zip(&deviance)
-        .filter(|(_, d)| **d - least <= CHANGE_95)
-        .map(|((t, _), _)| *t)
-        .collect();
+    let within = within_deviance(&gains, best, &s2, CHANGE_95);
     Some([*within.first()?, *within.last()?])
 }
 
