@@ -6,7 +6,8 @@
 //! family by CV), each output's wall time, evaluations and families tried.
 //!
 //! Run: `cargo bench --bench xi_choice` (about half a minute on 2 cores);
-//! `-- --csv FILE` writes the campaign as a measurement CSV instead (for
+//! `-- --csv FILE` writes the campaign as a measurement CSV instead, with
+//! a `cube` column for `holdout --groups cube` (for
 //! `robokrige holdout FILE --robot ur10 --tool=-0.14,0.30,92.82 --cv 10`).
 
 use robokrige::calibration::{CalibrationOptions, calibrate};
@@ -28,9 +29,19 @@ fn main() -> robokrige::Result<()> {
         .collect();
     let camp = iso_cubes(&robot, &spec, 2)?;
     let truth = TrueRobot::draw(&robot, &ErrorProfile::for_robot(&robot), 2);
-    let data = measure_cubes(&truth, camp.q.clone(), 2)?;
+    let mut data = measure_cubes(&truth, camp.q.clone(), 2)?;
     let args: Vec<String> = std::env::args().collect();
     if let Some(i) = args.iter().position(|a| a == "--csv") {
+        // the cube of each pose, for `holdout --groups cube`
+        data.text.push(robokrige::dataset::TextColumn {
+            name: "cube".into(),
+            values: camp
+                .cube
+                .iter()
+                .map(|c| format!("cube-{}", c + 1))
+                .collect(),
+            note: None,
+        });
         let path = args.get(i + 1).expect("--csv FILE");
         robokrige::dataset::write_csv(std::path::Path::new(path), &data)?;
         println!("{} poses written to {path}", data.len());

@@ -158,7 +158,14 @@ pub fn cv_tail(cv: &HoldoutCv) -> String {
         .enumerate()
         .skip(1)
     {
-        if !rows.is_empty() {
+        let all = cv.scores.get(k).is_some_and(|sc| sc.flag_rate >= 1.0);
+        if all {
+            let _ = writeln!(
+                s,
+                "{name}: all {} held-out rows flagged as outside the model's coverage",
+                rows.len()
+            );
+        } else if !rows.is_empty() {
             let _ = writeln!(
                 s,
                 "{name}: {} held-out row(s) flagged as outside the model's coverage (max {worst:.4} mm over the others)",
@@ -226,5 +233,31 @@ mod tests {
         assert_eq!(missed.len(), 1, "{tail}");
         assert!(missed[0].starts_with(CV_MODELS[2]), "{tail}");
         assert!(missed[0].ends_with("data row(s) 8"), "{tail}");
+        assert!(tail.contains("2 held-out row(s) flagged"), "{tail}");
+        // a model that flagged every held-out row (a held-out group) says
+        // so, with no "max over the others"
+        let score = |flag_rate: f64| PredictiveScores {
+            coverage_95: [0.95; 3],
+            nlpd: 0.0,
+            flag_rate,
+            flag_recall: None,
+            gross_rows: 0,
+        };
+        let all = HoldoutCv {
+            scores: vec![score(0.0), score(0.5), score(1.0), score(0.5), score(0.0)],
+            ..cv
+        };
+        let tail = cv_tail(&all);
+        let line = tail
+            .lines()
+            .find(|l| l.starts_with(CV_MODELS[2]) && l.contains("flagged as outside"))
+            .unwrap();
+        assert_eq!(
+            line,
+            format!(
+                "{}: all 2 held-out rows flagged as outside the model's coverage",
+                CV_MODELS[2]
+            )
+        );
     }
 }
