@@ -163,24 +163,16 @@ pub(super) fn profile_period(
         if cols.len() != axes.len() || cols.is_empty() {
             return None;
         }
-        let (beta, _) = least_squares(&cols, &axes, &ys, q)?;
-        let mut ss = [0.0; 3];
-        let mut k = [0usize; 3];
-        for (a, y) in ys.iter().enumerate() {
-            for (i, c) in cols.iter().enumerate() {
-                if axes[i].is_none_or(|b| b == a) && beta[i][a] != 0.0 {
-                    let xr = residualise(c, q[a]);
-                    ss[a] += beta[i][a] * xr.iter().zip(y).map(|(u, v)| u * v).sum::<f64>();
-                    k[a] += 1;
-                }
-            }
-        }
-        Some((ss, k))
+        least_squares(&cols, &axes, &ys, q).map(|f| (f.fitted, f.columns))
     };
     let steps = PERIOD_STEPS.max(3);
     let (lo, hi) = ((1.0 - PERIOD_SPAN).ln(), (1.0 + PERIOD_SPAN).ln());
-    let profile: Vec<(f64, [f64; 3], [usize; 3])> = (0..steps)
+    let grid: Vec<f64> = (0..steps)
         .map(|i| found * (lo + (hi - lo) * i as f64 / (steps - 1) as f64).exp())
+        .collect();
+    let profile: Vec<(f64, [f64; 3], [usize; 3])> = grid
+        .iter()
+        .copied()
         .chain(std::iter::once(found))
         .filter_map(|p| fitted(p).map(|(ss, k)| (p, ss, k)))
         .collect();
@@ -203,11 +195,7 @@ pub(super) fn profile_period(
     ) else {
         return false;
     };
-    let ends = (
-        profile.first().map(|x| x.0),
-        profile.get(steps - 1).map(|x| x.0),
-    );
-    if ends.0 == Some(p_lo) || ends.1 == Some(p_hi) {
+    if p_lo <= grid[0] || p_hi >= grid[steps - 1] {
         report.add_note(format!(
             "the period's profile is within its 95 % threshold at ±{:.0} % of the period found: its interval may be wider",
             100.0 * PERIOD_SPAN
@@ -394,16 +382,16 @@ pub(super) fn widen_rows(
 /// axis, or nothing once residualised (a joint that cannot move that axis:
 /// q1's harmonic through the Jacobian on z), has 0 there. `None` when an
 /// axis's fit is singular.
-#[allow(clippy::type_complexity)]
 fn least_squares(
     x: &[Vec<f64>],
     axes: &[Option<usize>],
     ys: &[Vec<f64>],
     q: [&[Vec<f64>]; 3],
-) -> Option<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+) -> Option<Fit> {
     let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
     let mut beta = vec![[0.0; 3]; x.len()];
     let mut diag = vec![[0.0; 3]; x.len()];
+    let (mut fitted, mut columns) = ([0.0; 3], [0usize; 3]);
     for (a, y) in ys.iter().enumerate() {
         let mut on = Vec::new();
         let mut xr: Vec<Vec<f64>> = Vec::new();
@@ -421,14 +409,32 @@ fn least_squares(
         }
         let g = DMatrix::from_fn(k, k, |i, j| dot(&xr[i], &xr[j]));
         let chol = g.cholesky()?;
-        let b = chol.solve(&DVector::from_fn(k, |i, _| dot(&xr[i], y)));
+        let rhs = DVector::from_fn(k, |i, _| dot(&xr[i], y));
+        let b = chol.solve(&rhs);
         for (r, &i) in on.iter().enumerate() {
             beta[i][a] = b[r];
             let unit = DVector::from_fn(k, |j, _| if j == r { 1.0 } else { 0.0 });
             diag[i][a] = chol.solve(&unit)[r];
+            fitted[a] += b[r] * rhs[r];
         }
+        columns[a] = k;
     }
-    Some((beta, diag))
+    Some(Fit {
+        beta,
+        diag,
+        fitted,
+        columns,
+    })
+}
+
+/// A [`least_squares`] fit: per column and axis the coefficient and the
+/// diagonal of `(XᵀX)⁻¹`, and per axis the fitted sum of squares
+/// `bᵀXᵀy` and the columns fitted.
+struct Fit {
+    beta: Vec<[f64; 3]>,
+    diag: Vec<[f64; 3]>,
+    fitted: [f64; 3],
+    columns: [usize; 3],
 }
 
 /// Widen the coefficient intervals `size` of an effect that adds `add`
@@ -459,7 +465,7 @@ pub(super) fn widen_coefficients(
     let basis = competitor_basis(competitors, per_axis);
     let none: &[Vec<f64>] = &[];
     let q = [&basis[0][..], &basis[1][..], &basis[2][..]];
-    let (Some((alone, v0)), Some(with)) = (
+    let (Some(alone), Some(with)) = (
         least_squares(&cols, &axes, &ys, [none; 3]),
         least_squares(&cols, &axes, &ys, q),
     ) else {
@@ -483,9 +489,9 @@ pub(super) fn widen_coefficients(
         };
         for a in (0..3).filter(|&a| axes[i].is_none_or(|b| b == a)) {
             let h = c.ci95[a];
-            let wide = fits.iter().fold(h, |w, (with, v1)| {
-                let inflation = (v1[i][a] / v0[i][a]).max(1.0).sqrt();
-                let delta = (with[i][a] - alone[i][a]).abs();
+            let wide = fits.iter().fold(h, |w, with| {
+                let inflation = (with.diag[i][a] / alone.diag[i][a]).max(1.0).sqrt();
+                let delta = (with.beta[i][a] - alone.beta[i][a]).abs();
                 w.max(delta + h * inflation)
             });
             widened |= wide > h;
@@ -553,9 +559,11 @@ mod tests {
         let cols = vec![x.clone(), x.clone(), vec![0.0; m]];
         let axes = [Some(0), Some(1), Some(2)];
         let none: &[Vec<f64>] = &[];
-        let (beta, diag) = least_squares(&cols, &axes, &ys, [none; 3]).unwrap();
+        let fit = least_squares(&cols, &axes, &ys, [none; 3]).unwrap();
+        let (beta, diag) = (&fit.beta, &fit.diag);
         assert!((beta[0][0] - 1.0).abs() < 0.05 && (beta[1][1] - 2.0).abs() < 0.05);
         assert_eq!((beta[2][2], diag[2][2]), (0.0, 0.0));
+        assert_eq!(fit.columns, [1, 1, 0]);
     }
 
     /// A harmonic found a little off its period, with a support interval
@@ -594,7 +602,8 @@ mod tests {
         let cols = feature_columns(&data, &add);
         let ys: Vec<Vec<f64>> = (0..3).map(|a| res.iter().map(|r| r[a]).collect()).collect();
         let none: &[Vec<f64>] = &[];
-        let (b, v) = least_squares(&cols, &[None, None], &ys, [none; 3]).unwrap();
+        let fit = least_squares(&cols, &[None, None], &ys, [none; 3]).unwrap();
+        let (b, v) = (&fit.beta, &fit.diag);
         let names: Vec<String> = add.iter().flat_map(Feature::names).collect();
         let size = |k: usize| Coefficient {
             column: names[k].clone(),
