@@ -46,9 +46,10 @@
 
 use super::{HyperSource, Plan};
 use crate::cancel::Cancel;
-use crate::cv::{cross_validate_closed_form, cross_validate_folds};
+use crate::cv::cross_validate_folds;
 use crate::dataset::Dataset;
 use crate::kinematics::Robot;
+use crate::kriging::HeldOut;
 use crate::methods::default_params;
 use crate::model::ErrorModel;
 use crate::{Error, Result};
@@ -119,7 +120,14 @@ impl Forecast {
         let k = FORECAST_FOLDS.min(campaign.len());
         let fold = crate::stats::kfold_partition(campaign.len(), k, FOLD_SEED)?;
         let blocks = crate::stats::fold_blocks(&fold);
-        let (rms, ratio) = cv_error(model, robot, campaign, &fold, cancel)?;
+        // each output's closed-form held-out residuals and variances on
+        // those folds, once: the MSE below, and the closed-form CV
+        let held: Vec<HeldOut> = model
+            .outputs
+            .iter()
+            .map(|o| o.held_out(&blocks))
+            .collect::<Result<_>>()?;
+        let (rms, ratio) = cv_error(model, robot, campaign, (&fold, &held), cancel)?;
         let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         let share = match model.calibration() {
             Some(c) if plan.imse_counts_calibration => {
@@ -127,7 +135,7 @@ impl Forecast {
             }
             _ => 0.0,
         };
-        let held_mse = held_out_mse(model, &blocks)? + share;
+        let held_mse = held_out_mse(model, &held) + share;
         // a model with no latent variance at its rows says nothing of where
         // they are: the CV then stands for the region as it is
         let mse_cv = if held_mse > 0.0 { held_mse } else { imse0 };
@@ -203,49 +211,92 @@ impl Forecast {
 ///   below the cold one.)
 /// - Above, a calibrated model's folds re-identify the calibration and
 ///   refit the Kriging outputs at the model's ξ and ν
-///   ([`ErrorModel::refit`]); a model without one is CV'd in closed form
-///   ([`cross_validate_closed_form`]: ξ and ν held, β re-estimated per
-///   fold; the same partition, from the same seed).
+///   ([`ErrorModel::refit`]); a model without one is CV'd in closed form:
+///   the outputs' `held` residuals on the same folds (ξ and ν held, β
+///   re-estimated per fold, as [`crate::cv::cross_validate_closed_form`]).
 ///
-/// `fold[i]` is row i's fold.
+/// `fold[i]` is row i's fold; `held[a]` output a's held-out residuals and
+/// variances on those folds.
 fn cv_error(
     model: &ErrorModel,
     robot: &Robot,
     campaign: &Dataset,
-    fold: &[usize],
+    (fold, held): (&[usize], &[HeldOut]),
     cancel: &Cancel,
 ) -> Result<(f64, f64)> {
     let s = if campaign.len() <= FULL_REFIT_ROWS {
         let params = default_params(robot, campaign)?
             .cancel(cancel.clone())
             .check()?;
-        cross_validate_folds(campaign, fold, |train| params.fit(train))?
+        cross_validate_folds(campaign, fold, |train| params.fit(train))?.summary
     } else if model.calibration().is_some() {
         cross_validate_folds(campaign, fold, |train| {
             cancel.check()?;
             model.refit(train)
         })?
+        .summary
     } else {
-        let k = crate::stats::fold_count(fold, campaign.len())?;
-        cross_validate_closed_form(campaign, model, k, FOLD_SEED)?
-    }
-    .summary;
+        let residuals: Vec<[f64; 3]> = (0..campaign.len())
+            .map(|i| std::array::from_fn(|a| held.get(a).map_or(0.0, |h| h.residuals[i])))
+            .collect();
+        crate::stats::summarize(&residuals)
+    };
     let rms = s.rms_mm.iter().map(|r| r * r).sum::<f64>().sqrt();
     Ok((rms, if rms > 0.0 { s.mean_3d_mm / rms } else { 1.0 }))
 }
 
 /// The Kriging outputs' share of `MSE_cv`: their latent MSE at the
 /// campaign's rows, each predicted from the rows outside its block of the
-/// forecast's CV (the diagonal of the closed-form `σ² B_II⁻¹` at the
-/// model's hyperparameters, [`crate::kriging::HeldOut::variances`], less
-/// the noise), summed over the outputs and averaged over the rows, mm².
-fn held_out_mse(model: &ErrorModel, blocks: &[Vec<usize>]) -> Result<f64> {
-    let rows: usize = blocks.iter().map(Vec::len).sum();
-    let noise = model.noise_std();
-    let mut total = 0.0;
-    for (out, s) in model.outputs.iter().zip(noise) {
-        let v = out.held_out(blocks)?.variances;
-        total += v.iter().map(|v| (v - s * s).max(0.0)).sum::<f64>() / rows.max(1) as f64;
+/// forecast's CV (`held`: the diagonal of the closed-form `σ² B_II⁻¹` at
+/// the model's hyperparameters, [`HeldOut::variances`], less the noise),
+/// summed over the outputs and averaged over the rows, mm².
+fn held_out_mse(model: &ErrorModel, held: &[HeldOut]) -> f64 {
+    held.iter()
+        .zip(model.noise_std())
+        .map(|(h, s)| {
+            let v = &h.variances;
+            v.iter().map(|v| (v - s * s).max(0.0)).sum::<f64>() / v.len().max(1) as f64
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cv::cross_validate_closed_form;
+    use crate::params::ErrorModelParams;
+
+    /// Above [`FULL_REFIT_ROWS`] a model without a calibration is CV'd from
+    /// the held-out residuals the forecast computes anyway: the same
+    /// figures as the closed-form CV on the same partition.
+    #[test]
+    fn the_closed_form_anchor_is_the_closed_form_cv() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+        let data = crate::dataset::read_csv(path.as_ref()).unwrap();
+        assert!(data.len() > FULL_REFIT_ROWS);
+        let robot = crate::kinematics::load_robot("comau-nj220").unwrap();
+        let model = ErrorModelParams::new()
+            .kriging(crate::kriging::KrigingOptions::default().starts(1))
+            .check()
+            .unwrap()
+            .fit(&data)
+            .unwrap();
+        assert!(model.calibration().is_none());
+        let fold = crate::stats::kfold_partition(data.len(), FORECAST_FOLDS, FOLD_SEED).unwrap();
+        let blocks = crate::stats::fold_blocks(&fold);
+        let held: Vec<HeldOut> = model
+            .outputs
+            .iter()
+            .map(|o| o.held_out(&blocks).unwrap())
+            .collect();
+        let (rms, ratio) = cv_error(&model, &robot, &data, (&fold, &held), &Cancel::new()).unwrap();
+        let s = cross_validate_closed_form(&data, &model, FORECAST_FOLDS, FOLD_SEED)
+            .unwrap()
+            .summary;
+        let want = s.rms_mm.iter().map(|r| r * r).sum::<f64>().sqrt();
+        assert!((rms - want).abs() <= 1e-12 * want, "{rms} vs {want}");
+        assert!((rms * ratio - s.mean_3d_mm).abs() <= 1e-12 * want);
+        // and the outputs' held-out MSE is their latent variance there
+        assert!(held_out_mse(&model, &held) > 0.0);
     }
-    Ok(total)
 }
