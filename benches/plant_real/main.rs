@@ -6,7 +6,7 @@
 //!
 //! Run: `cargo bench --bench plant_real -- [--series b|c|b,c] [--rows N]
 //! [--plants N] [--seed S] [--sizes 1,2] [--kinds step,block,drift,lag,harmonic]
-//! [--minutes M] [--no-calibrate] [--json DIR]`. Defaults: both series, all rows, 20
+//! [--minutes M] [--no-calibrate] [--json DIR] [--max-effects N]`. Defaults: both series, all rows, 20
 //! plants (the kinds in turn), seed 1, sizes 1 and 2, every kind, no time
 //! limit (`--minutes`: no plant starts after M minutes; the table has what
 //! ran; `--json DIR`: each diagnosis's JSON written there, as
@@ -47,6 +47,8 @@ struct Args {
     calibrate: Option<bool>,
     /// Where each diagnosis's JSON is written (`--json DIR`).
     json: Option<PathBuf>,
+    /// `--max-effects N` (else the CLI's default).
+    max_effects: Option<usize>,
 }
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
@@ -70,6 +72,7 @@ fn args() -> Args {
         minutes: None,
         calibrate: None,
         json: None,
+        max_effects: None,
     };
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let mut it = argv.iter();
@@ -97,6 +100,7 @@ fn args() -> Args {
             "--minutes" => a.minutes = Some(v().parse().expect("--minutes M")),
             "--no-calibrate" => a.calibrate = Some(false),
             "--json" => a.json = Some(PathBuf::from(v())),
+            "--max-effects" => a.max_effects = Some(v().parse().expect("--max-effects N")),
             other => panic!("unknown option {other}"),
         }
     }
@@ -133,12 +137,16 @@ fn file(series: char) -> PathBuf {
 }
 
 /// What `robokrige diagnose FILE --robot ur10 --tool …` runs with.
-fn options(data: &Dataset) -> DiagnoseOptions {
+fn options(data: &Dataset, max_effects: Option<usize>) -> DiagnoseOptions {
     let robot = robokrige::kinematics::load_robot_with_tool("ur10", Some(TOOL)).expect("ur10");
-    DiagnoseOptions::default()
+    let o = DiagnoseOptions::default()
         .base(&base_params("ejs", 1, true).expect("ejs"))
         .periodic(robokrige::space::parse_periodic("none", &data.q).expect("none"))
-        .robot(Some(robot))
+        .robot(Some(robot));
+    match max_effects {
+        Some(n) => o.max_effects(n),
+        None => o,
+    }
 }
 
 /// The diagnosis of `data` as the CLI runs it: on the residual of its
@@ -185,7 +193,7 @@ fn main() {
             .expect("csv")
             .head(a.rows.unwrap_or(usize::MAX));
         let m = data.len();
-        let o = options(&data);
+        let o = options(&data, a.max_effects);
         let robot = o.get_robot().expect("robot").clone();
         let (control, control_rows) = run(&data, &o, a.calibrate);
         save(&a, &format!("{s}-control"), &control);
@@ -242,7 +250,7 @@ fn main() {
                 let own = |t: &[score::Target]| own_coefficients(&control_rows, &o, &d, t);
                 let sc = score::score(&d, &control, (&shape, &p), m, &own);
                 println!(
-                    "plant {i:>2} {k}× {:<26} {:<10}{}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
+                    "plant {i:>2} {k}× {:<26} {:<10}{}{}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
                     shape.describe(),
                     format!("{:?}", sc.outcome),
                     if sc.left_by_cap {
@@ -255,6 +263,7 @@ fn main() {
                     } else {
                         ""
                     },
+                    if sc.own_only { " (own only)" } else { "" },
                     opt(sc.row_covered),
                     opt(sc.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
                     opt(sc.own_covered.as_ref().map(|v| v.iter().all(|b| *b))),
@@ -323,9 +332,9 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | (of which the planted family never significant) | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
+            "| kind | plants | right | proxy, named | proxy, not named | (of which the planted family never significant) | (proxies, named or not, that added only effects the control found significant) | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
         kinds.dedup();
         kinds.sort();
@@ -351,13 +360,14 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             };
             let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
             println!(
-                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
                 pct(count(Outcome::Right)),
                 pct(count(Outcome::ProxyNamed)),
                 pct(count(Outcome::Proxy)),
                 sel.iter()
                     .filter(|r| r.score.outcome == Outcome::Proxy && !r.score.seen)
                     .count(),
+                sel.iter().filter(|r| r.score.own_only).count(),
                 pct(count(Outcome::Missed)),
                 pct(sel.iter().filter(|r| r.score.left_by_cap).count()),
                 cov(|s| s.row_covered),

@@ -18,6 +18,13 @@
 //!   **seen**: the planted family was significant, at its place, in some
 //!   round (a proxy whose family never was cannot be named by a rule that
 //!   names significant candidates).
+//!   **own only**: a proxy whose every new effect the control also found
+//!   significant (in some round, at a compatible place: each parameter
+//!   within the tolerances above, or either one's 95 % interval of it
+//!   holding the other's value). The control
+//!   gave its places to others; the plant only reordered the campaign's
+//!   own effects, and nothing is a proxy of it in the sense of explaining
+//!   its residual.
 //! - **missed**: nothing new added.
 //! - A block added as two steps, one at each edge (within `tol`), is
 //!   right: the two step columns span the block's (its coverage: each
@@ -74,6 +81,10 @@ pub struct Score {
     pub left_by_cap: bool,
     /// The planted family was significant, at its place, in some round.
     pub seen: bool,
+    /// A proxy whose every new effect the control found significant too, in
+    /// some round, at its place ([`significant_in`]): the campaign's own
+    /// effects, taking the places the control gave to others.
+    pub own_only: bool,
 }
 
 pub fn tolerance(m: usize) -> usize {
@@ -99,6 +110,27 @@ fn same(a: &EffectReport, b: &EffectReport, tol: usize) -> bool {
                 (v - w).abs() <= 0.03 * v.abs().max(w.abs())
             }
         })
+}
+
+/// Whether `d` found `e` significant in some round: a report of the same
+/// label whose every parameter is compatible with `e`'s: within
+/// [`same`]'s tolerance, or either one's 95 % interval of it (when it has
+/// one) holds the other's value.
+fn significant_in(e: &EffectReport, d: &Diagnosis, tol: usize) -> bool {
+    d.effects.iter().filter(|b| b.significant).any(|b| {
+        b.label == e.label
+            && b.params.len() == e.params.len()
+            && e.params.iter().all(|(k, v)| {
+                let w = b.params.get(k).copied().unwrap_or(f64::NAN);
+                let near = if k.ends_with("row") {
+                    (v - w).abs() <= tol as f64
+                } else {
+                    (v - w).abs() <= 0.03 * v.abs().max(w.abs())
+                };
+                near || within(b.params_ci.get(k), *v) == Some(true)
+                    || within(e.params_ci.get(k), w) == Some(true)
+            })
+    })
 }
 
 fn is_right(e: &EffectReport, shape: &Shape, tol: usize) -> bool {
@@ -429,6 +461,7 @@ pub fn score(
             detail: detail(e, p, &targets, own_values.as_deref()),
             left_by_cap: false,
             seen: true,
+            own_only: false,
         };
     }
     if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
@@ -462,6 +495,7 @@ pub fn score(
             .iter()
             .any(|l| is_plant(&l.label, &l.params, &texts, shape, tol)),
         seen,
+        own_only: !new.is_empty() && new.iter().all(|e| significant_in(e, control, tol)),
     }
 }
 
@@ -532,6 +566,7 @@ fn block_as_steps(
         detail: format!("as two steps: {}", details.join(" | ")),
         left_by_cap: false,
         seen: true,
+        own_only: false,
     })
 }
 

@@ -40,7 +40,14 @@
 //!    effect), with at most [`EXPLAINED_AWAY`] of its evidence left
 //!    ([`explained_away`]).
 //!
-//! The effect's report then names it.
+//! The effect's report then names it, "explained away by it". When only
+//! the second holds (the effect's columns leave more than
+//! [`EXPLAINED_AWAY`] of the candidate's least-squares fit, yet the model
+//! refitted with the effect no longer needs the candidate: the columns
+//! with the refitted process take it, which least squares on the round's
+//! residuals does not see), the report names it too, after those, as
+//! "taken up by it": on this campaign the data could not say which of
+//! the two the residual is.
 //!
 //! **Region of the joint space.** A step or block of rows is a region of
 //! the joint space when the poses were measured region by region: its
@@ -179,7 +186,9 @@ impl Taken {
     /// `(‖Q_{ab}ᵀr‖² − ‖Q_aᵀr‖²)/‖Q_bᵀr‖²` (the numerator is the fit of the
     /// part of `b`'s columns orthogonal to the effect's), the sums in noise
     /// units and pooled over the axes. 0: the effect's columns fit all that
-    /// `b`'s do; 1: none of it. `None` when `b` fits nothing.
+    /// `b`'s do; 1: none of it (above 1 when `b`'s columns fit more once
+    /// the effect's are in: their overlap had cancelled part of it). `None`
+    /// when `b` fits nothing.
     pub(super) fn share_left(&self, b: &GridPoint) -> Option<f64> {
         let fit = |q: &[Vec<f64>], r: &[f64]| -> f64 {
             q.iter()
@@ -198,9 +207,10 @@ impl Taken {
     }
 }
 
-/// A candidate whose fit an added effect's columns take ([`Taken::share_left`] at
-/// most [`EXPLAINED_AWAY`]): its family's label and source, and the share
-/// left.
+/// A significant candidate of another source than an added effect, with
+/// the share of its fit the effect's columns leave
+/// ([`Taken::share_left`]; condition 1 of the module docs holds at most
+/// [`EXPLAINED_AWAY`]): its family's label and source, and the share left.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Shared {
     pub label: String,
@@ -209,8 +219,8 @@ pub(super) struct Shared {
 }
 
 /// The significant candidates of another source and label than candidate
-/// `k` of `tested` whose fit of the `residuals` `k`'s columns take
-/// (condition 1 of the module docs).
+/// `k` of `tested`, each with the share of its fit of the `residuals`
+/// that `k`'s columns leave.
 pub(super) fn sharing(
     tested: &[Tested],
     fams: &[Family],
@@ -228,7 +238,7 @@ pub(super) fn sharing(
                 return None;
             }
             let left = taken.share_left(tested[i].point(f))?;
-            (left <= EXPLAINED_AWAY).then(|| Shared {
+            Some(Shared {
                 label: f.label.clone(),
                 source: f.source.clone(),
                 left,
@@ -237,15 +247,17 @@ pub(super) fn sharing(
         .collect()
 }
 
-/// The candidates the effect `added` explained away (module docs): of
-/// `before` (the reports of the round it was added in) those it shares
-/// the residual with (`shared`, [`sharing`]), significant and not added;
-/// in `after` (the next round's reports, inside the model with it) the
-/// same family, not significant (q over the FDR, or a drop no longer
-/// worth an effect), with at most [`EXPLAINED_AWAY`] of its evidence.
-/// Those `added` already names as a competitor are not named twice. Each
-/// is named with its evidence and q before and after and the share of its
-/// fit the effect's columns leave, most evidence lost first.
+/// The candidates the effect `added` explained away or took up (module
+/// docs): of `before` (the reports of the round it was added in) those of
+/// another source (`shared`, [`sharing`]), significant and not added; in
+/// `after` (the next round's reports, inside the model with it) the same
+/// family, not significant (q over the FDR, or a drop no longer worth an
+/// effect), with at most [`EXPLAINED_AWAY`] of its evidence. Those
+/// `added` already names as a competitor are not named twice. Each is
+/// named with its evidence and q before and after and the share of its
+/// fit the effect's columns leave: those explained away (a share of at
+/// most [`EXPLAINED_AWAY`]) first, then those taken up, each most
+/// evidence lost first.
 pub(super) fn explained_away(
     added: &EffectReport,
     (before, after): (&[&EffectReport], &[EffectReport]),
@@ -255,7 +267,7 @@ pub(super) fn explained_away(
         let head = format!("{}{} (", b.label, params_text(b));
         added.confounded_with.iter().any(|c| c.starts_with(&head))
     };
-    let mut out: Vec<(f64, String)> = before
+    let mut out: Vec<(bool, f64, String)> = before
         .iter()
         .filter(|b| b.significant && !b.accepted && !named(b))
         .filter_map(|b| {
@@ -266,22 +278,34 @@ pub(super) fn explained_away(
                 .iter()
                 .find(|a| a.label == b.label && a.source == b.source)?;
             (!a.significant && a.evidence <= EXPLAINED_AWAY * b.evidence).then(|| {
+                let taken_up = s.left > EXPLAINED_AWAY;
+                let how = if taken_up {
+                    "; the model refitted with this one takes the rest: taken up by it"
+                } else {
+                    ": explained away by it"
+                };
+                // fitted after the effect's columns, a candidate's can fit
+                // more than alone (their overlap had cancelled part of it)
+                let share = if s.left >= 1.0 {
+                    "its columns take none of what this one fits".to_string()
+                } else {
+                    format!("its columns leave {:.0} % of what this one fits", 100.0 * s.left)
+                };
                 let text = format!(
-                    "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after; its columns leave {:.0} % of what this one fits: explained away by it)",
+                    "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after; {share}{how})",
                     b.label,
                     params_text(b),
                     b.evidence,
                     b.q_value,
                     a.evidence,
                     a.q_value,
-                    100.0 * s.left
                 );
-                (b.evidence - a.evidence, text)
+                (taken_up, b.evidence - a.evidence, text)
             })
         })
         .collect();
-    out.sort_by(|x, y| y.0.total_cmp(&x.0));
-    out.into_iter().map(|(_, t)| t).collect()
+    out.sort_by(|x, y| x.0.cmp(&y.0).then(y.1.total_cmp(&x.1)));
+    out.into_iter().map(|(_, _, t)| t).collect()
 }
 
 /// A report's parameters as " (name value, …)", or nothing.
@@ -401,9 +425,10 @@ mod tests {
         .unwrap()
     }
 
-    /// An effect names the candidates it took the evidence of and whose fit
-    /// its columns take, not one that kept its evidence, one that was not
-    /// significant before, one whose fit it does not take, or one it
+    /// An effect names the candidates it took the evidence of, those whose
+    /// fit its columns take first ("explained away") and then those whose
+    /// fit they do not ("taken up"); not one that kept its evidence, one
+    /// that was not significant before, one of its own source, or one it
     /// already names as a competitor.
     #[test]
     fn an_added_effect_names_the_candidates_it_explained_away() {
@@ -428,7 +453,7 @@ mod tests {
             report("moves of q3 into the pose", "q3", 0.001, false),
             // still significant
             report("harmonic of q2", "q2", 0.005, true),
-            // its fit is not the added effect's (not shared)
+            // its fit is not the added effect's columns' (taken up)
             report("q5 × q6", "q5", 0.001, false),
             report("harmonic of q1", "q1", 0.001, false),
         ];
@@ -438,20 +463,37 @@ mod tests {
             "moves of q3 into the pose",
             "harmonic of q2",
             "harmonic of q1",
+            "q5 × q6",
         ]
         .iter()
-        .zip(["row", "row", "q3", "q2", "q1"])
+        .zip(["row", "row", "q3", "q2", "q1", "q5"])
         .map(|(l, s)| Shared {
             label: l.to_string(),
             source: vec![s.to_string()],
-            left: 0.2,
+            left: if s == "q5" { 0.8 } else { 0.2 },
         })
         .collect();
         let before: Vec<&EffectReport> = before.iter().collect();
         let named = explained_away(&added, (&before, &after), &shared);
-        assert_eq!(named.len(), 1, "{named:?}");
+        assert_eq!(named.len(), 2, "{named:?}");
         assert!(named[0].starts_with("step in the measurement order (evidence 0.047"));
         assert!(named[0].contains("0.011") && named[0].contains("leave 20 %"));
+        assert!(named[0].ends_with("explained away by it)"));
+        // taken up: listed after, though it lost more evidence
+        assert!(named[1].starts_with("q5 × q6 (evidence 0.040"), "{named:?}");
+        assert!(named[1].contains("leave 80 %") && named[1].ends_with("taken up by it)"));
+        // a share left of 100 % or more: the columns take none of it
+        let shared: Vec<Shared> = shared
+            .into_iter()
+            .map(|s| Shared {
+                left: if s.label == "q5 × q6" { 1.3 } else { s.left },
+                ..s
+            })
+            .collect();
+        let named = explained_away(&added, (&before, &after), &shared);
+        assert!(
+            named[1].contains("its columns take none of what this one fits; the model refitted")
+        );
     }
 
     /// What a candidate fits is left in full by columns orthogonal to its
