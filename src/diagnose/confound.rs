@@ -49,6 +49,13 @@
 //! "taken up by it": on this campaign the data could not say which of
 //! the two the residual is.
 //!
+//! **Two steps, one block.** When the cap of effects leaves out a
+//! significant step of rows and a step was added, their two columns span
+//! a block of rows between them (a bump, back at its end, when their
+//! sizes are opposite): a step and a block are then explanations of the
+//! same residual that the cap, not the data, told apart. Each one's
+//! report names the other ([`steps_left_by_cap`]).
+//!
 //! **Region of the joint space.** A step or block of rows is a region of
 //! the joint space when the poses were measured region by region: its
 //! indicator is then predicted by the indicator of each row's nearest
@@ -56,7 +63,7 @@
 //! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
 
 use super::rank::{extend_orthonormal, fitted, orthonormal, similarity};
-use super::report::EffectReport;
+use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, GridPoint, Tested, is_time_column};
 
 /// Correlation of two fitted contributions from which they explain the
@@ -322,6 +329,43 @@ fn params_text(r: &EffectReport) -> String {
     }
 }
 
+/// The row of a step in the measurement order (an order effect with a
+/// single change point), if `kind` and `params` are one's.
+fn step_row(kind: EffectKind, params: &std::collections::BTreeMap<String, f64>) -> Option<f64> {
+    (kind == EffectKind::Order && params.len() == 1)
+        .then(|| params.get("row").copied())
+        .flatten()
+}
+
+/// Each step of rows the cap `left` out and each step among the `added`
+/// effects name each other (module docs, "two steps, one block"): the
+/// left one in the added one's `confounded_with` with its evidence, and
+/// the other way round.
+pub(super) fn steps_left_by_cap(added: &mut [EffectReport], left: &mut [LeftOut]) {
+    for l in left.iter_mut() {
+        let Some(r2) = step_row(l.kind, &l.params) else {
+            continue;
+        };
+        for e in added.iter_mut().filter(|e| e.accepted) {
+            let Some(r1) = step_row(e.kind, &e.params) else {
+                continue;
+            };
+            let (a, b) = (r1.min(r2), r1.max(r2));
+            let block = format!(
+                "with the other, a block of rows {a:.0}–{b:.0} (a bump, back at its end, when their sizes are opposite)"
+            );
+            e.confounded_with.push(format!(
+                "{} (row {r2:.3}) (evidence {:.3}, significant when the cap of effects was reached, not added: {block})",
+                l.label, l.evidence
+            ));
+            l.confounded_with.push(format!(
+                "{} (row {r1:.3}) (added in round {}: {block})",
+                e.label, e.round
+            ));
+        }
+    }
+}
+
 /// Whether a candidate is an anonymous order effect (a drift, a step or a
 /// block of rows: nothing measured names it).
 fn anonymous(f: &Family) -> bool {
@@ -494,6 +538,50 @@ mod tests {
         assert!(
             named[1].contains("its columns take none of what this one fits; the model refitted")
         );
+    }
+
+    /// A step left out by the cap and a step added name each other, with
+    /// the block their columns span; a block, a drift or a step not added
+    /// are not named.
+    #[test]
+    fn a_step_left_by_the_cap_and_a_step_added_name_the_block() {
+        let step = |row: f64, accepted: bool| {
+            let mut r = report("step in the measurement order", "row", 0.05, true);
+            r.kind = EffectKind::Order;
+            r.params.insert("row".into(), row);
+            r.accepted = accepted;
+            r
+        };
+        let mut block = report("block of rows (a bump, back at its end)", "row", 0.04, true);
+        block.kind = EffectKind::Order;
+        block.params.insert("from_row".into(), 10.0);
+        block.params.insert("to_row".into(), 20.0);
+        block.accepted = true;
+        let mut added = vec![step(229.0, true), step(100.0, false), block.clone()];
+        let mut left = vec![
+            LeftOut::of(&step(491.0, false)),
+            LeftOut::of(&report(
+                "drift over the measurement order",
+                "row",
+                0.03,
+                true,
+            )),
+            LeftOut::of(&block),
+        ];
+        steps_left_by_cap(&mut added, &mut left);
+        assert_eq!(
+            added[0].confounded_with.len(),
+            1,
+            "{:?}",
+            added[0].confounded_with
+        );
+        let named = &added[0].confounded_with[0];
+        assert!(named.starts_with("step in the measurement order (row 491.000) (evidence 0.050"));
+        assert!(named.contains("a block of rows 229–491"), "{named}");
+        assert!(added[1].confounded_with.is_empty() && added[2].confounded_with.is_empty());
+        assert_eq!(left[0].confounded_with.len(), 1);
+        assert!(left[0].confounded_with[0].contains("(row 229.000) (added in round"));
+        assert!(left[1].confounded_with.is_empty() && left[2].confounded_with.is_empty());
     }
 
     /// What a candidate fits is left in full by columns orthogonal to its

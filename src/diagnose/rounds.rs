@@ -318,6 +318,7 @@ impl Rounds {
         choose::prefer_measured(reports, r, &mut order);
         if round > o.max_effects {
             self.left_by_cap = choose::left_out(reports, r, &order);
+            confound::steps_left_by_cap(&mut self.effects, &mut self.left_by_cap);
             reports[order[0]].add_note(format!("not added: the cap of {} effects", o.max_effects));
             return Ok(false);
         }
