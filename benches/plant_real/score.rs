@@ -82,7 +82,7 @@ pub struct Score {
     /// The planted family was significant, at its place, in some round.
     pub seen: bool,
     /// A proxy whose every new effect the control found significant too, in
-    /// some round, at its place ([`significant_in`]): the campaign's own
+    /// some round, at a compatible place ([`significant_in`]): the campaign's own
     /// effects, taking the places the control gave to others.
     pub own_only: bool,
 }
@@ -99,35 +99,36 @@ fn near_rows(a: Option<f64>, b: usize, tol: usize) -> bool {
     a.is_some_and(|a| (a - b as f64).abs() <= tol as f64)
 }
 
+/// Two values of parameter `k` at the same place: rows within `tol`,
+/// others within 3 %.
+fn near(k: &str, v: f64, w: f64, tol: usize) -> bool {
+    if k.ends_with("row") {
+        (v - w).abs() <= tol as f64
+    } else {
+        (v - w).abs() <= 0.03 * v.abs().max(w.abs())
+    }
+}
+
 fn same(a: &EffectReport, b: &EffectReport, tol: usize) -> bool {
     a.label == b.label
         && a.params.len() == b.params.len()
-        && a.params.iter().all(|(k, v)| {
-            let w = b.params.get(k).copied().unwrap_or(f64::NAN);
-            if k.ends_with("row") {
-                (v - w).abs() <= tol as f64
-            } else {
-                (v - w).abs() <= 0.03 * v.abs().max(w.abs())
-            }
-        })
+        && a.params
+            .iter()
+            .all(|(k, v)| near(k, *v, b.params.get(k).copied().unwrap_or(f64::NAN), tol))
 }
 
 /// Whether `d` found `e` significant in some round: a report of the same
-/// label whose every parameter is compatible with `e`'s: within
-/// [`same`]'s tolerance, or either one's 95 % interval of it (when it has
-/// one) holds the other's value.
+/// label whose every parameter is compatible with `e`'s: [`near`], or
+/// either one's 95 % interval of it (when it has one) holds the other's
+/// value.
 fn significant_in(e: &EffectReport, d: &Diagnosis, tol: usize) -> bool {
     d.effects.iter().filter(|b| b.significant).any(|b| {
         b.label == e.label
             && b.params.len() == e.params.len()
             && e.params.iter().all(|(k, v)| {
                 let w = b.params.get(k).copied().unwrap_or(f64::NAN);
-                let near = if k.ends_with("row") {
-                    (v - w).abs() <= tol as f64
-                } else {
-                    (v - w).abs() <= 0.03 * v.abs().max(w.abs())
-                };
-                near || within(b.params_ci.get(k), *v) == Some(true)
+                near(k, *v, w, tol)
+                    || within(b.params_ci.get(k), *v) == Some(true)
                     || within(e.params_ci.get(k), w) == Some(true)
             })
     })

@@ -63,7 +63,7 @@
 //! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
 
 use super::rank::{extend_orthonormal, fitted, orthonormal, similarity};
-use super::report::{EffectReport, LeftOut};
+use super::report::{EffectReport, LeftOut, params_text};
 use super::scan::{EffectKind, Family, GridPoint, Tested, is_time_column};
 
 /// Correlation of two fitted contributions from which they explain the
@@ -161,7 +161,7 @@ pub(super) fn competitor_text(r: &EffectReport, correlation: f64) -> String {
     format!(
         "{}{} (score {:.3}, evidence {:.3}, within noise; correlation of the fitted contributions {:.2})",
         r.label,
-        params_text(r),
+        params_text(&r.params),
         r.score,
         r.evidence,
         correlation
@@ -271,7 +271,7 @@ pub(super) fn explained_away(
     shared: &[Shared],
 ) -> Vec<String> {
     let named = |b: &EffectReport| {
-        let head = format!("{}{} (", b.label, params_text(b));
+        let head = format!("{}{} (", b.label, params_text(&b.params));
         added.confounded_with.iter().any(|c| c.starts_with(&head))
     };
     let mut out: Vec<(bool, f64, String)> = before
@@ -301,7 +301,7 @@ pub(super) fn explained_away(
                 let text = format!(
                     "{}{} (evidence {:.3}, q {:.4} before it was added; {:.3}, q {:.4} after; {share}{how})",
                     b.label,
-                    params_text(b),
+                    params_text(&b.params),
                     b.evidence,
                     b.q_value,
                     a.evidence,
@@ -313,20 +313,6 @@ pub(super) fn explained_away(
         .collect();
     out.sort_by(|x, y| x.0.cmp(&y.0).then(y.1.total_cmp(&x.1)));
     out.into_iter().map(|(_, _, t)| t).collect()
-}
-
-/// A report's parameters as " (name value, …)", or nothing.
-fn params_text(r: &EffectReport) -> String {
-    let params: Vec<String> = r
-        .params
-        .iter()
-        .map(|(k, v)| format!("{k} {v:.3}"))
-        .collect();
-    if params.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", params.join(", "))
-    }
 }
 
 /// The row of a step in the measurement order (an order effect with a
@@ -355,12 +341,16 @@ pub(super) fn steps_left_by_cap(added: &mut [EffectReport], left: &mut [LeftOut]
                 "with the other, a block of rows {a:.0}–{b:.0} (a bump, back at its end, when their sizes are opposite)"
             );
             e.confounded_with.push(format!(
-                "{} (row {r2:.3}) (evidence {:.3}, significant when the cap of effects was reached, not added: {block})",
-                l.label, l.evidence
+                "{}{} (evidence {:.3}, significant when the cap of effects was reached, not added: {block})",
+                l.label,
+                params_text(&l.params),
+                l.evidence
             ));
             l.confounded_with.push(format!(
-                "{} (row {r1:.3}) (added in round {}: {block})",
-                e.label, e.round
+                "{}{} (added in round {}: {block})",
+                e.label,
+                params_text(&e.params),
+                e.round
             ));
         }
     }

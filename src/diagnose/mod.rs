@@ -84,7 +84,7 @@ pub use options::{
     DEFAULT_REFIT_ROWS, DEFAULT_SCAN_ROWS, DiagnoseOptions, MIN_SCAN_ROWS, min_resamples,
 };
 pub use plan::DiagnosePlan;
-pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut};
+pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut, params_text};
 pub use rows::ScanRows;
 pub use scan::EffectKind;
 

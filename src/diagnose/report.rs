@@ -222,6 +222,17 @@ impl EffectReport {
     }
 }
 
+/// Parameters as they follow a label in a report: " (name value, …)"
+/// with three decimals, or nothing when there are none.
+pub fn params_text(params: &BTreeMap<String, f64>) -> String {
+    let params: Vec<String> = params.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+    if params.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", params.join(", "))
+    }
+}
+
 /// The result of [`diagnose`](super::diagnose).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Diagnosis {

@@ -1,7 +1,7 @@
 //! `diagnose`: the summary it prints and its Markdown report.
 
 use super::xyz;
-use crate::diagnose::{CvStats, Diagnosis, EffectReport, LeftOut};
+use crate::diagnose::{CvStats, Diagnosis, EffectReport, LeftOut, params_text};
 use crate::study::diagnosis::{CompensationComparison, DiagnosisBase};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -231,19 +231,10 @@ fn not_separable(competitors: &[String]) -> String {
 
 /// What one candidate left by the cap would add.
 fn left_line(l: &LeftOut) -> String {
-    let params: Vec<String> = l
-        .params
-        .iter()
-        .map(|(k, v)| format!("{k} {v:.3}"))
-        .collect();
     let mut line = format!(
         "{}{}: evidence {:.3}, would lower the CV RMSE by {:.1} % (closed form){}",
         l.label,
-        if params.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", params.join(", "))
-        },
+        params_text(&l.params),
         l.evidence,
         100.0 * l.promised,
         l.refit_gain
