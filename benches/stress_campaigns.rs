@@ -11,8 +11,11 @@
 //! errors.
 //!
 //! Run: `cargo bench --bench stress_campaigns` (about 5 minutes on 2
-//! cores); `-- NAME` runs the campaigns whose name contains NAME.
+//! cores); `-- NAME` runs the campaigns whose name contains NAME;
+//! `-- --backlash` gives the calibrated models a calibration with the
+//! joints' backlash (`holdout --backlash`).
 
+use robokrige::calibration::CalibrationOptions;
 use robokrige::cv::kfold_partition;
 use robokrige::holdout::{CV_MODELS, HoldoutCv, HyperRows, holdout_cv};
 use robokrige::kinematics::{JointKind, Robot, load_robot};
@@ -167,6 +170,7 @@ fn print(label: &str, cv: &HoldoutCv) {
 
 fn main() -> robokrige::Result<()> {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let backlash = std::env::args().any(|a| a == "--backlash");
     for c in campaigns() {
         if filter
             .as_ref()
@@ -198,7 +202,8 @@ fn main() -> robokrige::Result<()> {
         );
         let base = ErrorModelParams::new()
             .periodic(periodic)
-            .kriging(KrigingOptions::default().nugget(true));
+            .kriging(KrigingOptions::default().nugget(true))
+            .calibrate(backlash.then(|| CalibrationOptions::default().with_backlash(true)));
         let random = kfold_partition(data.len(), 10, c.seed)?;
         let t_cv = std::time::Instant::now();
         let cv = holdout_cv(

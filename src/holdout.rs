@@ -347,9 +347,9 @@ fn fold_out(
     let dh_secs = t.elapsed().as_secs_f64();
     let s = dh.identifiability().noise_mm;
     let dh_held = Held {
-        mean: dh.predict(&held.q)?,
+        mean: dh.predict(&held.q, &held.dir)?,
         std: dh
-            .predict_variance(&held.q)?
+            .predict_variance(&held.q, &held.dir)?
             .iter()
             .map(|v| v.map(|x| (x + s * s).sqrt()))
             .collect(),
@@ -476,12 +476,12 @@ pub fn holdout_split(
     progress("D-H calibration");
     let t0 = Instant::now();
     // (one fit serves both: each row is charged its time)
-    let (dh, calibration) = calibrate_both(train, robot, &CalibrationOptions::default())?;
+    let (dh, calibration) = calibrate_both(train, robot, &calibration_options(base))?;
     let dh_secs = t0.elapsed().as_secs_f64();
     rows.push(score(
         "D-H calibration (LM)",
         &truth,
-        &dh.predict(&test.q)?,
+        &dh.predict(&test.q, &test.dir)?,
         dh_secs,
     ));
     for space in [Space::Js, Space::Ejs] {
@@ -570,7 +570,7 @@ fn hyperparameter_models(
     base: &ErrorModelParams,
 ) -> Result<(Vec<ErrorModel>, Vec<ErrorModel>)> {
     use rayon::prelude::*;
-    let first_cal = calibrate(first, robot, &CalibrationOptions::default())?;
+    let first_cal = calibrate(first, robot, &calibration_options(base))?;
     let mut fits: Vec<ErrorModel> = [
         (Space::Js, false),
         (Space::Ejs, false),
@@ -588,6 +588,13 @@ fn hyperparameter_models(
     .collect::<Result<_>>()?;
     let kinematic = fits.split_off(2);
     Ok((fits, kinematic))
+}
+
+/// The calibration of the calibrated models: `base`'s
+/// ([`ErrorModelParams::calibrate`], e.g. with the backlash), else the
+/// default one.
+fn calibration_options(base: &ErrorModelParams) -> CalibrationOptions {
+    base.get_calibration().cloned().unwrap_or_default()
 }
 
 /// Universal Kriging with the kinematic trend of `robot`, from `base`, on `data`.

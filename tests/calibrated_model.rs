@@ -37,6 +37,15 @@ fn quick_fit(data: &str, out: &str, extra: &[&str]) -> (i32, String, String) {
     rk(&args)
 }
 
+/// [`quick_fit`] with `--json -`: the list `key` of its JSON report.
+fn fit_list(data: &str, out: &str, extra: &[&str], key: &str) -> Vec<serde_json::Value> {
+    let extra: Vec<&str> = ["--json", "-"].iter().chain(extra).copied().collect();
+    let (c, out, err) = quick_fit(data, out, &extra);
+    assert_eq!(c, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    v[key].as_array().unwrap().clone()
+}
+
 fn quick() -> KrigingOptions {
     KrigingOptions::default()
         .optimizer(OptimizerKind::HookeJeeves)
@@ -65,7 +74,7 @@ fn one_file_holds_the_calibration_and_predicts_their_sum() {
     let q = &data.q[..5];
     let dir = &data.dir[..5];
     let sum = model.predict_mean(q, dir).unwrap();
-    let kin = cal.predict(q).unwrap();
+    let kin = cal.predict(q, dir).unwrap();
     let plain = ErrorModel::from_json(
         &{
             let mut v: serde_json::Value = serde_json::from_str(&model.to_json().unwrap()).unwrap();
@@ -225,13 +234,7 @@ fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_th
     let dir = tempfile::tempdir().unwrap();
     let p = |f: &str| dir.path().join(f).display().to_string();
     let data = ds("comau_harmonic.csv");
-    let fit = |out: &str, extra: &[&str]| {
-        let extra: Vec<&str> = ["--json", "-"].iter().chain(extra).copied().collect();
-        let (c, out, err) = quick_fit(&data, &p(out), &extra);
-        assert_eq!(c, 0, "{err}");
-        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-        v["joint_harmonics"].as_array().unwrap().clone()
-    };
+    let fit = |out: &str, extra: &[&str]| fit_list(&data, &p(out), extra, "joint_harmonics");
     // the 7.5° harmonic the campaign was simulated with, and nothing else
     let found = fit("h.json", &[]);
     assert_eq!(found.len(), 1, "{found:?}");
@@ -247,4 +250,51 @@ fn fit_finds_the_planted_gear_harmonic_and_robot_calibrated_says_it_is_not_in_th
     );
     let (_, _, err) = rk(&["robot", "calibrated", &p("g.json"), "-o", &p("g.toml")]);
     assert!(!err.contains("joint harmonics"), "{err}");
+}
+
+/// `fit --backlash` on a simulated COMAU campaign whose joints have play:
+/// the joints it keeps are the simulator's, each half backlash near the
+/// truth's; off by default; `robot calibrated` says the table leaves it
+/// out.
+#[test]
+fn fit_with_backlash_finds_the_simulated_play_and_keeps_it_in_the_model_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let data = ds("comau_lhs.csv");
+    let fit = |out: &str, extra: &[&str]| fit_list(&data, &p(out), extra, "backlash");
+    assert!(fit("d.json", &[]).is_empty());
+    let found = fit("b.json", &["--backlash"]);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ds("comau_lhs.truth.json")).unwrap())
+            .unwrap();
+    let planted = |j: usize| {
+        truth["robot"]["deviation"][j - 1]["backlash_deg"]
+            .as_f64()
+            .unwrap()
+    };
+    let joints: Vec<usize> = found
+        .iter()
+        .map(|b| b["joint"].as_u64().unwrap() as usize)
+        .collect();
+    // the joints that move the TCP most (a wrist joint's play may hide
+    // under the noise)
+    for j in [1, 2, 3] {
+        assert!(joints.contains(&j), "{found:?}");
+    }
+    for b in &found {
+        let j = b["joint"].as_u64().unwrap() as usize;
+        let half = b["half_deg"].as_f64().unwrap();
+        assert!(
+            (half / planted(j) - 1.0).abs() < 0.35,
+            "q{j}: {half} against {}",
+            planted(j)
+        );
+    }
+    let (c, _, err) = rk(&["robot", "calibrated", &p("b.json"), "-o", &p("b.toml")]);
+    assert_eq!(c, 0, "{err}");
+    assert!(err.contains("backlash of"), "{err}");
+    let (c, _, err) = rk(&["predict", &p("b.json"), &data, "-o", &p("b.csv")]);
+    assert_eq!(c, 0, "{err}");
+    let rows = std::fs::read_to_string(p("b.csv")).unwrap().lines().count();
+    assert_eq!(rows, 301);
 }

@@ -243,7 +243,7 @@ fn harmonics_found_in_two_small_cubes_do_not_move_the_poses_far_from_them() {
     // the search finds periods in the cubes (aliases of the longer errors)
     assert!(!full.harmonics().is_empty(), "{}", full.summary_line());
     let worst = |cal: &robokrige::calibration::Calibration| {
-        let pred = cal.predict(&held.q).unwrap();
+        let pred = cal.predict(&held.q, &held.dir).unwrap();
         norms(&residuals(held.errors.as_ref().unwrap(), &pred))
             .into_iter()
             .fold(0.0f64, f64::max)

@@ -36,6 +36,7 @@ _DEFAULTS: Dict[str, Any] = dict(
     kinematic=False,
     calibrate=True,
     joint_harmonics=True,
+    backlash=False,
     method=None,
     n_joints=None,
     dirs="auto",
@@ -173,6 +174,11 @@ class ErrorModel(EstimatorBase):
         transmission) errors, each period added only when the residual
         noise cannot explain it. False: the MD-H, tool and base errors
         alone (``--geometric``).
+    backlash : bool
+        With the calibration: also identify each joint's backlash (a joint
+        offset that follows the direction it approached from), fitted to
+        what the geometry leaves (``--backlash``). Off by default: for
+        robots whose gears have play.
     method : str, optional
         A named method instead ("recommended", "js-hj", "ejs-hj", "ejs-gps",
         "ejs-pca", "ejs-ga"): it fixes space, trend, corr, optimizer,
@@ -228,6 +234,7 @@ class ErrorModel(EstimatorBase):
         kinematic: bool = False,
         calibrate: bool = True,
         joint_harmonics: bool = True,
+        backlash: bool = False,
         method: Optional[str] = None,
         n_joints: Optional[int] = None,
         dirs: str = "auto",
@@ -246,6 +253,7 @@ class ErrorModel(EstimatorBase):
         self.kinematic = kinematic
         self.calibrate = calibrate
         self.joint_harmonics = joint_harmonics
+        self.backlash = backlash
         self.method = method
         self.n_joints = n_joints
         self.dirs = dirs
@@ -287,7 +295,7 @@ class ErrorModel(EstimatorBase):
         """The parameters as the extension reads them (checked types)."""
         p = {k: v for k, v in self.get_params().items() if k not in ("n_joints", "dirs", "covariates")}
         p["periodic"] = _periodic_spec(p["periodic"])
-        for key in ("nugget", "kinematic", "calibrate", "joint_harmonics"):
+        for key in ("nugget", "kinematic", "calibrate", "joint_harmonics", "backlash"):
             if not isinstance(p[key], (bool, np.bool_)):
                 raise _bad(f"{key} must be True or False, not {p[key]!r}")
             p[key] = bool(p[key])

@@ -47,6 +47,8 @@ pub struct FitParams {
     #[pyo3(item)]
     pub joint_harmonics: bool,
     #[pyo3(item)]
+    pub backlash: bool,
+    #[pyo3(item)]
     pub method: Option<String>,
     /// Covariate columns that enter the model as inputs
     /// ([`Overrides::covariates`]); none in the campaign form of `fit`.
@@ -121,9 +123,12 @@ impl FitParams {
         let mut o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
-            .calibrate(self.calibrate.then(|| CalibrationOptions {
-                joint_harmonics: self.joint_harmonics,
-                ..CalibrationOptions::default()
+            .calibrate(self.calibrate.then(|| {
+                CalibrationOptions {
+                    joint_harmonics: self.joint_harmonics,
+                    ..CalibrationOptions::default()
+                }
+                .with_backlash(self.backlash)
             }));
         if let Some(v) = &self.space {
             o = o.space(parse_space(v)?);

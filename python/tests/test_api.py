@@ -335,3 +335,22 @@ def test_the_calibration_finds_a_joint_harmonic_unless_told_geometric(datasets):
     assert harmonics(rk.ErrorModel(joint_harmonics=False, **opts).fit(q, d, e)) == []
     with pytest.raises(rk.RobokrigeError, match="joint_harmonics must be True or False"):
         rk.ErrorModel(joint_harmonics="yes", **opts).fit(q, d, e)
+
+
+def test_the_calibration_identifies_the_joints_backlash_when_asked(datasets):
+    """comau_lhs.csv is simulated with play in every joint: backlash=True
+    keeps the joints that move the tool most; the default does not look."""
+    import json
+
+    campaign = rk.read_campaign(datasets / "comau_lhs.csv", as_frame=False)
+    q, d, e = arrays(campaign)
+    opts = dict(robot="comau-nj220", corr="gaussian", optimizer="hj")
+
+    def backlash(m):
+        return json.loads(m.model_.to_json())["calibration"].get("backlash", [])
+
+    assert backlash(rk.ErrorModel(**opts).fit(q, d, e)) == []
+    joints = [b["joint"] for b in backlash(rk.ErrorModel(backlash=True, **opts).fit(q, d, e))]
+    assert {1, 2, 3} <= set(joints), joints
+    with pytest.raises(rk.RobokrigeError, match="backlash must be True or False"):
+        rk.ErrorModel(backlash="yes", **opts).fit(q, d, e)

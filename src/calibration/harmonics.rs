@@ -388,14 +388,14 @@ fn best_period(
 /// An orthonormal basis grown one column at a time (twice-run
 /// Gram–Schmidt), and the residual of `r_geo` projected off it.
 #[derive(Clone)]
-struct Basis {
+pub(super) struct Basis {
     q: Vec<DVector<f64>>,
     r: DVector<f64>,
 }
 
 impl Basis {
     /// The span of `columns`, with `r` projected off it.
-    fn new<C: std::borrow::Borrow<DVector<f64>>>(
+    pub(super) fn new<C: std::borrow::Borrow<DVector<f64>>>(
         columns: impl Iterator<Item = C>,
         r: &DVector<f64>,
     ) -> Self {
@@ -410,7 +410,7 @@ impl Basis {
     }
 
     /// `v` with its part in the span removed.
-    fn project_out(&self, v: &DVector<f64>) -> DVector<f64> {
+    pub(super) fn project_out(&self, v: &DVector<f64>) -> DVector<f64> {
         let mut v = v.clone();
         for _ in 0..2 {
             for q in &self.q {
@@ -422,7 +422,7 @@ impl Basis {
     }
 
     /// Add `v`'s new direction (if it has one), and take it off the residual.
-    fn push(&mut self, v: &DVector<f64>) {
+    pub(super) fn push(&mut self, v: &DVector<f64>) {
         let w = self.project_out(v);
         let n = w.norm();
         if n > 1e-10 * v.norm() {
@@ -433,8 +433,13 @@ impl Basis {
         }
     }
 
+    /// The residual, projected off the span.
+    pub(super) fn residual(&self) -> &DVector<f64> {
+        &self.r
+    }
+
     /// Residual variance per coordinate.
-    fn noise(&self) -> f64 {
+    pub(super) fn noise(&self) -> f64 {
         let left = self.r.len().saturating_sub(self.q.len()).max(1);
         self.r.norm_squared() / left as f64
     }

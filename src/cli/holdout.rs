@@ -7,6 +7,7 @@ use super::progress::{steps, steps_of, with_bar};
 use super::read_data;
 use clap::Args;
 use robokrige::Result;
+use robokrige::calibration::CalibrationOptions;
 use robokrige::cv::Folds;
 use robokrige::dataset::Dataset;
 use robokrige::holdout::{HyperRows, SplitExtras, holdout_cv_folds, holdout_split, split_rows};
@@ -55,6 +56,11 @@ pub struct HoldoutArgs {
     /// is seen [default with --groups].
     #[arg(long, conflicts_with = "train")]
     each_fold: bool,
+    /// The calibrated models' calibration also identifies each joint's
+    /// backlash (as `fit --backlash`); the D-H calibration row stays
+    /// geometric.
+    #[arg(long)]
+    backlash: bool,
     /// Held-out rows after the training ones (without --cv) [default: 300].
     #[arg(long)]
     test: Option<usize>,
@@ -99,7 +105,11 @@ fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<
     let o = Overrides::new().seed(a.seed).periodic(a.periodic.as_str());
     let base = params_with(None, &a.kriging.apply(o), rows)?;
     super::print_plan("holdout", base.check_fit_rows(rows.len(), option)?);
-    Ok(base)
+    // the calibrated models' calibration (the default one unless asked)
+    Ok(match a.backlash {
+        true => base.calibrate(Some(CalibrationOptions::default().with_backlash(true))),
+        false => base,
+    })
 }
 
 /// Where `a` asks the CV to choose the hyperparameters (`None`: the

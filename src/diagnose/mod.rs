@@ -120,7 +120,7 @@ pub fn diagnose_residual(
 ) -> Result<Diagnosis> {
     o.validate()?;
     let calibration = calibration
-        .map(|c| c.seen_displacements(&data.q))
+        .map(|c| c.seen_displacements(&data.q, &data.dir))
         .transpose()?;
     let t0 = std::time::Instant::now();
     let errors = data.errors_or_err()?;

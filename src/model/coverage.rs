@@ -292,7 +292,7 @@ impl ErrorModel {
         let trend: Vec<Vec<f64>> = self.outputs.iter().map(|o| o.predict_trend(&s)).collect();
         // the Kriging outputs' part of `mean` (a calibration's is not theirs)
         let kinematic = match self.calibration() {
-            Some(c) => c.predict(q)?,
+            Some(c) => c.predict(q, dir)?,
             None => vec![[0.0; 3]; q.len()],
         };
         // the reference: the model's held-out error where it was trained

@@ -297,7 +297,7 @@ impl ErrorModel {
     pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Prediction> {
         self.check_rows(q, dir)?;
         let mut p = self.predict_inputs(&self.inputs.encode(q, dir)?)?;
-        self.add_calibration(q, &mut p)?;
+        self.add_calibration(q, dir, &mut p)?;
         Ok(p)
     }
 
@@ -346,11 +346,11 @@ impl ErrorModel {
     /// Kriging of the calibration's residual already carries the
     /// calibration's error (it was fitted to it); away from there it
     /// cannot, and the calibration's extra uncertainty is added.
-    fn add_calibration(&self, q: &[Vec<f64>], p: &mut Prediction) -> Result<()> {
+    fn add_calibration(&self, q: &[Vec<f64>], dir: &[Vec<f64>], p: &mut Prediction) -> Result<()> {
         if let Some(c) = &self.calibration {
-            add_to(&mut p.mean, &c.predict(q)?);
+            add_to(&mut p.mean, &c.predict(q, dir)?);
             let base = c.campaign_variance();
-            for (s, v) in p.std.iter_mut().zip(c.predict_variance(q)?) {
+            for (s, v) in p.std.iter_mut().zip(c.predict_variance(q, dir)?) {
                 *s = std::array::from_fn(|a| (s[a] * s[a] + (v[a] - base[a]).max(0.0)).sqrt());
             }
         }
@@ -446,7 +446,7 @@ impl ErrorModel {
             .map(|k| [per_axis[0][k], per_axis[1][k], per_axis[2][k]])
             .collect();
         if let Some(c) = &self.calibration {
-            add_to(&mut mean, &c.predict(q)?);
+            add_to(&mut mean, &c.predict(q, dir)?);
         }
         Ok(mean)
     }
@@ -472,7 +472,7 @@ impl ErrorModel {
     pub fn predict_dataset(&self, data: &Dataset) -> Result<Prediction> {
         self.check_rows(&data.q, &data.dir)?;
         let mut p = self.predict_inputs(&self.inputs.encode_dataset(data)?)?;
-        self.add_calibration(&data.q, &mut p)?;
+        self.add_calibration(&data.q, &data.dir, &mut p)?;
         Ok(p)
     }
 }

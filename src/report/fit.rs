@@ -21,7 +21,8 @@ pub fn json(
         "settings": super::settings(params), "method": method, "robot": model.robot(),
         "seconds": secs, "outputs": model.reports(), "selection": model.selection(),
         "calibration": model.calibration().map(|c| c.identifiability()),
-        "joint_harmonics": model.calibration().map(|c| c.harmonics())})
+        "joint_harmonics": model.calibration().map(|c| c.harmonics()),
+        "backlash": model.calibration().map(|c| c.backlash())})
 }
 
 /// The progress line of a GA trend selection: output `axis`, its
@@ -101,6 +102,13 @@ pub fn summary(model: &ErrorModel, rows: usize, secs: f64, output: &Path) -> Str
 /// parameters it left at nominal.
 pub fn calibration(c: &Calibration) -> String {
     let mut s = format!("  calibration: {}\n", c.summary_line());
+    for b in c.backlash() {
+        let _ = writeln!(
+            s,
+            "  q{}: half backlash {:+.4}° (at the TCP {:.4} mm RMS)",
+            b.joint, b.half_deg, b.tcp_rms_mm
+        );
+    }
     for line in joint_harmonics(c) {
         let _ = writeln!(s, "  {line}");
     }
@@ -141,12 +149,16 @@ pub fn joint_harmonics(c: &Calibration) -> Vec<String> {
 
 /// What a robot file of the calibration leaves out (`robot calibrated`).
 pub fn not_in_robot_file(c: &Calibration) -> Option<String> {
-    let n = c.harmonics().len();
-    (n > 0).then(|| {
-        format!(
-            "the robot file holds the MD-H, tool and base errors; the {n} joint harmonics stay in the model file (a controller that compensates with the model gets them, one that loads this table does not)"
-        )
-    })
+    let (b, h) = (c.backlash().len(), c.harmonics().len());
+    let left = match (b, h) {
+        (0, 0) => return None,
+        (b, 0) => format!("the backlash of {b} joint(s) stays"),
+        (0, h) => format!("the {h} joint harmonics stay"),
+        (b, h) => format!("the backlash of {b} joint(s) and the {h} joint harmonics stay"),
+    };
+    Some(format!(
+        "the robot file holds the MD-H, tool and base errors; {left} in the model file (a controller that compensates with the model gets them, one that loads this table does not)"
+    ))
 }
 
 /// One line per output of what PCC+PCA or the GA selected.

@@ -40,6 +40,15 @@ pub fn split(
     )
 }
 
+/// What the header says of a calibration with the joints' backlash.
+fn backlash_note(base: &ErrorModelParams) -> &'static str {
+    if base.get_calibration().is_some_and(|c| c.backlash) {
+        "; the calibrated models' calibration identifies the joints' backlash"
+    } else {
+        ""
+    }
+}
+
 /// What `holdout --cv` (or `--groups`) prints for the `rows` rows of the
 /// campaign `data` partitioned by `folds`, fitted from `base`: how, the
 /// hyperparameters' rows and time, the periodic joints, then the tables
@@ -71,13 +80,14 @@ pub fn cv(
         ),
     };
     format!(
-        "{data}: {how} on all {rows_all} rows; Kriging ξ{} chosen {chosen}; periodic joints: {}\n{}{}{}",
+        "{data}: {how} on all {rows_all} rows; Kriging ξ{} chosen {chosen}; periodic joints: {}{}\n{}{}{}",
         if base.get_kriging().get_nugget() {
             " and nugget"
         } else {
             ""
         },
         joint_list(base.get_periodic()),
+        backlash_note(base),
         rows(&cv.rows),
         scores(&cv.scores),
         cv_tail(cv)
