@@ -341,7 +341,8 @@ fn fold_out(
     let (tr, held) = (data.select(&train), data.select(&test));
     let t = Instant::now();
     // the D-H row's geometric calibration and, from the same geometric
-    // fit, the calibrated models' own (the joint harmonics besides)
+    // fit, the calibrated models' own (the joint harmonics, and the
+    // backlash when asked, besides)
     // (one fit serves both: each row is charged its time)
     let (dh, cal) = calibrate_both(&tr, robot, &calibrated[0].calibration_options())?;
     let dh_secs = t.elapsed().as_secs_f64();

@@ -176,8 +176,8 @@ class ErrorModel(EstimatorBase):
         alone (``--geometric``).
     backlash : bool
         With the calibration: also identify each joint's backlash (a joint
-        offset that follows the direction it approached from), fitted to
-        what the geometry leaves (``--backlash``). Off by default: for
+        offset that follows the direction it approached from), the
+        geometry fitted beside it (``--backlash``). Off by default: for
         robots whose gears have play.
     method : str, optional
         A named method instead ("recommended", "js-hj", "ejs-hj", "ejs-gps",

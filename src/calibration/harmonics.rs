@@ -259,20 +259,9 @@ pub(crate) fn backlash_columns(
         return Vec::new();
     };
     let n = jac.first().map_or(0, |j| j.ncols());
-    (0..n)
-        .filter(|&j| {
-            let pos = dirs.iter().any(|d| d.get(j).is_some_and(|v| *v > 0.0));
-            let neg = dirs.iter().any(|d| d.get(j).is_some_and(|v| *v < 0.0));
-            pos && neg
-        })
-        .map(|j| {
-            DVector::from_iterator(
-                3 * jac.len(),
-                jac.iter()
-                    .zip(dirs)
-                    .flat_map(|(jq, d)| (0..3).map(move |a| jq[(a, j)] * d[j])),
-            )
-        })
+    super::backlash::reversing(dirs, n)
+        .into_iter()
+        .map(|j| super::backlash::column(jac, dirs, j))
         .collect()
 }
 

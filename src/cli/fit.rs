@@ -104,8 +104,8 @@ pub struct ModelArgs {
     #[arg(long, requires = "robot", conflicts_with = "no_calibrate")]
     geometric: bool,
     /// Also identify each joint's backlash in the calibration (a joint
-    /// offset that follows the direction the joint approached from), fitted
-    /// to what the geometry leaves. Off by default: for robots whose gears
+    /// offset that follows the direction the joint approached from), the
+    /// geometry fitted beside it. Off by default: for robots whose gears
     /// have play; on a UR10 (harmonic drives) it made the model worse.
     #[arg(long, requires = "robot", conflicts_with = "no_calibrate")]
     backlash: bool,

@@ -106,9 +106,10 @@ fn base_params(a: &HoldoutArgs, rows: &Dataset, option: Option<&str>) -> Result<
     let base = params_with(None, &a.kriging.apply(o), rows)?;
     super::print_plan("holdout", base.check_fit_rows(rows.len(), option)?);
     // the calibrated models' calibration (the default one unless asked)
-    Ok(match a.backlash {
-        true => base.calibrate(Some(CalibrationOptions::default().with_backlash(true))),
-        false => base,
+    Ok(if a.backlash {
+        base.calibrate(Some(CalibrationOptions::default().with_backlash(true)))
+    } else {
+        base
     })
 }
 

@@ -88,8 +88,8 @@ pub struct ErrorModel {
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub(crate) software: String,
     /// The kinematic calibration the Kriging outputs sit on, if any: the
-    /// model predicts `δ̂_cal(q) + δ̂_UK(s)`, the Kriging outputs having been
-    /// fitted to `e − δ̂_cal(q)`.
+    /// model predicts `δ̂_cal(q, λ) + δ̂_UK(s)`, the Kriging outputs having
+    /// been fitted to `e − δ̂_cal(q, λ)`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) calibration: Option<Box<Calibration>>,
     /// The leave-one-out check of the intervals, computed when first
@@ -338,7 +338,7 @@ impl ErrorModel {
         self
     }
 
-    /// Add the calibration's kinematic error `δ̂_cal(q)` (if any) to the
+    /// Add the calibration's kinematic error `δ̂_cal(q, λ)` (if any) to the
     /// Kriging outputs' predicted means, and to their MSE the calibration's
     /// variance beyond its largest over the campaign,
     /// `max(0, Var δ̂_cal(q) − max_campaign Var δ̂_cal)`
