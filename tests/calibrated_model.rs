@@ -290,6 +290,13 @@ fn fit_with_backlash_finds_the_simulated_play_and_keeps_it_in_the_model_file() {
             planted(j)
         );
     }
+    // a build before the backlash would ignore it: the file says so
+    let head: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("b.json")).unwrap()).unwrap();
+    assert_eq!(head["version"], robokrige::model::MODEL_VERSION);
+    let head: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("d.json")).unwrap()).unwrap();
+    assert_eq!(head["version"], robokrige::model::MODEL_VERSION_CALIBRATED);
     let (c, _, err) = rk(&["robot", "calibrated", &p("b.json"), "-o", &p("b.toml")]);
     assert_eq!(c, 0, "{err}");
     assert!(err.contains("backlash of"), "{err}");

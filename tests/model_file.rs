@@ -300,7 +300,7 @@ fn a_phase_referenced_harmonic_is_a_version_5_file() {
     assert_eq!(plain.version(), MODEL_VERSION_UNCALIBRATED);
     assert!(!plain.to_json().unwrap().contains("centre_deg"));
     let centred = fit(-31.25);
-    assert_eq!(centred.version(), robokrige::model::MODEL_VERSION);
+    assert_eq!(centred.version(), robokrige::model::MODEL_VERSION_PHASE);
     let text = centred.to_json().unwrap();
     let head: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(head["version"], 5);

@@ -42,8 +42,13 @@ pub const MODEL_FORMAT: &str = "robokrige-error-model";
 /// recomputed when first needed).
 /// Version 5 may hold a harmonic whose phase is counted from a joint value
 /// other than 0 ([`Feature::Harmonic`]'s `centre_deg`), which a build
-/// before it would ignore.
-pub const MODEL_VERSION: u32 = 5;
+/// before it would ignore. Version 6 may hold a calibration with the
+/// joints' backlash ([`Calibration::backlash`]), which a build before it
+/// would ignore too.
+pub const MODEL_VERSION: u32 = 6;
+/// The version a model with a phase-referenced harmonic and no backlash
+/// is written as.
+pub const MODEL_VERSION_PHASE: u32 = 5;
 /// The version a model with a calibration and no phase-referenced
 /// harmonic is written as, readable by the builds before that field.
 pub const MODEL_VERSION_CALIBRATED: u32 = 4;
@@ -315,11 +320,17 @@ impl ErrorModel {
     }
 
     /// The file version this model is written as: the oldest that holds
-    /// it. 5 with a phase-referenced harmonic, else 4 with a calibration
-    /// and 3 without.
+    /// it. 6 with a calibration's backlash, else 5 with a phase-referenced
+    /// harmonic, else 4 with a calibration and 3 without.
     pub(crate) fn file_version(&self) -> u32 {
-        if self.extras().iter().any(Feature::has_phase_reference) {
+        if self
+            .calibration
+            .as_ref()
+            .is_some_and(|c| !c.backlash().is_empty())
+        {
             MODEL_VERSION
+        } else if self.extras().iter().any(Feature::has_phase_reference) {
+            MODEL_VERSION_PHASE
         } else if self.calibration.is_some() {
             MODEL_VERSION_CALIBRATED
         } else {
