@@ -69,6 +69,15 @@ pub struct JointBacklash {
 }
 
 impl JointBacklash {
+    /// The half backlash with its unit on `robot`: degrees, or mm for a
+    /// prismatic joint.
+    pub fn display_on(&self, robot: &crate::kinematics::Robot) -> String {
+        match robot.links.get(self.joint - 1).map(|l| l.kind) {
+            Some(crate::kinematics::JointKind::Prismatic) => format!("{:+.4} mm", self.half_deg),
+            _ => format!("{:+.4}°", self.half_deg),
+        }
+    }
+
     /// Error unless the joint is one of `n` and the half backlash finite.
     pub fn validate(&self, n: usize) -> std::result::Result<(), String> {
         if self.joint == 0 || self.joint > n {

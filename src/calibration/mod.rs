@@ -1046,7 +1046,7 @@ impl Calibration {
             let per_joint: Vec<String> = self
                 .backlash
                 .iter()
-                .map(|b| format!("q{} {:+.4}°", b.joint, b.half_deg))
+                .map(|b| format!("q{} {}", b.joint, b.display_on(&self.nominal)))
                 .collect();
             format!("; half backlash {}", per_joint.join(", "))
         };

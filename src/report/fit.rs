@@ -105,8 +105,10 @@ pub fn calibration(c: &Calibration) -> String {
     for b in c.backlash() {
         let _ = writeln!(
             s,
-            "  q{}: half backlash {:+.4}° (at the TCP {:.4} mm RMS)",
-            b.joint, b.half_deg, b.tcp_rms_mm
+            "  q{}: half backlash {} (at the TCP {:.4} mm RMS)",
+            b.joint,
+            b.display_on(c.nominal()),
+            b.tcp_rms_mm
         );
     }
     for line in joint_harmonics(c) {
