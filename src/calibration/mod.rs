@@ -714,14 +714,9 @@ impl Calibration {
             .directions_seen
             .min(self.uncertainty.len())];
         let mut per_pose = self.displacements_at(q, seen)?;
-        for (p, h) in per_pose.iter_mut().zip(self.harmonic_columns_at(q)?) {
-            for (pa, ha) in p.iter_mut().zip(h) {
-                pa.extend(ha);
-            }
-        }
-        for (p, b) in per_pose.iter_mut().zip(self.backlash_columns_at(q, dir)?) {
-            for (pa, ba) in p.iter_mut().zip(b) {
-                pa.extend(ba);
+        for (p, t) in per_pose.iter_mut().zip(self.joint_term_columns_at(q, dir)?) {
+            for (pa, ta) in p.iter_mut().zip(t) {
+                pa.extend(ta);
             }
         }
         let width = seen.len() + 2 * self.harmonics.len() + self.backlash.len();
@@ -745,16 +740,40 @@ impl Calibration {
     }
 
     /// At each pose of `q` approached from `dir`, per axis, the TCP
-    /// displacement of a unit half backlash of each joint of
-    /// [`Calibration::backlash`] (`out[k][a]`), Jacobian per degree at the
-    /// nominal parameters.
-    fn backlash_columns_at(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[Vec<f64>; 3]>> {
-        if self.backlash.is_empty() {
+    /// displacement of a unit coefficient of each joint term (`out[k][a]`):
+    /// the joint harmonics' sine and cosine (`2h` values, `J_aj sin,
+    /// J_aj cos` per harmonic), then each joint's half backlash
+    /// (`J_aj λ_j`), with one pass of Jacobians per degree at the nominal
+    /// parameters for both.
+    fn joint_term_columns_at(
+        &self,
+        q: &[Vec<f64>],
+        dir: &[Vec<f64>],
+    ) -> Result<Vec<[Vec<f64>; 3]>> {
+        if self.harmonics.is_empty() && self.backlash.is_empty() {
             return Ok(vec![Default::default(); q.len()]);
         }
         self.check_directions(q, dir)?;
         let jac = harmonics::jacobians(&self.nominal, q)?;
-        Ok(backlash::unit_columns(&self.backlash, &jac, dir))
+        let play = backlash::unit_columns(&self.backlash, &jac, dir);
+        Ok(q.iter()
+            .zip(&jac)
+            .zip(play)
+            .map(|((qk, jq), b)| {
+                let mut b = b.into_iter();
+                std::array::from_fn(|a| {
+                    self.harmonics
+                        .iter()
+                        .flat_map(|h| {
+                            let (s, c) = h.unit_terms(qk[h.joint - 1]);
+                            let l = jq[(a, h.joint - 1)];
+                            [l * s, l * c]
+                        })
+                        .chain(b.next().unwrap_or_default())
+                        .collect()
+                })
+            })
+            .collect())
     }
 
     /// Error unless `dir` holds a direction row per pose of `q` (or nothing:
@@ -768,32 +787,6 @@ impl Calibration {
             )));
         }
         Ok(())
-    }
-
-    /// At each pose of `q`, per axis, the TCP displacement of a unit
-    /// coefficient of each joint harmonic's sine and cosine (`out[k][a]`,
-    /// `2h` values: `J_aj sin, J_aj cos` per harmonic, Jacobian per degree
-    /// at the nominal parameters).
-    fn harmonic_columns_at(&self, q: &[Vec<f64>]) -> Result<Vec<[Vec<f64>; 3]>> {
-        if self.harmonics.is_empty() {
-            return Ok(vec![Default::default(); q.len()]);
-        }
-        let jac = harmonics::jacobians(&self.nominal, q)?;
-        Ok(q.iter()
-            .zip(&jac)
-            .map(|(qk, jq)| {
-                std::array::from_fn(|a| {
-                    self.harmonics
-                        .iter()
-                        .flat_map(|h| {
-                            let (s, c) = h.unit_terms(qk[h.joint - 1]);
-                            let l = jq[(a, h.joint - 1)];
-                            [l * s, l * c]
-                        })
-                        .collect()
-                })
-            })
-            .collect())
     }
 
     /// The identified parameter errors (degrees and mm), in the order of
@@ -874,9 +867,8 @@ impl Calibration {
     /// (the geometry's given the backlash it was fitted beside).
     pub fn predict_variance(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
         let along = self.displacements_at(q, &self.uncertainty)?;
-        let harmonic = self.harmonic_columns_at(q)?;
-        let play = self.backlash_columns_at(q, dir)?;
-        let cov = &self.harmonic_covariance;
+        let terms = self.joint_term_columns_at(q, dir)?;
+        let w = 2 * self.harmonics.len();
         let quadratic = |h: &[f64], c: &[f64]| -> f64 {
             let w = h.len();
             (0..w)
@@ -886,16 +878,18 @@ impl Calibration {
         };
         Ok(along
             .iter()
-            .zip(&harmonic)
-            .zip(&play)
-            .map(|((d, h), b)| {
+            .zip(&terms)
+            .map(|(d, t)| {
                 std::array::from_fn(|a| {
                     let geometric: f64 = d[a]
                         .iter()
                         .zip(&self.uncertainty)
                         .map(|(x, (_, var))| var * x * x)
                         .sum();
-                    geometric + quadratic(&h[a], cov) + quadratic(&b[a], &self.backlash_covariance)
+                    let (h, b) = t[a].split_at(w);
+                    geometric
+                        + quadratic(h, &self.harmonic_covariance)
+                        + quadratic(b, &self.backlash_covariance)
                 })
             })
             .collect())
