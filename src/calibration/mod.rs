@@ -32,26 +32,29 @@
 //! the half backlashes, `δq` the joint harmonics, zero without them), and
 //! gives the residual `e − δ̂_cal` that a Kriging model
 //! learns next (the calibrated error model).
+//!
+//! One concept a file: `geometric.rs` (the geometric fit and the stages
+//! after it), [`identifiability`] (the scaled Jacobian's directions and
+//! the report), [`backlash`], [`harmonics`], `predict.rs` (the prediction,
+//! its variance and the displacements of the directions seen); this file
+//! holds the options, the entry points and the [`Calibration`] as a file
+//! stores it.
 
 pub mod backlash;
+mod geometric;
 pub mod harmonics;
 pub mod identifiability;
+mod predict;
 
 pub use backlash::JointBacklash;
 pub use harmonics::JointHarmonic;
 pub use identifiability::{Identifiability, ParameterReport};
 
 use crate::dataset::Dataset;
-use crate::kinematics::{
-    ErrorChain, IDENTIFICATION_STEP, Robot, apply_errors, calib_names, identification_jacobian,
-};
-use crate::optim::{LeastSquares, LmOptions, levenberg_marquardt_on};
-use crate::vec3::residuals;
+use crate::kinematics::{Robot, apply_errors};
 use crate::{Error, Result};
-use backlash::BacklashFit;
-use identifiability::{ScaledJacobian, rms};
-use nalgebra::{DMatrix, DVector, Vector3};
-use rayon::prelude::*;
+use geometric::Geometric;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Options of [`calibrate`].
@@ -260,406 +263,6 @@ pub fn calibrate_both(
     Ok((geometric, full))
 }
 
-/// The geometric fit of a calibration, before its joint harmonics.
-struct Geometric<'a> {
-    /// The joints as reached (as commanded, unless a backlash was found).
-    joints: &'a [Vec<f64>],
-    /// The approach directions of the poses (empty: not known).
-    dirs: &'a [Vec<f64>],
-    /// The backlash the geometry was fitted beside.
-    backlash: Option<BacklashFit>,
-    targets: &'a [Vector3<f64>],
-    nominal: &'a Robot,
-    opts: &'a CalibrationOptions,
-    jac: DMatrix<f64>,
-    sj: ScaledJacobian,
-    k: usize,
-    s: f64,
-    rho0: f64,
-    fit: SubspaceFit,
-}
-
-impl<'a> Geometric<'a> {
-    /// Levenberg–Marquardt on every numerically identifiable direction,
-    /// then on those seen above the noise of that first fit.
-    fn fit(
-        joints: &'a [Vec<f64>],
-        targets: &'a [Vector3<f64>],
-        nominal: &'a Robot,
-        opts: &'a CalibrationOptions,
-    ) -> Result<Self> {
-        opts.validate()?;
-        let m = joints.len();
-        let r0 = position_residual(nominal, joints, targets);
-        let rho0 = rms(&r0);
-        if !(rho0.is_finite() && rho0 > 0.0) {
-            return Err(Error::InvalidParameter(format!(
-                "the calibration needs measured errors that are finite and not all zero (RMS {rho0})"
-            )));
-        }
-        let jac = stacked_jacobian(nominal, joints);
-        let sj = ScaledJacobian::new(&jac, rho0);
-        let rank = sj.numerical_rank();
-        let first = fit_subspace(nominal, joints, targets, &sj, &vec![0.0; rank], opts)?;
-        let dof_left = (3 * m).saturating_sub(rank).max(1) as f64;
-        let s = opts
-            .noise_mm
-            .unwrap_or_else(|| first.r.norm() / dof_left.sqrt());
-        let k = sj.seen_above(s);
-        let fit = if k == rank {
-            first
-        } else {
-            // the directions are orthogonal in the scaled parameters, so the
-            // first fit's coordinates along the kept ones are where the
-            // truncated fit ends up to first order: start there
-            fit_subspace(nominal, joints, targets, &sj, &first.u[..k], opts)?
-        };
-        Ok(Geometric {
-            joints,
-            dirs: &[],
-            backlash: None,
-            targets,
-            nominal,
-            opts,
-            jac,
-            sj,
-            k,
-            s,
-            rho0,
-            fit,
-        })
-    }
-
-    /// The calibration the options ask for on `data`, this stage fitted on
-    /// its commanded joints: with [`CalibrationOptions::backlash`], the
-    /// backlash searched on this stage's residual ([`backlash::search`])
-    /// and, where one is found, the geometry refitted on the joints as
-    /// reached, `q + b∘λ`, along the directions this stage saw (one
-    /// alternation: the geometric directions were refitted beside the
-    /// backlash in its least squares); then [`Geometric::finish`].
-    fn full(self, data: &'a Dataset) -> Result<Calibration> {
-        let found = if self.opts.backlash {
-            let pjac = harmonics::jacobians(self.nominal, self.joints)?;
-            let geometric = &self.jac * self.sj.basis(self.k);
-            backlash::search(&pjac, &data.dir, &geometric, &self.fit.r)?
-        } else {
-            None
-        };
-        let Some(found) = found else {
-            return Geometric {
-                dirs: &data.dir,
-                ..self
-            }
-            .finish();
-        };
-        // the geometry refitted on the joints as reached, along the
-        // directions this stage saw and from where it ended: a lower
-        // residual noise must not let more, weakly seen, directions in (on
-        // two 100 mm UR10 cubes, one held out, those took the held-out
-        // error from 1.64 to 2.17 mm). Kept as identified instead, the
-        // geometry holds the part of a backlash that acts as a joint
-        // offset over the campaign's directions, and poses approached
-        // otherwise are off by it.
-        let joints: Vec<Vec<f64>> = data
-            .q
-            .iter()
-            .zip(&data.dir)
-            .map(|(q, d)| backlash::reached(&found.backlash, q, d))
-            .collect();
-        let fit = fit_subspace(
-            self.nominal,
-            &joints,
-            self.targets,
-            &self.sj,
-            &self.fit.u,
-            self.opts,
-        )?;
-        // (this stage's noise and directions seen stay those of the fit
-        // before the backlash: the identifiability report states them)
-        Geometric {
-            joints: &joints,
-            dirs: &data.dir,
-            backlash: Some(found),
-            fit,
-            ..self
-        }
-        .finish()
-    }
-
-    /// The calibration the options ask for: with the joint harmonics
-    /// ([`Geometric::with_harmonics`], with this stage's directions) or
-    /// geometric.
-    fn finish(&self) -> Result<Calibration> {
-        let dirs = (!self.dirs.is_empty()).then_some(self.dirs);
-        let found = if self.opts.joint_harmonics {
-            self.with_harmonics(dirs)?
-        } else {
-            None
-        };
-        found.map_or_else(|| self.calibration(&self.fit, None), Ok)
-    }
-
-    /// The joint harmonics searched on the geometric residual (see
-    /// [`harmonics`]), and the geometry refitted beside them when that
-    /// lowers the residual significantly: by more than the level-
-    /// [`harmonics::FALSE_ALARM`] bound of χ²ₖ ([`harmonics::chi2_bound`])
-    /// in units of the noise, `k` the geometric directions seen. Otherwise
-    /// the geometry stays as identified and the harmonics fit what it
-    /// leaves. A harmonic partly in the span of the geometric directions
-    /// (a few cycles over the range) biases the geometric fit, which the
-    /// refit corrects; on a campaign that barely samples a joint (a few
-    /// small ISO cubes) an alias of a longer error that the model lacks
-    /// can pass the search, and refitting the weakly seen directions
-    /// beside it gains nothing in the fit but moves poses far from the
-    /// campaign (on two 100 mm cubes of a UR10, held-out home and check
-    /// poses 0.7 mm). With the approach directions `dirs`, a backlash of
-    /// each joint that reverses (`∂P/∂q_j · λ_j`, a step of the joint
-    /// with the direction) is refitted beside each candidate and left to
-    /// the Kriging: a harmonic must not take up a direction effect.
-    /// `None` when no harmonic passes: the geometric calibration stands.
-    fn with_harmonics(&self, dirs: Option<&[Vec<f64>]>) -> Result<Option<Calibration>> {
-        let (joints, targets, nominal) = (self.joints, self.targets, self.nominal);
-        let pjac = harmonics::jacobians(nominal, joints)?;
-        let geometric = &self.jac * self.sj.basis(self.k);
-        let backlash = harmonics::backlash_columns(&pjac, dirs);
-        let found = harmonics::search(nominal, joints, &pjac, &self.fit.r, &geometric, &backlash);
-        if found.chosen.is_empty() {
-            return Ok(None);
-        }
-        let residual = |p: &[f64], h: &[JointHarmonic]| {
-            let moved: Vec<Vec<f64>> = joints.iter().map(|q| harmonics::deviated(h, q)).collect();
-            position_residual(&apply_errors(nominal, p), &moved, targets)
-        };
-        // the geometry as identified, the harmonics beside the backlash
-        let kept = harmonics::coefficients(&found, backlash.iter().cloned(), &self.fit.r)?;
-        let kept_fit = SubspaceFit {
-            r: residual(&self.fit.p, &kept.harmonics),
-            ..self.fit.clone()
-        };
-        // the geometry refitted beside the harmonics: on the targets with
-        // the harmonics' TCP displacement removed
-        let beside = geometric
-            .column_iter()
-            .map(|c| c.into_owned())
-            .chain(backlash);
-        let joint = harmonics::coefficients(&found, beside, &self.fit.r)?;
-        let shifted: Vec<Vector3<f64>> = targets
-            .iter()
-            .zip(&joint.shift)
-            .map(|(t, d)| t - Vector3::from(*d))
-            .collect();
-        let mut fit = fit_subspace(nominal, joints, &shifted, &self.sj, &self.fit.u, self.opts)?;
-        fit.r = residual(&fit.p, &joint.harmonics);
-        let gain = (kept_fit.r.norm_squared() - fit.r.norm_squared()) / found.noise;
-        let cal = if gain > harmonics::chi2_bound(self.k, harmonics::FALSE_ALARM) {
-            self.calibration(&fit, Some(joint))?
-        } else {
-            self.calibration(&kept_fit, Some(kept))?
-        };
-        Ok(Some(cal))
-    }
-
-    /// The calibration of the geometric fit `fit` (this stage's or the
-    /// one refitted beside the harmonics `found`).
-    fn calibration(
-        &self,
-        fit: &SubspaceFit,
-        found: Option<harmonics::HarmonicFit>,
-    ) -> Result<Calibration> {
-        let (sj, m) = (&self.sj, self.joints.len());
-        let names = calib_names(self.nominal.dof());
-        let identifiability = sj.report(self.k, self.s, &fit.p, &names, m);
-        let basis = sj.basis(sj.sigma.len());
-        let uncertainty = sj
-            .posterior_variances(self.s)
-            .into_iter()
-            .enumerate()
-            .map(|(i, v)| (basis.column(i).iter().copied().collect(), v))
-            .collect();
-        let (harmonics, harmonic_covariance) =
-            found.map_or((Vec::new(), Vec::new()), |h| (h.harmonics, h.covariance));
-        let (backlash, backlash_covariance) = self
-            .backlash
-            .clone()
-            .map_or((Vec::new(), Vec::new()), |b| (b.backlash, b.covariance));
-        let mut cal = Calibration {
-            uncertainty,
-            campaign_variance: [0.0; 3],
-            harmonics,
-            harmonic_covariance,
-            backlash,
-            backlash_covariance,
-            nominal: self.nominal.clone(),
-            identified: apply_errors(self.nominal, &fit.p),
-            parameters: fit.p.clone(),
-            identifiability,
-            options: self.opts.clone(),
-            rows: m,
-            rms_before_mm: self.rho0,
-            rms_after_mm: rms(&fit.r),
-            iterations: fit.iterations,
-            stop: fit.stop.clone(),
-        };
-        let var = cal.predict_variance(self.joints, self.dirs)?;
-        cal.campaign_variance =
-            std::array::from_fn(|a| var.iter().map(|v| v[a]).fold(0.0, f64::max));
-        Ok(cal)
-    }
-}
-
-#[derive(Clone)]
-struct SubspaceFit {
-    u: Vec<f64>,
-    p: Vec<f64>,
-    r: DVector<f64>,
-    iterations: usize,
-    stop: String,
-}
-
-/// Levenberg–Marquardt on the coordinates of the first `u0.len()`
-/// directions, from `u0`.
-fn fit_subspace(
-    nominal: &Robot,
-    joints: &[Vec<f64>],
-    targets: &[Vector3<f64>],
-    sj: &ScaledJacobian,
-    u0: &[f64],
-    opts: &CalibrationOptions,
-) -> Result<SubspaceFit> {
-    let k = u0.len();
-    let t = sj.basis(k);
-    if k == 0 {
-        let p = vec![0.0; t.nrows()];
-        return Ok(SubspaceFit {
-            u: Vec::new(),
-            r: position_residual(nominal, joints, targets),
-            p,
-            iterations: 0,
-            stop: "nothing identifiable".into(),
-        });
-    }
-    let mut problem = Subspace {
-        nominal,
-        joints,
-        targets,
-        t,
-    };
-    let res = levenberg_marquardt_on(
-        &mut problem,
-        u0,
-        &LmOptions {
-            max_iter: opts.max_iter,
-            // the directions are orthogonal at nominal: nothing to freeze
-            rank_tol: 1e-12,
-            ..LmOptions::default()
-        },
-    )?;
-    let p = problem.params(&res.x);
-    Ok(SubspaceFit {
-        r: position_residual(&apply_errors(nominal, &p), joints, targets),
-        u: res.x,
-        p,
-        iterations: res.iterations,
-        stop: format!("{:?}", res.stop),
-    })
-}
-
-/// The least squares of [`fit_subspace`]: the residual of the errors
-/// `p = T u` over the coordinates `u` of the directions `T`.
-struct Subspace<'a> {
-    nominal: &'a Robot,
-    joints: &'a [Vec<f64>],
-    targets: &'a [Vector3<f64>],
-    t: DMatrix<f64>,
-}
-
-impl Subspace<'_> {
-    fn params(&self, u: &[f64]) -> Vec<f64> {
-        (&self.t * DVector::from_column_slice(u)).data.into()
-    }
-}
-
-impl LeastSquares for Subspace<'_> {
-    fn residual(&mut self, u: &[f64]) -> Result<DVector<f64>> {
-        let p = self.params(u);
-        Ok(position_residual(
-            &apply_errors(self.nominal, &p),
-            self.joints,
-            self.targets,
-        ))
-    }
-
-    /// In the parameters' own units (steps of [`IDENTIFICATION_STEP`], as
-    /// the identification Jacobian), then onto the directions: a step in the
-    /// directions' prior units could be large for a weakly seen parameter.
-    fn jacobian(&mut self, u: &[f64]) -> Result<DMatrix<f64>> {
-        let p = self.params(u);
-        let jp = residual_jacobian(
-            self.nominal,
-            &p,
-            IDENTIFICATION_STEP,
-            self.joints,
-            self.targets,
-        );
-        Ok(jp * &self.t)
-    }
-}
-
-/// `targets − FK(robot; joints)`, stacked x, y, z per pose.
-fn position_residual(robot: &Robot, joints: &[Vec<f64>], targets: &[Vector3<f64>]) -> DVector<f64> {
-    let per_pose: Vec<Vector3<f64>> = joints
-        .par_iter()
-        .zip(targets)
-        .map(|(q, p)| p - robot.fk_unchecked(q).translation.vector)
-        .collect();
-    DVector::from_iterator(
-        3 * per_pose.len(),
-        per_pose.iter().flat_map(|d| [d.x, d.y, d.z]),
-    )
-}
-
-/// `∂r/∂p` of [`position_residual`] at the errors `p` (3m × P): central
-/// differences of step `h`, column j `(r(p + h e_j) − r(p − h e_j)) / w_j`
-/// with `w_j = (p_j + h) − (p_j − h)`, the distance the two points are
-/// apart after rounding. The same numbers as
-/// `optim::numerical_jacobian(r, p, [h; P])`, bit for bit, but each moved
-/// parameter recomputes only its own link and the products after it
-/// ([`ErrorChain`]), not a whole forward kinematics.
-fn residual_jacobian(
-    nominal: &Robot,
-    p: &[f64],
-    h: f64,
-    joints: &[Vec<f64>],
-    targets: &[Vector3<f64>],
-) -> DMatrix<f64> {
-    let np = p.len();
-    let blocks: Vec<Vec<[f64; 3]>> = joints
-        .par_iter()
-        .zip(targets)
-        .map(|(q, target)| {
-            let chain = ErrorChain::new(nominal, p, q);
-            (0..np)
-                .map(|j| {
-                    let (hi, lo) = (p[j] + h, p[j] - h);
-                    let (fp, fm) = (target - chain.moved(j, hi), target - chain.moved(j, lo));
-                    std::array::from_fn(|a| (fp[a] - fm[a]) / (hi - lo))
-                })
-                .collect()
-        })
-        .collect();
-    DMatrix::from_fn(3 * joints.len(), np, |i, j| blocks[i / 3][j][i % 3])
-}
-
-/// The identification Jacobian of every pose, stacked (3m × P).
-fn stacked_jacobian(robot: &Robot, joints: &[Vec<f64>]) -> DMatrix<f64> {
-    let rows: Vec<[Vec<f64>; 3]> = joints
-        .par_iter()
-        .map(|q| identification_jacobian(robot, q))
-        .collect();
-    let np = rows.first().map_or(0, |r| r[0].len());
-    DMatrix::from_fn(3 * rows.len(), np, |i, j| rows[i / 3][i % 3][j])
-}
-
 impl Calibration {
     /// The robot as the controller knows it.
     pub fn nominal(&self) -> &Robot {
@@ -698,35 +301,6 @@ impl Calibration {
         robot
     }
 
-    /// The TCP displacement of a unit step along each direction the campaign
-    /// saw, at the poses `q`, per axis: `out[a][i][k] = ∂P_a/∂p(q_k)·D v_i`
-    /// for the first [`Identifiability::directions_seen`] directions `D v_i`
-    /// of the scaled Jacobian (at the nominal parameters, as the directions
-    /// were found). Whatever of an effect on these poses lies in their span
-    /// the calibration has taken up; refitted beside the effect, they give
-    /// it back (Frisch–Waugh). Empty per axis for a calibration read from a
-    /// file that does not record its directions. The joint harmonics' and
-    /// the backlash's unit displacements follow (approach directions `dir`,
-    /// as [`Calibration::predict`]).
-    pub fn seen_displacements(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Displacements> {
-        let seen = &self.uncertainty[..self
-            .identifiability
-            .directions_seen
-            .min(self.uncertainty.len())];
-        let mut per_pose = self.displacements_at(q, seen)?;
-        for (p, t) in per_pose.iter_mut().zip(self.joint_term_columns_at(q, dir)?) {
-            for (pa, ta) in p.iter_mut().zip(t) {
-                pa.extend(ta);
-            }
-        }
-        let width = seen.len() + 2 * self.harmonics.len() + self.backlash.len();
-        Ok(std::array::from_fn(|a| {
-            (0..width)
-                .map(|i| per_pose.iter().map(|p| p[a][i]).collect())
-                .collect()
-        }))
-    }
-
     /// The joint harmonics added after the geometric fit (none for a
     /// geometric calibration).
     pub fn harmonics(&self) -> &[JointHarmonic] {
@@ -737,56 +311,6 @@ impl Calibration {
     /// a geometric calibration, or where the campaign showed none).
     pub fn backlash(&self) -> &[JointBacklash] {
         &self.backlash
-    }
-
-    /// At each pose of `q` approached from `dir`, per axis, the TCP
-    /// displacement of a unit coefficient of each joint term (`out[k][a]`):
-    /// the joint harmonics' sine and cosine (`2h` values, `J_aj sin,
-    /// J_aj cos` per harmonic), then each joint's half backlash
-    /// (`J_aj λ_j`), with one pass of Jacobians per degree at the nominal
-    /// parameters for both.
-    fn joint_term_columns_at(
-        &self,
-        q: &[Vec<f64>],
-        dir: &[Vec<f64>],
-    ) -> Result<Vec<[Vec<f64>; 3]>> {
-        if self.harmonics.is_empty() && self.backlash.is_empty() {
-            return Ok(vec![Default::default(); q.len()]);
-        }
-        self.check_directions(q, dir)?;
-        let jac = harmonics::jacobians(&self.nominal, q)?;
-        let play = backlash::unit_columns(&self.backlash, &jac, dir);
-        Ok(q.iter()
-            .zip(&jac)
-            .zip(play)
-            .map(|((qk, jq), b)| {
-                let mut b = b.into_iter();
-                std::array::from_fn(|a| {
-                    self.harmonics
-                        .iter()
-                        .flat_map(|h| {
-                            let (s, c) = h.unit_terms(qk[h.joint - 1]);
-                            let l = jq[(a, h.joint - 1)];
-                            [l * s, l * c]
-                        })
-                        .chain(b.next().unwrap_or_default())
-                        .collect()
-                })
-            })
-            .collect())
-    }
-
-    /// Error unless `dir` holds a direction row per pose of `q` (or nothing:
-    /// not known, a backlash then left at the middle of its play).
-    fn check_directions(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<()> {
-        if !dir.is_empty() && dir.len() != q.len() {
-            return Err(Error::InvalidParameter(format!(
-                "{} poses but {} rows of approach directions",
-                q.len(),
-                dir.len()
-            )));
-        }
-        Ok(())
     }
 
     /// The identified parameter errors (degrees and mm), in the order of
@@ -820,139 +344,6 @@ impl Calibration {
     /// Levenberg–Marquardt steps of the final fit, and why it stopped.
     pub fn solver(&self) -> (usize, &str) {
         (self.iterations, &self.stop)
-    }
-
-    /// The kinematic part of the error at joints `q` approached from the
-    /// directions `dir` (`λ = ±1` per joint, a row per pose; empty: not
-    /// known, each backlash then at the middle of its play):
-    /// `δ̂_cal = P_cal(q' + δq(q')) − P_nom(q)`, `q' = q + b∘λ`, mm.
-    pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        for r in q {
-            self.nominal.check_len(r)?;
-        }
-        self.check_directions(q, dir)?;
-        Ok(q.par_iter()
-            .enumerate()
-            .map(|(k, qk)| {
-                let lambda = dir.get(k).map_or(&[][..], Vec::as_slice);
-                let commanded = backlash::reached(&self.backlash, qk, lambda);
-                let reached = harmonics::deviated(&self.harmonics, &commanded);
-                (self.identified.fk_unchecked(&reached).translation.vector
-                    - self.nominal.fk_unchecked(qk).translation.vector)
-                    .into()
-            })
-            .collect())
-    }
-
-    /// The variance (mm², per axis) of the calibration's prediction at
-    /// joints `q` from what the campaign left uncertain: with the
-    /// identification Jacobian `J(q)` and the parameter directions `D v_i`
-    /// of the scaled Jacobian ([`identifiability`]),
-    ///
-    /// ```text
-    /// Var δ̂_cal,a(q) = Σ_i var_i · (J_a(q) D v_i)²,   var_i = 1 / (1 + σ_i²/s²),
-    /// ```
-    ///
-    /// the posterior variance of each direction's coordinate: small for a
-    /// direction the campaign sees, the prior's for one fixed at nominal.
-    /// Near the campaign's poses the unseen directions move the TCP by
-    /// less than the noise; far from them they may not, and the variance
-    /// says so. `J` is taken at the nominal parameters, as the directions
-    /// were. 2(5n + 9) forward kinematics per pose.
-    ///
-    /// Joint harmonics add `h_a(q)ᵀ C h_a(q)`, `h_a` the displacements of
-    /// their unit coefficients and `C` the coefficients' least-squares
-    /// covariance; the backlash (directions `dir`, as [`Calibration::predict`])
-    /// adds its own the same way. Each part is conditional on the others
-    /// (the geometry's given the backlash it was fitted beside).
-    pub fn predict_variance(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        let along = self.displacements_at(q, &self.uncertainty)?;
-        let terms = self.joint_term_columns_at(q, dir)?;
-        let w = 2 * self.harmonics.len();
-        let quadratic = |h: &[f64], c: &[f64]| -> f64 {
-            let w = h.len();
-            (0..w)
-                .flat_map(|i| (0..w).map(move |j| (i, j)))
-                .map(|(i, j)| h[i] * c[i * w + j] * h[j])
-                .sum()
-        };
-        Ok(along
-            .iter()
-            .zip(&terms)
-            .map(|(d, t)| {
-                std::array::from_fn(|a| {
-                    let geometric: f64 = d[a]
-                        .iter()
-                        .zip(&self.uncertainty)
-                        .map(|(x, (_, var))| var * x * x)
-                        .sum();
-                    let (h, b) = t[a].split_at(w);
-                    geometric
-                        + quadratic(h, &self.harmonic_covariance)
-                        + quadratic(b, &self.backlash_covariance)
-                })
-            })
-            .collect())
-    }
-
-    /// At each pose of `q`, per axis, the TCP displacement of a unit step
-    /// along each direction of `dirs` (`out[k][a][i]`), with the
-    /// identification Jacobian at the nominal parameters, where the
-    /// directions were found.
-    fn displacements_at(
-        &self,
-        q: &[Vec<f64>],
-        dirs: &[(Vec<f64>, f64)],
-    ) -> Result<Vec<[Vec<f64>; 3]>> {
-        for r in q {
-            self.nominal.check_len(r)?;
-        }
-        Ok(q.par_iter()
-            .map(|qk| {
-                let j = identification_jacobian(&self.nominal, qk);
-                std::array::from_fn(|a| {
-                    dirs.iter()
-                        .map(|(dir, _)| j[a].iter().zip(dir).map(|(x, y)| x * y).sum())
-                        .collect()
-                })
-            })
-            .collect())
-    }
-
-    /// The posterior covariance of the parameter errors (P × P, degrees and
-    /// mm as the parameters), from the directions `D v_i` of the scaled
-    /// Jacobian and their posterior variances:
-    ///
-    /// ```text
-    /// Σ_p = Σ_i var_i · (D v_i)(D v_i)ᵀ,   var_i = 1 / (1 + σ_i²/s²),
-    /// ```
-    ///
-    /// so that [`Calibration::predict_variance`] at `q` is the diagonal of
-    /// `J(q) Σ_p J(q)ᵀ`. What a campaign planner conditions on a new pose.
-    pub fn parameter_covariance(&self) -> DMatrix<f64> {
-        let np = self.parameters.len();
-        let mut c = DMatrix::zeros(np, np);
-        for (dir, var) in &self.uncertainty {
-            let d = DVector::from_column_slice(dir);
-            c.ger(*var, &d, &d, 1.0);
-        }
-        c
-    }
-
-    /// Largest [`Calibration::predict_variance`] over the poses it was
-    /// identified on, mm² per axis: what a prediction's calibration
-    /// variance is compared with to tell an extrapolation.
-    pub fn campaign_variance(&self) -> [f64; 3] {
-        self.campaign_variance
-    }
-
-    /// `data` with its errors replaced by what the calibration leaves,
-    /// `e − δ̂_cal(q, λ)`.
-    pub fn residual(&self, data: &Dataset) -> Result<Dataset> {
-        let pred = self.predict(&data.q, &data.dir)?;
-        let mut r = data.clone();
-        r.errors = Some(residuals(data.errors_or_err()?, &pred));
-        Ok(r)
     }
 
     /// The same calibration identified anew on `data` (same nominal robot
@@ -1075,8 +466,11 @@ impl Calibration {
 
 #[cfg(test)]
 mod tests {
+    use super::geometric::{position_residual, residual_jacobian};
     use super::*;
+    use crate::kinematics::IDENTIFICATION_STEP;
     use crate::kinematics::load_robot;
+    use crate::vec3::residuals;
 
     /// The chain's residual Jacobian is the generic central differences'
     /// bit for bit, away from the nominal errors and with a base and tool.

@@ -1,0 +1,227 @@
+//! What a [`Calibration`] predicts at new poses, and how sure it is: the
+//! kinematic part of the error `δ̂_cal(q, λ)`, its variance from the
+//! directions the campaign left uncertain and the joint terms'
+//! covariances, and the TCP displacements of the directions it saw (what
+//! a diagnosis refits beside an effect).
+
+use super::{Calibration, Displacements, backlash, harmonics};
+use crate::dataset::Dataset;
+use crate::kinematics::identification_jacobian;
+use crate::vec3::residuals;
+use crate::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+impl Calibration {
+    /// The TCP displacement of a unit step along each direction the campaign
+    /// saw, at the poses `q`, per axis: `out[a][i][k] = ∂P_a/∂p(q_k)·D v_i`
+    /// for the first [`Identifiability::directions_seen`](super::Identifiability::directions_seen) directions `D v_i`
+    /// of the scaled Jacobian (at the nominal parameters, as the directions
+    /// were found). Whatever of an effect on these poses lies in their span
+    /// the calibration has taken up; refitted beside the effect, they give
+    /// it back (Frisch–Waugh). Empty per axis for a calibration read from a
+    /// file that does not record its directions. The joint harmonics' and
+    /// the backlash's unit displacements follow (approach directions `dir`,
+    /// as [`Calibration::predict`]).
+    pub fn seen_displacements(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Displacements> {
+        let seen = &self.uncertainty[..self
+            .identifiability
+            .directions_seen
+            .min(self.uncertainty.len())];
+        let mut per_pose = self.displacements_at(q, seen)?;
+        for (p, t) in per_pose.iter_mut().zip(self.joint_term_columns_at(q, dir)?) {
+            for (pa, ta) in p.iter_mut().zip(t) {
+                pa.extend(ta);
+            }
+        }
+        let width = seen.len() + 2 * self.harmonics.len() + self.backlash.len();
+        Ok(std::array::from_fn(|a| {
+            (0..width)
+                .map(|i| per_pose.iter().map(|p| p[a][i]).collect())
+                .collect()
+        }))
+    }
+
+    /// At each pose of `q` approached from `dir`, per axis, the TCP
+    /// displacement of a unit coefficient of each joint term (`out[k][a]`):
+    /// the joint harmonics' sine and cosine (`2h` values, `J_aj sin,
+    /// J_aj cos` per harmonic), then each joint's half backlash
+    /// (`J_aj λ_j`), with one pass of Jacobians per degree at the nominal
+    /// parameters for both.
+    fn joint_term_columns_at(
+        &self,
+        q: &[Vec<f64>],
+        dir: &[Vec<f64>],
+    ) -> Result<Vec<[Vec<f64>; 3]>> {
+        if self.harmonics.is_empty() && self.backlash.is_empty() {
+            return Ok(vec![Default::default(); q.len()]);
+        }
+        self.check_directions(q, dir)?;
+        let jac = harmonics::jacobians(&self.nominal, q)?;
+        let play = backlash::unit_columns(&self.backlash, &jac, dir);
+        Ok(q.iter()
+            .zip(&jac)
+            .zip(play)
+            .map(|((qk, jq), b)| {
+                let mut b = b.into_iter();
+                std::array::from_fn(|a| {
+                    self.harmonics
+                        .iter()
+                        .flat_map(|h| {
+                            let (s, c) = h.unit_terms(qk[h.joint - 1]);
+                            let l = jq[(a, h.joint - 1)];
+                            [l * s, l * c]
+                        })
+                        .chain(b.next().unwrap_or_default())
+                        .collect()
+                })
+            })
+            .collect())
+    }
+
+    /// Error unless `dir` holds a direction row per pose of `q` (or nothing:
+    /// not known, a backlash then left at the middle of its play).
+    fn check_directions(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<()> {
+        if !dir.is_empty() && dir.len() != q.len() {
+            return Err(Error::InvalidParameter(format!(
+                "{} poses but {} rows of approach directions",
+                q.len(),
+                dir.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The kinematic part of the error at joints `q` approached from the
+    /// directions `dir` (`λ = ±1` per joint, a row per pose; empty: not
+    /// known, each backlash then at the middle of its play):
+    /// `δ̂_cal = P_cal(q' + δq(q')) − P_nom(q)`, `q' = q + b∘λ`, mm.
+    pub fn predict(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        self.check_directions(q, dir)?;
+        Ok(q.par_iter()
+            .enumerate()
+            .map(|(k, qk)| {
+                let lambda = dir.get(k).map_or(&[][..], Vec::as_slice);
+                let commanded = backlash::reached(&self.backlash, qk, lambda);
+                let reached = harmonics::deviated(&self.harmonics, &commanded);
+                (self.identified.fk_unchecked(&reached).translation.vector
+                    - self.nominal.fk_unchecked(qk).translation.vector)
+                    .into()
+            })
+            .collect())
+    }
+
+    /// The variance (mm², per axis) of the calibration's prediction at
+    /// joints `q` from what the campaign left uncertain: with the
+    /// identification Jacobian `J(q)` and the parameter directions `D v_i`
+    /// of the scaled Jacobian ([`identifiability`](super::identifiability)),
+    ///
+    /// ```text
+    /// Var δ̂_cal,a(q) = Σ_i var_i · (J_a(q) D v_i)²,   var_i = 1 / (1 + σ_i²/s²),
+    /// ```
+    ///
+    /// the posterior variance of each direction's coordinate: small for a
+    /// direction the campaign sees, the prior's for one fixed at nominal.
+    /// Near the campaign's poses the unseen directions move the TCP by
+    /// less than the noise; far from them they may not, and the variance
+    /// says so. `J` is taken at the nominal parameters, as the directions
+    /// were. 2(5n + 9) forward kinematics per pose.
+    ///
+    /// Joint harmonics add `h_a(q)ᵀ C h_a(q)`, `h_a` the displacements of
+    /// their unit coefficients and `C` the coefficients' least-squares
+    /// covariance; the backlash (directions `dir`, as [`Calibration::predict`])
+    /// adds its own the same way. Each part is conditional on the others
+    /// (the geometry's given the backlash it was fitted beside).
+    pub fn predict_variance(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
+        let along = self.displacements_at(q, &self.uncertainty)?;
+        let terms = self.joint_term_columns_at(q, dir)?;
+        let w = 2 * self.harmonics.len();
+        let quadratic = |h: &[f64], c: &[f64]| -> f64 {
+            let w = h.len();
+            (0..w)
+                .flat_map(|i| (0..w).map(move |j| (i, j)))
+                .map(|(i, j)| h[i] * c[i * w + j] * h[j])
+                .sum()
+        };
+        Ok(along
+            .iter()
+            .zip(&terms)
+            .map(|(d, t)| {
+                std::array::from_fn(|a| {
+                    let geometric: f64 = d[a]
+                        .iter()
+                        .zip(&self.uncertainty)
+                        .map(|(x, (_, var))| var * x * x)
+                        .sum();
+                    let (h, b) = t[a].split_at(w);
+                    geometric
+                        + quadratic(h, &self.harmonic_covariance)
+                        + quadratic(b, &self.backlash_covariance)
+                })
+            })
+            .collect())
+    }
+
+    /// At each pose of `q`, per axis, the TCP displacement of a unit step
+    /// along each direction of `dirs` (`out[k][a][i]`), with the
+    /// identification Jacobian at the nominal parameters, where the
+    /// directions were found.
+    fn displacements_at(
+        &self,
+        q: &[Vec<f64>],
+        dirs: &[(Vec<f64>, f64)],
+    ) -> Result<Vec<[Vec<f64>; 3]>> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        Ok(q.par_iter()
+            .map(|qk| {
+                let j = identification_jacobian(&self.nominal, qk);
+                std::array::from_fn(|a| {
+                    dirs.iter()
+                        .map(|(dir, _)| j[a].iter().zip(dir).map(|(x, y)| x * y).sum())
+                        .collect()
+                })
+            })
+            .collect())
+    }
+
+    /// The posterior covariance of the parameter errors (P × P, degrees and
+    /// mm as the parameters), from the directions `D v_i` of the scaled
+    /// Jacobian and their posterior variances:
+    ///
+    /// ```text
+    /// Σ_p = Σ_i var_i · (D v_i)(D v_i)ᵀ,   var_i = 1 / (1 + σ_i²/s²),
+    /// ```
+    ///
+    /// so that [`Calibration::predict_variance`] at `q` is the diagonal of
+    /// `J(q) Σ_p J(q)ᵀ`. What a campaign planner conditions on a new pose.
+    pub fn parameter_covariance(&self) -> DMatrix<f64> {
+        let np = self.parameters.len();
+        let mut c = DMatrix::zeros(np, np);
+        for (dir, var) in &self.uncertainty {
+            let d = DVector::from_column_slice(dir);
+            c.ger(*var, &d, &d, 1.0);
+        }
+        c
+    }
+
+    /// Largest [`Calibration::predict_variance`] over the poses it was
+    /// identified on, mm² per axis: what a prediction's calibration
+    /// variance is compared with to tell an extrapolation.
+    pub fn campaign_variance(&self) -> [f64; 3] {
+        self.campaign_variance
+    }
+
+    /// `data` with its errors replaced by what the calibration leaves,
+    /// `e − δ̂_cal(q, λ)`.
+    pub fn residual(&self, data: &Dataset) -> Result<Dataset> {
+        let pred = self.predict(&data.q, &data.dir)?;
+        let mut r = data.clone();
+        r.errors = Some(residuals(data.errors_or_err()?, &pred));
+        Ok(r)
+    }
+}
