@@ -7,8 +7,8 @@
 //! K-fold CV at the fitted hyperparameters (closed form, eq 21 of seed 003
 //! without the refit). Its robot is `NAME.robot.toml` (or `.json`) beside it
 //! when that exists, else the batch's robot, else none; a given robot is
-//! calibrated first (the calibrated model, unless
-//! [`BatchOptions::calibrate`] is off) and recorded in the model
+//! calibrated first (the calibrated model, as
+//! [`BatchOptions::calibration`] says) and recorded in the model
 //! ([`ErrorModel::record_robot`]). A campaign that
 //! fails is reported with its error and does not stop the others.
 
@@ -36,9 +36,10 @@ pub struct BatchOptions {
     pub seed: u64,
     /// Robot of campaigns without their own robot file.
     pub robot: Option<Robot>,
-    /// Calibrate a campaign's robot first (the calibrated model of
-    /// `fit --robot`); without a robot there is nothing to calibrate.
-    pub calibrate: bool,
+    /// How a campaign's robot is calibrated first (the calibrated model
+    /// of `fit --robot`); `None`: Kriging of the raw error. Without a
+    /// robot there is nothing to calibrate.
+    pub calibration: Option<CalibrationOptions>,
 }
 
 impl Default for BatchOptions {
@@ -47,7 +48,7 @@ impl Default for BatchOptions {
             folds: 10,
             seed: 1,
             robot: None,
-            calibrate: true,
+            calibration: Some(CalibrationOptions::default()),
         }
     }
 }
@@ -67,6 +68,10 @@ pub struct CampaignReport {
     pub cv: ErrorSummary,
     /// The correlation family chosen per axis.
     pub correlation: Vec<String>,
+    /// What the calibration identified
+    /// ([`crate::calibration::Calibration::summary_line`]); `None` for
+    /// Kriging of the raw error.
+    pub calibration: Option<String>,
     /// Wall time of fit and CV, s.
     pub seconds: f64,
     /// The fitted model (saved by the caller).
@@ -120,10 +125,8 @@ pub fn run_campaign(campaign: &Path, opts: &BatchOptions) -> Result<CampaignRepo
         .space(Space::Ejs)
         .periodic(periodic_joints(&data.q))
         .kriging(kriging);
-    if let (Some(r), true) = (&robot, opts.calibrate) {
-        params = params
-            .robot(r.clone())
-            .calibrate(Some(CalibrationOptions::default()));
+    if let (Some(r), Some(c)) = (&robot, &opts.calibration) {
+        params = params.robot(r.clone()).calibrate(Some(c.clone()));
     }
     let mut model = params.check()?.fit(&data)?;
     if let Some(r) = &robot {
@@ -137,6 +140,7 @@ pub fn run_campaign(campaign: &Path, opts: &BatchOptions) -> Result<CampaignRepo
         measured: summarize(&errors),
         cv: cv.summary,
         correlation: model.outputs.iter().map(|o| o.corr().to_string()).collect(),
+        calibration: model.calibration().map(|c| c.summary_line()),
         seconds: t0.elapsed().as_secs_f64(),
         model,
     })

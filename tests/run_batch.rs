@@ -200,3 +200,59 @@ fn a_batch_reports_every_campaign_with_its_own_robot_and_lists_failures() {
         "{err}"
     );
 }
+
+/// The batch's calibration flags are `fit`'s: with `--backlash` the
+/// simulated COMAU's play is identified and kept in the campaign's model
+/// file, and its report says what the calibration found.
+#[test]
+fn a_batch_calibrates_with_the_backlash_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let fleet = dir.path().join("fleet");
+    std::fs::create_dir(&fleet).unwrap();
+    std::fs::copy(ds("comau_lhs.csv"), fleet.join("cell.csv")).unwrap();
+    let batch = |out: &str, extra: &[&str]| {
+        let out = dir.path().join(out);
+        let json = dir.path().join(format!("{}.json", out.display()));
+        let mut args = vec![
+            "batch".to_string(),
+            fleet.display().to_string(),
+            "-o".into(),
+            out.display().to_string(),
+            "--robot".into(),
+            "comau-nj220".into(),
+            "--folds".into(),
+            "4".into(),
+            "--json".into(),
+            json.display().to_string(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (c, _, err) = rk(&argv);
+        assert_eq!(c, 0, "{err}");
+        let model: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("cell.model.json")).unwrap())
+                .unwrap();
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        (model, report[0]["report"]["calibration"].clone())
+    };
+    let (plain, line) = batch("plain", &[]);
+    assert!(plain["calibration"]["backlash"].is_null(), "{line}");
+    assert!(line.as_str().unwrap().contains("directions seen"), "{line}");
+    assert!(!line.as_str().unwrap().contains("backlash"), "{line}");
+    let (with, line) = batch("backlash", &["--backlash"]);
+    let found = with["calibration"]["backlash"].as_array().unwrap();
+    assert!(!found.is_empty(), "{line}");
+    assert!(line.as_str().unwrap().contains("half backlash"), "{line}");
+    // no calibration, no backlash: refused rather than ignored
+    let (c, _, err) = rk(&[
+        "batch",
+        &fleet.display().to_string(),
+        "-o",
+        &dir.path().join("x").display().to_string(),
+        "--no-calibrate",
+        "--backlash",
+    ]);
+    assert_eq!(c, 2, "{err}");
+    assert!(err.contains("cannot be used with"), "{err}");
+}

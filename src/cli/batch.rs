@@ -6,6 +6,7 @@ use robokrige::batch::{
     BatchOptions, campaigns, check_failures, prepare_output, run_batch, write_campaigns,
     write_summary,
 };
+use robokrige::calibration::CalibrationOptions;
 use robokrige::kinematics::load_robot;
 use robokrige::report::batch as report;
 use std::path::PathBuf;
@@ -39,6 +40,18 @@ pub struct BatchArgs {
     /// calibration leaves.
     #[arg(long)]
     no_calibrate: bool,
+    /// Residual noise per coordinate (mm) that decides which calibration
+    /// directions a campaign sees [default: estimated from a first fit].
+    #[arg(long, value_name = "MM", conflicts_with = "no_calibrate")]
+    calibration_noise: Option<f64>,
+    /// Calibrate the MD-H, tool and base errors only: no periodic (gear)
+    /// errors of the joints.
+    #[arg(long, conflicts_with = "no_calibrate")]
+    geometric: bool,
+    /// Also identify each joint's backlash in the calibration (as `fit
+    /// --backlash`): for robots whose gears have play.
+    #[arg(long, conflicts_with = "no_calibrate")]
+    backlash: bool,
     /// CV folds.
     #[arg(long, default_value_t = 10)]
     folds: usize,
@@ -59,7 +72,9 @@ pub fn run(a: BatchArgs) -> Result<()> {
         folds: a.folds,
         seed: a.seed,
         robot: a.robot.as_deref().map(load_robot).transpose()?,
-        calibrate: !a.no_calibrate,
+        calibration: (!a.no_calibrate).then(|| {
+            CalibrationOptions::new(!a.geometric, a.calibration_noise).with_backlash(a.backlash)
+        }),
     };
     let (n, folder) = (files.len(), a.folder.display());
     eprintln!("batch: {n} campaign(s) in {folder}, in parallel");
