@@ -6,7 +6,7 @@ mod common;
 
 use common::rk;
 use robokrige::cv::{cross_validate_folds, group_partition, kfold_partition};
-use robokrige::dataset::{Dataset, TextColumn};
+use robokrige::dataset::{Dataset, TextColumn, read_csv};
 use robokrige::holdout::{CV_MODELS, HyperRows, holdout_cv};
 use robokrige::kinematics::{JointKind, Robot, load_robot};
 use robokrige::kriging::KrigingOptions;
@@ -256,4 +256,78 @@ fn harmonics_found_in_two_small_cubes_do_not_move_the_poses_far_from_them() {
         "with harmonics {h:.3} mm, geometric {g:.3} mm ({})",
         full.summary_line()
     );
+}
+
+/// `simulate --kind cubes` writes a cube campaign whose `cube` column is a
+/// label `cv --groups cube` holds out cube by cube; with an effect it is
+/// measured like any campaign, and a bad size is refused.
+#[test]
+fn simulated_cubes_on_the_command_line_are_held_out_cube_by_cube() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("cubes.csv");
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--kind",
+        "cubes",
+        "--cubes",
+        "3",
+        "--edge",
+        "200",
+        "--poses",
+        "90",
+        "--seed",
+        "4",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let data = read_csv(&csv).unwrap();
+    assert_eq!(data.len(), 90);
+    let labels = data.group_labels("cube").unwrap();
+    for g in ["c1", "c2", "c3"] {
+        assert_eq!(labels.iter().filter(|l| *l == g).count(), 30, "{g}");
+    }
+    // a label, not a covariate a model or a diagnosis would take up
+    assert!(data.covariate("cube").is_none());
+    // each cube is a cluster: its poses within the cube's reach of each other
+    let robot = load_robot("comau-nj220").unwrap();
+    for g in ["c1", "c2", "c3"] {
+        let p: Vec<_> = (0..data.len())
+            .filter(|&i| labels[i] == g)
+            .map(|i| robot.position(&data.q[i]).unwrap())
+            .collect();
+        let far = p
+            .iter()
+            .flat_map(|a| p.iter().map(move |b| (a - b).norm()))
+            .fold(0.0f64, f64::max);
+        assert!(far <= 200.0 * 3f64.sqrt() + 1e-6, "{g}: {far} mm");
+    }
+    let (c, stdout, err) = rk(&[
+        "cv",
+        csv.to_str().unwrap(),
+        "--groups",
+        "cube",
+        "--optimizer",
+        "hj",
+        "--corr",
+        "gaussian",
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(
+        stdout.contains("leave-one-group-out CV over the 3 groups of 'cube'"),
+        "{stdout}"
+    );
+    let (c, _, err) = rk(&[
+        "simulate",
+        "--kind",
+        "cubes",
+        "--cubes",
+        "4",
+        "--poses",
+        "90",
+        "-o",
+        dir.path().join("x.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(c, 1);
+    assert!(err.contains("multiple of --cubes 4"), "{err}");
 }

@@ -18,6 +18,7 @@ Examples:
   robokrige simulate --kind verify --poses 30 --seed 1 -o comau_verify.csv
   robokrige simulate --kind circle --seed 1 -o circle.csv
   robokrige simulate --robot scara-rh3frh5515 --kind indexing --seed 1 -o scara_idx.csv
+  robokrige simulate --robot ur10 --kind cubes --cubes 4 --edge 300 --poses 600 -o cubes.csv
   robokrige simulate --seed 2 --effect temperature:delta_k=6,tau_s=1200 -o warm.csv
 
 Effects (repeatable --effect NAME[:key=value,...]; defaults in brackets):
@@ -38,7 +39,7 @@ pub struct SimulateArgs {
     /// Campaign kind.
     #[arg(long, value_enum, default_value = "lhs")]
     kind: CampaignKind,
-    /// Number of poses (lhs 300, verify 30) or circle points (72); not for indexing or crosstalk.
+    /// Number of poses (lhs 300, verify 30, cubes 600) or circle points (72); not for indexing or crosstalk.
     #[arg(long)]
     poses: Option<usize>,
     /// Seed of the true robot and of the campaign.
@@ -56,6 +57,12 @@ pub struct SimulateArgs {
     /// Forward/backward passes per indexed joint (--kind indexing, crosstalk) [default: 3].
     #[arg(long)]
     cycles: Option<usize>,
+    /// ISO 9283 cubes (--kind cubes) [default: 4]; --poses is shared equally among them.
+    #[arg(long)]
+    cubes: Option<usize>,
+    /// Cube edge, mm (--kind cubes) [default: 300].
+    #[arg(long, value_name = "MM")]
+    edge: Option<f64>,
     /// Output CSV.
     #[arg(short, long)]
     output: PathBuf,
@@ -68,7 +75,9 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let mut spec = CampaignSpec::new(a.kind, a.seed).sizes(a.poses, a.diameter, a.cycles);
+    let mut spec = CampaignSpec::new(a.kind, a.seed)
+        .sizes(a.poses, a.diameter, a.cycles)
+        .cube_sizes(a.cubes, a.edge);
     spec.effects = Effect::parse_all(&a.effects)?;
     spec.ranges = a.ranges.as_deref().map(parse_ranges).transpose()?;
     spec.validate()?;

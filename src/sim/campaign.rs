@@ -13,7 +13,7 @@
 //!   around the robot's home TCP (seed 004 §IV.B.3); not measured.
 
 use super::{Effect, PoseContext, TrueRobot, gaussian, rng_for};
-use crate::dataset::{Covariate, Dataset, DirSource};
+use crate::dataset::{Covariate, Dataset, DirSource, TextColumn};
 use crate::kinematics::{IkOptions, IkTarget, JointKind, Robot};
 use crate::space::{MOVE_EPS, derive_directions};
 use crate::trajectory::Trajectory;
@@ -37,6 +37,8 @@ pub enum CampaignKind {
     Crosstalk,
     /// A circle of commanded TCP points (a trajectory to compensate; not measured).
     Circle,
+    /// ISO 9283 cubes: the poses clustered in a few cubes of the workspace, as a performance test measures them, each row labelled by its cube (`cube`: leave one cube out with `--groups cube`).
+    Cubes,
 }
 
 impl CampaignKind {
@@ -47,6 +49,7 @@ impl CampaignKind {
             CampaignKind::Verify => 30,
             CampaignKind::Indexing | CampaignKind::Crosstalk => 0,
             CampaignKind::Circle => 72,
+            CampaignKind::Cubes => 600,
         }
     }
 }
@@ -71,6 +74,20 @@ pub struct CampaignSpec {
     pub circle_diameter_mm: f64,
     /// Forward-and-backward cycles of each indexing (and cross-talk) test.
     pub indexing_cycles: usize,
+    /// Number of ISO 9283 cubes (`cubes`); the poses are shared equally.
+    #[serde(default = "default_cubes")]
+    pub cubes: usize,
+    /// Edge of each cube, mm (`cubes`).
+    #[serde(default = "default_cube_edge_mm")]
+    pub cube_edge_mm: f64,
+}
+
+fn default_cubes() -> usize {
+    4
+}
+
+fn default_cube_edge_mm() -> f64 {
+    300.0
 }
 
 impl CampaignSpec {
@@ -85,6 +102,18 @@ impl CampaignSpec {
             seconds_per_pose: 12.0,
             circle_diameter_mm: 100.0,
             indexing_cycles: 3,
+            cubes: default_cubes(),
+            cube_edge_mm: default_cube_edge_mm(),
+        }
+    }
+
+    /// The spec with the cube campaign's sizes given (`simulate`'s
+    /// `--cubes`, `--edge`); each one not given keeps its value.
+    pub fn cube_sizes(self, cubes: Option<usize>, edge_mm: Option<f64>) -> Self {
+        CampaignSpec {
+            cubes: cubes.unwrap_or(self.cubes),
+            cube_edge_mm: edge_mm.unwrap_or(self.cube_edge_mm),
+            ..self
         }
     }
 
@@ -134,6 +163,28 @@ impl CampaignSpec {
         }
         if self.indexing_cycles != defaults.indexing_cycles && !grid {
             return refuse("--cycles is for --kind indexing or crosstalk");
+        }
+        if self.kind == CampaignKind::Cubes {
+            let per = self.poses.checked_div(self.cubes).unwrap_or(0);
+            if self.cubes == 0 {
+                return refuse("--cubes must be at least 1");
+            }
+            if per * self.cubes != self.poses || per < super::iso_cubes::ISO_POINTS {
+                return refuse(&format!(
+                    "--poses {} must be a multiple of --cubes {}, with at least the {} ISO points per cube",
+                    self.poses,
+                    self.cubes,
+                    super::iso_cubes::ISO_POINTS
+                ));
+            }
+            if !(self.cube_edge_mm.is_finite() && self.cube_edge_mm > 0.0) {
+                return refuse(&format!(
+                    "--edge {} must be a positive number of mm",
+                    self.cube_edge_mm
+                ));
+            }
+        } else if self.cubes != defaults.cubes || self.cube_edge_mm != defaults.cube_edge_mm {
+            return refuse("--cubes and --edge are for --kind cubes");
         }
         if circle {
             if self.ranges.is_some() {
@@ -252,6 +303,7 @@ pub fn simulate_on(robot: &TrueRobot, spec: &CampaignSpec) -> Result<(SimOutput,
             let traj = circle(nominal, spec.circle_diameter_mm, spec.poses)?;
             return Ok((SimOutput::Trajectory(traj), truth));
         }
+        CampaignKind::Cubes => cubes(nominal, spec, &ranges)?,
     };
     if visits.iter().all(|v| !v.measured) {
         return Err(Error::InvalidParameter(
@@ -277,6 +329,7 @@ fn kind_stream(kind: CampaignKind) -> &'static str {
         CampaignKind::Indexing => "campaign-indexing",
         CampaignKind::Crosstalk => "campaign-crosstalk",
         CampaignKind::Circle => "campaign-circle",
+        CampaignKind::Cubes => "campaign-cubes",
     }
 }
 
@@ -321,6 +374,30 @@ fn measured(poses: Vec<Vec<f64>>) -> Vec<Visit> {
             tag: None,
         })
         .collect()
+}
+
+/// The poses of an ISO 9283 cube campaign ([`super::iso_cubes`]): the
+/// spec's cubes in its ranges, the poses shared equally, every revolute
+/// joint allowed a whole turn per cube where its limits let it; each
+/// visit tagged with its cube.
+fn cubes(robot: &Robot, spec: &CampaignSpec, ranges: &[(f64, f64)]) -> Result<Vec<Visit>> {
+    let mut iso = super::iso_cubes::IsoCubeSpec::new(
+        spec.cubes,
+        spec.cube_edge_mm,
+        spec.poses / spec.cubes.max(1),
+    )
+    .with_branches(robot, &[]);
+    iso.ranges = Some(ranges.to_vec());
+    let c = super::iso_cubes::iso_cubes(robot, &iso, spec.seed)?;
+    Ok(c.q
+        .into_iter()
+        .zip(c.cube)
+        .map(|(q, cube)| Visit {
+            q,
+            measured: true,
+            tag: Some((cube, 0)),
+        })
+        .collect())
 }
 
 /// Latin-hypercube sample of `m` points: each joint's range cut into `m`
@@ -619,6 +696,19 @@ fn measure(
             tags.iter().map(|t| t.1 as f64).collect(),
         ));
     }
+    // a cube is a label, not a quantity: a text column ("c1", …)
+    let text = if spec.kind == CampaignKind::Cubes {
+        vec![TextColumn {
+            name: "cube".into(),
+            values: rows
+                .iter()
+                .map(|&i| format!("c{}", visits[i].tag.map_or(0, |t| t.0) + 1))
+                .collect(),
+            note: None,
+        }]
+    } else {
+        Vec::new()
+    };
     Ok(Dataset {
         source: "<simulated>".into(),
         q,
@@ -628,7 +718,7 @@ fn measure(
         positions: Some(positions),
         ids: Some((0..m).map(|k| k.to_string()).collect()),
         covariates,
-        text: Vec::new(),
+        text,
         lines: Default::default(),
     })
 }
