@@ -178,6 +178,20 @@ fn groups_come_from_a_column_and_every_group_is_one_fold() {
     assert!(group_partition(&vec!["a".to_string(); 5]).is_err());
 }
 
+/// `cv FILE --groups COLUMN` with a quick fit (Hooke–Jeeves, Gaussian).
+fn cv_groups(csv: &std::path::Path, column: &str) -> (i32, String, String) {
+    rk(&[
+        "cv",
+        csv.to_str().unwrap(),
+        "--groups",
+        column,
+        "--optimizer",
+        "hj",
+        "--corr",
+        "gaussian",
+    ])
+}
+
 #[test]
 fn cv_groups_on_the_command_line() {
     let dir = std::env::temp_dir().join(format!("robokrige-groups-{}", std::process::id()));
@@ -196,16 +210,7 @@ fn cv_groups_on_the_command_line() {
     }
     let csv = dir.join("grouped.csv");
     std::fs::write(&csv, out).unwrap();
-    let (c, stdout, err) = rk(&[
-        "cv",
-        csv.to_str().unwrap(),
-        "--groups",
-        "cell",
-        "--optimizer",
-        "hj",
-        "--corr",
-        "gaussian",
-    ]);
+    let (c, stdout, err) = cv_groups(&csv, "cell");
     assert_eq!(c, 0, "{err}");
     assert!(
         stdout.contains("leave-one-group-out CV over the 3 groups of 'cell'"),
@@ -302,16 +307,7 @@ fn simulated_cubes_on_the_command_line_are_held_out_cube_by_cube() {
             .fold(0.0f64, f64::max);
         assert!(far <= 200.0 * 3f64.sqrt() + 1e-6, "{g}: {far} mm");
     }
-    let (c, stdout, err) = rk(&[
-        "cv",
-        csv.to_str().unwrap(),
-        "--groups",
-        "cube",
-        "--optimizer",
-        "hj",
-        "--corr",
-        "gaussian",
-    ]);
+    let (c, stdout, err) = cv_groups(&csv, "cube");
     assert_eq!(c, 0, "{err}");
     assert!(
         stdout.contains("leave-one-group-out CV over the 3 groups of 'cube'"),
