@@ -52,7 +52,7 @@ pub struct SimulateArgs {
     #[arg(long, allow_hyphen_values = true)]
     ranges: Option<String>,
     /// Circle diameter, mm (--kind circle) [default: 100].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     diameter: Option<f64>,
     /// Forward/backward passes per indexed joint (--kind indexing, crosstalk) [default: 3].
     #[arg(long)]
@@ -61,7 +61,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     cubes: Option<usize>,
     /// Cube edge, mm (--kind cubes) [default: 300].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
     edge: Option<f64>,
     /// Output CSV.
     #[arg(short, long)]

@@ -381,6 +381,13 @@ fn measured(poses: Vec<Vec<f64>>) -> Vec<Visit> {
 /// joint allowed a whole turn per cube where its limits let it; each
 /// visit tagged with its cube.
 fn cubes(robot: &Robot, spec: &CampaignSpec, ranges: &[(f64, f64)]) -> Result<Vec<Visit>> {
+    if robot.dof() < 6 {
+        return Err(Error::InvalidParameter(format!(
+            "--kind cubes needs a robot of six joints or more (its poses hold a cube's orientation), not {} with {}",
+            robot.name,
+            robot.dof()
+        )));
+    }
     let mut iso = super::iso_cubes::IsoCubeSpec::new(
         spec.cubes,
         spec.cube_edge_mm,
