@@ -5,6 +5,43 @@
 //! joint last moved), and everything around them: kinematics, a measurement
 //! simulator, dataset I/O.
 //!
+//! # Quick start: the calibrated model
+//!
+//! A campaign (joints, approach directions, measured errors) and the
+//! robot it was measured on give the model an engineer deploys: the
+//! robot's kinematic errors identified on the directions the campaign
+//! sees, then Kriging of what that calibration leaves, in one file.
+//!
+//! ```no_run
+//! use robokrige::calibration::CalibrationOptions;
+//! use robokrige::compensate::{CompensationOptions, compensate};
+//! use robokrige::cv::cross_validate_closed_form;
+//! use robokrige::dataset::read_csv;
+//! use robokrige::kinematics::load_robot;
+//! use robokrige::params::ErrorModelParams;
+//! use robokrige::trajectory::Trajectory;
+//!
+//! let data = read_csv("datasets/comau_lhs.csv".as_ref())?;
+//! let robot = load_robot("comau-nj220")?; // a preset or a robot file
+//! let model = ErrorModelParams::new()
+//!     .robot(robot.clone())
+//!     .calibrate(Some(CalibrationOptions::default()))
+//!     .check()?
+//!     .fit(&data)?;
+//! // how well it predicts poses it was not fitted on (10 folds, seed 1)
+//! let cv = cross_validate_closed_form(&data, &model, 10, 1)?;
+//! println!("CV mean 3D error {:.3} mm", cv.summary.mean_3d_mm);
+//! // the error at new poses, with its standard deviation, mm
+//! let p = model.predict(&[vec![0.0, -10.0, -120.0, 0.0, -30.0, 0.0]], &[vec![1.0; 6]])?;
+//! println!("{:?} ± {:?}", p.mean[0], p.std[0]);
+//! // the commands that put the TCP on a path, and the model file
+//! let path = Trajectory::read_csv("datasets/comau_circle.csv".as_ref())?;
+//! let out = compensate(&robot, &model, &path, &CompensationOptions::default())?;
+//! println!("{} joint commands to send", out.commands.poses.len());
+//! model.save("model.json".as_ref())?;
+//! # Ok::<(), robokrige::Error>(())
+//! ```
+//!
 //! Module map, bottom layer first (the layers and their rules:
 //! `docs/ARCHITECTURE.md`; the papers cited as "seed 00N": `REFERENCES.md`):
 //!
@@ -22,6 +59,7 @@
 //! | data | [`predictor`] | the `ErrorPredictor` trait every error model implements |
 //! | geometry | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK (also along a path), presets |
 //! | geometry | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
+//! | geometry | [`calibration`] | MD-H, tool and base errors by Levenberg–Marquardt on the directions a campaign sees; the joints' harmonics and backlash; identifiability; the calibration's prediction and variance |
 //! | geometry | [`optim`] | box-constrained minimisers (BFGS, GPS, Hooke–Jeeves, GA, Levenberg–Marquardt) |
 //! | engine | [`kriging`] | universal Kriging: trend, correlation families, likelihood, fit, predict |
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
@@ -37,6 +75,7 @@
 //! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, hybrid, comparisons |
 //! | studies | [`study`] | compensation targets, simulator truth files, before/after evaluation on the simulated robot |
 //! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
+//! | studies | [`plan`] | which poses to measure next: the integrated-MSE design, its order with via-points, when to stop |
 //! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
 //! | studies | [`demo`] | the demo's job on the simulated COMAU: methods by CV, compensation, a diagnosis |
 //! | output | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
