@@ -858,4 +858,45 @@ mod tests {
         };
         assert!(bad.validate().is_err());
     }
+
+    /// One design of every coefficient: the diagonal of `G' Σ' G'ᵀ` is the
+    /// calibration's stated variance, with the joint terms and without
+    /// directions (each backlash at mid-play: no share).
+    #[test]
+    fn the_design_rows_and_covariance_give_the_stated_variance() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
+        let data = crate::dataset::read_csv(path.as_ref()).unwrap();
+        let robot = load_robot("comau-nj220").unwrap();
+        let cal = calibrate(
+            &data,
+            &robot,
+            &CalibrationOptions::default().with_backlash(true),
+        )
+        .unwrap();
+        assert!(!cal.backlash().is_empty());
+        let rows: Vec<usize> = (0..data.len()).step_by(37).collect();
+        let part = data.select(&rows);
+        let sigma = cal.design_covariance();
+        let p = sigma.nrows();
+        assert_eq!(
+            p,
+            cal.parameters().len() + 2 * cal.harmonics().len() + cal.backlash().len()
+        );
+        for dir in [&part.dir[..], &[]] {
+            let g = cal.design_rows(&part.q, dir).unwrap();
+            let want = cal.predict_variance(&part.q, dir).unwrap();
+            for (k, w) in want.iter().enumerate() {
+                let gk = nalgebra::DMatrix::from_row_slice(3, p, &g[k * 3 * p..(k + 1) * 3 * p]);
+                let v = &gk * &sigma * gk.transpose();
+                for a in 0..3 {
+                    assert!(
+                        (v[(a, a)] - w[a]).abs() <= 1e-9 * w[a].max(1e-12),
+                        "pose {k} axis {a}: {} vs {}",
+                        v[(a, a)],
+                        w[a]
+                    );
+                }
+            }
+        }
+    }
 }

@@ -189,6 +189,59 @@ impl Calibration {
             .collect())
     }
 
+    /// Every coefficient the calibration estimated as one design, at each
+    /// pose of `q` approached from `dir` (as [`Calibration::predict`]):
+    /// the TCP displacement per axis of a unit step of each, row-major
+    /// `3 × P'` per pose, one pose after the other, with `P' = P + 2h + b`
+    /// — the P parameter errors (the identification Jacobian at the nominal
+    /// parameters), then the joint harmonics' sine and cosine
+    /// coefficients, then the half backlashes. With
+    /// [`Calibration::design_covariance`] `Σ'`, the diagonal of
+    /// `G'(q) Σ' G'(q)ᵀ` is [`Calibration::predict_variance`]: what a
+    /// campaign planner conditions on a new pose.
+    pub fn design_rows(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<f64>> {
+        for r in q {
+            self.nominal.check_len(r)?;
+        }
+        let terms = self.joint_term_columns_at(q, dir)?;
+        Ok(q.par_iter()
+            .zip(&terms)
+            .flat_map_iter(|(qk, t)| {
+                let j = identification_jacobian(&self.nominal, qk);
+                (0..3)
+                    .flat_map(|a| j[a].clone().into_iter().chain(t[a].iter().copied()))
+                    .collect::<Vec<f64>>()
+            })
+            .collect())
+    }
+
+    /// The covariance of the coefficients of [`Calibration::design_rows`]
+    /// (`P' × P'`): [`Calibration::parameter_covariance`], then the joint
+    /// harmonics' and the backlash's least-squares covariances, block by
+    /// block (each part conditional on the others, as in
+    /// [`Calibration::predict_variance`]).
+    pub fn design_covariance(&self) -> DMatrix<f64> {
+        let geometric = self.parameter_covariance();
+        let (np, nh, nb) = (
+            geometric.nrows(),
+            2 * self.harmonics.len(),
+            self.backlash.len(),
+        );
+        let mut c = DMatrix::zeros(np + nh + nb, np + nh + nb);
+        c.view_mut((0, 0), (np, np)).copy_from(&geometric);
+        for (start, w, cov) in [
+            (np, nh, &self.harmonic_covariance),
+            (np + nh, nb, &self.backlash_covariance),
+        ] {
+            for i in 0..w {
+                for j in 0..w {
+                    c[(start + i, start + j)] = cov[i * w + j];
+                }
+            }
+        }
+        c
+    }
+
     /// The posterior covariance of the parameter errors (P × P, degrees and
     /// mm as the parameters), from the directions `D v_i` of the scaled
     /// Jacobian and their posterior variances:

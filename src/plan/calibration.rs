@@ -2,11 +2,14 @@
 //! next, pin down the kinematic parameters where the region needs them.
 //!
 //! A calibrated model predicts `δ̂ = δ̂_cal(q) + Kriging(x)`. Its Kriging
-//! part is designed in `imse`; its calibration part has the parameter
-//! errors' posterior covariance `Σ` (P × P,
-//! [`Calibration::parameter_covariance`]), so that at joints `q`, with the
-//! identification Jacobian `G(q)` (3 × P, at the nominal parameters as the
-//! calibration's directions were found),
+//! part is designed in `imse`; its calibration part has the covariance
+//! `Σ` of every coefficient it estimated (P × P,
+//! [`Calibration::design_covariance`]: the parameter errors' posterior,
+//! the joint harmonics' and the backlash's), so that at joints `q`
+//! approached from λ, with `G(q, λ)` the TCP displacements of unit steps of
+//! those coefficients (3 × P, [`Calibration::design_rows`]: the
+//! identification Jacobian at the nominal parameters, as the calibration's
+//! directions were found, then the joint terms' unit columns),
 //!
 //! ```text
 //! Var δ̂_cal(q) = diag G(q) Σ G(q)ᵀ,     IMSE_cal = mean_z tr(G_z Σ G_zᵀ) = tr(Σ M),
@@ -27,8 +30,8 @@
 //! is in mm² summed over the axes, the unit of the Kriging outputs' IMSE,
 //! and the planner adds the two.
 
+use super::PoseSet;
 use crate::calibration::Calibration;
-use crate::kinematics::identification_jacobian;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, Matrix3};
 use rayon::prelude::*;
@@ -51,12 +54,10 @@ pub(super) struct CalibrationDesign {
     m: DMatrix<f64>,
 }
 
-/// `G(q)` of every pose, row-major 3 × P each, one after the other.
-fn jacobians(cal: &Calibration, q: &[Vec<f64>]) -> Vec<f64> {
-    let robot = cal.nominal();
-    q.par_iter()
-        .flat_map_iter(|qk| identification_jacobian(robot, qk).into_iter().flatten())
-        .collect()
+/// `G(q)` of every pose approached from `dir`, row-major 3 × P each, one
+/// after the other ([`Calibration::design_rows`]).
+fn jacobians(cal: &Calibration, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<f64>> {
+    cal.design_rows(q, dir)
 }
 
 /// `X · B` for a 3 × P row-major block `x` and a P × P matrix `b`.
@@ -97,10 +98,11 @@ fn outer3(x: &[f64], y: &[f64], np: usize) -> Matrix3<f64> {
 /// calibration) counts its in-sample `tr(A_f)`.
 pub(super) fn held_out_variance(
     cal: &Calibration,
-    q: &[Vec<f64>],
+    poses: &PoseSet,
     blocks: &[Vec<usize>],
 ) -> Result<f64> {
-    let sigma = cal.parameter_covariance();
+    let q = &poses.q;
+    let sigma = cal.design_covariance();
     let np = sigma.nrows();
     let noise = cal.identifiability().noise_mm;
     if !noise.is_finite() || q.is_empty() {
@@ -108,7 +110,7 @@ pub(super) fn held_out_variance(
             "the calibration's held-out share needs a finite noise and poses".into(),
         ));
     }
-    let g = jacobians(cal, q);
+    let g = jacobians(cal, q, &poses.dir)?;
     let total: f64 = blocks
         .iter()
         .map(|block| {
@@ -135,8 +137,8 @@ fn held_out_trace(gf: &DMatrix<f64>, sigma: &DMatrix<f64>, s2: f64) -> f64 {
 impl CalibrationDesign {
     /// The state for `cal` with candidates `cand` and region `region`
     /// (joints in the robot's units).
-    pub(super) fn new(cal: &Calibration, cand: &[Vec<f64>], region: &[Vec<f64>]) -> Result<Self> {
-        let sigma = cal.parameter_covariance();
+    pub(super) fn new(cal: &Calibration, cand: &PoseSet, region: &PoseSet) -> Result<Self> {
+        let sigma = cal.design_covariance();
         let np = sigma.nrows();
         let noise = cal.identifiability().noise_mm;
         // a noise-free calibration has Σ = 0: its share is nothing, and the
@@ -146,13 +148,13 @@ impl CalibrationDesign {
                 "the calibration's share of the IMSE needs a finite noise and a region".into(),
             ));
         }
-        let gz = jacobians(cal, region);
+        let gz = jacobians(cal, &region.q, &region.dir)?;
         let mut m = DMatrix::zeros(np, np);
         for block in gz.chunks(3 * np) {
             let gt = DMatrix::from_row_slice(3, np, block);
             m.gemm_tr(1.0 / region.len() as f64, &gt, &gt, 1.0);
         }
-        let g = jacobians(cal, cand);
+        let g = jacobians(cal, &cand.q, &cand.dir)?;
         let mut a = vec![0.0; g.len()];
         let mut am = vec![0.0; g.len()];
         a.par_chunks_mut(3 * np)
@@ -245,10 +247,13 @@ mod tests {
         let cal = calibrate(&data, &nominal, &CalibrationOptions::default()).unwrap();
         spec.seed = 4;
         spec.poses = 30;
-        let cand = campaign::measurements(&truth, &spec).unwrap().q;
+        let cand = PoseSet::from(&campaign::measurements(&truth, &spec).unwrap());
         spec.seed = 5;
-        let region = campaign::measurements(&truth, &spec).unwrap().q;
-        (CalibrationDesign::new(&cal, &cand, &region).unwrap(), cand)
+        let region = PoseSet::from(&campaign::measurements(&truth, &spec).unwrap());
+        (
+            CalibrationDesign::new(&cal, &cand, &region).unwrap(),
+            cand.q,
+        )
     }
 
     #[test]

@@ -470,7 +470,7 @@ fn choose_by_imse(
         .map(|o| cancel.check().and_then(|()| AxisDesign::new(o, &sc, &sz)))
         .collect::<Result<_>>()?;
     let mut cal = match model.calibration().filter(|_| calibration_share) {
-        Some(c) => Some(CalibrationDesign::new(c, &cand.q, &region.q)?),
+        Some(c) => Some(CalibrationDesign::new(c, cand, region)?),
         None => None,
     };
     let imse = |axes: &[AxisDesign], cal: &Option<CalibrationDesign>| {

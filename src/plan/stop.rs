@@ -131,7 +131,7 @@ impl Forecast {
         let noise2: f64 = model.noise_std().iter().map(|s| s * s).sum();
         let share = match model.calibration() {
             Some(c) if plan.imse_counts_calibration => {
-                super::calibration::held_out_variance(c, &campaign.q, &blocks)?
+                super::calibration::held_out_variance(c, &super::PoseSet::from(campaign), &blocks)?
             }
             _ => 0.0,
         };
