@@ -51,7 +51,7 @@
 //! are off by it.
 
 use super::harmonics::{Basis, FALSE_ALARM, chi2_bound};
-use crate::{Error, Result};
+use crate::Result;
 use nalgebra::{DMatrix, DVector, Matrix3xX};
 use serde::{Deserialize, Serialize};
 
@@ -207,15 +207,12 @@ pub(crate) fn search(
         .collect();
     let noise = basis.noise();
     // the half backlashes beside the geometric directions (Frisch–Waugh)
-    let tilde: Vec<DVector<f64>> = kept
-        .iter()
-        .map(|(_, i, _)| g.project_out(&cols[*i]))
-        .collect();
-    let b = DMatrix::from_columns(&tilde);
-    let chol = b.tr_mul(&b).cholesky().ok_or_else(|| {
-        Error::Numerical("the joints' backlash columns are not independent".into())
-    })?;
-    let beta = chol.solve(&b.tr_mul(r_geo));
+    let (beta, covariance) = g.fit_beside(
+        kept.iter().map(|(_, i, _)| cols[*i].clone()),
+        r_geo,
+        noise,
+        "the joints' backlash columns",
+    )?;
     let m = jac.len() as f64;
     Ok(Some(BacklashFit {
         backlash: kept
@@ -228,7 +225,7 @@ pub(crate) fn search(
                 tcp_rms_mm: (&cols[*i] * half).norm() / m.sqrt(),
             })
             .collect(),
-        covariance: (chol.inverse() * noise).transpose().as_slice().to_vec(),
+        covariance,
     }))
 }
 

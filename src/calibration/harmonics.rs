@@ -427,6 +427,28 @@ impl Basis {
         &self.r
     }
 
+    /// The least squares of `r` on `cols` beside the span (Frisch–Waugh:
+    /// each column with its part in the span removed): the coefficients,
+    /// and their covariance `noise · (C̃ᵀC̃)⁻¹`, row-major. An error names
+    /// `what` when the columns are not independent beside the span.
+    pub(super) fn fit_beside(
+        &self,
+        cols: impl Iterator<Item = DVector<f64>>,
+        r: &DVector<f64>,
+        noise: f64,
+        what: &str,
+    ) -> Result<(DVector<f64>, Vec<f64>)> {
+        let tilde: Vec<DVector<f64>> = cols.map(|c| self.project_out(&c)).collect();
+        let c = DMatrix::from_columns(&tilde);
+        let chol = c
+            .tr_mul(&c)
+            .cholesky()
+            .ok_or_else(|| Error::Numerical(format!("{what} are not independent")))?;
+        let beta = chol.solve(&c.tr_mul(r));
+        let covariance = (chol.inverse() * noise).transpose().as_slice().to_vec();
+        Ok((beta, covariance))
+    }
+
     /// Residual variance per coordinate.
     pub(super) fn noise(&self) -> f64 {
         let left = self.r.len().saturating_sub(self.q.len()).max(1);
@@ -545,13 +567,12 @@ pub(crate) fn coefficients(
     beside: impl Iterator<Item = DVector<f64>>,
     r_geo: &DVector<f64>,
 ) -> Result<HarmonicFit> {
-    let g = Basis::new(beside, r_geo);
-    let cols: Vec<DVector<f64>> = found.columns.iter().map(|h| g.project_out(h)).collect();
-    let h = DMatrix::from_columns(&cols);
-    let chol = h.tr_mul(&h).cholesky().ok_or_else(|| {
-        Error::Numerical("the joint harmonics' columns are not independent".into())
-    })?;
-    let beta = chol.solve(&h.tr_mul(r_geo));
+    let (beta, covariance) = Basis::new(beside, r_geo).fit_beside(
+        found.columns.iter().cloned(),
+        r_geo,
+        found.noise,
+        "the joint harmonics' columns",
+    )?;
     let raw = &found.columns;
     let m = r_geo.len() / 3;
     let harmonics = found
@@ -580,10 +601,7 @@ pub(crate) fn coefficients(
     }
     Ok(HarmonicFit {
         harmonics,
-        covariance: (chol.inverse() * found.noise)
-            .transpose()
-            .as_slice()
-            .to_vec(),
+        covariance,
         shift,
     })
 }
