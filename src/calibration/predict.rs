@@ -207,9 +207,10 @@ impl Calibration {
         Ok(q.par_iter()
             .zip(&terms)
             .flat_map_iter(|(qk, t)| {
-                let j = identification_jacobian(&self.nominal, qk);
-                (0..3)
-                    .flat_map(|a| j[a].clone().into_iter().chain(t[a].iter().copied()))
+                identification_jacobian(&self.nominal, qk)
+                    .into_iter()
+                    .zip(t)
+                    .flat_map(|(ja, ta)| ja.into_iter().chain(ta.iter().copied()))
                     .collect::<Vec<f64>>()
             })
             .collect())

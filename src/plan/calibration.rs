@@ -54,12 +54,6 @@ pub(super) struct CalibrationDesign {
     m: DMatrix<f64>,
 }
 
-/// `G(q)` of every pose approached from `dir`, row-major 3 × P each, one
-/// after the other ([`Calibration::design_rows`]).
-fn jacobians(cal: &Calibration, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<f64>> {
-    cal.design_rows(q, dir)
-}
-
 /// `X · B` for a 3 × P row-major block `x` and a P × P matrix `b`.
 fn times(x: &[f64], b: &DMatrix<f64>, out: &mut [f64]) {
     let np = b.nrows();
@@ -110,7 +104,7 @@ pub(super) fn held_out_variance(
             "the calibration's held-out share needs a finite noise and poses".into(),
         ));
     }
-    let g = jacobians(cal, q, &poses.dir)?;
+    let g = cal.design_rows(q, &poses.dir)?;
     let total: f64 = blocks
         .iter()
         .map(|block| {
@@ -148,13 +142,13 @@ impl CalibrationDesign {
                 "the calibration's share of the IMSE needs a finite noise and a region".into(),
             ));
         }
-        let gz = jacobians(cal, &region.q, &region.dir)?;
+        let gz = cal.design_rows(&region.q, &region.dir)?;
         let mut m = DMatrix::zeros(np, np);
         for block in gz.chunks(3 * np) {
             let gt = DMatrix::from_row_slice(3, np, block);
             m.gemm_tr(1.0 / region.len() as f64, &gt, &gt, 1.0);
         }
-        let g = jacobians(cal, &cand.q, &cand.dir)?;
+        let g = cal.design_rows(&cand.q, &cand.dir)?;
         let mut a = vec![0.0; g.len()];
         let mut am = vec![0.0; g.len()];
         a.par_chunks_mut(3 * np)

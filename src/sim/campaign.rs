@@ -165,10 +165,10 @@ impl CampaignSpec {
             return refuse("--cycles is for --kind indexing or crosstalk");
         }
         if self.kind == CampaignKind::Cubes {
-            let per = self.poses.checked_div(self.cubes).unwrap_or(0);
             if self.cubes == 0 {
                 return refuse("--cubes must be at least 1");
             }
+            let per = self.poses / self.cubes;
             if per * self.cubes != self.poses || per < super::iso_cubes::ISO_POINTS {
                 return refuse(&format!(
                     "--poses {} must be a multiple of --cubes {}, with at least the {} ISO points per cube",
@@ -361,7 +361,8 @@ fn check_ranges(robot: &Robot, ranges: &[(f64, f64)]) -> Result<()> {
 struct Visit {
     q: Vec<f64>,
     measured: bool,
-    /// (indexed joint, cycle) for indexing tests.
+    /// (indexed joint, cycle) for indexing tests; (cube, 0) for a cube
+    /// campaign (its `cube` column).
     tag: Option<(usize, usize)>,
 }
 
