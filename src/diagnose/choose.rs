@@ -3,7 +3,8 @@
 //!
 //! - **Compared** ([`compared`]): the best significant candidate of each
 //!   kind (the order's drift apart from its step and block: [`group`]), at
-//!   most [`COMPARED`], in their ranked order. The round
+//!   most [`COMPARED`], in their ranked order, the last place going to
+//!   the round's strongest by evidence when its kind is not among them. The round
 //!   orders them by what each adds on the refitted model
 //!   ([`EffectReport::refit_gain`]), not by the scan's score, so that a
 //!   step the data shows clearly is not crowded out by a harmonic whose
@@ -70,11 +71,18 @@ fn group(f: &Family) -> (EffectKind, bool) {
 }
 
 /// The candidates compared for adding: the first significant one (with a
-/// positive score) of each kind ([`group`]), at most [`COMPARED`].
+/// positive score) of each kind ([`group`]), at most [`COMPARED`], the
+/// last place going to the round's strongest by evidence when its kind is
+/// not among them. The rank puts the kinds already added last, so that a
+/// new kind is weighed; the strongest is weighed too, so that a kind
+/// already added (a second harmonic of the campaign's own) is not left out
+/// of the comparison by what the refitted model would gain, nor the loop
+/// stopped while it would lower the CV.
 pub(super) fn compared(r: &Round) -> Vec<usize> {
     let mut seen = Vec::new();
     let mut out = Vec::new();
-    for k in (0..r.tested.len()).filter(|&k| r.eligible(k)) {
+    let eligible: Vec<usize> = (0..r.tested.len()).filter(|&k| r.eligible(k)).collect();
+    for &k in &eligible {
         let g = group(r.family(k));
         if !seen.contains(&g) {
             seen.push(g);
@@ -83,6 +91,16 @@ pub(super) fn compared(r: &Round) -> Vec<usize> {
                 break;
             }
         }
+    }
+    let strongest = eligible
+        .iter()
+        .copied()
+        .max_by(|&a, &b| r.tested[a].evidence.total_cmp(&r.tested[b].evidence));
+    if let Some(k) = strongest.filter(|k| !seen.contains(&group(r.family(*k)))) {
+        if out.len() == COMPARED {
+            out.pop();
+        }
+        out.push(k);
     }
     out
 }
@@ -260,5 +278,90 @@ pub(super) fn widen_intervals(
             "a region of the joint space: its rows were measured in a region of their own (correlation of the rows with their {} nearest poses' {overlap:.2}); a function of the pose explains the same",
             confound::NEIGHBOURS
         ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::scan::GridPoint;
+    use std::collections::BTreeMap;
+
+    fn family(kind: EffectKind) -> Family {
+        Family {
+            kind,
+            source: vec![kind.name().into()],
+            label: kind.name().into(),
+            grid: vec![GridPoint::new(
+                BTreeMap::new(),
+                vec![vec![1.0; 4]],
+                Vec::new(),
+            )],
+            zoom: None,
+        }
+    }
+
+    fn candidate(family: usize, evidence: f64) -> Tested {
+        Tested {
+            family,
+            best: 0,
+            explained: evidence,
+            p_value: 0.001,
+            q_value: 0.01,
+            score: evidence,
+            resamples: 999,
+            refit: false,
+            cv_sse_before: 1.0,
+            evidence,
+            support: Vec::new(),
+            refined: None,
+        }
+    }
+
+    /// A kind already in the model is ranked after the new ones; when
+    /// [`COMPARED`] new kinds would fill the comparison, its strongest
+    /// candidate takes the last place, and it is not compared twice when it
+    /// is there.
+    #[test]
+    fn the_strongest_candidate_is_compared_whatever_its_kind() {
+        use EffectKind::*;
+        let kinds = [
+            Harmonic,
+            Covariate,
+            Order,
+            Interaction,
+            DirectionHistory,
+            MotionHistory,
+        ];
+        let fams: Vec<Family> = kinds.iter().map(|&k| family(k)).collect();
+        let residuals = vec![[0.0; 3]; 4];
+        let all = |_: &Tested| true;
+        // the harmonic (already added) has the most evidence
+        let mut tested: Vec<Tested> = [0.05, 0.04, 0.03, 0.02, 0.015, 0.01]
+            .iter()
+            .enumerate()
+            .map(|(f, &e)| candidate(f, e))
+            .collect();
+        crate::diagnose::rank::rank(&mut tested, &all, &|t: &Tested| t.family == 0);
+        assert_eq!(tested.last().map(|t| t.family), Some(0));
+        let r = Round {
+            tested: &tested,
+            fams: &fams,
+            residuals: &residuals,
+            significant: &all,
+        };
+        let families: Vec<usize> = compared(&r).iter().map(|&k| tested[k].family).collect();
+        assert_eq!(families, vec![1, 2, 3, 0]);
+        // ranked first, it is compared once
+        let mut tested: Vec<Tested> = (0..6)
+            .map(|f| candidate(f, 0.05 - 0.005 * f as f64))
+            .collect();
+        crate::diagnose::rank::rank(&mut tested, &all, &|_: &Tested| false);
+        let r = Round {
+            tested: &tested,
+            ..r
+        };
+        let families: Vec<usize> = compared(&r).iter().map(|&k| tested[k].family).collect();
+        assert_eq!(families, vec![0, 1, 2, 3]);
     }
 }
