@@ -234,11 +234,8 @@ impl Calibration {
             (np, nh, &self.harmonic_covariance),
             (np + nh, nb, &self.backlash_covariance),
         ] {
-            for i in 0..w {
-                for j in 0..w {
-                    c[(start + i, start + j)] = cov[i * w + j];
-                }
-            }
+            c.view_mut((start, start), (w, w))
+                .copy_from(&DMatrix::from_row_slice(w, w, cov));
         }
         c
     }

@@ -301,23 +301,6 @@ mod tests {
         }
     }
 
-    fn candidate(family: usize, evidence: f64) -> Tested {
-        Tested {
-            family,
-            best: 0,
-            explained: evidence,
-            p_value: 0.001,
-            q_value: 0.01,
-            score: evidence,
-            resamples: 999,
-            refit: false,
-            cv_sse_before: 1.0,
-            evidence,
-            support: Vec::new(),
-            refined: None,
-        }
-    }
-
     /// A kind already in the model is ranked after the new ones; when
     /// [`COMPARED`] new kinds would fill the comparison, its strongest
     /// candidate takes the last place, and it is not compared twice when it
@@ -340,7 +323,7 @@ mod tests {
         let mut tested: Vec<Tested> = [0.05, 0.04, 0.03, 0.02, 0.015, 0.01]
             .iter()
             .enumerate()
-            .map(|(f, &e)| candidate(f, e))
+            .map(|(f, &e)| Tested::for_test(f, e))
             .collect();
         crate::diagnose::rank::rank(&mut tested, &all, &|t: &Tested| t.family == 0);
         assert_eq!(tested.last().map(|t| t.family), Some(0));
@@ -354,7 +337,7 @@ mod tests {
         assert_eq!(families, vec![1, 2, 3, 0]);
         // ranked first, it is compared once
         let mut tested: Vec<Tested> = (0..6)
-            .map(|f| candidate(f, 0.05 - 0.005 * f as f64))
+            .map(|f| Tested::for_test(f, 0.05 - 0.005 * f as f64))
             .collect();
         crate::diagnose::rank::rank(&mut tested, &all, &|_: &Tested| false);
         let r = Round {

@@ -178,23 +178,6 @@ mod tests {
         }
     }
 
-    fn tested(family: usize, score: f64) -> Tested {
-        Tested {
-            family,
-            best: 0,
-            explained: score,
-            p_value: 0.001,
-            q_value: 0.01,
-            score,
-            resamples: 999,
-            refit: false,
-            cv_sse_before: 1.0,
-            evidence: score,
-            support: Vec::new(),
-            refined: None,
-        }
-    }
-
     /// Occam's rule: of two significant candidates that explain the same
     /// residual, the one with fewer model columns goes first; one that
     /// explains something else, or is not significant, does not.
@@ -219,20 +202,20 @@ mod tests {
             family("something else", vec![wiggle], vec![cov("w")]),
         ];
         let all = |_: &Tested| true;
-        let mut order = vec![tested(0, 0.90), tested(1, 0.85)];
+        let mut order = vec![Tested::for_test(0, 0.90), Tested::for_test(1, 0.85)];
         let moved = prefer_simpler(&mut order, &fams, &resid, &all);
         assert_eq!(moved, Some((0, "t × joint angles".to_string())));
         assert_eq!(order[0].family, 1);
         // not significant: it stays where it is
-        let mut order = vec![tested(0, 0.90), tested(1, 0.85)];
+        let mut order = vec![Tested::for_test(0, 0.90), Tested::for_test(1, 0.85)];
         let only_first = |x: &Tested| x.family == 0;
         assert_eq!(prefer_simpler(&mut order, &fams, &resid, &only_first), None);
         assert_eq!(order[0].family, 0);
         // fewer columns, but it explains another part of the residual
-        let mut order = vec![tested(0, 0.90), tested(2, 0.85)];
+        let mut order = vec![Tested::for_test(0, 0.90), Tested::for_test(2, 0.85)];
         assert_eq!(prefer_simpler(&mut order, &fams, &resid, &all), None);
         // too weak a score to stand in for the first
-        let mut order = vec![tested(0, 0.90), tested(1, 0.50)];
+        let mut order = vec![Tested::for_test(0, 0.90), Tested::for_test(1, 0.50)];
         assert_eq!(prefer_simpler(&mut order, &fams, &resid, &all), None);
     }
 }

@@ -79,6 +79,27 @@ pub struct Refined {
 }
 
 impl Tested {
+    /// A significant test result of `family` (its first grid point) whose
+    /// score, share explained and evidence are all `evidence`: what the
+    /// ranking and choosing tests build their rounds from.
+    #[cfg(test)]
+    pub(crate) fn for_test(family: usize, evidence: f64) -> Self {
+        Tested {
+            family,
+            best: 0,
+            explained: evidence,
+            p_value: 0.001,
+            q_value: 0.01,
+            score: evidence,
+            resamples: 999,
+            refit: false,
+            cv_sse_before: 1.0,
+            evidence,
+            support: Vec::new(),
+            refined: None,
+        }
+    }
+
     /// The grid point to report and add: the refined one where there is one.
     pub fn point<'a>(&'a self, family: &'a Family) -> &'a GridPoint {
         self.refined
