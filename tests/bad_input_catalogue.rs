@@ -1040,6 +1040,19 @@ fn command_cases() -> Vec<Case> {
     let not_truth = write("not_truth.json", "{\"a\": 1}");
     let out = |n: &str| s(&path(n));
     vec![
+        // a calibration option needs a robot to calibrate
+        case(
+            "fit_geometric_without_robot",
+            &["fit", &d, "--geometric", "-o", &out("g.json")],
+            &[data],
+            Expect::Usage,
+        ),
+        case(
+            "cv_calibration_noise_without_robot",
+            &["cv", &d, "--calibration-noise", "0.1"],
+            &[data],
+            Expect::Usage,
+        ),
         // compensate
         case(
             "compensate_unknown_robot",

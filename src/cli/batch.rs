@@ -1,12 +1,12 @@
 //! `batch`: every campaign of a folder, one robot each, in parallel.
 
+use super::fit::CalibrationArgs;
 use clap::Args;
 use robokrige::Result;
 use robokrige::batch::{
     BatchOptions, campaigns, check_failures, prepare_output, run_batch, write_campaigns,
     write_summary,
 };
-use robokrige::calibration::CalibrationOptions;
 use robokrige::kinematics::load_robot;
 use robokrige::report::batch as report;
 use std::path::PathBuf;
@@ -35,23 +35,8 @@ pub struct BatchArgs {
     /// Robot (preset name or robot file) of campaigns without NAME.robot.toml.
     #[arg(long)]
     robot: Option<String>,
-    /// Kriging of the raw error. By default a campaign with a robot is
-    /// calibrated first (as `fit --robot`) and Kriging fits what the
-    /// calibration leaves.
-    #[arg(long)]
-    no_calibrate: bool,
-    /// Residual noise per coordinate (mm) that decides which calibration
-    /// directions a campaign sees [default: estimated from a first fit].
-    #[arg(long, value_name = "MM", conflicts_with = "no_calibrate")]
-    calibration_noise: Option<f64>,
-    /// Calibrate the MD-H, tool and base errors only: no periodic (gear)
-    /// errors of the joints.
-    #[arg(long, conflicts_with = "no_calibrate")]
-    geometric: bool,
-    /// Also identify each joint's backlash in the calibration (as `fit
-    /// --backlash`): for robots whose gears have play.
-    #[arg(long, conflicts_with = "no_calibrate")]
-    backlash: bool,
+    #[command(flatten)]
+    calibration: CalibrationArgs,
     /// CV folds.
     #[arg(long, default_value_t = 10)]
     folds: usize,
@@ -72,9 +57,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
         folds: a.folds,
         seed: a.seed,
         robot: a.robot.as_deref().map(load_robot).transpose()?,
-        calibration: (!a.no_calibrate).then(|| {
-            CalibrationOptions::new(!a.geometric, a.calibration_noise).with_backlash(a.backlash)
-        }),
+        calibration: a.calibration.options(),
     };
     let (n, folder) = (files.len(), a.folder.display());
     eprintln!("batch: {n} campaign(s) in {folder}, in parallel");

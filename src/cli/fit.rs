@@ -50,6 +50,12 @@ impl KrigingArgs {
 /// library's default ([`robokrige::methods::Overrides`]); `--method` refuses
 /// the model options (the library's rule and message).
 #[derive(Debug, Args)]
+#[command(group(
+    clap::ArgGroup::new("calibration_flags")
+        .args(["no_calibrate", "calibration_noise", "geometric", "backlash"])
+        .multiple(true)
+        .requires("robot")
+))]
 pub struct ModelArgs {
     /// Input space [default: ejs].
     #[arg(long, value_enum)]
@@ -83,32 +89,45 @@ pub struct ModelArgs {
     /// (no separate calibration then).
     #[arg(long)]
     kinematic: bool,
-    /// With --robot: Kriging of the raw error. By default a robot is
+    #[command(flatten)]
+    calibration: CalibrationArgs,
+}
+
+/// The calibration options of `fit`, `cv`, `holdout` (through
+/// [`ModelArgs`]) and `batch`.
+#[derive(Debug, Args)]
+pub struct CalibrationArgs {
+    /// Kriging of the raw error. By default a campaign with a robot is
     /// calibrated first (MD-H, tool and base errors by Levenberg–Marquardt
     /// on the directions the campaign sees, then the joints' periodic
     /// errors) and Kriging fits what the calibration leaves; the model file
     /// holds both.
-    #[arg(long, requires = "robot")]
+    #[arg(long)]
     no_calibrate: bool,
     /// Residual noise per coordinate (mm) that decides which calibration
     /// directions the campaign sees [default: estimated from a first fit].
-    #[arg(
-        long,
-        value_name = "MM",
-        requires = "robot",
-        conflicts_with = "no_calibrate"
-    )]
+    #[arg(long, value_name = "MM", conflicts_with = "no_calibrate")]
     calibration_noise: Option<f64>,
     /// Calibrate the MD-H, tool and base errors only: no periodic (gear)
     /// errors of the joints.
-    #[arg(long, requires = "robot", conflicts_with = "no_calibrate")]
+    #[arg(long, conflicts_with = "no_calibrate")]
     geometric: bool,
     /// Also identify each joint's backlash in the calibration (a joint
     /// offset that follows the direction the joint approached from), the
     /// geometry fitted beside it. Off by default: for robots whose gears
     /// have play; on a UR10 (harmonic drives) it made the model worse.
-    #[arg(long, requires = "robot", conflicts_with = "no_calibrate")]
+    #[arg(long, conflicts_with = "no_calibrate")]
     backlash: bool,
+}
+
+impl CalibrationArgs {
+    /// The calibration asked for: `None` with `--no-calibrate`.
+    pub fn options(&self) -> Option<CalibrationOptions> {
+        (!self.no_calibrate).then(|| {
+            CalibrationOptions::new(!self.geometric, self.calibration_noise)
+                .with_backlash(self.backlash)
+        })
+    }
 }
 
 impl ModelArgs {
@@ -122,12 +141,10 @@ impl ModelArgs {
     /// The flags given, as the library's overrides.
     fn overrides(&self) -> Result<Overrides> {
         let robot = load_optional_robot(self.robot.as_deref(), self.tool.as_deref())?;
-        let calibration = CalibrationOptions::new(!self.geometric, self.calibration_noise)
-            .with_backlash(self.backlash);
         let o = Overrides::new()
             .seed(self.seed)
             .kinematic(self.kinematic)
-            .calibrate((!self.no_calibrate).then_some(calibration))
+            .calibrate(self.calibration.options())
             .with(self.space, Overrides::space)
             .with(self.trend, Overrides::trend)
             .with(self.starts, Overrides::starts)
