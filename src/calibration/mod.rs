@@ -468,8 +468,8 @@ impl Calibration {
 mod tests {
     use super::geometric::{position_residual, residual_jacobian};
     use super::*;
-    use crate::kinematics::IDENTIFICATION_STEP;
     use crate::kinematics::load_robot;
+    use crate::kinematics::{IDENTIFICATION_STEP, identification_jacobian};
     use crate::vec3::residuals;
 
     /// The chain's residual Jacobian is the generic central differences'
@@ -859,9 +859,11 @@ mod tests {
         assert!(bad.validate().is_err());
     }
 
-    /// One design of every coefficient: the diagonal of `G' Σ' G'ᵀ` is the
-    /// calibration's stated variance, with the joint terms and without
-    /// directions (each backlash at mid-play: no share).
+    /// The stated variance is the sum of its parts written out (the
+    /// directions' `Σ_i var_i (J D v_i)²`, then the joint harmonics' and
+    /// the backlash's quadratic forms), with the joint terms and without
+    /// directions (each backlash at mid-play: no share), and the diagonal
+    /// of `G' Σ' G'ᵀ` from the design and its covariance.
     #[test]
     fn the_design_rows_and_covariance_give_the_stated_variance() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
@@ -884,17 +886,43 @@ mod tests {
         );
         for dir in [&part.dir[..], &[]] {
             let g = cal.design_rows(&part.q, dir).unwrap();
-            let want = cal.predict_variance(&part.q, dir).unwrap();
-            for (k, w) in want.iter().enumerate() {
+            let stated = cal.predict_variance(&part.q, dir).unwrap();
+            let terms = cal.joint_term_columns_at(&part.q, dir).unwrap();
+            let nh = 2 * cal.harmonics().len();
+            let quadratic = |h: &[f64], c: &[f64]| -> f64 {
+                let w = h.len();
+                (0..w)
+                    .flat_map(|i| (0..w).map(move |j| h[i] * c[i * w + j] * h[j]))
+                    .sum()
+            };
+            for (k, w) in stated.iter().enumerate() {
+                let jac = identification_jacobian(&robot, &part.q[k]);
                 let gk = nalgebra::DMatrix::from_row_slice(3, p, &g[k * 3 * p..(k + 1) * 3 * p]);
                 let v = &gk * &sigma * gk.transpose();
                 for a in 0..3 {
-                    assert!(
-                        (v[(a, a)] - w[a]).abs() <= 1e-9 * w[a].max(1e-12),
-                        "pose {k} axis {a}: {} vs {}",
-                        v[(a, a)],
-                        w[a]
-                    );
+                    let along: f64 = cal
+                        .uncertainty
+                        .iter()
+                        .map(|(d, var)| {
+                            var * jac[a]
+                                .iter()
+                                .zip(d)
+                                .map(|(x, y)| x * y)
+                                .sum::<f64>()
+                                .powi(2)
+                        })
+                        .sum();
+                    let (h, b) = terms[k][a].split_at(nh);
+                    let parts = along
+                        + quadratic(h, &cal.harmonic_covariance)
+                        + quadratic(b, &cal.backlash_covariance);
+                    for (what, x) in [("parts", parts), ("G Σ Gᵀ", v[(a, a)])] {
+                        assert!(
+                            (x - w[a]).abs() <= 1e-9 * w[a].max(1e-12),
+                            "pose {k} axis {a}: {what} {x} vs stated {}",
+                            w[a]
+                        );
+                    }
                 }
             }
         }

@@ -9,7 +9,7 @@ use crate::dataset::Dataset;
 use crate::kinematics::identification_jacobian;
 use crate::vec3::residuals;
 use crate::{Error, Result};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, DVectorView};
 use rayon::prelude::*;
 
 impl Calibration {
@@ -48,7 +48,7 @@ impl Calibration {
     /// J_aj cos` per harmonic), then each joint's half backlash
     /// (`J_aj λ_j`), with one pass of Jacobians per degree at the nominal
     /// parameters for both.
-    fn joint_term_columns_at(
+    pub(super) fn joint_term_columns_at(
         &self,
         q: &[Vec<f64>],
         dir: &[Vec<f64>],
@@ -135,31 +135,26 @@ impl Calibration {
     /// covariance; the backlash (directions `dir`, as [`Calibration::predict`])
     /// adds its own the same way. Each part is conditional on the others
     /// (the geometry's given the backlash it was fitted beside).
+    ///
+    /// All of it is one quadratic form, the diagonal of `G'(q) Σ' G'(q)ᵀ`
+    /// with the design of every coefficient [`Calibration::design_rows`]
+    /// and its covariance [`Calibration::design_covariance`] (block
+    /// diagonal, `Σ_p = Σ_i var_i (D v_i)(D v_i)ᵀ` first), and it is
+    /// computed so.
     pub fn predict_variance(&self, q: &[Vec<f64>], dir: &[Vec<f64>]) -> Result<Vec<[f64; 3]>> {
-        let along = self.displacements_at(q, &self.uncertainty)?;
-        let terms = self.joint_term_columns_at(q, dir)?;
-        let w = 2 * self.harmonics.len();
-        let quadratic = |h: &[f64], c: &[f64]| -> f64 {
-            let w = h.len();
-            (0..w)
-                .flat_map(|i| (0..w).map(move |j| (i, j)))
-                .map(|(i, j)| h[i] * c[i * w + j] * h[j])
-                .sum()
-        };
-        Ok(along
-            .iter()
-            .zip(&terms)
-            .map(|(d, t)| {
+        let rows = self.design_rows(q, dir)?;
+        let sigma = self.design_covariance();
+        let p = sigma.nrows();
+        if p == 0 {
+            return Ok(vec![[0.0; 3]; q.len()]);
+        }
+        // the diagonal of G'(q) Σ' G'(q)ᵀ, one axis's row g at a time
+        Ok(rows
+            .par_chunks(3 * p)
+            .map(|pose| {
                 std::array::from_fn(|a| {
-                    let geometric: f64 = d[a]
-                        .iter()
-                        .zip(&self.uncertainty)
-                        .map(|(x, (_, var))| var * x * x)
-                        .sum();
-                    let (h, b) = t[a].split_at(w);
-                    geometric
-                        + quadratic(h, &self.harmonic_covariance)
-                        + quadratic(b, &self.backlash_covariance)
+                    let g = DVectorView::from_slice(&pose[a * p..(a + 1) * p], p);
+                    g.dot(&(&sigma * g))
                 })
             })
             .collect())
