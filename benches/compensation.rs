@@ -9,7 +9,7 @@ use robokrige::compensate::{CompensationOptions, compensate};
 use robokrige::kinematics;
 use robokrige::kriging::KrigingOptions;
 use robokrige::model::ErrorModel;
-use robokrige::sim::campaign::circle;
+use robokrige::sim::designs::circle;
 use robokrige::space::Space;
 use std::time::Instant;
 

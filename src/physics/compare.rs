@@ -20,7 +20,8 @@ use crate::kinematics::{self, Robot};
 use crate::methods::Method;
 use crate::predictor::ErrorPredictor;
 use crate::sim::{
-    CampaignKind, CampaignSpec, ErrorProfile, Execution, TrueRobot, campaign, execute, rng_for,
+    CampaignKind, CampaignSpec, ErrorProfile, Execution, TrueRobot, campaign, designs, execute,
+    rng_for,
 };
 use crate::stats::spread;
 use crate::trajectory::Trajectory;
@@ -167,7 +168,7 @@ fn path(nominal: &Robot, opts: &CompareOptions) -> Result<Trajectory> {
     for k in 0..8 {
         let mut center = home;
         center.translation.vector += toward * k as f64;
-        fwd = campaign::circle_around(
+        fwd = designs::circle_around(
             nominal,
             &center,
             &nominal.home,

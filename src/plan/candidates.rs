@@ -71,7 +71,7 @@ pub fn draw(
     seed: u64,
 ) -> PoseSet {
     let mut rng = rng_for(seed, "plan-candidates");
-    let q = crate::sim::campaign::lhs(ranges, n, &mut rng);
+    let q = crate::sim::designs::lhs(ranges, n, &mut rng);
     let dir = q
         .iter()
         .map(|row| directions(row, limits, step, &mut rng))

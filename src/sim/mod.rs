@@ -18,6 +18,7 @@
 //! used to *check* the engine, never inside it.
 
 pub mod campaign;
+pub mod designs;
 mod effects;
 pub mod execute;
 pub mod iso_cubes;

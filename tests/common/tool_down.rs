@@ -20,7 +20,7 @@ pub fn ur10_tool_down(m: usize, seed: u64, stream: &str) -> (Robot, TrueRobot, V
         (-93.0, -87.0),
         (-200.0, 200.0),
     ];
-    let mut q = robokrige::sim::campaign::lhs(&ranges, m, &mut rng_for(seed, stream));
+    let mut q = robokrige::sim::designs::lhs(&ranges, m, &mut rng_for(seed, stream));
     for r in &mut q {
         r[3] = -90.0 - r[1] - r[2];
     }
