@@ -248,6 +248,7 @@ impl Rounds {
             systems,
             resamples,
             o.seed,
+            o.fdr,
             o.refine,
             &refit,
             &o.kriging.cancel,

@@ -121,6 +121,11 @@ const BATCH: usize = 100;
 /// Exceedances after which a family's p-value is settled (Besag & Clifford
 /// 1991): a clearly null family stops after a batch or two.
 const SETTLED: usize = 10;
+/// Chance, at one look, that a family's upper confidence bound of its
+/// exceedance probability is below the truth (one-sided Clopper–Pearson):
+/// what it costs to stop a clearly significant family early
+/// ([`exceedance_upper`], [`Null::decide`]).
+const DECIDED_RISK: f64 = 1e-3;
 
 /// A family as tested.
 struct Trial {
@@ -156,9 +161,10 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 /// grid point at the model's ξ. Its null distribution is that of the same
 /// statistic in pseudo-campaigns (sign-flipped whitened residuals, seeded,
 /// the same for every family, sequential: a family stops once `SETTLED`
-/// resamples reach its statistic, `p = (1 + exceed)/(1 + run)`), so the
-/// p-value accounts for the scan over the family's grid. Benjamini–Hochberg
-/// across families.
+/// resamples reach its statistic, `p = (1 + exceed)/(1 + run)`, or once it
+/// is significant at `fdr` whatever the resamples left would show, see
+/// [`Null::decide`]), so the p-value accounts for the scan over the
+/// family's grid. Benjamini–Hochberg across families.
 ///
 /// The `refine` families with the largest statistic are tried again at the
 /// ξ the model would choose with their best grid point (`refit` returns the
@@ -189,6 +195,7 @@ pub fn test_families(
     systems: Vec<AxisSystem>,
     permutations: usize,
     seed: u64,
+    fdr: f64,
     refine: usize,
     refit: &Refit<'_>,
     cancel: &Cancel,
@@ -223,9 +230,16 @@ pub fn test_families(
             }
         })
         .collect();
-    let null = base.sign_flip(&trials, &observed, permutations, seed, cancel, progress);
+    let null = base.sign_flip(
+        &trials,
+        &observed,
+        (permutations, fdr),
+        seed,
+        cancel,
+        progress,
+    );
     cancel.check()?;
-    let p = null.p_values(&trials);
+    let p = null.p_values();
     let q = benjamini_hochberg(&p);
     let within = support_width(&systems);
     Ok((0..families.len())
@@ -259,20 +273,70 @@ struct Baseline<'a> {
 
 /// The sign-flip resamples of every family: exceedances of its observed
 /// statistic, resamples run, and the sum and sum of squares of its null
-/// statistics.
+/// statistics; the smallest upper bound of its exceedance probability so
+/// far, and whether it was stopped as significant.
 struct Null {
     exceed: Vec<usize>,
     run: Vec<usize>,
     moments: Vec<[f64; 2]>,
+    upper: Vec<f64>,
+    decided: Vec<bool>,
+    /// Whether the family has a finite statistic (one without is never
+    /// resampled; its p-value is 1).
+    finite: Vec<bool>,
 }
 
 impl Null {
+    fn new(finite: Vec<bool>) -> Self {
+        let f = finite.len();
+        Null {
+            exceed: vec![0; f],
+            run: vec![0; f],
+            moments: vec![[0.0; 2]; f],
+            upper: vec![1.0; f],
+            decided: vec![false; f],
+            finite,
+        }
+    }
+
+    /// Whether family `k` still takes resamples.
+    fn open(&self, k: usize) -> bool {
+        self.exceed[k] < SETTLED && !self.decided[k] && self.finite[k]
+    }
+
+    /// Stop the open families that are significant at `fdr` whatever the
+    /// resamples left would show (the idea of Gandy & Hahn's MMCTest, 2014):
+    /// each open family's exceedance probability is bounded above by
+    /// [`exceedance_upper`] (the smallest bound over the looks so far), the
+    /// others keep their p-value, and an open family whose
+    /// Benjamini–Hochberg q-value on these bounds is within `fdr` is
+    /// decided. Its p-value stays `(1 + exceed)/(1 + run)`, below its
+    /// bound, and Benjamini–Hochberg is monotone in the p-values, so with
+    /// every bound holding it is significant in the end too. A clearly null
+    /// family still stops at [`SETTLED`] exceedances; what only more
+    /// resamples can tell runs on.
+    fn decide(&mut self, fdr: f64) {
+        let open: Vec<usize> = (0..self.finite.len()).filter(|&k| self.open(k)).collect();
+        for &k in &open {
+            let u = exceedance_upper(self.exceed[k], self.run[k], DECIDED_RISK);
+            self.upper[k] = self.upper[k].min(u);
+        }
+        let mut v = self.p_values();
+        for &k in &open {
+            v[k] = self.upper[k];
+        }
+        let q = benjamini_hochberg(&v);
+        for k in open {
+            self.decided[k] = q[k] <= fdr;
+        }
+    }
+
     /// `(1 + exceedances) / (1 + resamples)`, 1 for a family without a
     /// finite statistic.
-    fn p_values(&self, trials: &[Trial]) -> Vec<f64> {
-        (0..trials.len())
+    fn p_values(&self) -> Vec<f64> {
+        (0..self.finite.len())
             .map(|k| {
-                if trials[k].stat.is_finite() {
+                if self.finite[k] {
                     (1 + self.exceed[k]) as f64 / (1 + self.run[k]) as f64
                 } else {
                     1.0
@@ -308,27 +372,22 @@ impl<'a> Baseline<'a> {
     /// The sequential sign-flip test: pseudo-campaigns (sign-flipped
     /// whitened residuals, seeded, the same for every family) in batches,
     /// a family dropping out once [`SETTLED`] of them reach its `observed`
-    /// statistic, at most `permutations` in all.
+    /// statistic or once it is significant at `fdr` whatever more would
+    /// show ([`Null::decide`]), at most `permutations` in all.
     fn sign_flip(
         &self,
         trials: &[Trial],
         observed: &[f64],
-        permutations: usize,
+        (permutations, fdr): (usize, f64),
         seed: u64,
         cancel: &Cancel,
         progress: &dyn Fn(&str),
     ) -> Null {
         let (f, m) = (trials.len(), self.systems[0].rows());
-        let mut null = Null {
-            exceed: vec![0; f],
-            run: vec![0; f],
-            moments: vec![[0.0; 2]; f],
-        };
+        let mut null = Null::new(trials.iter().map(|t| t.stat.is_finite()).collect());
         let mut done = 0;
         while done < permutations && !cancel.is_cancelled() {
-            let active: Vec<usize> = (0..f)
-                .filter(|&k| null.exceed[k] < SETTLED && trials[k].stat.is_finite())
-                .collect();
+            let active: Vec<usize> = (0..f).filter(|&k| null.open(k)).collect();
             if active.is_empty() {
                 break;
             }
@@ -363,6 +422,7 @@ impl<'a> Baseline<'a> {
                 }
             }
             done += batch;
+            null.decide(fdr);
         }
         null
     }
@@ -500,6 +560,41 @@ fn resolve(
 /// Passes of a [`Zoom`] at most.
 const ZOOM_PASSES: usize = 4;
 
+/// Upper one-sided `1 − risk` Clopper–Pearson bound of an exceedance
+/// probability from `exceed` exceedances in `run` resamples: the `p` at
+/// which `P(Binomial(run, p) ≤ exceed) = risk` (bisection; 1 without
+/// resamples).
+fn exceedance_upper(exceed: usize, run: usize, risk: f64) -> f64 {
+    if run == 0 || exceed >= run {
+        return 1.0;
+    }
+    // ln P(Binomial(run, p) ≤ exceed), the terms summed in log space
+    let ln_cdf = |p: f64| -> f64 {
+        let (lp, lq) = (p.ln(), (1.0 - p).ln());
+        let mut ln_choose = 0.0;
+        let mut terms = Vec::with_capacity(exceed + 1);
+        for i in 0..=exceed {
+            if i > 0 {
+                ln_choose += ((run - i + 1) as f64).ln() - (i as f64).ln();
+            }
+            terms.push(ln_choose + i as f64 * lp + (run - i) as f64 * lq);
+        }
+        let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        top + terms.iter().map(|t| (t - top).exp()).sum::<f64>().ln()
+    };
+    let target = risk.ln();
+    let (mut lo, mut hi) = (exceed as f64 / run as f64, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if ln_cdf(mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
 /// Benjamini–Hochberg adjusted p-values (step-up, monotone).
 pub fn benjamini_hochberg(p: &[f64]) -> Vec<f64> {
     let n = p.len();
@@ -525,5 +620,73 @@ mod tests {
         assert!((q[2] - 0.0533333333333).abs() < 1e-9);
         assert!((q[1] - 0.0533333333333).abs() < 1e-9);
         assert!((q[3] - 0.5).abs() < 1e-12);
+    }
+
+    /// Without exceedances the bound is `1 − risk^(1/run)`; with some, the
+    /// binomial CDF at the bound is the risk; more resamples tighten it.
+    #[test]
+    fn the_upper_bound_of_an_exceedance_probability_is_clopper_pearson() {
+        let u = exceedance_upper(0, 100, 1e-3);
+        assert!((u - (1.0 - 1e-3f64.powf(0.01))).abs() < 1e-9, "{u}");
+        let (e, n) = (3usize, 500usize);
+        let u = exceedance_upper(e, n, 1e-3);
+        let mut cdf = 0.0;
+        let mut choose = 1.0f64;
+        for i in 0..=e {
+            if i > 0 {
+                choose *= (n - i + 1) as f64 / i as f64;
+            }
+            cdf += choose * u.powi(i as i32) * (1.0 - u).powi((n - i) as i32);
+        }
+        assert!((cdf - 1e-3).abs() < 1e-9, "{cdf}");
+        assert!(u > (1 + e) as f64 / (1 + n) as f64);
+        assert!(exceedance_upper(3, 1000, 1e-3) < u);
+        assert_eq!(exceedance_upper(0, 0, 1e-3), 1.0);
+    }
+
+    /// A family no resample reaches stops once Benjamini–Hochberg on the
+    /// bounds already counts it, the sooner the more such families there
+    /// are (the bar is `rank × fdr / families`); one with a few
+    /// exceedances, whose fate more resamples decide, and a null one do
+    /// not; three clear families among 95 need every resample.
+    #[test]
+    fn a_clearly_significant_family_stops_before_the_last_resample() {
+        // `clear` families without exceedances, one with three in every
+        // 500, the rest null (settled at once); the resamples run when the
+        // first clear one stopped
+        let run_until_stop = |clear: usize| -> (Option<usize>, Null) {
+            let mut null = Null::new(vec![true; 95]);
+            let mut stopped = None;
+            for run in (100..=1999).step_by(100) {
+                for k in 0..95 {
+                    if null.open(k) {
+                        null.exceed[k] = match k {
+                            k if k < clear => 0,
+                            k if k == clear => 3 * run / 500,
+                            _ => SETTLED,
+                        };
+                        null.run[k] = run;
+                    }
+                }
+                null.decide(0.05);
+                if stopped.is_none() && null.decided[0] {
+                    stopped = Some(run);
+                }
+            }
+            (stopped, null)
+        };
+        let (at, null) = run_until_stop(20);
+        let at = at.expect("twenty clear families stop early");
+        assert!(at < 1999 && (0..20).all(|k| null.decided[k]), "{at}");
+        assert!((20..95).all(|k| !null.decided[k]));
+        // their p-values stay below their bounds, and BH on the p-values
+        // counts them
+        let p = null.p_values();
+        let q = benjamini_hochberg(&p);
+        assert!((0..20).all(|k| p[k] <= null.upper[k] && q[k] <= 0.05));
+        let (sooner, _) = run_until_stop(60);
+        assert!(sooner.unwrap() < at, "{sooner:?} vs {at}");
+        let (never, few) = run_until_stop(3);
+        assert!(never.is_none() && few.run[0] == 1900, "{never:?}");
     }
 }
