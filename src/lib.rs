@@ -1,15 +1,17 @@
 //! # robokrige
 //!
-//! Universal-Kriging surrogate models of an industrial robot's TCP error over the
-//! **extended joint space** `s = [θ1..θn, λ1..λn]` (λ = ±1, the direction each
-//! joint last moved), and everything around them: kinematics, a measurement
-//! simulator, dataset I/O.
+//! Universal-Kriging surrogate models of an industrial robot's TCP (tool
+//! centre point) error over the **extended joint space** (EJS)
+//! `s = [θ1..θn, λ1..λn]` (λ = ±1, the direction each joint last moved) or
+//! the joint space (JS) `[θ1..θn]` alone, and everything around them:
+//! kinematics, calibration, a measurement simulator, dataset I/O.
 //!
 //! # Quick start: the calibrated model
 //!
 //! A campaign (joints, approach directions, measured errors) and the
 //! robot it was measured on give the model an engineer deploys: the
-//! robot's kinematic errors identified on the directions the campaign
+//! robot's kinematic errors (its MD-H, modified Denavit–Hartenberg,
+//! parameters, tool and base) identified on the directions the campaign
 //! sees, then Kriging of what that calibration leaves, in one file.
 //!
 //! ```no_run
@@ -57,14 +59,14 @@
 //! | data | [`memory`], [`output`] | memory estimates before large allocations; checked, atomic output files |
 //! | data | [`vec3`] | TCP error vectors `[x, y, z]` (mm): norm, residuals |
 //! | data | [`predictor`] | the `ErrorPredictor` trait every error model implements |
-//! | geometry | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK (also along a path), presets |
-//! | geometry | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
-//! | geometry | [`calibration`] | MD-H, tool and base errors by Levenberg–Marquardt on the directions a campaign sees; the joints' harmonics and backlash; identifiability; the calibration's prediction and variance |
-//! | geometry | [`optim`] | box-constrained minimisers (BFGS, GPS, Hooke–Jeeves, GA, Levenberg–Marquardt) |
+//! | geometry and numerics | [`kinematics`] | MD-H chain (seed 003 eq 1), forward kinematics, Jacobian, IK (also along a path), presets |
+//! | geometry and numerics | [`frames`] | best-fit plane, circle, axis line; SVD registration (seed 004 eqs 29–35) |
+//! | geometry and numerics | [`calibration`] | MD-H, tool and base errors by Levenberg–Marquardt on the directions a campaign sees; the joints' harmonics and backlash; identifiability; the calibration's prediction and variance |
+//! | geometry and numerics | [`optim`] | box-constrained minimisers (BFGS, GPS, Hooke–Jeeves, GA, Levenberg–Marquardt) |
 //! | engine | [`kriging`] | universal Kriging: trend, correlation families, likelihood, fit, predict |
 //! | engine | [`features`] | extra inputs beyond `[θ, λ]` that `diagnose` can add |
 //! | engine | [`inputs`] | `InputMap`: encoding, extras and normalisation of a model's inputs, in one place |
-//! | engine | [`selection`] | trend selection: candidates, PCC + PCA (seed 003 eqs 15–20), GA (seed 004), the kinematic trend |
+//! | engine | [`selection`] | trend selection: candidates, PCC + PCA (partial correlation and principal components, seed 003 eqs 15–20), a genetic algorithm (GA, seed 004), the kinematic trend |
 //! | model | [`model`] | `ErrorModel`: three Kriging outputs over JS or EJS, save/load |
 //! | model | [`params`] | `ErrorModelParams` → checked → `fit`: every space × trend × hyperparameter choice |
 //! | model | [`methods`] | the papers' model variants by name (`Method::params`), and `recommended`; a fit by names and its rules (`params_with`) |
@@ -72,15 +74,15 @@
 //! | studies | [`compensate`] | single-step and iterative feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22) |
 //! | studies | [`diagnose`] | closing the loop: what the model still misses |
 //! | studies | [`sim`] | a "true robot" and its campaigns (checks the engine; never used inside it) |
-//! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, hybrid, comparisons |
+//! | studies | [`physics`] | the lookup-table models of seeds 000 and 002, D-H calibration, physics + Kriging, comparisons |
 //! | studies | [`study`] | compensation targets, simulator truth files, before/after evaluation on the simulated robot |
 //! | studies | [`holdout`] | Kriging beside the D-H calibration on held-out real rows |
 //! | studies | [`plan`] | which poses to measure next: the integrated-MSE design, its order with via-points, when to stop |
 //! | studies | [`batch`] | a fleet: every campaign of a folder fitted and cross-validated, in parallel |
 //! | studies | [`demo`] | the demo's job on the simulated COMAU: methods by CV, compensation, a diagnosis |
-//! | output | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
-//! | output | [`report`] | the studies' text reports: the tables the CLI prints, its Markdown reports |
-//! | output | `config` | config files (`robokrige run`): steps as command lines, run in order; Cargo feature `cli` |
+//! | presentation | `plot` | SVG charts (box plots, x–y plots) and the studies' charts; Cargo feature `plot` (default) |
+//! | presentation | [`report`] | the studies' text reports: the tables the CLI prints, its Markdown reports |
+//! | presentation | `config` | config files (`robokrige run`): steps as command lines, run in order; Cargo feature `cli` |
 //!
 //! Cargo features: `cli` (the `robokrige` binary: clap, indicatif) and
 //! `plot` (plotters), both on by default; `default-features = false` gives

@@ -88,10 +88,14 @@ impl ProgramPose {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ProgramFormat {
-    /// A joint CSV: `id,q1..qN,measure` (and `label` when a pose has one).
+    /// A joint CSV: `id,q1..qN,measure` (and `label` when a pose has one);
+    /// a campaign plan writes its own CSV, with the directions
+    /// ([`crate::plan::Plan::write_csv`]).
     #[cfg_attr(
         feature = "cli",
-        value(help = "Joint CSV: id,q1..qN,measure[,label] (degrees; mm for prismatic joints)")
+        value(
+            help = "CSV, one row per move (degrees; mm for prismatic joints): compensate writes id,q1..qN,measure[,label], plan id,q1..qN,dir1..dirN,measure,source"
+        )
     )]
     Csv,
     /// Universal Robots URScript: `movej` in radians.
