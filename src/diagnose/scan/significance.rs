@@ -161,10 +161,11 @@ fn support_width(systems: &[AxisSystem]) -> f64 {
 /// grid point at the model's ξ. Its null distribution is that of the same
 /// statistic in pseudo-campaigns (sign-flipped whitened residuals, seeded,
 /// the same for every family, sequential: a family stops once `SETTLED`
-/// resamples reach its statistic, `p = (1 + exceed)/(1 + run)`, or once it
-/// is significant at `fdr` whatever the resamples left would show, see
-/// [`Null::decide`]), so the p-value accounts for the scan over the
-/// family's grid. Benjamini–Hochberg across families.
+/// resamples reach its statistic, `p = (1 + exceed)/(1 + run)`, or once
+/// Benjamini–Hochberg at `fdr` counts it on the upper Clopper–Pearson
+/// bounds of the open families' exceedance probabilities, so that the
+/// resamples left could not change it), so the p-value accounts for the
+/// scan over the family's grid. Benjamini–Hochberg across families.
 ///
 /// The `refine` families with the largest statistic are tried again at the
 /// ξ the model would choose with their best grid point (`refit` returns the
