@@ -89,8 +89,8 @@ impl ProgramPose {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ProgramFormat {
     /// A joint CSV: `id,q1..qN,measure` (and `label` when a pose has one);
-    /// a campaign plan writes its own CSV, with the directions
-    /// ([`crate::plan::Plan::write_csv`]).
+    /// a campaign plan writes its own CSV, with the directions (the plan's
+    /// `write_csv`).
     #[cfg_attr(
         feature = "cli",
         value(
