@@ -93,6 +93,24 @@ pub fn campaigns(folder: &Path) -> Result<Vec<PathBuf>> {
             message: "no campaign (*.csv) in this folder".into(),
         });
     }
+    // `a.csv` and `a.CSV` would write one `a.model.json` (and on a
+    // case-insensitive file system, so would `A.csv`)
+    for (i, f) in out.iter().enumerate() {
+        let name = campaign_name(f).to_lowercase();
+        if let Some(g) = out[..i]
+            .iter()
+            .find(|g| campaign_name(g).to_lowercase() == name)
+        {
+            return Err(Error::Input {
+                source_name: folder.display().to_string(),
+                message: format!(
+                    "{} and {} would write the same model and report files (NAME.model.json): rename one",
+                    g.display(),
+                    f.display()
+                ),
+            });
+        }
+    }
     Ok(out)
 }
 
@@ -178,17 +196,18 @@ pub fn prepare_output(folder: &Path, output: &Path) -> Result<()> {
 
 /// Write every campaign of `files` that succeeded (`results`, the same
 /// order) into the folder `out` ([`write_campaign`]).
-pub fn write_campaigns(
-    out: &Path,
-    files: &[PathBuf],
-    results: &[Result<CampaignReport>],
-) -> Result<()> {
-    for (file, r) in files.iter().zip(results) {
-        if let Ok(rep) = r {
-            write_campaign(out, &campaign_name(file), rep)?;
+///
+/// A campaign whose files cannot be written becomes a failed one (its
+/// result the write error), so that the others are still written and the
+/// summary says which failed.
+pub fn write_campaigns(out: &Path, files: &[PathBuf], results: &mut [Result<CampaignReport>]) {
+    for (file, r) in files.iter().zip(results.iter_mut()) {
+        if let Ok(rep) = r
+            && let Err(e) = write_campaign(out, &campaign_name(file), rep)
+        {
+            *r = Err(e);
         }
     }
-    Ok(())
 }
 
 /// Write campaign `name`'s model and report into the folder `out`:

@@ -17,6 +17,34 @@ use std::path::{Path, PathBuf};
 
 use crate::{Error, Result};
 
+/// Files no output may replace for the rest of the process, beyond each
+/// command's own inputs: `run`'s config file, read once but not an input
+/// of the steps it runs.
+static PROTECTED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Refuse, from now on, any output that is the file `path`
+/// ([`check_outputs`] and [`write_atomic`]).
+pub fn protect(path: &Path) {
+    let mut p = PROTECTED.lock().unwrap_or_else(|e| e.into_inner());
+    p.push(resolve(path));
+}
+
+/// The protected file `path` is, if any.
+fn protected(path: &Path) -> Option<PathBuf> {
+    let r = resolve(path);
+    let p = PROTECTED.lock().unwrap_or_else(|e| e.into_inner());
+    p.iter().find(|q| **q == r || same_file(q, path)).cloned()
+}
+
+/// The error for an output that would replace the protected file `p`.
+fn refuse_protected(out: &Path, p: &Path) -> Error {
+    Error::InvalidParameter(format!(
+        "output {} is {}, which this run reads: refusing to overwrite it",
+        out.display(),
+        p.display()
+    ))
+}
+
 /// Write `path` atomically: `fill` writes the whole content into a
 /// temporary file in the same folder, which then replaces `path` by a
 /// rename. On any failure `path` is left as it was and the temporary file
@@ -26,6 +54,9 @@ pub fn write_atomic(
     fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
     let io_err = |e| Error::io(path, e);
+    if let Some(p) = protected(path) {
+        return Err(refuse_protected(path, &p));
+    }
     let mut tmp = temp_beside(path).map_err(io_err)?;
     {
         let mut w = io::BufWriter::new(tmp.as_file_mut());
@@ -98,6 +129,9 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
             continue;
         }
         let r = resolve(out);
+        if let Some(p) = protected(out) {
+            return Err(refuse_protected(out, &p));
+        }
         for inp in inputs {
             if r == resolve(inp) || same_file(out, inp) {
                 return Err(Error::InvalidParameter(format!(

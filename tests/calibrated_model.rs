@@ -305,3 +305,53 @@ fn fit_with_backlash_finds_the_simulated_play_and_keeps_it_in_the_model_file() {
     let rows = std::fs::read_to_string(p("b.csv")).unwrap().lines().count();
     assert_eq!(rows, 301);
 }
+
+#[test]
+fn a_calibration_on_a_few_poses_keeps_coordinates_for_its_noise_and_refuses_too_few() {
+    let robot = preset("comau-nj220").unwrap();
+    let data = read_csv(ds("comau_lhs.csv").as_ref()).unwrap();
+    // 8 poses, 24 coordinates: a first fit on every direction interpolated
+    // them (noise 0, every direction "seen")
+    let cal = robokrige::calibration::calibrate(
+        &data.clone().head(8),
+        &robot,
+        &CalibrationOptions::geometric(),
+    )
+    .unwrap();
+    let id = cal.identifiability();
+    assert!(id.noise_mm > 0.01, "noise {}", id.noise_mm);
+    assert!(
+        id.directions_seen <= 24 - robokrige::calibration::MIN_NOISE_DOF,
+        "{} directions seen on 24 coordinates",
+        id.directions_seen
+    );
+    // 3 poses leave nothing for the noise: refused, naming the ways out
+    let err = robokrige::calibration::calibrate(
+        &data.clone().head(3),
+        &robot,
+        &CalibrationOptions::geometric(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("--calibration-noise") && err.contains("--no-calibrate"),
+        "{err}"
+    );
+    // with the noise given, they are calibrated along what they see
+    let given = CalibrationOptions::new(false, Some(0.05));
+    assert!(robokrige::calibration::calibrate(&data.head(3), &robot, &given).is_ok());
+}
+
+#[test]
+fn a_calibration_that_sees_no_direction_is_written_and_loads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.json");
+    let out = out.to_str().unwrap();
+    let (c, text, err) = quick_fit(&ds("comau_lhs.csv"), out, &["--calibration-noise", "1000"]);
+    assert_eq!(c, 0, "{err}");
+    assert!(text.contains("0 of 39 directions"), "{text}");
+    let m = ErrorModel::load(out.as_ref()).unwrap();
+    let id = m.calibration().unwrap().identifiability();
+    assert_eq!(id.directions_seen, 0);
+    assert!(id.condition_number.is_infinite());
+}

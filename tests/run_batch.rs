@@ -256,3 +256,46 @@ fn a_batch_calibrates_with_the_backlash_when_asked() {
     assert_eq!(c, 2, "{err}");
     assert!(err.contains("cannot be used with"), "{err}");
 }
+
+#[test]
+fn no_step_and_no_log_of_a_run_writes_over_its_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let config = format!(
+        "data = \"{}\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"run.toml\"\noptimizer = \"hj\"\n",
+        ds("comau_lhs.csv")
+    );
+    std::fs::write(p("run.toml"), &config).unwrap();
+    let (c, _, err) = rk(&["run", &p("run.toml")]);
+    assert_ne!(c, 0);
+    assert!(err.contains("refusing to overwrite"), "{err}");
+    assert_eq!(std::fs::read_to_string(p("run.toml")).unwrap(), config);
+    // the log, refused before any step runs
+    let config = config.replace("output = \"run.toml\"", "output = \"m.json\"");
+    std::fs::write(p("run.toml"), &config).unwrap();
+    let (c, _, err) = rk(&["run", &p("run.toml"), "--json", &p("run.toml")]);
+    assert_ne!(c, 0);
+    assert!(err.contains("refusing to overwrite"), "{err}");
+    assert!(!dir.path().join("m.json").exists());
+    assert_eq!(std::fs::read_to_string(p("run.toml")).unwrap(), config);
+}
+
+#[test]
+fn a_batch_refuses_two_campaigns_that_would_write_the_same_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let fleet = dir.path().join("fleet");
+    std::fs::create_dir(&fleet).unwrap();
+    let text = std::fs::read_to_string(ds("comau_lhs.csv")).unwrap();
+    std::fs::write(fleet.join("a.csv"), &text).unwrap();
+    std::fs::write(fleet.join("a.CSV"), &text).unwrap();
+    let out = dir.path().join("out");
+    let (c, _, err) = rk(&[
+        "batch",
+        fleet.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_ne!(c, 0);
+    assert!(err.contains("the same model and report files"), "{err}");
+    assert!(!out.join("summary.csv").exists());
+}

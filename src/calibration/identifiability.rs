@@ -185,6 +185,12 @@ impl ScaledJacobian {
     }
 }
 
+/// Serde `deserialize_with` for a ratio JSON cannot hold when infinite:
+/// `null` (what serde_json writes for a non-finite number) reads as +∞.
+fn infinite_when_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+}
+
 /// One calibration parameter: its identified error and how much of it the
 /// campaign saw.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -221,7 +227,9 @@ pub struct Identifiability {
     pub noise_mm: f64,
     /// Every singular value of the scaled Jacobian, descending.
     pub singular_values: Vec<f64>,
-    /// `σ_1 / σ_k` over the directions kept.
+    /// `σ_1 / σ_k` over the directions kept; infinite when none is kept
+    /// (`null` in a model file).
+    #[serde(deserialize_with = "infinite_when_null")]
     pub condition_number: f64,
     /// Borm & Menq's observability index `(σ_1 ⋯ σ_k)^{1/k} / √m`.
     pub o1: f64,

@@ -47,6 +47,7 @@ pub mod identifiability;
 mod predict;
 
 pub use backlash::JointBacklash;
+pub use geometric::MIN_NOISE_DOF;
 pub use harmonics::JointHarmonic;
 pub use identifiability::{Identifiability, ParameterReport};
 

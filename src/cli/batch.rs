@@ -61,7 +61,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
     };
     let (n, folder) = (files.len(), a.folder.display());
     eprintln!("batch: {n} campaign(s) in {folder}, in parallel");
-    let results = super::progress::with_bar(files.len() as u64, "campaigns", |pb| {
+    let mut results = super::progress::with_bar(files.len() as u64, "campaigns", |pb| {
         run_batch(&files, &opts, &|c, r| {
             pb.inc(1);
             if let Err(e) = r {
@@ -69,8 +69,8 @@ pub fn run(a: BatchArgs) -> Result<()> {
             }
         })
     });
+    write_campaigns(&a.output, &files, &mut results);
     say_part!("{}", report::table(&files, &results));
-    write_campaigns(&a.output, &files, &results)?;
     write_summary(&summary_csv, &files, &results)?;
     say!("summary -> {}", summary_csv.display());
     let v = report::json(&files, &results);

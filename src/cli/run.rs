@@ -56,6 +56,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     let steps = config::read_steps(&a.config, &super::Cli::command())?;
     let folder = config::folder(&a.config);
     let json_out = a.json.as_deref().map(config::output_path);
+    // no step, nor the log, may write over the config (resolved before the
+    // working folder changes)
+    robokrige::output::protect(&a.config);
+    super::check_files(&[], &[json_out.as_deref()])?;
     std::env::set_current_dir(&folder).map_err(|e| Error::io(&folder, e))?;
     let ran = config::run_steps(
         (&source, &steps),
