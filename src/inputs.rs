@@ -144,6 +144,16 @@ impl InputMap {
         &self.extras
     }
 
+    /// Set the reference of covariate `name` in every extra that reads it
+    /// ([`Feature::set_covariate_reference`]); whether any does.
+    pub(crate) fn set_covariate_reference(&mut self, name: &str, value: f64) -> bool {
+        let mut any = false;
+        for f in &mut self.extras {
+            any |= f.set_covariate_reference(name, value);
+        }
+        any
+    }
+
     /// Column names, one per input dimension.
     pub fn names(&self) -> &[String] {
         &self.names

@@ -1060,3 +1060,66 @@ fn options_a_mode_does_not_use_are_refused() {
         );
     }
 }
+
+/// A model with `temp_c` as an input, compensated at a temperature given
+/// with `--covariate`; without it, at the campaign's start value with a
+/// warning that says so (and that the trajectory's own column is not read).
+#[test]
+fn compensate_holds_a_covariate_at_the_value_given_and_warns_without_one() {
+    use robokrige::features::Feature;
+    use robokrige::kriging::{KrigingOptions, OptimizerKind};
+    use robokrige::params::ErrorModelParams;
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let ds = |f: &str| format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"));
+    let data = robokrige::dataset::read_csv(ds("comau_temperature.csv").as_ref())
+        .unwrap()
+        .head(120);
+    let opts = KrigingOptions::default()
+        .optimizer(OptimizerKind::HookeJeeves)
+        .max_evals(200);
+    let m = ErrorModelParams::new()
+        .kriging(opts)
+        .extras(vec![Feature::Covariate {
+            name: "temp_c".into(),
+            reference: Some(21.0),
+        }])
+        .check()
+        .and_then(|p| p.fit(&data))
+        .unwrap();
+    m.save(p("m.json").as_ref()).unwrap();
+    let comp = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "compensate",
+            ds("comau_circle.csv").leak(),
+            "--model",
+            p("m.json").leak(),
+            "--robot",
+            "comau-nj220",
+            "-o",
+            p(out).leak(),
+        ];
+        args.extend_from_slice(extra);
+        rk(&args)
+    };
+    let (c, _, err) = comp("a.csv", &[]);
+    assert_eq!(c, 0, "{err}");
+    assert!(
+        err.contains("covariate 'temp_c': compensating at 21")
+            && err.contains("--covariate temp_c=VALUE"),
+        "{err}"
+    );
+    let (c, _, err) = comp("b.csv", &["--covariate", "temp_c=21"]);
+    assert_eq!(c, 0, "{err}");
+    assert!(!err.contains("warning: the model uses covariate"), "{err}");
+    let (c, _, err) = comp("c.csv", &["--covariate", "temp_c=35"]);
+    assert_eq!(c, 0, "{err}");
+    let read = |f: &str| std::fs::read_to_string(p(f)).unwrap();
+    assert_eq!(read("a.csv"), read("b.csv"));
+    assert_ne!(read("a.csv"), read("c.csv"));
+    let (c, _, err) = comp("d.csv", &["--covariate", "payload=3"]);
+    assert_eq!(c, 1);
+    assert!(err.contains("does not use covariate 'payload'"), "{err}");
+    let (c, _, err) = comp("d.csv", &["--covariate", "temp_c"]);
+    assert_eq!(c, 2, "{err}");
+}

@@ -60,6 +60,11 @@ pub struct CompensateArgs {
     /// [default: the start pose's orientation].
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     orientation: Option<Vec<f64>>,
+    /// The value of a covariate the model uses (e.g. temp_c=24.5) while the
+    /// trajectory runs; repeat for several. Without it a covariate takes
+    /// its value at the start of the measured campaign, with a warning.
+    #[arg(long = "covariate", value_name = "NAME=VALUE", value_parser = parse_covariate)]
+    covariates: Vec<(String, f64)>,
     /// Simulator truth: also run the nominal and compensated commands on the
     /// simulated robot and report the errors before and after.
     #[arg(long)]
@@ -119,7 +124,11 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     super::check_files(&inputs, &outputs)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     let commands_out = CommandsOutput::new(&a.output, a.format, &robot)?;
-    let model = AnyModel::load_for(&a.model, &robot)?;
+    let model = at_covariates(
+        AnyModel::load_for(&a.model, &robot)?,
+        &a.covariates,
+        &a.traj,
+    )?;
     let start = robot.start_or_home(a.start.as_deref())?;
     let targets = Targets::read(&a.traj, &robot, a.orientation.as_deref(), &start)?;
     super::warn(&targets.warnings);
@@ -153,6 +162,66 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let run = (&res, a.iterative, secs);
     let v = report::json(files, (&robot.name, &model), run, eval.as_ref());
     super::json_to(a.json.as_deref(), &v, "compensation report")
+}
+
+/// `NAME=VALUE` of `--covariate`.
+fn parse_covariate(s: &str) -> std::result::Result<(String, f64), String> {
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("'{s}': expected NAME=VALUE, e.g. temp_c=24.5"))?;
+    let v: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': the value '{value}' is not a number"))?;
+    if name.trim().is_empty() || !v.is_finite() {
+        return Err(format!("'{s}': expected NAME=VALUE with a finite value"));
+    }
+    Ok((name.trim().to_string(), v))
+}
+
+/// The model with the covariates `given` held at their values; a warning
+/// for each covariate it uses that is not given (the value it takes, and
+/// that a column of that name in `traj` is not read).
+fn at_covariates(model: AnyModel, given: &[(String, f64)], traj: &Path) -> Result<AnyModel> {
+    let AnyModel::Kriging(m) = model else {
+        if let Some((name, _)) = given.first() {
+            return Err(robokrige::Error::InvalidParameter(format!(
+                "--covariate {name}: a physics model uses no covariate"
+            )));
+        }
+        return Ok(model);
+    };
+    let mut m = *m;
+    let used = m.covariates();
+    for (name, value) in given {
+        m = m.at_covariate(name, *value)?;
+    }
+    let header = std::fs::read_to_string(traj)
+        .ok()
+        .and_then(|t| t.lines().next().map(str::to_string))
+        .unwrap_or_default();
+    for (name, reference) in used {
+        if given.iter().any(|(n, _)| *n == name) {
+            continue;
+        }
+        let note = if header.split(',').any(|c| c.trim() == name) {
+            format!(
+                " ({} has a '{name}' column; compensate does not read it)",
+                traj.display()
+            )
+        } else {
+            String::new()
+        };
+        let Some(v) = reference else {
+            return Err(robokrige::Error::InvalidParameter(format!(
+                "the model uses covariate '{name}' and records no value for it{note}: give the value the trajectory runs at with --covariate {name}=VALUE"
+            )));
+        };
+        super::warn([format!(
+            "the model uses covariate '{name}': compensating at {v} (its value at the start of the measured campaign){note}; give the value the trajectory runs at with --covariate {name}=VALUE"
+        )]);
+    }
+    Ok(AnyModel::Kriging(Box::new(m)))
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {

@@ -212,6 +212,33 @@ fn harmonic_arg(joint: usize, period_deg: f64, centre_deg: f64) -> String {
 }
 
 impl Feature {
+    /// The covariate this feature reads (itself, or the one inside a
+    /// product or a lag), with its reference: the value a prediction from
+    /// poses alone takes.
+    pub fn covariate(&self) -> Option<(&str, Option<f64>)> {
+        match self {
+            Feature::Covariate { name, reference } => Some((name, *reference)),
+            Feature::Times { of, .. } | Feature::Lagged { of, .. } => of.covariate(),
+            _ => None,
+        }
+    }
+
+    /// Set the reference of covariate `name` (itself, or inside a product
+    /// or a lag) to `value`: predictions from poses alone then take it.
+    /// Returns whether this feature reads that covariate.
+    pub fn set_covariate_reference(&mut self, covariate: &str, value: f64) -> bool {
+        match self {
+            Feature::Covariate { name, reference } if name == covariate => {
+                *reference = Some(value);
+                true
+            }
+            Feature::Times { of, .. } | Feature::Lagged { of, .. } => {
+                of.set_covariate_reference(covariate, value)
+            }
+            _ => false,
+        }
+    }
+
     /// Column names, one per input dimension this feature adds.
     pub fn names(&self) -> Vec<String> {
         match self {

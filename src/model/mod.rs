@@ -192,6 +192,41 @@ impl ErrorModel {
         self.inputs.extras()
     }
 
+    /// The covariates the model reads (a measured column such as `temp_c`,
+    /// alone or inside a product or a lag), each once, with the value a
+    /// prediction from poses alone takes ([`ErrorModel::predict`]).
+    pub fn covariates(&self) -> Vec<(String, Option<f64>)> {
+        let mut out: Vec<(String, Option<f64>)> = Vec::new();
+        for (name, reference) in self.extras().iter().filter_map(Feature::covariate) {
+            if !out.iter().any(|(n, _)| n == name) {
+                out.push((name.to_string(), reference));
+            }
+        }
+        out
+    }
+
+    /// The model with covariate `name` held at `value` in predictions from
+    /// poses alone (a compensation run at that temperature or payload).
+    pub fn at_covariate(mut self, name: &str, value: f64) -> Result<Self> {
+        if !value.is_finite() {
+            return Err(Error::InvalidParameter(format!(
+                "covariate '{name}' = {value}: a finite value is needed"
+            )));
+        }
+        if !self.inputs.set_covariate_reference(name, value) {
+            let used: Vec<String> = self.covariates().into_iter().map(|(n, _)| n).collect();
+            return Err(Error::InvalidParameter(format!(
+                "the model does not use covariate '{name}' (it uses: {})",
+                if used.is_empty() {
+                    "none".to_string()
+                } else {
+                    used.join(", ")
+                }
+            )));
+        }
+        Ok(self)
+    }
+
     /// The basis selection that chose the trends (PCC+PCA or GA), if any.
     pub fn selection(&self) -> Option<&Selection> {
         self.selection.as_ref()
