@@ -1040,6 +1040,53 @@ fn command_cases() -> Vec<Case> {
     let not_truth = write("not_truth.json", "{\"a\": 1}");
     let out = |n: &str| s(&path(n));
     vec![
+        // the kinematic trend has no separate calibration to set
+        case(
+            "fit_kinematic_with_a_calibration_option",
+            &[
+                "fit",
+                &d,
+                "--robot",
+                "comau-nj220",
+                "--kinematic",
+                "--geometric",
+                "-o",
+                &out("k.json"),
+            ],
+            &[data],
+            Expect::Usage,
+        ),
+        // a tracker position alone would leave out no pose
+        case(
+            "plan_tracker_without_a_limit",
+            &[
+                "plan",
+                "--robot",
+                "comau-nj220",
+                "--budget",
+                "5",
+                "--tracker=0,0,1000",
+                "-o",
+                &out("p.csv"),
+            ],
+            &[],
+            fail(&["--tracker alone", "--max-range"]),
+        ),
+        case(
+            "plan_negative_target",
+            &[
+                "plan",
+                "--robot",
+                "comau-nj220",
+                "--budget",
+                "5",
+                "--target-mm=-1",
+                "-o",
+                &out("p.csv"),
+            ],
+            &[],
+            fail(&["--target-mm", "positive"]),
+        ),
         // a calibration option needs a robot to calibrate
         case(
             "fit_geometric_without_robot",

@@ -186,3 +186,37 @@ fn the_forecast_now_meets_the_error_on_new_poses_and_falls_with_the_plan() {
         );
     }
 }
+
+/// A pool's poses the plan cannot use, and a budget it cannot fill, are
+/// said in its notes (they were left out silently).
+#[test]
+fn a_plan_says_which_pool_poses_it_left_out_and_when_it_plans_fewer() {
+    let robot = robokrige::kinematics::preset("comau-nj220").unwrap();
+    let mut pool = robokrige::dataset::read_csv(&shipped("comau_verify.csv"))
+        .unwrap()
+        .head(20);
+    // three poses beyond q2's upper limit
+    let hi = robot.limits[1].1;
+    for q in pool.q.iter_mut().take(3) {
+        q[1] = hi + 5.0;
+    }
+    let region = Region::from_options(None, Some(&pool), &robot).unwrap();
+    let plan = PlanParams::new(50)
+        .check()
+        .unwrap()
+        .plan(&PlanInputs {
+            robot: &robot,
+            campaign: None,
+            prior: None,
+            pool: Some(&pool),
+            region: &region,
+        })
+        .unwrap();
+    let notes = plan.notes.join("\n");
+    assert!(
+        notes.contains("3 of the pool's poses outside the robot's joint limits"),
+        "{notes}"
+    );
+    assert!(notes.contains("planned 17 of 50 poses"), "{notes}");
+    assert_eq!(plan.chosen.len(), 17);
+}

@@ -86,8 +86,8 @@ pub struct ModelArgs {
     tool: Option<String>,
     /// Add the kinematic-error basis (rows of the robot's identification
     /// Jacobian, seed 003 eq 4) to the trend: one fit calibrates and krigs
-    /// (no separate calibration then).
-    #[arg(long)]
+    /// (no separate calibration then: the calibration options are refused).
+    #[arg(long, conflicts_with = "calibration_flags")]
     kinematic: bool,
     #[command(flatten)]
     calibration: CalibrationArgs,

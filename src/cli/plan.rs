@@ -91,6 +91,11 @@ pub struct PlanArgs {
 pub fn run(a: PlanArgs) -> Result<()> {
     let inputs = [&a.campaign, &a.pool, &a.region, &a.prior].map(Option::as_deref);
     super::check_files(&inputs, &[Some(a.output.as_path()), a.json.as_deref()])?;
+    if let Some(t) = a.target_mm.filter(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(robokrige::Error::InvalidParameter(format!(
+            "--target-mm must be a positive error in mm, not {t}"
+        )));
+    }
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     Plan::check_output(&a.output, a.format, &robot)?;
     let campaign = a.campaign.as_deref().map(read_data).transpose()?;

@@ -148,6 +148,12 @@ impl TrackerView {
                 p.len()
             ))
         })?;
+        if max_range.is_none() && max_incidence.is_none() {
+            return Err(Error::InvalidParameter(
+                "--tracker alone leaves out no pose: give --max-range and/or --max-incidence"
+                    .into(),
+            ));
+        }
         let mut view = TrackerView::new(pos)?;
         if let Some(r) = max_range {
             view = view.max_range(r)?;

@@ -247,13 +247,19 @@ impl ValidPlanParams {
         let ranges = working_ranges(robot);
         let step = vec![p.via_step; n];
         let measured = measured_poses(robot, inputs.campaign)?;
-        let (cand, cand_rows) = self.candidate_set(inputs, &ranges, &step, &measured)?;
-        if cand.is_empty() {
-            return Err(Error::InvalidParameter(
-                "no candidate pose is left to plan (all measured, or none the tracker sees)".into(),
-            ));
-        }
         let mut notes = Vec::new();
+        let (cand, cand_rows) =
+            self.candidate_set(inputs, &ranges, &step, &measured, &mut notes)?;
+        if cand.is_empty() {
+            return Err(Error::InvalidParameter(format!(
+                "no candidate pose is left to plan{}",
+                if notes.is_empty() {
+                    String::new()
+                } else {
+                    format!(": {}", notes.join("; "))
+                }
+            )));
+        }
         let (model, source) = self.hyperparameters(inputs, &mut notes)?;
         let region = self.region_set(inputs.region, &ranges, &robot.limits, &step, n)?;
         p.cancel.check()?;
@@ -275,12 +281,17 @@ impl ValidPlanParams {
                 (chosen, Vec::new(), false)
             }
         };
-        if chosen.len() < p.budget && model.is_some() {
+        let wanted = if model.is_some() {
+            p.budget
+        } else {
+            p.budget.min(p.first_batch)
+        };
+        if chosen.len() < wanted {
             notes.push(format!(
                 "only {} candidates: planned {} of {} poses",
                 cand.len(),
                 chosen.len(),
-                p.budget
+                wanted
             ));
         }
         let poses = cand.select(&chosen);
@@ -316,6 +327,7 @@ impl ValidPlanParams {
         ranges: &[(f64, f64)],
         step: &[f64],
         measured: &PoseSet,
+        notes: &mut Vec<String>,
     ) -> Result<(PoseSet, Vec<usize>)> {
         let p = &self.0;
         let robot = inputs.robot;
@@ -351,11 +363,38 @@ impl ValidPlanParams {
             .zip(&measured.dir)
             .map(|(q, d)| key(q, d))
             .collect();
-        let rows: Vec<usize> = (0..all.len())
+        let new: Vec<usize> = (0..all.len())
             .filter(|&i| !done.contains(&key(&all.q[i], &all.dir[i])))
+            .collect();
+        let reachable: Vec<usize> = new
+            .iter()
+            .copied()
             .filter(|&i| robot.within_limits(&all.q[i]))
+            .collect();
+        let rows: Vec<usize> = reachable
+            .iter()
+            .copied()
             .filter(|&i| p.tracker.as_ref().is_none_or(|t| t.sees(robot, &all.q[i])))
             .collect();
+        // a pool's poses left out are the user's: say how many and why (the
+        // drawn candidates are drawn within the limits)
+        let source = if inputs.pool.is_some() {
+            "of the pool's poses"
+        } else {
+            "candidates"
+        };
+        for (dropped, why) in [
+            (all.len() - new.len(), "already measured"),
+            (
+                new.len() - reachable.len(),
+                "outside the robot's joint limits",
+            ),
+            (reachable.len() - rows.len(), "not seen by the tracker"),
+        ] {
+            if dropped > 0 && (inputs.pool.is_some() || rows.is_empty()) {
+                notes.push(format!("{dropped} {source} {why}, left out"));
+            }
+        }
         Ok((all.select(&rows), rows))
     }
 
@@ -370,6 +409,13 @@ impl ValidPlanParams {
             .campaign
             .filter(|c| c.errors.is_some() && !c.is_empty());
         if let Some(c) = measured.filter(|c| c.len() >= MIN_FIT_ROWS) {
+            if inputs.prior.is_some() {
+                notes.push(format!(
+                    "the prior model is not used: the {} measured poses re-estimate the \
+                     hyperparameters (a prior is used below {MIN_FIT_ROWS})",
+                    c.len()
+                ));
+            }
             let params = default_params(inputs.robot, c)?.cancel(self.0.cancel.clone());
             return Ok((Some(params.check()?.fit(c)?), HyperSource::Campaign));
         }

@@ -81,6 +81,11 @@ pub struct Forecast {
     /// The repeatability floor: the mean 3D error with infinitely many
     /// poses (the model's noise), mm.
     pub floor_mean_3d: f64,
+    /// Whether the model measured its noise: false when some output's
+    /// nugget sits at the bottom of its search box (the model interpolates
+    /// its measurements), so that the floor reads about 0 without saying
+    /// anything of the robot's repeatability.
+    pub floor_identified: bool,
     /// Forecast mean 3D error after `k` more planned poses (`k` = 0, 1, …,
     /// the plan's length), mm.
     pub mean_3d: Vec<f64>,
@@ -150,6 +155,10 @@ impl Forecast {
             cv_mean_3d: rms * ratio,
             region_ratio: if mse_cv > 0.0 { imse0 / mse_cv } else { 1.0 },
             floor_mean_3d: noise2.sqrt() * ratio,
+            floor_identified: model.outputs.iter().all(|o| {
+                o.data.nugget
+                    > 10f64.powf(crate::kriging::KrigingOptions::default().log10_nugget.0 + 1.0)
+            }),
             mean_3d,
         })
     }
@@ -193,7 +202,7 @@ impl Forecast {
         if let Some(k) = self.mean_3d.iter().position(|e| *e <= target_mm) {
             return Verdict::After(k);
         }
-        if target_mm <= self.floor_mean_3d {
+        if self.floor_identified && target_mm <= self.floor_mean_3d {
             Verdict::Unreachable
         } else {
             Verdict::BeyondPlan

@@ -33,6 +33,14 @@ pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) ->
             plan.unrealised
         );
     }
+    if let Some(f) = forecast.filter(|f| !f.floor_identified) {
+        s += &format!(
+            "the floor (repeatability) is not measured: the model's noise estimate is at the \
+             bottom of its range (it interpolates the {} poses measured), so the {:.4} mm below \
+             says nothing of the robot's repeatability; measure a few poses twice to see it\n",
+            f.measured, f.floor_mean_3d
+        );
+    }
     if let Some(f) = forecast {
         s += &format!(
             "held-out mean 3D error: {:.4} mm at the {} poses measured (10-fold CV), \
@@ -88,6 +96,7 @@ pub fn json(plan: &Plan, forecast: Option<&Forecast>) -> serde_json::Value {
             "cv_mean_3d_mm": f.cv_mean_3d,
             "region_ratio": f.region_ratio,
             "floor_mean_3d_mm": f.floor_mean_3d,
+            "floor_identified": f.floor_identified,
             "mean_3d_mm": f.mean_3d,
         })),
     })
