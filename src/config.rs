@@ -212,6 +212,24 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
         argv.extend(options);
         out.push(argv);
     }
+    // a top-level key no step has (a misspelt `robt`) would be dropped
+    let commands: Vec<&clap::Command> = list
+        .iter()
+        .filter_map(|s| s.get("command")?.as_str())
+        .filter_map(|name| {
+            name.split_whitespace()
+                .try_fold(root, |c, p| c.find_subcommand(p))
+        })
+        .collect();
+    if let Some((key, _)) = defaults
+        .iter()
+        .find(|(key, _)| commands.iter().all(|c| find_arg(c, key).is_none()))
+    {
+        return Err(bad(format!(
+            "the top-level key '{key}' is an option of none of the steps' commands \
+             (top-level keys are defaults for the steps that have that option)"
+        )));
+    }
     Ok(out)
 }
 

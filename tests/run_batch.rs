@@ -299,3 +299,18 @@ fn a_batch_refuses_two_campaigns_that_would_write_the_same_files() {
     assert!(err.contains("the same model and report files"), "{err}");
     assert!(!out.join("summary.csv").exists());
 }
+
+#[test]
+fn a_top_level_key_no_step_has_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let config = format!(
+        "data = \"{}\"\nrobt = \"comau-nj220\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"m.json\"\n",
+        ds("comau_lhs.csv")
+    );
+    std::fs::write(p("run.toml"), config).unwrap();
+    let (c, _, err) = rk(&["run", &p("run.toml")]);
+    assert_ne!(c, 0);
+    assert!(err.contains("'robt'"), "{err}");
+    assert!(!dir.path().join("m.json").exists());
+}
