@@ -408,3 +408,24 @@ fn a_tool_translation_replaces_the_offset_and_keeps_the_rotation() {
         );
     }
 }
+
+/// Joints outside the robot's limits are named, with how many rows and
+/// the furthest value; a campaign inside them gives none.
+#[test]
+fn a_campaign_beyond_the_joint_limits_is_named_per_joint() {
+    let robot = robokrige::kinematics::preset("comau-nj220").unwrap();
+    let path = format!("{}/datasets/comau_lhs.csv", env!("CARGO_MANIFEST_DIR"));
+    let mut data = robokrige::dataset::read_csv(path.as_ref())
+        .unwrap()
+        .head(10);
+    assert!(robot.limit_warnings(&data).is_empty());
+    let hi = robot.limits[1].1;
+    data.q[3][1] = hi + 7.0;
+    data.q[5][1] = hi + 30.0;
+    let w = robot.limit_warnings(&data);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("q2 of 2 row(s)") && w[0].contains(&format!("{:.2}", hi + 30.0)),
+        "{w:?}"
+    );
+}

@@ -68,6 +68,9 @@ pub fn run(a: CvArgs) -> Result<()> {
     }
     let data = super::read_data(&a.data)?;
     let params = a.model.resolve(None, &data)?;
+    if let Some(r) = params.get_robot() {
+        super::warn(r.limit_warnings(&data));
+    }
     super::print_plan("cv", params.check_fit_rows(data.len(), None)?);
     let plan = CvPlan {
         mode: a.mode,

@@ -182,6 +182,9 @@ pub fn run_fit(a: FitArgs) -> Result<()> {
     super::check_files(&[Some(data_path)], &[Some(output), a.json.as_deref()])?;
     let data = super::read_data(data_path)?;
     let params = a.model.resolve(a.method.as_deref(), &data)?.check()?;
+    if let Some(r) = params.params().get_robot() {
+        super::warn(r.limit_warnings(&data));
+    }
     super::print_plan("fit", params.params().check_fit_rows(data.len(), None)?);
     let t0 = std::time::Instant::now();
     let model = match &a.method {

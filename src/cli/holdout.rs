@@ -139,6 +139,7 @@ pub fn run(a: HoldoutArgs) -> Result<()> {
     let data = read_data(&a.data)?;
     let robot = robokrige::kinematics::load_robot_with_tool(&a.robot, a.tool.as_deref())?;
     robot.check_dataset(&data)?;
+    super::warn(robot.limit_warnings(&data));
     if a.each_fold && a.cv.is_none() && a.groups.is_none() {
         return Err(robokrige::Error::InvalidParameter(
             "--each-fold chooses the hyperparameters per fold: it needs --cv K or --groups COLUMN"

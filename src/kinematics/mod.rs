@@ -174,6 +174,39 @@ impl Robot {
         })
     }
 
+    /// A warning per joint of `data` that leaves this robot's limits: how
+    /// many rows, and the furthest value (a campaign of another robot, or
+    /// angles in another convention, fits without error otherwise).
+    pub fn limit_warnings(&self, data: &crate::dataset::Dataset) -> Vec<String> {
+        let unit = |j: usize| match self.links[j].kind {
+            JointKind::Prismatic => "mm",
+            JointKind::Revolute => "°",
+        };
+        (0..self.dof().min(data.n_joints()))
+            .filter_map(|j| {
+                let (lo, hi) = self.limits[j];
+                let out: Vec<f64> = data
+                    .q
+                    .iter()
+                    .map(|q| q[j])
+                    .filter(|v| *v < lo || *v > hi)
+                    .collect();
+                let worst = out
+                    .iter()
+                    .copied()
+                    .max_by(|a, b| (a - a.clamp(lo, hi)).abs().total_cmp(&(b - b.clamp(lo, hi)).abs()))?;
+                Some(format!(
+                    "{}: q{} of {} row(s) outside the limits of robot '{}', [{lo}, {hi}] {u} (up to {worst:.2} {u}): is this the robot that was measured, with its joint convention?",
+                    data.source,
+                    j + 1,
+                    out.len(),
+                    self.name,
+                    u = unit(j)
+                ))
+            })
+            .collect()
+    }
+
     /// This robot with its TCP offset replaced: the tool's translation set
     /// to `xyz` (mm, in the flange frame), its rotation kept. What
     /// `--tool x,y,z` and Python's `tool=(x, y, z)` do.
