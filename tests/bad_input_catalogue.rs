@@ -1073,6 +1073,25 @@ fn command_cases() -> Vec<Case> {
             fail(&["--tracker alone", "--max-range"]),
         ),
         case(
+            "plan_region_outside_the_joint_limits",
+            &[
+                "plan",
+                "--robot",
+                "comau-nj220",
+                "--budget",
+                "5",
+                "--region",
+                &s(&write(
+                    "region_oob.csv",
+                    "q1,q2,q3,q4,q5,q6\n0,0,-90,0,0,0\n0,120,-90,0,0,0\n",
+                )),
+                "-o",
+                &out("p.csv"),
+            ],
+            &[],
+            fail(&["region_oob.csv", "1 of its 2 poses", "data row 2"]),
+        ),
+        case(
             "plan_negative_target",
             &[
                 "plan",

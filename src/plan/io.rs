@@ -2,12 +2,12 @@
 //! CSV.
 
 use super::{Plan, PoseSet, Region};
-use crate::Result;
 use crate::dataset::Dataset;
 use crate::kinematics::{IkOptions, Robot, all_reached, first_pass_joints};
 use crate::program::{self, ProgramFormat, ProgramOptions, ProgramPose};
 use crate::space::derive_directions;
 use crate::trajectory::{TargetFile, read_target_file};
+use crate::{Error, Result};
 use std::path::Path;
 
 impl Region {
@@ -34,6 +34,22 @@ impl Region {
         match read_target_file(path)? {
             TargetFile::Joints(d) => {
                 robot.check_dataset(&d)?;
+                // a task the robot cannot run is not a region to plan for
+                let out: Vec<usize> = (0..d.len())
+                    .filter(|&i| !robot.within_limits(&d.q[i]))
+                    .collect();
+                if let Some(&first) = out.first() {
+                    return Err(Error::Input {
+                        source_name: path.display().to_string(),
+                        message: format!(
+                            "{} of its {} poses are outside the joint limits of robot '{}' (the first at data row {}): the robot cannot run this task",
+                            out.len(),
+                            d.len(),
+                            robot.name,
+                            first + 1
+                        ),
+                    });
+                }
                 Ok(Region::Poses(PoseSet::from(&d)))
             }
             TargetFile::Tcp(traj) => {
