@@ -314,3 +314,22 @@ fn a_top_level_key_no_step_has_is_refused() {
     assert!(err.contains("'robt'"), "{err}");
     assert!(!dir.path().join("m.json").exists());
 }
+
+#[test]
+fn a_batch_with_calibration_options_and_no_robot_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let fleet = dir.path().join("fleet");
+    std::fs::create_dir(&fleet).unwrap();
+    std::fs::copy(ds("comau_lhs.csv"), fleet.join("a.csv")).unwrap();
+    let out = dir.path().join("out");
+    let (c, _, err) = rk(&[
+        "batch",
+        fleet.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--geometric",
+    ]);
+    assert_ne!(c, 0);
+    assert!(err.contains("need a robot"), "{err}");
+    assert!(!out.join("summary.csv").exists());
+}

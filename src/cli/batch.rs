@@ -50,6 +50,17 @@ pub struct BatchArgs {
 
 pub fn run(a: BatchArgs) -> Result<()> {
     let files = campaigns(&a.folder)?;
+    if a.calibration.any()
+        && a.robot.is_none()
+        && files
+            .iter()
+            .all(|f| robokrige::batch::robot_beside(f).is_none())
+    {
+        return Err(robokrige::Error::InvalidParameter(
+            "the calibration options need a robot: --robot, or a NAME.robot.toml beside a campaign"
+                .into(),
+        ));
+    }
     prepare_output(&a.folder, &a.output)?;
     let summary_csv = a.output.join("summary.csv");
     super::check_files(&[], &[Some(summary_csv.as_path()), a.json.as_deref()])?;

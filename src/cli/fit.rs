@@ -121,6 +121,11 @@ pub struct CalibrationArgs {
 }
 
 impl CalibrationArgs {
+    /// Whether any calibration option was given.
+    pub fn any(&self) -> bool {
+        self.no_calibrate || self.calibration_noise.is_some() || self.geometric || self.backlash
+    }
+
     /// The calibration asked for: `None` with `--no-calibrate`.
     pub fn options(&self) -> Option<CalibrationOptions> {
         (!self.no_calibrate).then(|| {
