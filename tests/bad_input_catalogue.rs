@@ -1092,6 +1092,12 @@ fn command_cases() -> Vec<Case> {
             fail(&["region_oob.csv", "1 of its 2 poses", "data row 2"]),
         ),
         case(
+            "cv_groups_on_a_joint_column",
+            &["cv", &d, "--groups", "q1"],
+            &[data],
+            fail(&["'q1' is a measurement column", "extra columns"]),
+        ),
+        case(
             "plan_negative_target",
             &[
                 "plan",

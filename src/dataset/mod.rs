@@ -231,7 +231,7 @@ impl Dataset {
             .count();
         if repeats > 0 {
             out.push(format!(
-                "{}: {repeats} pose(s) repeat an earlier pose exactly; without --nugget the model must interpolate both measurements",
+                "{}: {repeats} pose(s) repeat an earlier pose exactly; the default nugget takes their differences as noise (with --no-nugget the model would have to interpolate both measurements)",
                 self.source
             ));
         }
@@ -318,8 +318,20 @@ impl Dataset {
             .map(|c| c.name.as_str())
             .chain(self.text.iter().map(|t| t.name.as_str()))
             .collect();
+        let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+        let measurement = name == "id"
+            || ["ex", "ey", "ez", "x", "y", "z"].contains(&name)
+            || name.strip_prefix("dir").is_some_and(digits)
+            || name.strip_prefix('q').is_some_and(digits);
         Err(self.input_err(format!(
-            "has no column '{name}' to group by (extra columns: {})",
+            "{} to group by (extra columns: {})",
+            if measurement {
+                format!(
+                    "'{name}' is a measurement column (id, joints, directions, errors), not a group: name an extra column"
+                )
+            } else {
+                format!("has no column '{name}'")
+            },
             if known.is_empty() {
                 "none".to_string()
             } else {
