@@ -258,7 +258,7 @@ pub fn holdout_cv(
         fold_max_mm.push(worst);
         fold_max_covered_mm.push(worst_covered);
     };
-    let run = |f: usize| -> Result<FoldOut> {
+    let run_fold = |f: usize| -> Result<FoldOut> {
         match &once {
             Some((calibrated, kinematic)) => fold_out(data, fold, f, robot, calibrated, kinematic),
             None => {
@@ -273,19 +273,34 @@ pub fn holdout_cv(
             }
         }
     };
+    // a fold that fails names itself and its sizes (a group too large
+    // leaves too few rows to train on)
+    let in_fold = |f: usize| -> Result<FoldOut> {
+        run_fold(f).map_err(|e| {
+            if e.is_interrupted() {
+                return e;
+            }
+            let held = fold.iter().filter(|&&g| g == f).count();
+            crate::Error::InvalidParameter(format!(
+                "fold {} of {k} ({held} rows held out, {} to train on): {e}",
+                f + 1,
+                m - held
+            ))
+        })
+    };
     if m <= PARALLEL_FOLD_ROWS {
         // small folds at once: each fold's calibration and refits leave a
         // core idle part of the time, and their memory is small
         use rayon::prelude::*;
         progress(1, &format!("{k} folds"));
-        let outs: Vec<Result<FoldOut>> = (0..k).into_par_iter().map(run).collect();
+        let outs: Vec<Result<FoldOut>> = (0..k).into_par_iter().map(in_fold).collect();
         for out in outs {
             merge(out?);
         }
     } else {
         for f in 0..k {
             progress(f + 1, &format!("fold {}", f + 1));
-            merge(run(f)?);
+            merge(in_fold(f)?);
         }
     }
     let mut rows = vec![score("nominal", errors, &vec![[0.0; 3]; m], 0.0)];

@@ -327,3 +327,40 @@ fn simulated_cubes_on_the_command_line_are_held_out_cube_by_cube() {
     assert_eq!(c, 1);
     assert!(err.contains("multiple of --cubes 4"), "{err}");
 }
+
+/// A fold that cannot be fitted (a group so large that the rest cannot
+/// carry the kinematic trend) names itself and its sizes.
+#[test]
+fn a_fold_that_fails_names_itself_and_its_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("g.csv");
+    let text = std::fs::read_to_string(format!(
+        "{}/datasets/comau_lhs.csv",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{},g\n", lines.next().unwrap());
+    for (i, l) in lines.take(60).enumerate() {
+        let g = match i {
+            0..30 => "a",
+            30..59 => "b",
+            _ => "c",
+        };
+        out += &format!("{l},{g}\n");
+    }
+    std::fs::write(&path, out).unwrap();
+    let (c, _, err) = rk(&[
+        "holdout",
+        path.to_str().unwrap(),
+        "--robot",
+        "comau-nj220",
+        "--groups",
+        "g",
+    ]);
+    assert_eq!(c, 1, "{err}");
+    assert!(
+        err.contains("fold 1 of 3 (30 rows held out, 30 to train on)"),
+        "{err}"
+    );
+}
