@@ -74,6 +74,9 @@ pub fn run(a: ImportArgs) -> Result<()> {
     let mut imported = import_for(&a.export, &spec, robot.as_ref())?;
     say_part!("{}", report::read(&imported, &spec, &a.export));
     let located = locate_imported(robot.as_ref(), &mut imported.data)?;
+    if let Some(fit) = &located {
+        super::warn(fit.warnings(&imported.data));
+    }
     let name = robot.as_ref().map(|r| r.name.as_str());
     say_part!("{}", report::located(name, &imported, located.as_ref()));
     write_csv(&a.output, &imported.data)?;

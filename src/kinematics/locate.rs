@@ -36,6 +36,37 @@ pub struct TrackerFit {
     pub iterations: usize,
 }
 
+/// An RMS TCP error above this (mm) is not a robot's absolute error (a few
+/// tenths of a mm to a few mm, uncalibrated): the import read the export
+/// wrongly. The IPA UR10 export read with its radians as degrees gave
+/// 229.9 mm (and a TCP offset of 9 m); read right, 1.06 mm.
+pub const IMPLAUSIBLE_RMS_MM: f64 = 20.0;
+
+impl TrackerFit {
+    /// Why these errors are implausible, if they are: their RMS above
+    /// [`IMPLAUSIBLE_RMS_MM`], with what to check (and radians, when every
+    /// joint value of `data` lies within ±2π).
+    pub fn warnings(&self, data: &Dataset) -> Vec<String> {
+        if self.rms_mm <= IMPLAUSIBLE_RMS_MM {
+            return Vec::new();
+        }
+        let radian_like = data
+            .q
+            .iter()
+            .all(|q| q.iter().all(|v| v.abs() <= std::f64::consts::TAU));
+        vec![format!(
+            "the errors' RMS is {:.1} mm, far beyond a robot's absolute error (a few mm): check the \
+             export's units (--angles, --lengths), the robot (--robot) and its joint convention{}",
+            self.rms_mm,
+            if radian_like {
+                "; every joint value lies within ±2π: radians read as degrees? (--angles rad)"
+            } else {
+                ""
+            }
+        )]
+    }
+}
+
 /// Stop when the step is below this (radians and mm).
 const STEP_TOL: f64 = 1e-12;
 /// Gauss–Newton iteration cap.
@@ -167,7 +198,23 @@ pub fn locate_imported(robot: Option<&Robot>, data: &mut Dataset) -> Result<Opti
                 .into(),
         ));
     }
-    errors_from_positions(robot, data)
+    // joint values all within ±2π read as degrees put the robot nowhere
+    // near the tracker's readings: say what most likely happened
+    let radian_like = data.q.len() >= 3
+        && data
+            .q
+            .iter()
+            .all(|q| q.iter().all(|v| v.abs() <= std::f64::consts::TAU));
+    errors_from_positions(robot, data).map_err(|e| {
+        if radian_like && !e.is_interrupted() {
+            Error::InvalidParameter(format!(
+                "{e}; every joint value lies within ±2π: if the export's angles are radians, \
+                 add --angles rad (angles = \"rad\" in the map)"
+            ))
+        } else {
+            e
+        }
+    })
 }
 
 #[cfg(test)]
