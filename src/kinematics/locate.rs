@@ -40,11 +40,11 @@ pub struct TrackerFit {
 /// tenths of a mm to a few mm, uncalibrated): the import read the export
 /// wrongly. The IPA UR10 export read with its radians as degrees gave
 /// 229.9 mm (and a TCP offset of 9 m); read right, 1.06 mm.
-pub const IMPLAUSIBLE_RMS_MM: f64 = 20.0;
+const IMPLAUSIBLE_RMS_MM: f64 = 20.0;
 
 impl TrackerFit {
     /// Why these errors are implausible, if they are: their RMS above
-    /// [`IMPLAUSIBLE_RMS_MM`], with what to check (and radians, when every
+    /// `IMPLAUSIBLE_RMS_MM` (20 mm), with what to check (and radians, when every
     /// joint value of `data` lies within ±2π).
     pub fn warnings(&self, data: &Dataset) -> Vec<String> {
         if self.rms_mm <= IMPLAUSIBLE_RMS_MM {
