@@ -196,10 +196,12 @@ fn at_covariates(model: AnyModel, given: &[(String, f64)], traj: &Path) -> Resul
     for (name, value) in given {
         m = m.at_covariate(name, *value)?;
     }
-    let header = std::fs::read_to_string(traj)
-        .ok()
-        .and_then(|t| t.lines().next().map(str::to_string))
-        .unwrap_or_default();
+    // the trajectory's header only (Targets::read reads the file)
+    let mut header = String::new();
+    if let Ok(f) = std::fs::File::open(traj) {
+        use std::io::BufRead;
+        let _ = std::io::BufReader::new(f).read_line(&mut header);
+    }
     for (name, reference) in used {
         if given.iter().any(|(n, _)| *n == name) {
             continue;

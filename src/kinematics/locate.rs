@@ -44,26 +44,35 @@ const IMPLAUSIBLE_RMS_MM: f64 = 20.0;
 
 impl TrackerFit {
     /// Why these errors are implausible, if they are: their RMS above
-    /// `IMPLAUSIBLE_RMS_MM` (20 mm), with what to check (and radians, when every
-    /// joint value of `data` lies within ±2π).
+    /// `IMPLAUSIBLE_RMS_MM` (20 mm), with what to check (and radians, when
+    /// every joint value of `data` lies within ±2π).
     pub fn warnings(&self, data: &Dataset) -> Vec<String> {
         if self.rms_mm <= IMPLAUSIBLE_RMS_MM {
             return Vec::new();
         }
-        let radian_like = data
-            .q
-            .iter()
-            .all(|q| q.iter().all(|v| v.abs() <= std::f64::consts::TAU));
         vec![format!(
             "the errors' RMS is {:.1} mm, far beyond a robot's absolute error (a few mm): check the \
              export's units (--angles, --lengths), the robot (--robot) and its joint convention{}",
             self.rms_mm,
-            if radian_like {
-                "; every joint value lies within ±2π: radians read as degrees? (--angles rad)"
-            } else {
-                ""
-            }
+            radians_hint(data)
         )]
+    }
+}
+
+/// `"; every joint value lies within ±2π: …"` when every joint value of
+/// `data` (at least three rows) does: radians read as degrees, the likely
+/// cause of a campaign the robot's kinematics cannot place; else `""`.
+fn radians_hint(data: &Dataset) -> &'static str {
+    let radian_like = data.q.len() >= 3
+        && data
+            .q
+            .iter()
+            .all(|q| q.iter().all(|v| v.abs() <= std::f64::consts::TAU));
+    if radian_like {
+        "; every joint value lies within ±2π: if the export's angles are radians, add --angles rad \
+         (angles = \"rad\" in the map)"
+    } else {
+        ""
     }
 }
 
@@ -198,21 +207,14 @@ pub fn locate_imported(robot: Option<&Robot>, data: &mut Dataset) -> Result<Opti
                 .into(),
         ));
     }
-    // joint values all within ±2π read as degrees put the robot nowhere
-    // near the tracker's readings: say what most likely happened
-    let radian_like = data.q.len() >= 3
-        && data
-            .q
-            .iter()
-            .all(|q| q.iter().all(|v| v.abs() <= std::f64::consts::TAU));
+    // joint values within ±2π read as degrees put the robot nowhere near
+    // the tracker's readings: say what most likely happened
+    let hint = radians_hint(data);
     errors_from_positions(robot, data).map_err(|e| {
-        if radian_like && !e.is_interrupted() {
-            Error::InvalidParameter(format!(
-                "{e}; every joint value lies within ±2π: if the export's angles are radians, \
-                 add --angles rad (angles = \"rad\" in the map)"
-            ))
-        } else {
+        if hint.is_empty() || e.is_interrupted() {
             e
+        } else {
+            Error::InvalidParameter(format!("{e}{hint}"))
         }
     })
 }

@@ -363,18 +363,25 @@ impl ValidPlanParams {
             .zip(&measured.dir)
             .map(|(q, d)| key(q, d))
             .collect();
-        let new: Vec<usize> = (0..all.len())
-            .filter(|&i| !done.contains(&key(&all.q[i], &all.dir[i])))
-            .collect();
-        let reachable: Vec<usize> = new
-            .iter()
-            .copied()
-            .filter(|&i| robot.within_limits(&all.q[i]))
-            .collect();
-        let rows: Vec<usize> = reachable
-            .iter()
-            .copied()
-            .filter(|&i| p.tracker.as_ref().is_none_or(|t| t.sees(robot, &all.q[i])))
+        // why each pose left out is: measured, beyond the limits, unseen
+        let mut dropped = [0usize; 3];
+        let rows: Vec<usize> = (0..all.len())
+            .filter(|&i| {
+                let (q, d) = (&all.q[i], &all.dir[i]);
+                let why = if done.contains(&key(q, d)) {
+                    Some(0)
+                } else if !robot.within_limits(q) {
+                    Some(1)
+                } else if !p.tracker.as_ref().is_none_or(|t| t.sees(robot, q)) {
+                    Some(2)
+                } else {
+                    None
+                };
+                if let Some(k) = why {
+                    dropped[k] += 1;
+                }
+                why.is_none()
+            })
             .collect();
         // a pool's poses left out are the user's: say how many and why (the
         // drawn candidates are drawn within the limits)
@@ -383,16 +390,14 @@ impl ValidPlanParams {
         } else {
             "candidates"
         };
-        for (dropped, why) in [
-            (all.len() - new.len(), "already measured"),
-            (
-                new.len() - reachable.len(),
-                "outside the robot's joint limits",
-            ),
-            (reachable.len() - rows.len(), "not seen by the tracker"),
-        ] {
-            if dropped > 0 && (inputs.pool.is_some() || rows.is_empty()) {
-                notes.push(format!("{dropped} {source} {why}, left out"));
+        let reasons = [
+            "already measured",
+            "outside the robot's joint limits",
+            "not seen by the tracker",
+        ];
+        for (n, why) in dropped.into_iter().zip(reasons) {
+            if n > 0 && (inputs.pool.is_some() || rows.is_empty()) {
+                notes.push(format!("{n} {source} {why}, left out"));
             }
         }
         Ok((all.select(&rows), rows))
