@@ -314,4 +314,23 @@ mod tests {
         // and the outputs' held-out MSE is their latent variance there
         assert!(held_out_mse(&model, &held) > 0.0);
     }
+
+    /// Below a measured floor a target is unreachable; below a floor the
+    /// model did not measure (about 0), it is only beyond the plan.
+    #[test]
+    fn only_a_measured_floor_makes_a_target_unreachable() {
+        let f = |floor_identified| Forecast {
+            measured: 100,
+            cv_mean_3d: 0.2,
+            region_ratio: 1.0,
+            floor_mean_3d: 0.05,
+            floor_identified,
+            mean_3d: vec![0.2, 0.15, 0.12],
+        };
+        assert_eq!(f(true).verdict(0.25), Verdict::Met);
+        assert_eq!(f(true).verdict(0.15), Verdict::After(1));
+        assert_eq!(f(true).verdict(0.08), Verdict::BeyondPlan);
+        assert_eq!(f(true).verdict(0.04), Verdict::Unreachable);
+        assert_eq!(f(false).verdict(0.04), Verdict::BeyondPlan);
+    }
 }
