@@ -215,7 +215,7 @@ pub fn holdout_cv(
                 let n = fold.iter().filter(|&&g| g != f).count();
                 if n < 10 {
                     return Err(Error::InvalidParameter(format!(
-                        "fold {} of {k} (numbered by first appearance) leaves {n} training rows: choosing the hyperparameters on each fold's training rows needs at least 10 (choose them once on the first rows instead, e.g. --train {m})",
+                        "fold {} of {k} (numbered by first appearance) leaves {n} training rows: choosing the hyperparameters on each fold's training rows needs at least 10, and a fold that small cannot be fitted at all: merge the rows it holds out with another group's, or use random folds (--cv K)",
                         f + 1
                     )));
                 }

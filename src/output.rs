@@ -48,12 +48,17 @@ fn refuse_protected(out: &Path, p: &Path) -> Error {
 /// Write `path` atomically: `fill` writes the whole content into a
 /// temporary file in the same folder, which then replaces `path` by a
 /// rename. On any failure `path` is left as it was and the temporary file
-/// is removed. New files get the usual permissions (`0666` less the umask).
+/// is removed. `-` is refused: it means standard output everywhere else. New files get the usual permissions (`0666` less the umask).
 pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
     let io_err = |e| Error::io(path, e);
+    if is_stdout(path) {
+        return Err(Error::InvalidParameter(
+            "'-' would be a file named '-': standard output takes only the --json reports; give a file name".into(),
+        ));
+    }
     if let Some(p) = protected(path) {
         return Err(refuse_protected(path, &p));
     }

@@ -1098,6 +1098,12 @@ fn command_cases() -> Vec<Case> {
             fail(&["'q1' is a measurement column", "extra columns"]),
         ),
         case(
+            "fit_output_dash_is_not_a_file",
+            &["fit", &d, "-o", "-"],
+            &[data],
+            fail(&["-o - would write a file named '-'", "--json -"]),
+        ),
+        case(
             "plan_negative_target",
             &[
                 "plan",

@@ -204,6 +204,29 @@ fn unreachable_points_are_reported_by_index_never_passed_through() {
 }
 
 #[test]
+fn a_start_far_from_the_trajectory_does_not_make_it_unreachable() {
+    // Seeded from this start alone, the inverse kinematics of the circle's
+    // first eleven points did not converge; home is the last seed.
+    let (ejs, _) = models();
+    let opts = CompensationOptions {
+        start: Some(vec![100.0, 0.0, -100.0, 170.0, -100.0, 170.0]),
+        ..CompensationOptions::default()
+    };
+    let res = compensate(&robot(), ejs, &circle(), &opts).unwrap();
+    assert_eq!(res.joints.len(), circle().len());
+}
+
+#[test]
+fn a_start_outside_the_joint_limits_is_refused_by_name() {
+    let e = robot()
+        .start_or_home(Some(&[0.0, 200.0, -90.0, 0.0, 0.0, 0.0]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("start pose") && e.contains("q2 = 200°"), "{e}");
+    assert!(!e.contains("q3"), "{e}");
+}
+
+#[test]
 fn bad_options_and_mismatched_robots_are_errors() {
     let (ejs, _) = models();
     let targets = circle();

@@ -141,6 +141,9 @@ fn each_fold_chooses_the_hyperparameters_without_the_held_out_group() {
         err.contains("fold 2 of 2") && err.contains("leaves 6 training rows"),
         "{err}"
     );
+    // and it does not suggest choosing them once on the first rows: such a
+    // fold cannot be fitted at all
+    assert!(err.contains("merge") && !err.contains("--train"), "{err}");
 }
 
 #[test]

@@ -231,3 +231,34 @@ fn a_plan_says_which_pool_poses_it_left_out_and_when_it_plans_fewer() {
     assert!(notes.contains("planned 17 of 50 poses"), "{notes}");
     assert_eq!(plan.chosen.len(), 17);
 }
+
+#[test]
+fn a_plan_says_when_its_pre_position_moves_go_to_a_hard_limit() {
+    let robot = robokrige::kinematics::preset("comau-nj220").unwrap();
+    let region = Region::from_options(None, None, &robot).unwrap();
+    let notes_with = |step: f64| {
+        PlanParams::new(12)
+            .via_step(step)
+            .candidates(300)
+            .region_points(100)
+            .check()
+            .unwrap()
+            .plan(&PlanInputs {
+                robot: &robot,
+                campaign: None,
+                prior: None,
+                pool: None,
+                region: &region,
+            })
+            .unwrap()
+            .notes
+            .join("\n")
+    };
+    let limit = "go to a joint's hard limit";
+    assert!(!notes_with(5.0).contains(limit), "{}", notes_with(5.0));
+    let wide = notes_with(500.0);
+    assert!(
+        wide.contains(limit) && wide.contains("--via-step 500°"),
+        "{wide}"
+    );
+}

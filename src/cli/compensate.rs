@@ -137,7 +137,8 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let res = with_spinner("compensate", |_| {
         compensate(&robot, &model, &targets.traj, &opts)
-    })?;
+    })
+    .map_err(|e| targets.explain(e))?;
     let secs = t0.elapsed().as_secs_f64();
     super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;

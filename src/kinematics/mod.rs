@@ -178,10 +178,7 @@ impl Robot {
     /// many rows, and the furthest value (a campaign of another robot, or
     /// angles in another convention, fits without error otherwise).
     pub fn limit_warnings(&self, data: &crate::dataset::Dataset) -> Vec<String> {
-        let unit = |j: usize| match self.links[j].kind {
-            JointKind::Prismatic => "mm",
-            JointKind::Revolute => "°",
-        };
+        let unit = |j: usize| self.joint_unit(j);
         (0..self.dof().min(data.n_joints()))
             .filter_map(|j| {
                 let (lo, hi) = self.limits[j];
@@ -236,11 +233,44 @@ impl Robot {
         }
     }
 
+    /// The unit of joint `j`'s values: "°", or "mm" for a prismatic joint.
+    pub fn joint_unit(&self, j: usize) -> &'static str {
+        match self.links[j].kind {
+            JointKind::Prismatic => "mm",
+            JointKind::Revolute => "°",
+        }
+    }
+
     /// The joints a run starts from: `start`, checked to have one value per
-    /// joint, or by default the home pose.
+    /// joint and to lie within the joint limits, or by default the home
+    /// pose.
     pub fn start_or_home(&self, start: Option<&[f64]>) -> Result<Vec<f64>> {
+        let given = start.is_some();
         let start = start.unwrap_or(&self.home).to_vec();
         self.check_len(&start)?;
+        let outside: Vec<String> = start
+            .iter()
+            .zip(&self.limits)
+            .enumerate()
+            .filter(|(_, (v, (lo, hi)))| !(*v >= lo && *v <= hi))
+            .map(|(j, (v, (lo, hi)))| {
+                let u = self.joint_unit(j);
+                let sp = if u == "°" { "" } else { " " };
+                format!("q{} = {v}{sp}{u} not in [{lo}, {hi}]{sp}{u}", j + 1)
+            })
+            .collect();
+        if !outside.is_empty() {
+            return Err(Error::InvalidParameter(format!(
+                "the {} is outside the limits of robot '{}': {}",
+                if given {
+                    "start pose"
+                } else {
+                    "robot's home pose"
+                },
+                self.name,
+                outside.join(", ")
+            )));
+        }
         Ok(start)
     }
 

@@ -48,7 +48,8 @@ pub fn all_reached(results: Vec<Result<Vec<f64>>>) -> Result<Vec<Vec<f64>>> {
 
 /// Sequential IK along `poses`: each point seeded from its hint (if given),
 /// then from the previous point's solution (the paper's rule), then from the
-/// start pose. One result per pose, in order.
+/// start pose, then from the robot's home pose (a start far from the
+/// trajectory must not make its points unreachable). One result per pose, in order.
 pub fn first_pass_joints(
     robot: &Robot,
     has_orientation: bool,
@@ -62,12 +63,15 @@ pub fn first_pass_joints(
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let mut seeds: Vec<&[f64]> = Vec::with_capacity(3);
+            let mut seeds: Vec<&[f64]> = Vec::with_capacity(4);
             if let Some(h) = hints.and_then(|h| h.get(i)) {
                 seeds.push(h);
             }
             seeds.push(&prev);
             seeds.push(start);
+            if robot.home.as_slice() != start {
+                seeds.push(&robot.home);
+            }
             let r = robot.ik_from_any(&path_target(has_orientation, p), &seeds, opts);
             if let Ok(q) = &r {
                 prev.clone_from(q);

@@ -21,6 +21,11 @@ pub enum CoverageIssue {
         min_deg: f64,
         /// Largest value of that joint in the training campaign.
         max_deg: f64,
+        /// Whether the joint is prismatic (values in mm), when the model
+        /// records its robot; `None`: not known, the values are shown
+        /// without a unit.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        prismatic: Option<bool>,
     },
     /// The 95 % predictive interval of a new measurement reaches a gross
     /// error: `1.96 √(MSE + noise²)`, calibrated on the model's
@@ -80,11 +85,19 @@ impl std::fmt::Display for CoverageIssue {
                 value_deg,
                 min_deg,
                 max_deg,
-            } => write!(
-                f,
-                "q{} = {value_deg:.2}° outside the campaign's [{min_deg:.2}, {max_deg:.2}]°",
-                joint + 1
-            ),
+                prismatic,
+            } => {
+                let unit = match prismatic {
+                    Some(true) => " mm",
+                    Some(false) => "°",
+                    None => "",
+                };
+                write!(
+                    f,
+                    "q{} = {value_deg:.2}{unit} outside the campaign's [{min_deg:.2}, {max_deg:.2}]{unit}",
+                    joint + 1
+                )
+            }
             CoverageIssue::Uncertain {
                 axis,
                 std_mm,
@@ -315,6 +328,10 @@ impl ErrorModel {
                         value_deg: v,
                         min_deg: lo,
                         max_deg: hi,
+                        prismatic: self
+                            .robot
+                            .as_ref()
+                            .and_then(|r| r.prismatic.get(j).copied()),
                     });
                 }
             }
@@ -395,5 +412,41 @@ impl ErrorModel {
                 })
             })
             .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CoverageIssue;
+
+    #[test]
+    fn a_joint_range_is_shown_in_its_joints_unit_or_none_when_unknown() {
+        let issue = |prismatic| CoverageIssue::JointRange {
+            joint: 2,
+            value_deg: 190.0,
+            min_deg: 75.0,
+            max_deg: 80.0,
+            prismatic,
+        };
+        let shown = |p| issue(p).to_string();
+        assert_eq!(
+            shown(Some(true)),
+            "q3 = 190.00 mm outside the campaign's [75.00, 80.00] mm"
+        );
+        assert_eq!(
+            shown(Some(false)),
+            "q3 = 190.00° outside the campaign's [75.00, 80.00]°"
+        );
+        assert_eq!(
+            shown(None),
+            "q3 = 190.00 outside the campaign's [75.00, 80.00]"
+        );
+        // files without the field read as not known
+        let json =
+            r#"{"kind":"joint-range","joint":2,"value_deg":190.0,"min_deg":75.0,"max_deg":80.0}"#;
+        assert_eq!(
+            serde_json::from_str::<CoverageIssue>(json).unwrap(),
+            issue(None)
+        );
     }
 }

@@ -17,6 +17,10 @@ pub struct RobotRecord {
     pub table_digest: String,
     /// Flange ← TCP: translation (mm) and roll–pitch–yaw (degrees).
     pub tool: crate::kinematics::FrameSpec,
+    /// Which joints are prismatic (their values in mm, not degrees); empty
+    /// in model files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub prismatic: Vec<bool>,
 }
 
 /// Tool frames closer than this (mm, and degrees) are the same tool.
@@ -29,6 +33,7 @@ impl RobotRecord {
             name: robot.name.clone(),
             table_digest: crate::kinematics::table_digest(robot),
             tool: crate::kinematics::FrameSpec::of(&robot.tool),
+            prismatic: robot.prismatic_joints(),
         }
     }
 

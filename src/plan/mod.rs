@@ -302,8 +302,29 @@ impl ValidPlanParams {
             ),
             None => (robot.home.clone(), vec![1.0; n]),
         };
-        let (moves, unrealised) =
+        let (moves, unrealised, at_limit) =
             order::order(&poses, &start, &start_dir, &ranges, &robot.limits, &step);
+        if at_limit.iter().any(|&c| c > 0) {
+            let prismatic = robot.prismatic_joints();
+            let joints: Vec<String> = at_limit
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c > 0)
+                .map(|(j, c)| format!("q{} at {c}", j + 1))
+                .collect();
+            let unit = if prismatic.iter().all(|p| *p) {
+                " mm"
+            } else if prismatic.iter().any(|p| *p) {
+                " (degrees, mm for prismatic joints)"
+            } else {
+                "°"
+            };
+            notes.push(format!(
+                "pre-position moves go to a joint's hard limit where --via-step {}{unit} back would leave it ({} of the via-points); a smaller --via-step keeps them inside",
+                p.via_step,
+                joints.join(", ")
+            ));
+        }
         Ok(Plan {
             moves,
             chosen: chosen.iter().map(|&i| cand_rows[i]).collect(),

@@ -52,7 +52,10 @@ fn arrival(from: &[f64], from_dir: &[f64], to: &[f64]) -> Vec<f64> {
 /// direct move would reach from a wrong side. `ranges` scale the joints for
 /// distances; `limits` bound the via-points (a joint whose via-point would
 /// leave them arrives as it can: its λ is then reported as not realised,
-/// the second value returned).
+/// the second value returned). A via-point whose joint `step` back would
+/// leave the limits stops at the limit; the third value counts those
+/// via-points per joint, for the caller to warn about (a move to a hard
+/// limit).
 pub fn order(
     poses: &PoseSet,
     start: &[f64],
@@ -60,7 +63,7 @@ pub fn order(
     ranges: &[(f64, f64)],
     limits: &[(f64, f64)],
     step: &[f64],
-) -> (Vec<PlannedMove>, usize) {
+) -> (Vec<PlannedMove>, usize, Vec<usize>) {
     let scale: Vec<f64> = ranges.iter().map(|(lo, hi)| (hi - lo).max(1e-12)).collect();
     let dist = |a: &[f64], b: &[f64]| -> f64 {
         a.iter()
@@ -81,6 +84,7 @@ pub fn order(
     let mut left: Vec<usize> = (0..poses.len()).collect();
     let mut moves = Vec::with_capacity(2 * poses.len());
     let mut unrealised = 0;
+    let mut at_limit = vec![0; start.len()];
     while !left.is_empty() {
         let cost = |i: usize| -> (f64, bool) {
             let direct = arrival(&cur, &cur_dir, &poses.q[i]) == poses.dir[i];
@@ -103,6 +107,12 @@ pub fn order(
                 .zip(step.iter().zip(limits))
                 .map(|((v, l), (s, (lo, hi)))| (v - l * s).clamp(*lo, *hi))
                 .collect();
+            for (j, (lo, hi)) in limits.iter().enumerate() {
+                let stepped = q[j] - want[j] * step[j];
+                if stepped < *lo || stepped > *hi {
+                    at_limit[j] += 1;
+                }
+            }
             let via_dir = arrival(&cur, &cur_dir, &via);
             moves.push(PlannedMove {
                 q: via.clone(),
@@ -126,7 +136,7 @@ pub fn order(
         cur = q.clone();
         cur_dir = got;
     }
-    (moves, unrealised)
+    (moves, unrealised, at_limit)
 }
 
 #[cfg(test)]
@@ -150,7 +160,7 @@ mod tests {
             ],
         };
         let ranges = [(-90.0, 90.0), (-90.0, 90.0)];
-        let (moves, unrealised) = order(
+        let (moves, unrealised, at_limit) = order(
             &poses,
             &[0.0, 0.0],
             &[1.0, 1.0],
@@ -159,6 +169,7 @@ mod tests {
             &[5.0, 5.0],
         );
         assert_eq!(unrealised, 0);
+        assert_eq!(at_limit, [0, 0]);
         assert_eq!(moves.iter().filter(|m| m.measure).count(), 4);
         // replaying the moves gives each measured pose its planned λ
         let q: Vec<Vec<f64>> = moves.iter().map(|m| m.q.clone()).collect();
@@ -179,7 +190,28 @@ mod tests {
             dir: vec![vec![1.0]],
         };
         let r = [(-90.0, 90.0)];
-        let (_, unrealised) = order(&poses, &[0.0], &[1.0], &r, &r, &[5.0]);
+        let (_, unrealised, _) = order(&poses, &[0.0], &[1.0], &r, &r, &[5.0]);
         assert_eq!(unrealised, 1);
+    }
+
+    #[test]
+    fn a_via_point_stopped_at_a_limit_is_counted_per_joint() {
+        // q1 at 60° approached from below, 50° back would be 10° (inside);
+        // 100° back would be −40°, beyond the lower limit −30°.
+        let poses = PoseSet {
+            q: vec![vec![60.0, 0.0]],
+            dir: vec![vec![1.0, -1.0]],
+        };
+        let r = [(-30.0, 90.0), (-90.0, 90.0)];
+        for (step, want) in [(50.0, [0, 0]), (100.0, [1, 0])] {
+            let (moves, unrealised, at_limit) =
+                order(&poses, &[70.0, -10.0], &[1.0, 1.0], &r, &r, &[step, 5.0]);
+            assert_eq!(
+                (unrealised, at_limit.as_slice()),
+                (0, &want[..]),
+                "step {step}"
+            );
+            assert_eq!(moves.len(), 2, "one via-point, then the pose");
+        }
     }
 }

@@ -26,6 +26,10 @@ pub struct Targets {
     pub hints: Option<Vec<Vec<f64>>>,
     /// Warnings of the pose list (repeated poses, …), for the caller to show.
     pub warnings: Vec<String>,
+    /// Position-only targets that took the tool orientation of the start
+    /// pose (no `--orientation`): an unreachable target may be the start's
+    /// fault, not the trajectory's ([`Targets::explain`]).
+    pub orientation_from_start: bool,
 }
 
 impl Targets {
@@ -35,6 +39,7 @@ impl Targets {
             traj: Trajectory::new(q.iter().map(|q| robot.fk(q)).collect::<Result<_>>()?),
             hints: Some(q.to_vec()),
             warnings: Vec::new(),
+            orientation_from_start: false,
         })
     }
 
@@ -70,6 +75,25 @@ impl Targets {
             traj,
             hints: None,
             warnings: Vec::new(),
+            orientation_from_start: false,
+        }
+    }
+
+    /// `e` with what the targets add to it: an [`Error::Unreachable`] of
+    /// targets that took the start pose's orientation says so, since a
+    /// start whose tool points elsewhere than the task needs makes
+    /// reachable positions unreachable.
+    pub fn explain(&self, e: Error) -> Error {
+        match e {
+            Error::Unreachable { indices, first } if self.orientation_from_start => {
+                Error::Unreachable {
+                    indices,
+                    first: format!(
+                        "{first}; the trajectory has positions only, and every target takes the tool orientation of the start pose (--start, else home): give the task's orientation with --orientation roll,pitch,yaw, or a start pose whose tool points as the task needs"
+                    ),
+                }
+            }
+            e => e,
         }
     }
 
@@ -120,7 +144,10 @@ impl Targets {
                         "--orientation needs three angles: roll,pitch,yaw (deg)".into(),
                     ));
                 }
-                None => robot.fk(start)?.rotation,
+                None => {
+                    targets.orientation_from_start = true;
+                    robot.fk(start)?.rotation
+                }
             };
             for p in &mut t.poses {
                 *p = Isometry3::from_parts(p.translation, rot);
@@ -378,4 +405,32 @@ pub fn compensate_and_evaluate_each<M: ErrorPredictor + ?Sized>(
         .iter()
         .map(|m| compensate_and_evaluate(robot, *m, truth_path, truth, targets, start, seed))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unreachable_target_of_the_start_pose_orientation_says_so() {
+        let unreachable = || Error::Unreachable {
+            indices: vec![0, 1],
+            first: "inverse kinematics did not converge".into(),
+        };
+        let mut t = Targets::from_trajectory(Trajectory::new(Vec::new()));
+        assert_eq!(
+            t.explain(unreachable()).to_string(),
+            unreachable().to_string()
+        );
+        t.orientation_from_start = true;
+        let e = t.explain(unreachable()).to_string();
+        assert!(
+            e.contains("did not converge; the trajectory has positions only"),
+            "{e}"
+        );
+        assert!(e.contains("--orientation"), "{e}");
+        // other errors pass unchanged
+        let other = t.explain(Error::InvalidParameter("x".into())).to_string();
+        assert_eq!(other, Error::InvalidParameter("x".into()).to_string());
+    }
 }
