@@ -20,6 +20,28 @@ fn shipped(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// `params`' plan for `robot` and `region`, continuing `campaign`, choosing
+/// among `pool`'s poses when given (no prior).
+fn plan_with(
+    params: PlanParams,
+    robot: &Robot,
+    campaign: Option<&Dataset>,
+    pool: Option<&Dataset>,
+    region: &Region,
+) -> robokrige::plan::Plan {
+    params
+        .check()
+        .unwrap()
+        .plan(&PlanInputs {
+            robot,
+            campaign,
+            prior: None,
+            pool,
+            region,
+        })
+        .unwrap()
+}
+
 fn default_model(robot: &Robot, data: &Dataset) -> ErrorModel {
     default_params(robot, data)
         .unwrap()
@@ -64,20 +86,16 @@ fn a_planned_campaign_for_the_task_beats_a_latin_hypercube_of_the_same_size() {
     let circle = Trajectory::read_csv(&shipped("comau_circle.csv")).unwrap();
     let region = Region::from_file(&shipped("comau_circle.csv"), &robot).unwrap();
     let plan = |campaign: Option<&Dataset>, n: usize| {
-        PlanParams::new(n)
-            .first_batch(n)
-            .candidates(1500)
-            .region_points(72)
-            .check()
-            .unwrap()
-            .plan(&PlanInputs {
-                robot: &robot,
-                campaign,
-                prior: None,
-                pool: None,
-                region: &region,
-            })
-            .unwrap()
+        plan_with(
+            PlanParams::new(n)
+                .first_batch(n)
+                .candidates(1500)
+                .region_points(72),
+            &robot,
+            campaign,
+            None,
+            &region,
+        )
     };
     let measure = |moves: &[robokrige::plan::PlannedMove]| {
         let q: Vec<Vec<f64>> = moves.iter().map(|m| m.q.clone()).collect();
@@ -136,17 +154,13 @@ fn the_forecast_now_meets_the_error_on_new_poses_and_falls_with_the_plan() {
         vs.poses = 300;
         let fresh = robokrige::sim::campaign::measurements(&truth, &vs).unwrap();
         let region = Region::Poses(PoseSet::from(&fresh));
-        let plan = PlanParams::new(20)
-            .check()
-            .unwrap()
-            .plan(&PlanInputs {
-                robot: &nominal,
-                campaign: Some(&data),
-                prior: None,
-                pool: Some(&fresh),
-                region: &region,
-            })
-            .unwrap();
+        let plan = plan_with(
+            PlanParams::new(20),
+            &nominal,
+            Some(&data),
+            Some(&fresh),
+            &region,
+        );
         let cancel = robokrige::cancel::Cancel::new();
         let f = Forecast::new(&plan, &nominal, &data, &cancel).unwrap();
         // a campaign the plan's model was not fitted on is refused
@@ -212,17 +226,7 @@ fn a_plan_says_which_pool_poses_it_left_out_and_when_it_plans_fewer() {
         q[1] = hi + 5.0;
     }
     let region = Region::from_options(None, Some(&pool), &robot).unwrap();
-    let plan = PlanParams::new(50)
-        .check()
-        .unwrap()
-        .plan(&PlanInputs {
-            robot: &robot,
-            campaign: None,
-            prior: None,
-            pool: Some(&pool),
-            region: &region,
-        })
-        .unwrap();
+    let plan = plan_with(PlanParams::new(50), &robot, None, Some(&pool), &region);
     let notes = plan.notes.join("\n");
     assert!(
         notes.contains("3 of the pool's poses outside the robot's joint limits"),
@@ -237,22 +241,18 @@ fn a_plan_says_when_its_pre_position_moves_go_to_a_hard_limit() {
     let robot = robokrige::kinematics::preset("comau-nj220").unwrap();
     let region = Region::from_options(None, None, &robot).unwrap();
     let notes_with = |step: f64| {
-        PlanParams::new(12)
-            .via_step(step)
-            .candidates(300)
-            .region_points(100)
-            .check()
-            .unwrap()
-            .plan(&PlanInputs {
-                robot: &robot,
-                campaign: None,
-                prior: None,
-                pool: None,
-                region: &region,
-            })
-            .unwrap()
-            .notes
-            .join("\n")
+        plan_with(
+            PlanParams::new(12)
+                .via_step(step)
+                .candidates(300)
+                .region_points(100),
+            &robot,
+            None,
+            None,
+            &region,
+        )
+        .notes
+        .join("\n")
     };
     let limit = "go to a joint's hard limit";
     assert!(!notes_with(5.0).contains(limit), "{}", notes_with(5.0));

@@ -9,16 +9,50 @@ fn ds(f: &str) -> String {
     format!("{}/datasets/{f}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A test's temporary folder.
+struct Scratch(tempfile::TempDir);
+
+impl Scratch {
+    fn new() -> Self {
+        Scratch(tempfile::tempdir().unwrap())
+    }
+
+    /// The path of `f` in the folder.
+    fn path(&self, f: &str) -> String {
+        self.0.path().join(f).display().to_string()
+    }
+
+    /// Write `text` to `f` in the folder; its path.
+    fn write(&self, f: &str, text: &str) -> String {
+        std::fs::write(self.path(f), text).unwrap();
+        self.path(f)
+    }
+
+    /// A `fleet` folder of campaigns (name, text) and the path of an `out`
+    /// folder beside it, for `batch`.
+    fn fleet(&self, campaigns: &[(&str, &str)]) -> (String, String) {
+        std::fs::create_dir(self.path("fleet")).unwrap();
+        for (name, text) in campaigns {
+            self.write(&format!("fleet/{name}"), text);
+        }
+        (self.path("fleet"), self.path("out"))
+    }
+}
+
+/// The shipped COMAU campaign's text.
+fn lhs() -> String {
+    std::fs::read_to_string(ds("comau_lhs.csv")).unwrap()
+}
+
 #[test]
 fn a_config_step_gives_the_same_model_as_its_flags() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| dir.path().join(f).display().to_string();
+    let dir = Scratch::new();
+    let p = |f: &str| dir.path(f);
     let config = format!(
         "data = \"{}\"\nrobot = \"comau-nj220\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"a.json\"\noptimizer = \"hj\"\ncorr = \"gaussian\"\nno-nugget = true\n",
         ds("comau_lhs.csv")
     );
-    std::fs::write(p("robokrige.toml"), config).unwrap();
-    let (c, out, err) = rk(&["run", &p("robokrige.toml")]);
+    let (c, out, err) = rk(&["run", &dir.write("robokrige.toml", &config)]);
     assert_eq!(c, 0, "{err}");
     assert!(out.contains("robokrige fit"), "{out}");
     let (c, _, err) = rk(&[
@@ -49,14 +83,13 @@ fn a_config_step_gives_the_same_model_as_its_flags() {
 
 #[test]
 fn a_config_plan_step_plans_what_its_flags_plan() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| dir.path().join(f).display().to_string();
+    let dir = Scratch::new();
+    let p = |f: &str| dir.path(f);
     let config = format!(
         "robot = \"comau-nj220\"\n\n[[step]]\ncommand = \"plan\"\ncampaign = \"{}\"\nbudget = 6\ncandidates = 400\nregion-points = 200\noutput = \"a.csv\"\n",
         ds("comau_lhs.csv")
     );
-    std::fs::write(p("robokrige.toml"), config).unwrap();
-    let (c, out, err) = rk(&["run", &p("robokrige.toml")]);
+    let (c, out, err) = rk(&["run", &dir.write("robokrige.toml", &config)]);
     assert_eq!(c, 0, "{err}");
     assert!(out.contains("robokrige plan"), "{out}");
     let (c, _, err) = rk(&[
@@ -259,77 +292,55 @@ fn a_batch_calibrates_with_the_backlash_when_asked() {
 
 #[test]
 fn no_step_and_no_log_of_a_run_writes_over_its_config() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| dir.path().join(f).display().to_string();
+    let dir = Scratch::new();
     let config = format!(
         "data = \"{}\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"run.toml\"\noptimizer = \"hj\"\n",
         ds("comau_lhs.csv")
     );
-    std::fs::write(p("run.toml"), &config).unwrap();
-    let (c, _, err) = rk(&["run", &p("run.toml")]);
+    let run = dir.write("run.toml", &config);
+    let (c, _, err) = rk(&["run", &run]);
     assert_ne!(c, 0);
     assert!(err.contains("refusing to overwrite"), "{err}");
-    assert_eq!(std::fs::read_to_string(p("run.toml")).unwrap(), config);
+    assert_eq!(std::fs::read_to_string(&run).unwrap(), config);
     // the log, refused before any step runs
     let config = config.replace("output = \"run.toml\"", "output = \"m.json\"");
-    std::fs::write(p("run.toml"), &config).unwrap();
-    let (c, _, err) = rk(&["run", &p("run.toml"), "--json", &p("run.toml")]);
+    dir.write("run.toml", &config);
+    let (c, _, err) = rk(&["run", &run, "--json", &run]);
     assert_ne!(c, 0);
     assert!(err.contains("refusing to overwrite"), "{err}");
-    assert!(!dir.path().join("m.json").exists());
-    assert_eq!(std::fs::read_to_string(p("run.toml")).unwrap(), config);
+    assert!(!std::path::Path::new(&dir.path("m.json")).exists());
+    assert_eq!(std::fs::read_to_string(&run).unwrap(), config);
 }
 
 #[test]
 fn a_batch_refuses_two_campaigns_that_would_write_the_same_files() {
-    let dir = tempfile::tempdir().unwrap();
-    let fleet = dir.path().join("fleet");
-    std::fs::create_dir(&fleet).unwrap();
-    let text = std::fs::read_to_string(ds("comau_lhs.csv")).unwrap();
-    std::fs::write(fleet.join("a.csv"), &text).unwrap();
-    std::fs::write(fleet.join("a.CSV"), &text).unwrap();
-    let out = dir.path().join("out");
-    let (c, _, err) = rk(&[
-        "batch",
-        fleet.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let dir = Scratch::new();
+    let (fleet, out) = dir.fleet(&[("a.csv", &lhs()), ("a.CSV", &lhs())]);
+    let (c, _, err) = rk(&["batch", &fleet, "-o", &out]);
     assert_ne!(c, 0);
     assert!(err.contains("the same model and report files"), "{err}");
-    assert!(!out.join("summary.csv").exists());
+    assert!(!std::path::Path::new(&out).join("summary.csv").exists());
 }
 
 #[test]
 fn a_top_level_key_no_step_has_is_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| dir.path().join(f).display().to_string();
+    let dir = Scratch::new();
     let config = format!(
         "data = \"{}\"\nrobt = \"comau-nj220\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"m.json\"\n",
         ds("comau_lhs.csv")
     );
-    std::fs::write(p("run.toml"), config).unwrap();
-    let (c, _, err) = rk(&["run", &p("run.toml")]);
+    let (c, _, err) = rk(&["run", &dir.write("run.toml", &config)]);
     assert_ne!(c, 0);
     assert!(err.contains("'robt'"), "{err}");
-    assert!(!dir.path().join("m.json").exists());
+    assert!(!std::path::Path::new(&dir.path("m.json")).exists());
 }
 
 #[test]
 fn a_batch_with_calibration_options_and_no_robot_is_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let fleet = dir.path().join("fleet");
-    std::fs::create_dir(&fleet).unwrap();
-    std::fs::copy(ds("comau_lhs.csv"), fleet.join("a.csv")).unwrap();
-    let out = dir.path().join("out");
-    let (c, _, err) = rk(&[
-        "batch",
-        fleet.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--geometric",
-    ]);
+    let dir = Scratch::new();
+    let (fleet, out) = dir.fleet(&[("a.csv", &lhs())]);
+    let (c, _, err) = rk(&["batch", &fleet, "-o", &out, "--geometric"]);
     assert_ne!(c, 0);
     assert!(err.contains("need a robot"), "{err}");
-    assert!(!out.join("summary.csv").exists());
+    assert!(!std::path::Path::new(&out).join("summary.csv").exists());
 }
