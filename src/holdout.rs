@@ -215,8 +215,9 @@ pub fn holdout_cv(
                 let n = fold.iter().filter(|&&g| g != f).count();
                 if n < 10 {
                     return Err(Error::InvalidParameter(format!(
-                        "fold {} of {k} (numbered by first appearance) leaves {n} training rows: choosing the hyperparameters on each fold's training rows needs at least 10, and a fold that small cannot be fitted at all: merge the rows it holds out with another group's, or use random folds (--cv K)",
-                        f + 1
+                        "fold {} of {k} (numbered by first appearance) holds out {} of the {m} rows and leaves {n} to train on: choosing the hyperparameters on each fold's training rows needs at least 10, and a fold that small cannot be fitted at all: split that group into smaller ones, or use random folds (--cv K)",
+                        f + 1,
+                        m - n
                     )));
                 }
             }

@@ -108,7 +108,8 @@ fn json_to_stdout(args: &[String]) -> bool {
 /// Whether the command line gives `-` (standard output) as a file output
 /// (`-o`/`--output`), which only the `--json` reports may be.
 fn file_output_to_stdout(args: &[String]) -> bool {
-    args.iter().any(|a| a == "--output=-" || a == "-o-")
+    args.iter()
+        .any(|a| a == "--output=-" || a == "-o-" || a == "-o=-")
         || args
             .windows(2)
             .any(|w| (w[0] == "-o" || w[0] == "--output") && w[1] == "-")
@@ -119,7 +120,7 @@ pub fn run(cli: Cli) -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     if file_output_to_stdout(&args) {
         return Err(robokrige::Error::InvalidParameter(
-            "-o - would write a file named '-': standard output takes only the --json reports (--json -); give -o a file name".into(),
+            "-o - would write a file named '-': standard output takes only the --json reports (--json -); give -o a path".into(),
         ));
     }
     TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);

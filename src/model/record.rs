@@ -105,4 +105,13 @@ impl ErrorModel {
             None => Ok(()),
         }
     }
+
+    /// Which of the recorded robot's joints are prismatic, from `robot`
+    /// (already checked to be that robot), when the file predates the
+    /// record of it: the units of the coverage warnings.
+    pub(crate) fn fill_joint_kinds(&mut self, robot: &Robot) {
+        if let Some(r) = self.robot.as_mut().filter(|r| r.prismatic.is_empty()) {
+            r.prismatic = robot.prismatic_joints();
+        }
+    }
 }

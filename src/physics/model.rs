@@ -332,8 +332,11 @@ impl AnyModel {
     /// [`AnyModel::load`] of a model for `robot`, refused with the file's
     /// name when it is for another ([`AnyModel::check_robot`]).
     pub fn load_for(path: &Path, robot: &Robot) -> Result<Self> {
-        let model = Self::load(path)?;
+        let mut model = Self::load(path)?;
         model.check_robot(robot, &path.display().to_string())?;
+        if let AnyModel::Kriging(m) = &mut model {
+            m.fill_joint_kinds(robot);
+        }
         Ok(model)
     }
 

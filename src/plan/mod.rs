@@ -310,7 +310,7 @@ impl ValidPlanParams {
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| **c > 0)
-                .map(|(j, c)| format!("q{} at {c}", j + 1))
+                .map(|(j, c)| format!("q{} in {c}", j + 1))
                 .collect();
             let unit = if prismatic.iter().all(|p| *p) {
                 " mm"
@@ -320,9 +320,10 @@ impl ValidPlanParams {
                 "°"
             };
             notes.push(format!(
-                "pre-position moves go to a joint's hard limit where --via-step {}{unit} back would leave it ({} of the via-points); a smaller --via-step keeps them inside",
+                "pre-position moves go to a joint's hard limit where --via-step {}{unit} back would leave it: {} of the {} via-points; a smaller --via-step keeps them inside",
                 p.via_step,
-                joints.join(", ")
+                joints.join(", "),
+                moves.iter().filter(|m| !m.measure).count()
             ));
         }
         Ok(Plan {

@@ -31,7 +31,7 @@ pub struct Execution {
 /// moves, drawing the noise
 /// from `rng`.
 /// The controller's IK seeds each point from `hints` (if given), then from the
-/// previous point ([`first_pass_joints`]).
+/// previous point, the start and the home pose ([`first_pass_joints`]).
 pub fn execute(
     robot: &TrueRobot,
     commands: &Trajectory,

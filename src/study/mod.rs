@@ -89,7 +89,7 @@ impl Targets {
                 Error::Unreachable {
                     indices,
                     first: format!(
-                        "{first}; the trajectory has positions only, and every target takes the tool orientation of the start pose (--start, else home): give the task's orientation with --orientation roll,pitch,yaw, or a start pose whose tool points as the task needs"
+                        "{first}; the trajectory has positions only, and every target takes the tool orientation of the start pose (--start, else home): if the positions are within reach, give the task's orientation with --orientation roll,pitch,yaw, or a start pose whose tool points as the task needs"
                     ),
                 }
             }
