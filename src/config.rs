@@ -202,6 +202,13 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
                 }
             } else {
                 for v in values {
+                    // `-` is standard output for the JSON reports only; a
+                    // file output named so would run the step, then fail
+                    if v == "-" && long(arg) != "json" {
+                        return Err(at(format!(
+                            "{key} = \"-\": standard output takes only the json reports; give {key} a path"
+                        )));
+                    }
                     options.push(format!("--{}", long(arg)));
                     options.push(v);
                 }

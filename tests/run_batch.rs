@@ -344,3 +344,22 @@ fn a_batch_with_calibration_options_and_no_robot_is_refused() {
     assert!(err.contains("need a robot"), "{err}");
     assert!(!std::path::Path::new(&out).join("summary.csv").exists());
 }
+
+#[test]
+fn a_config_step_output_to_standard_output_is_refused_before_any_step() {
+    let dir = Scratch::new();
+    let config = format!(
+        "data = \"{}\"\n\n[[step]]\ncommand = \"simulate\"\nposes = 10\noutput = \"s.csv\"\n\n[[step]]\ncommand = \"fit\"\noutput = \"-\"\n",
+        ds("comau_lhs.csv")
+    );
+    let (c, _, err) = rk(&["run", &dir.write("run.toml", &config)]);
+    assert_ne!(c, 0);
+    assert!(
+        err.contains("output = \"-\"") && err.contains("give output a path"),
+        "{err}"
+    );
+    assert!(
+        !std::path::Path::new(&dir.path("s.csv")).exists(),
+        "a step ran"
+    );
+}
