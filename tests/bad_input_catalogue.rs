@@ -1104,6 +1104,28 @@ fn command_cases() -> Vec<Case> {
             fail(&["-o - would write a file named '-'", "--json -"]),
         ),
         case(
+            "compensate_plot_dash_is_not_a_file",
+            &[
+                "compensate",
+                "--model",
+                &m,
+                "--robot",
+                "comau-nj220",
+                &s(&traj),
+                "-o",
+                &out("c.csv"),
+                "--truth",
+                &s(&truth),
+                "--plot",
+                "-",
+            ],
+            &[model],
+            fail(&[
+                "--plot - would write a file named '-'",
+                "give --plot a path",
+            ]),
+        ),
+        case(
             "plan_negative_target",
             &[
                 "plan",

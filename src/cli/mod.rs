@@ -105,23 +105,34 @@ fn json_to_stdout(args: &[String]) -> bool {
     args.iter().any(|a| a == "--json=-") || args.windows(2).any(|w| w[0] == "--json" && w[1] == "-")
 }
 
-/// Whether the command line gives `-` (standard output) as a file output
-/// (`-o`/`--output`), which only the `--json` reports may be.
-fn file_output_to_stdout(args: &[String]) -> bool {
-    args.iter()
-        .any(|a| a == "--output=-" || a == "-o-" || a == "-o=-")
-        || args
-            .windows(2)
-            .any(|w| (w[0] == "-o" || w[0] == "--output") && w[1] == "-")
+/// The options whose value is a file or folder to write, besides `--json`.
+const FILE_OUTPUTS: [&str; 7] = [
+    "-o",
+    "--output",
+    "--model-out",
+    "--dh-output",
+    "--plot",
+    "--plots",
+    "--report",
+];
+
+/// The option of the command line that gives `-` (standard output) as a
+/// file output ([`FILE_OUTPUTS`]), which only the `--json` reports may be.
+fn file_output_to_stdout(args: &[String]) -> Option<&'static str> {
+    FILE_OUTPUTS.into_iter().find(|opt| {
+        args.iter()
+            .any(|a| *a == format!("{opt}=-") || (*opt == "-o" && a == "-o-"))
+            || args.windows(2).any(|w| w[0] == *opt && w[1] == "-")
+    })
 }
 
 /// Run a parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    if file_output_to_stdout(&args) {
-        return Err(robokrige::Error::InvalidParameter(
-            "-o - would write a file named '-': standard output takes only the --json reports (--json -); give -o a path".into(),
-        ));
+    if let Some(opt) = file_output_to_stdout(&args) {
+        return Err(robokrige::Error::InvalidParameter(format!(
+            "{opt} - would write a file named '-': standard output takes only the --json reports (--json -); give {opt} a path"
+        )));
     }
     TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);
     dispatch(cli.command)
