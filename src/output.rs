@@ -48,7 +48,8 @@ fn refuse_protected(out: &Path, p: &Path) -> Error {
 /// Write `path` atomically: `fill` writes the whole content into a
 /// temporary file in the same folder, which then replaces `path` by a
 /// rename. On any failure `path` is left as it was and the temporary file
-/// is removed. `-` is refused: it means standard output everywhere else. New files get the usual permissions (`0666` less the umask).
+/// is removed. `-` is refused: it means standard output everywhere else.
+/// New files get the usual permissions (`0666` less the umask).
 pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,

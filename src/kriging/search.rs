@@ -617,8 +617,8 @@ const INERT_LOG10_THETA: f64 = -3.0;
 /// behind the best, went on to win by 0.02.
 ///
 /// A run that crawls stops: when its last [`CRAWL_STAGES`] stages (20
-/// iterations) together lowered ln ψ by less than one iteration may
-/// under the [`basin_tolerance`] (0.01 nats of log-likelihood). On the
+/// iterations) together lowered ln ψ by less than the [`basin_tolerance`]
+/// lets a single iteration stop at (0.01 nats of log-likelihood). On the
 /// 632-pose ISO-cube campaign (`cargo bench --bench xi_choice`) the
 /// kinematic-trend JS winner of ex otherwise ran to the 200-iteration
 /// limit along a ridge, gaining 3.5e-9 of ln ψ per iteration from its
