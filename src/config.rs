@@ -202,13 +202,6 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
                 }
             } else {
                 for v in values {
-                    // `-` is standard output for the JSON reports only; a
-                    // file output named so would run the step, then fail
-                    if v == "-" && long(arg) != "json" {
-                        return Err(at(format!(
-                            "{key} = \"-\": standard output takes only the json reports; give {key} a path"
-                        )));
-                    }
                     options.push(format!("--{}", long(arg)));
                     options.push(v);
                 }
@@ -217,6 +210,10 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
         positional.sort_by_key(|(i, _)| *i);
         argv.extend(positional.into_iter().map(|(_, v)| v));
         argv.extend(options);
+        // a file named `-` would run the step, then fail or write `./-`
+        if let Some(opt) = dash_option(root, &argv) {
+            return Err(at(dash_message(&opt)));
+        }
         out.push(argv);
     }
     // a top-level key no step has (a misspelt `robt`) would be dropped
@@ -238,6 +235,44 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
         )));
     }
     Ok(out)
+}
+
+/// The first option of the argument list `argv` (a command line of
+/// `root`, program name first) given `-` where only `--json` may be: `-` is
+/// standard output for the JSON reports, and nothing reads standard input,
+/// so any other option given `-` names a file `-`. The option as a user
+/// writes it (`--plot`, `-o/--output`); `None` when there is none, or when
+/// `root` does not parse `argv` (its parser then says why).
+///
+/// The command line checks its own arguments with it before any work, and
+/// `run` every step of a config before any step runs: one rule for both.
+pub fn dash_option(root: &clap::Command, argv: &[String]) -> Option<String> {
+    let matches = root.clone().try_get_matches_from(argv).ok()?;
+    let (mut cmd, mut m) = (root, &matches);
+    while let Some((name, sub)) = m.subcommand() {
+        cmd = cmd.find_subcommand(name)?;
+        m = sub;
+    }
+    cmd.get_arguments()
+        .filter(|a| !a.is_positional() && a.get_action().takes_values())
+        .filter(|a| a.get_long() != Some("json"))
+        .find(|a| {
+            m.try_get_raw(a.get_id().as_str())
+                .ok()
+                .flatten()
+                .is_some_and(|mut v| v.any(|v| v == "-"))
+        })
+        .map(|a| match a.get_short() {
+            Some(c) => format!("-{c}/--{}", long(a)),
+            None => format!("--{}", long(a)),
+        })
+}
+
+/// Why the option `opt` ([`dash_option`]) may not be `-`.
+pub fn dash_message(opt: &str) -> String {
+    format!(
+        "{opt} - would be a file named '-': only the --json reports go to standard output (--json -), and no input is read from it; give {opt} a path"
+    )
 }
 
 /// The argument of `cmd` a config key names: its id or its long name.

@@ -1101,7 +1101,7 @@ fn command_cases() -> Vec<Case> {
             "fit_output_dash_is_not_a_file",
             &["fit", &d, "-o", "-"],
             &[data],
-            fail(&["-o - would write a file named '-'", "--json -"]),
+            fail(&["-o/--output - would be a file named '-'", "--json -"]),
         ),
         case(
             "compensate_plot_dash_is_not_a_file",
@@ -1120,10 +1120,7 @@ fn command_cases() -> Vec<Case> {
                 "-",
             ],
             &[model],
-            fail(&[
-                "--plot - would write a file named '-'",
-                "give --plot a path",
-            ]),
+            fail(&["--plot - would be a file named '-'", "give --plot a path"]),
         ),
         case(
             "plan_negative_target",

@@ -362,3 +362,36 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
         a.before.mean_abs_mm
     );
 }
+
+#[test]
+fn an_unreachable_position_only_target_says_where_its_orientation_came_from() {
+    // the library's compensate-and-evaluate (diagnose --traj, the demo) says
+    // what `robokrige compensate` says: position-only targets took the
+    // start pose's orientation
+    let (ejs, _) = models();
+    let dir = std::env::temp_dir().join(format!("rk-orient-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let traj = dir.join("far.csv");
+    std::fs::write(&traj, "x,y,z\n1800,0,1000\n9000,0,1000\n").unwrap();
+    let r = robot();
+    let start = r.start_or_home(None).unwrap();
+    let targets = robokrige::study::Targets::read(&traj, &r, None, &start).unwrap();
+    let truth_path = shipped("comau_circle.truth.json");
+    let truth = robokrige::study::load_truth(&truth_path).unwrap();
+    let e = robokrige::study::compensate_and_evaluate(
+        &r,
+        ejs,
+        &truth_path,
+        &truth,
+        &targets,
+        &start,
+        1,
+    )
+    .unwrap_err()
+    .to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        e.contains("unreachable") && e.contains("orientation of the start pose"),
+        "{e}"
+    );
+}

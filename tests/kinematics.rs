@@ -425,7 +425,7 @@ fn a_campaign_beyond_the_joint_limits_is_named_per_joint() {
     let w = robot.limit_warnings(&data);
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(
-        w[0].contains("q2 of 2 row(s)") && w[0].contains(&format!("{:.2}", hi + 30.0)),
+        w[0].contains("q2 of 2 row(s)") && w[0].contains(&format!("(up to {:.2}°)", hi + 30.0)),
         "{w:?}"
     );
 }

@@ -186,10 +186,13 @@ impl TargetSpec<'_, '_> {
                 Isometry3::from_parts(Translation3::from(Vector3::new(p[0], p[1], p[2])), rot)
             })
             .collect();
-        Ok(Targets::from_trajectory(Trajectory {
+        let mut targets = Targets::from_trajectory(Trajectory {
             poses,
             has_orientation: rpy.is_some() || fixed.is_some(),
-        }))
+        });
+        // an unreachable target then says where its orientation came from
+        targets.orientation_from_start = rpy.is_none() && fixed.is_some() && self.orientation.is_none();
+        Ok(targets)
     }
 }
 
@@ -281,11 +284,7 @@ pub fn compensate(
         Predictor::Physics(p) => p.check_robot(&robot, "model"),
     }
     .map_err(to_py)?;
-    let start = start.unwrap_or_else(|| robot.home.clone());
-    robot.check_len(&start).map_err(to_py)?;
-    if start.iter().any(|v| !v.is_finite()) {
-        return Err(invalid("start: joint values must be finite"));
-    }
+    let start = robot.start_or_home(start.as_deref()).map_err(to_py)?;
     let targets = spec.resolve(&robot, &start).map_err(to_py)?;
     let opts = CompensationOptions {
         iterative,
@@ -300,13 +299,15 @@ pub fn compensate(
             let t0 = std::time::Instant::now();
             let (res, coverage) = match m {
                 Predictor::Kriging(k) => {
-                    let res = robokrige::compensate::compensate(&robot, k, &targets.traj, &opts)?;
+                    let res = robokrige::compensate::compensate(&robot, k, &targets.traj, &opts)
+                        .map_err(|e| targets.explain(e))?;
                     // the means the compensation used; no standard deviations
                     let coverage = k.coverage(&res.joints, &res.dir, &res.predicted, None)?;
                     (res, coverage)
                 }
                 Predictor::Physics(p) => (
-                    robokrige::compensate::compensate(&robot, p, &targets.traj, &opts)?,
+                    robokrige::compensate::compensate(&robot, p, &targets.traj, &opts)
+                        .map_err(|e| targets.explain(e))?,
                     Vec::new(),
                 ),
             };

@@ -174,8 +174,16 @@ def test_compensate_targets():
         rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), tol=0)
     with raises(r"a joint vector has 2 values but the robot or model has 6 joints"):
         rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), start=[0, 0])
-    with raises(r"unreachable"):
+    # position-only targets take the start pose's orientation: an
+    # unreachable one says so, with what to give instead
+    with raises(r"unreachable.*orientation of the start pose.*orientation"):
         rk.compensate(m, "comau-nj220", np.array([[1e5, 0, 1000]]))
+    # with their own orientation there is nothing to add
+    with pytest.raises(rk.RobokrigeError) as info:
+        rk.compensate(m, "comau-nj220", np.array([[1e5, 0, 1000]]), rpy=np.zeros((1, 3)))
+    assert "unreachable" in str(info.value) and "start pose" not in str(info.value)
+    with raises(r"the start pose is outside the limits of robot 'comau-nj220': q2 = 200° not in"):
+        rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), start=[0, 200, 0, 0, 0, 0])
 
 
 def test_many_bad_inputs_never_panic():

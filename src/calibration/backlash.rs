@@ -73,10 +73,8 @@ impl JointBacklash {
     /// The half backlash with its unit on `robot`: degrees, or mm for a
     /// prismatic joint.
     pub fn display_on(&self, robot: &crate::kinematics::Robot) -> String {
-        match robot.links.get(self.joint - 1).map(|l| l.kind) {
-            Some(crate::kinematics::JointKind::Prismatic) => format!("{:+.4} mm", self.half_deg),
-            _ => format!("{:+.4}°", self.half_deg),
-        }
+        let unit = robot.joint_unit(self.joint.wrapping_sub(1));
+        format!("{:+.4}{unit}", self.half_deg)
     }
 
     /// Error unless the joint is one of `n` and the half backlash finite.

@@ -35,7 +35,7 @@ mod robot;
 mod run;
 mod simulate;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use robokrige::Result;
 use robokrige::model::CoverageWarning;
 use robokrige::report::predict;
@@ -105,34 +105,13 @@ fn json_to_stdout(args: &[String]) -> bool {
     args.iter().any(|a| a == "--json=-") || args.windows(2).any(|w| w[0] == "--json" && w[1] == "-")
 }
 
-/// The options whose value is a file or folder to write, besides `--json`.
-const FILE_OUTPUTS: [&str; 7] = [
-    "-o",
-    "--output",
-    "--model-out",
-    "--dh-output",
-    "--plot",
-    "--plots",
-    "--report",
-];
-
-/// The option of the command line that gives `-` (standard output) as a
-/// file output ([`FILE_OUTPUTS`]), which only the `--json` reports may be.
-fn file_output_to_stdout(args: &[String]) -> Option<&'static str> {
-    FILE_OUTPUTS.into_iter().find(|opt| {
-        args.iter()
-            .any(|a| *a == format!("{opt}=-") || (*opt == "-o" && a == "-o-"))
-            || args.windows(2).any(|w| w[0] == *opt && w[1] == "-")
-    })
-}
-
 /// Run a parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    if let Some(opt) = file_output_to_stdout(&args) {
-        return Err(robokrige::Error::InvalidParameter(format!(
-            "{opt} - would write a file named '-': standard output takes only the --json reports (--json -); give {opt} a path"
-        )));
+    if let Some(opt) = robokrige::config::dash_option(&Cli::command(), &args) {
+        return Err(robokrige::Error::InvalidParameter(
+            robokrige::config::dash_message(&opt),
+        ));
     }
     TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);
     dispatch(cli.command)

@@ -193,7 +193,7 @@ impl Robot {
                     .copied()
                     .max_by(|a, b| (a - a.clamp(lo, hi)).abs().total_cmp(&(b - b.clamp(lo, hi)).abs()))?;
                 Some(format!(
-                    "{}: q{} of {} row(s) outside the limits of robot '{}', [{lo}, {hi}] {u} (up to {worst:.2} {u}): is this the robot that was measured, with its joint convention?",
+                    "{}: q{} of {} row(s) outside the limits of robot '{}', [{lo}, {hi}]{u} (up to {worst:.2}{u}): is this the robot that was measured, with its joint convention?",
                     data.source,
                     j + 1,
                     out.len(),
@@ -233,11 +233,14 @@ impl Robot {
         }
     }
 
-    /// The unit of joint `j`'s values: "°", or "mm" for a prismatic joint.
+    /// The unit of joint `j`'s values as a suffix to a number: "°", or
+    /// " mm" for a prismatic joint (`format!("{v}{}", robot.joint_unit(j))`
+    /// gives `12.5°` and `190 mm`, as every joint value in a message is
+    /// written). A joint this robot does not have gets "°".
     pub fn joint_unit(&self, j: usize) -> &'static str {
-        match self.links[j].kind {
-            JointKind::Prismatic => "mm",
-            JointKind::Revolute => "°",
+        match self.links.get(j).map(|l| l.kind) {
+            Some(JointKind::Prismatic) => " mm",
+            _ => "°",
         }
     }
 
@@ -255,8 +258,7 @@ impl Robot {
             .filter(|(_, (v, (lo, hi)))| !(*v >= lo && *v <= hi))
             .map(|(j, (v, (lo, hi)))| {
                 let u = self.joint_unit(j);
-                let sp = if u == "°" { "" } else { " " };
-                format!("q{} = {v}{sp}{u} not in [{lo}, {hi}]{sp}{u}", j + 1)
+                format!("q{} = {v}{u} not in [{lo}, {hi}]{u}", j + 1)
             })
             .collect();
         if !outside.is_empty() {

@@ -373,7 +373,8 @@ pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
     seed: u64,
 ) -> Result<CompensatedRun> {
     let opts = targets.compensation_options(start);
-    let compensation = compensate(robot, model, &targets.traj, &opts)?;
+    let compensation =
+        compensate(robot, model, &targets.traj, &opts).map_err(|e| targets.explain(e))?;
     let (evaluation, runs) = evaluate(
         truth_path,
         truth,
