@@ -241,6 +241,42 @@ fn a_control_campaign_reports_no_significant_effect() {
     );
 }
 
+/// A campaign measured in a random order has no note on its order; the
+/// same poses measured joint by joint (sorted by q1, so that the order
+/// follows the joint space) have one, in the report as in the JSON.
+#[test]
+fn a_campaign_measured_region_by_region_says_its_order_effects_are_pose_effects() {
+    use robokrige::report::diagnose::{Names, summary};
+    let data = campaign(160, 4, None);
+    let names = Names {
+        data: "c.csv".as_ref(),
+        method: "ejs",
+    };
+    let d = diagnose(&data, &quick(), &|_| {}).unwrap();
+    let o = d.order_in_joint_space.as_ref().unwrap();
+    assert!(!o.matters(), "{o:?}");
+    assert!(!summary(&d, names).contains("not separable on this campaign: a step"));
+    let mut by_q1: Vec<usize> = (0..data.len()).collect();
+    by_q1.sort_by(|&a, &b| data.q[a][0].total_cmp(&data.q[b][0]));
+    let d = diagnose(&data.select(&by_q1), &quick(), &|_| {}).unwrap();
+    let o = d.order_in_joint_space.as_ref().unwrap();
+    assert!(
+        o.order_correlation > 0.8 && o.regional_steps() > o.scanned / 2,
+        "{o:?}"
+    );
+    let text = summary(&d, names);
+    assert!(
+        text.contains("not separable on this campaign: a step at rows")
+            && text.contains("measuring in a random order separates them"),
+        "{text}"
+    );
+    let json = serde_json::to_value(&d).unwrap();
+    assert!(
+        json["order_in_joint_space"]["step_rows"].is_array(),
+        "{json}"
+    );
+}
+
 #[test]
 fn a_model_with_extra_inputs_round_trips_and_predicts_from_poses() {
     let data = campaign(80, 5, Some("payload:kg=0/60/120"));

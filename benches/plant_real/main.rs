@@ -213,6 +213,9 @@ fn main() {
             sigma[2],
             added(&control)
         );
+        if let Some(text) = control.order_in_joint_space.as_ref().and_then(|o| o.text()) {
+            println!("control's note on the order: {text}");
+        }
         let temp_varies = data.covariate("temp_c").is_some_and(|c| {
             let (lo, hi) = c
                 .values
@@ -250,7 +253,7 @@ fn main() {
                 let own = |t: &[score::Target]| own_coefficients(&control_rows, &o, &d, t);
                 let sc = score::score(&d, &control, (&shape, &p), m, &own);
                 println!(
-                    "plant {i:>2} {k}× {:<26} {:<10}{}{}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
+                    "plant {i:>2} {k}× {:<26} {:<10}{}{}{}{} row cov {:<5} coef cov {:<5} (+own {:<5}) {:>4.0} s  new: {}",
                     shape.describe(),
                     format!("{:?}", sc.outcome),
                     if sc.left_by_cap {
@@ -264,6 +267,11 @@ fn main() {
                         ""
                     },
                     if sc.own_only { " (own only)" } else { "" },
+                    if sc.by_order_note {
+                        " (by the order note)"
+                    } else {
+                        ""
+                    },
                     opt(sc.row_covered),
                     opt(sc.coef_covered.as_ref().map(|v| v.iter().all(|b| *b))),
                     opt(sc.own_covered.as_ref().map(|v| v.iter().all(|b| *b))),
@@ -332,9 +340,9 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             score::tolerance(m)
         );
         println!(
-            "| kind | plants | right | proxy, named | proxy, not named | (of which the planted family never significant) | (proxies, named or not, that added only effects the control found significant) | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
+            "| kind | plants | right | proxy, named | (of which by the order note alone) | proxy, not named | (of which the planted family never significant) | (proxies, named or not, that added only effects the control found significant) | missed | not right, listed as left by the cap | row / period / τ interval covers | coefficient intervals cover (plant: all axes) | (per axis) | (per axis, planted + campaign's own) | s / diagnose |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         let mut kinds: Vec<&str> = rows.iter().map(|r| r.kind).collect();
         kinds.dedup();
         kinds.sort();
@@ -360,9 +368,10 @@ fn table(s: char, m: usize, sizes: &[f64], rows: &[Row]) {
             };
             let secs = sel.iter().map(|r| r.seconds).sum::<f64>() / n.max(1) as f64;
             println!(
-                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
+                "| {kind} | {n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {secs:.0} |",
                 pct(count(Outcome::Right)),
                 pct(count(Outcome::ProxyNamed)),
+                sel.iter().filter(|r| r.score.by_order_note).count(),
                 pct(count(Outcome::Proxy)),
                 sel.iter()
                     .filter(|r| r.score.outcome == Outcome::Proxy && !r.score.seen)

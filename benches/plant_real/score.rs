@@ -15,6 +15,11 @@
 //!   measurement order, at an edge) at the planted place (a step's row
 //!   within `tol` of the planted one or of a planted block's edge, a
 //!   block's two edges each within `tol`, a harmonic's period within 3 %).
+//!   Also **named** (counted apart, "by the order note"): a step or block
+//!   whose row (each edge) is within `tol` of a row where the report's note
+//!   on the order says a step is a region of the joint space, so that a
+//!   step or block there and an effect of the pose can stand for each
+//!   other ([`Diagnosis::order_in_joint_space`]).
 //!   **seen**: the planted family was significant, at its place, in some
 //!   round (a proxy whose family never was cannot be named by a rule that
 //!   names significant candidates).
@@ -85,6 +90,9 @@ pub struct Score {
     /// some round, at a compatible place ([`significant_in`]): the campaign's own
     /// effects, taking the places the control gave to others.
     pub own_only: bool,
+    /// A proxy named by the report's note on the order against the joint
+    /// space alone ([`named_by_order`]), not by an effect's competitors.
+    pub by_order_note: bool,
 }
 
 pub fn tolerance(m: usize) -> usize {
@@ -463,6 +471,7 @@ pub fn score(
             left_by_cap: false,
             seen: true,
             own_only: false,
+            by_order_note: false,
         };
     }
     if let Some(sc) = block_as_steps(&new, shape, p, tol, own) {
@@ -479,6 +488,8 @@ pub fn score(
         .effects
         .iter()
         .any(|e| e.significant && is_plant(&e.label, &e.params, &texts, shape, tol));
+    let by_order_note = !named && named_by_order(d, shape, tol);
+    let named = named || by_order_note;
     let outcome = match (new.is_empty(), named) {
         (true, _) => Outcome::Missed,
         (false, true) => Outcome::ProxyNamed,
@@ -497,6 +508,24 @@ pub fn score(
             .any(|l| is_plant(&l.label, &l.params, &texts, shape, tol)),
         seen,
         own_only: !new.is_empty() && new.iter().all(|e| significant_in(e, control, tol)),
+        by_order_note: by_order_note && !new.is_empty(),
+    }
+}
+
+/// Whether the report's note on the order against the joint space
+/// ([`Diagnosis::order_in_joint_space`]) names the planted step or block:
+/// a step is regional within `tol` rows of the planted row (of each of a
+/// block's two edges). The note says that there a step or block of the
+/// rows and an effect of the pose can stand for each other.
+fn named_by_order(d: &Diagnosis, shape: &Shape, tol: usize) -> bool {
+    let Some(o) = d.order_in_joint_space.as_ref().filter(|o| o.matters()) else {
+        return false;
+    };
+    let near = |row: usize| (row.saturating_sub(tol)..=row + tol).any(|r| o.step_is_regional(r));
+    match *shape {
+        Shape::Step { row, .. } => near(row),
+        Shape::Block { from, to, .. } => near(from) && near(to),
+        _ => false,
     }
 }
 
@@ -568,6 +597,7 @@ fn block_as_steps(
         left_by_cap: false,
         seen: true,
         own_only: false,
+        by_order_note: false,
     })
 }
 

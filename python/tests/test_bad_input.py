@@ -180,7 +180,7 @@ def test_compensate_targets():
         rk.compensate(m, "comau-nj220", np.array([[1e5, 0, 1000]]))
     # with their own orientation there is nothing to add
     with pytest.raises(rk.RobokrigeError) as info:
-        rk.compensate(m, "comau-nj220", np.array([[1e5, 0, 1000]]), rpy=np.zeros((1, 3)))
+        rk.compensate(m, "comau-nj220", np.array([[1e5, 0, 1000, 180, 0, 0]]))
     assert "unreachable" in str(info.value) and "start pose" not in str(info.value)
     with raises(r"the start pose is outside the limits of robot 'comau-nj220': q2 = 200° not in"):
         rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), start=[0, 200, 0, 0, 0, 0])

@@ -21,11 +21,12 @@
 //! - **Intervals** ([`widen_intervals`]): those of an added effect with its
 //!   competitors refitted ([`super::profile`]).
 
-use super::confound::{self, SAME_RESIDUAL, competitor_text, not_separable, region_overlap};
+use super::confound::{self, SAME_RESIDUAL, competitor_text, not_separable};
 use super::profile::{
     across_period, drift_columns, feature_columns, profile_period, widen_coefficients, widen_rows,
 };
 use super::rank::alike;
+use super::regions::{NEIGHBOURS, region_overlap};
 use super::report::{EffectReport, LeftOut};
 use super::scan::{EffectKind, Family, Tested, step_rows};
 use crate::calibration::Displacements;
@@ -276,7 +277,7 @@ pub(super) fn widen_intervals(
     if overlap >= SAME_RESIDUAL {
         report.confounded_with.push(format!(
             "a region of the joint space: its rows were measured in a region of their own (correlation of the rows with their {} nearest poses' {overlap:.2}); a function of the pose explains the same",
-            confound::NEIGHBOURS
+            NEIGHBOURS
         ));
     }
 }

@@ -1,8 +1,8 @@
 //! Which candidates a campaign cannot tell apart: "not separable on this
 //! campaign" ([`not_separable`]), the measured column preferred over an
-//! anonymous order effect among them ([`prefer_measured`]), and a step or
-//! block of rows that is also a region of the joint space
-//! ([`region_overlap`]).
+//! anonymous order effect among them ([`prefer_measured`]). A step or
+//! block of rows that is also a region of the joint space:
+//! [`super::regions`].
 //!
 //! **The measure.** A candidate's *fitted contribution* is the
 //! least-squares fit of the centred CV residuals of the current model (at
@@ -57,10 +57,8 @@
 //! report names the other ([`steps_left_by_cap`]).
 //!
 //! **Region of the joint space.** A step or block of rows is a region of
-//! the joint space when the poses were measured region by region: its
-//! indicator is then predicted by the indicator of each row's nearest
-//! poses in joint space ([`region_overlap`]: the correlation of the
-//! indicator with its mean over the [`NEIGHBOURS`] nearest other poses).
+//! the joint space when the poses were measured region by region
+//! ([`super::regions`]).
 
 use super::rank::{extend_orthonormal, fitted, orthonormal, similarity};
 use super::report::{EffectReport, LeftOut, params_text};
@@ -75,9 +73,6 @@ pub const SAME_RESIDUAL: f64 = 0.7;
 /// at most once an effect is added for that effect to have explained it
 /// away ([`Taken::share_left`], [`explained_away`]).
 pub const EXPLAINED_AWAY: f64 = 0.5;
-
-/// Nearest poses in joint space a row's region indicator is averaged over.
-pub const NEIGHBOURS: usize = 5;
 
 /// What a candidate explains: its fitted contribution, and its explained
 /// sum of squares in noise units less the columns' share of noise.
@@ -398,52 +393,6 @@ pub(super) fn prefer_measured(
         .map(|c| c.index)
 }
 
-/// How much a set of rows (`inside[i]`, a step's rows after it or a
-/// block's rows) is a region of the joint space: the correlation of its
-/// indicator with the share of each row's [`NEIGHBOURS`] nearest other
-/// poses (Euclidean in the joint angles, degrees) that are inside too. 1:
-/// the rows are a region of their own; near 0: spread over the workspace.
-pub fn region_overlap(q: &[Vec<f64>], inside: &[bool]) -> f64 {
-    let m = q.len();
-    if m <= NEIGHBOURS + 1 || inside.iter().all(|&b| b) || inside.iter().all(|&b| !b) {
-        return 0.0;
-    }
-    let share: Vec<f64> = (0..m)
-        .map(|i| {
-            let mut d: Vec<(f64, usize)> = (0..m)
-                .filter(|&j| j != i)
-                .map(|j| {
-                    let s: f64 = q[i].iter().zip(&q[j]).map(|(a, b)| (a - b).powi(2)).sum();
-                    (s, j)
-                })
-                .collect();
-            d.select_nth_unstable_by(NEIGHBOURS - 1, |a, b| {
-                a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-            });
-            d[..NEIGHBOURS].iter().filter(|(_, j)| inside[*j]).count() as f64 / NEIGHBOURS as f64
-        })
-        .collect();
-    let x: Vec<f64> = inside.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
-    correlation(&x, &share)
-}
-
-/// Pearson correlation of two columns (0 when one is constant).
-fn correlation(x: &[f64], y: &[f64]) -> f64 {
-    let n = x.len() as f64;
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        sxy += (a - mx) * (b - my);
-        sxx += (a - mx).powi(2);
-        syy += (b - my).powi(2);
-    }
-    if sxx > 0.0 && syy > 0.0 {
-        sxy / (sxx * syy).sqrt()
-    } else {
-        0.0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -595,25 +544,5 @@ mod tests {
         let other = point(vec![y.clone()]);
         let left = Taken::new(&other, &residuals).share_left(&b).unwrap();
         assert!(left > 0.9, "{left}");
-    }
-
-    /// A block of rows measured in its own corner of the joint space is a
-    /// region; the same rows spread over the space are not.
-    #[test]
-    fn a_block_measured_in_its_own_region_overlaps_it() {
-        let m = 120;
-        let inside: Vec<bool> = (0..m).map(|i| (40..80).contains(&i)).collect();
-        // a deterministic scatter of poses; the block's are shifted away
-        let pose = |i: usize, shift: f64| -> Vec<f64> {
-            (0..3)
-                .map(|j| ((i * (7 + 3 * j) + 11 * j) % 97) as f64 + shift)
-                .collect()
-        };
-        let regional: Vec<Vec<f64>> = (0..m)
-            .map(|i| pose(i, if inside[i] { 500.0 } else { 0.0 }))
-            .collect();
-        let spread: Vec<Vec<f64>> = (0..m).map(|i| pose(i, 0.0)).collect();
-        assert!(region_overlap(&regional, &inside) > 0.95);
-        assert!(region_overlap(&spread, &inside) < SAME_RESIDUAL);
     }
 }

@@ -51,7 +51,8 @@
 //! order of a round's candidates: evidence, Occam's rule), `confound.rs`
 //! (what the campaign cannot separate), `choose.rs` (which candidate
 //! joins the model, the cap's list), `profile.rs` (intervals with the
-//! competing effects refitted),
+//! competing effects refitted), `regions.rs` (order effects that are
+//! regions of the joint space),
 //! `accept.rs` (when a drop is worth an effect; the "after" check),
 //! `rounds.rs` (one round of the loop), `rows.rs` (the rows scanned),
 //! `plan.rs` (the memory it needs), `report.rs` ([`Diagnosis`] and its
@@ -67,6 +68,7 @@ mod options;
 mod plan;
 mod profile;
 mod rank;
+mod regions;
 mod report;
 mod rounds;
 mod rows;
@@ -77,13 +79,14 @@ use crate::calibration::Calibration;
 use crate::cv::kfold_partition;
 use crate::dataset::Dataset;
 pub use accept::{AFTER_LEVEL_RATIO, Worth};
-pub use confound::{NEIGHBOURS, SAME_RESIDUAL, region_overlap};
+pub use confound::SAME_RESIDUAL;
 use fit::cross_validated;
 pub use fit::{base_params, fit_with_effects, with_columns};
 pub use options::{
     DEFAULT_REFIT_ROWS, DEFAULT_SCAN_ROWS, DiagnoseOptions, MIN_SCAN_ROWS, min_resamples,
 };
 pub use plan::DiagnosePlan;
+pub use regions::{NEIGHBOURS, OrderInJointSpace, region_overlap};
 pub use report::{AfterCheck, Coefficient, CvStats, Diagnosis, EffectReport, LeftOut, params_text};
 pub use rows::ScanRows;
 pub use scan::EffectKind;

@@ -283,6 +283,12 @@ pub struct Diagnosis {
     /// the loop stopped on its own.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub left_by_cap: Vec<LeftOut>,
+    /// How far the measurement order follows the joint space
+    /// ([`super::regions`]): where it does, an order effect is not
+    /// separable from an effect of the pose (`None`: too few rows, or a
+    /// report written before it was measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order_in_joint_space: Option<super::OrderInJointSpace>,
     /// Wall-clock time of the whole diagnosis, seconds.
     pub seconds: f64,
 }

@@ -441,6 +441,7 @@ impl Rounds {
             scanned_rows: rows.len(),
             dropped_covariates: scan::dropped_covariates_on(data, &[], rows),
             left_by_cap: self.left_by_cap,
+            order_in_joint_space: super::OrderInJointSpace::measure(&data.q),
             seconds,
         }
     }

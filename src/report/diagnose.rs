@@ -91,6 +91,9 @@ pub fn summary(d: &Diagnosis, names: Names<'_>) -> String {
     for line in cap_lines(d) {
         let _ = writeln!(s, "  {line}");
     }
+    if let Some(text) = order_text(d) {
+        let _ = writeln!(s, "  not separable on this campaign: {text}");
+    }
     if d.steps.is_empty() {
         if d.effects.iter().any(|e| e.significant) {
             let _ = writeln!(
@@ -262,6 +265,12 @@ pub fn cap_lines(d: &Diagnosis) -> Vec<String> {
     out
 }
 
+/// What the report says of the measurement order against the joint space
+/// ([`crate::diagnose::OrderInJointSpace::text`]), when it matters.
+fn order_text(d: &Diagnosis) -> Option<String> {
+    d.order_in_joint_space.as_ref().and_then(|o| o.text())
+}
+
 /// The line on the calibration whose residual is diagnosed, if there is
 /// one ([`DiagnosisBase::calibration`]); empty without.
 pub fn calibrated_base(base: &DiagnosisBase) -> String {
@@ -327,6 +336,9 @@ pub fn markdown(d: &Diagnosis, names: Names<'_>, extras: Extras<'_>) -> String {
             let _ = writeln!(s, "- {}", line.trim_start());
         }
         let _ = writeln!(s);
+    }
+    if let Some(text) = order_text(d) {
+        let _ = writeln!(s, "**Not separable on this campaign**: {text}.\n");
     }
     if d.steps.is_empty() {
         let text = if d.effects.iter().any(|e| e.significant) {
