@@ -262,3 +262,60 @@ fn a_plan_says_when_its_pre_position_moves_go_to_a_hard_limit() {
         "{wide}"
     );
 }
+
+/// In passes over the region the order of a plan follows the joint space
+/// less than in one tour of the same poses, each pass a run of the poses
+/// in the order chosen; the plan says how far it does, and a plan whose
+/// tour follows it says so with the way out.
+#[test]
+fn a_plan_in_passes_keeps_its_order_from_following_the_joint_space() {
+    let robot = robokrige::kinematics::preset("ur10").unwrap();
+    let region = Region::from_options(None, None, &robot).unwrap();
+    let plan = |passes: usize| {
+        plan_with(
+            PlanParams::new(150)
+                .first_batch(150)
+                .candidates(1500)
+                .region_points(300)
+                .passes(passes),
+            &robot,
+            None,
+            None,
+            &region,
+        )
+    };
+    let (one, three) = (plan(1), plan(3));
+    assert_eq!((one.passes, three.passes), (1, 3));
+    assert_eq!(one.chosen, three.chosen);
+    let (o1, o3) = (
+        one.order_in_joint_space.clone().unwrap(),
+        three.order_in_joint_space.clone().unwrap(),
+    );
+    assert!(
+        o1.order_correlation > o3.order_correlation + 0.2,
+        "{o1:?} {o3:?}"
+    );
+    // the passes are the runs 0..50, 50..100, 100..150 of the poses chosen
+    let runs: Vec<usize> = three
+        .moves
+        .iter()
+        .filter_map(|m| m.pose)
+        .map(|i| i / 50)
+        .collect();
+    assert!(runs.windows(2).all(|w| w[0] <= w[1]) && runs.len() == 150);
+    let note =
+        |p: &robokrige::plan::Plan| p.notes.iter().any(|n| n.contains("in the order planned"));
+    assert_eq!(note(&one), o1.matters());
+    assert_eq!(note(&three), o3.matters());
+    if o1.matters() {
+        assert!(
+            one.notes.iter().any(|n| n.contains("--passes K")),
+            "{:?}",
+            one.notes
+        );
+    }
+    assert!(
+        PlanParams::new(10).passes(0).check().is_err(),
+        "no pass is refused"
+    );
+}

@@ -86,6 +86,7 @@ def plan(
     candidates: int = 5000,
     region_points: int = 1000,
     via_step: float = 5.0,
+    passes: int = 1,
     tracker: Optional[Sequence[float]] = None,
     max_range: Optional[float] = None,
     max_incidence: Optional[float] = None,
@@ -113,6 +114,10 @@ def plan(
     - ``region``: a task's joint poses (DataFrame ``q1..qN`` or n-column
       array, a ``Data``) or a task file (joint poses or a TCP path);
       default: the pool's poses, else the robot's working ranges.
+    - ``passes``: measure in that many passes over the region, each a
+      tour of the next run of poses in the order chosen (default 1: one
+      tour, the shortest path); more passes keep a slow change over the
+      measurement from following the joint space, at a longer path.
     - ``tracker`` (x, y, z mm, robot base frame), ``max_range`` (mm),
       ``max_incidence`` (degrees): plan only poses the tracker sees.
     - ``output``: also write the plan (``format`` "csv", "urscript",
@@ -139,6 +144,7 @@ def plan(
         candidates=int(candidates),
         region_points=int(region_points),
         via_step=float(via_step),
+        passes=int(passes),
         tracker_at=t,
         max_range=None if max_range is None else float(max_range),
         max_incidence=None if max_incidence is None else float(max_incidence),

@@ -178,6 +178,7 @@ def plan(
     candidates: int = 5000,
     region_points: int = 1000,
     via_step: float = 5.0,
+    passes: int = 1,
     tracker_at: Optional[Tuple[float, float, float]] = None,
     max_range: Optional[float] = None,
     max_incidence: Optional[float] = None,

@@ -71,7 +71,7 @@ type PlanOut<'py> = (
 #[pyfunction]
 #[pyo3(signature = (robot, budget, *, tool=None, campaign=None, prior=None, pool=None,
     region=None, first_batch=50, candidates=5000, region_points=1000, via_step=5.0,
-    tracker_at=None, max_range=None, max_incidence=None, target_mm=None, seed=1,
+    passes=1, tracker_at=None, max_range=None, max_incidence=None, target_mm=None, seed=1,
     output=None, format="csv"))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan<'py>(
@@ -87,6 +87,7 @@ pub fn plan<'py>(
     candidates: usize,
     region_points: usize,
     via_step: f64,
+    passes: usize,
     tracker_at: Option<[f64; 3]>,
     max_range: Option<f64>,
     max_incidence: Option<f64>,
@@ -122,6 +123,7 @@ pub fn plan<'py>(
         .candidates(candidates)
         .region_points(region_points)
         .via_step(via_step)
+        .passes(passes)
         .seed(seed);
     if let Some(view) = tracker(tracker_at, max_range, max_incidence).map_err(to_py)? {
         params = params.tracker(view);

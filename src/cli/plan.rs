@@ -66,6 +66,12 @@ pub struct PlanArgs {
     /// How far back a pre-position move starts, degrees (mm for prismatic joints).
     #[arg(long, default_value_t = 5.0)]
     via_step: f64,
+    /// Measure in K passes over the region, each a tour of the next run of
+    /// poses in the order chosen (1: one tour of all, the shortest path).
+    /// More passes keep a slow change over the measurement (a warm-up, a
+    /// tracker step) from following the joint space, at a longer path.
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    passes: usize,
     /// Tracker position in the robot base frame, mm ("x,y,z"): plan only poses it sees.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, num_args = 1)]
     tracker: Option<Vec<f64>>,
@@ -109,6 +115,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         .candidates(a.candidates)
         .region_points(a.region_points)
         .via_step(a.via_step)
+        .passes(a.passes)
         .seed(a.seed)
         .tracker(view);
     let mut plan = params.check()?.plan(&PlanInputs {

@@ -115,7 +115,11 @@ impl OrderInJointSpace {
             })
             .collect();
         if self.step_rows.len() > SHOWN {
-            ranges.push(format!("{} more ranges", self.step_rows.len() - SHOWN));
+            let more = self.step_rows.len() - SHOWN;
+            ranges.push(format!(
+                "{more} more range{}",
+                if more == 1 { "" } else { "s" }
+            ));
         }
         let mut parts = Vec::new();
         if !self.step_rows.is_empty() {

@@ -22,9 +22,12 @@
 //!    calibration's share (`calibration`): the parameters' posterior
 //!    covariance, conditioned on each chosen pose like the Kriging
 //!    outputs.
-//! 5. **Order** ([`order::order`]): a greedy tour from the robot's current
-//!    pose, with a pre-position move wherever the direct move would not
-//!    realise the planned λ.
+//! 5. **Order** ([`order::in_passes`]): a greedy tour from the robot's
+//!    current pose (in one pass by default, or in several, each over the
+//!    region), with a pre-position move wherever the direct move would not
+//!    realise the planned λ. The plan says when its order follows the joint
+//!    space ([`Plan::order_in_joint_space`]): `diagnose` could not tell an
+//!    order effect from a pose effect on such a campaign.
 //!
 //! [`Plan::imse_curve`] records the region's integrated MSE after each
 //! chosen pose: the model's own forecast of how the error falls with the
@@ -42,6 +45,7 @@ pub use order::PlannedMove;
 
 use crate::cancel::Cancel;
 use crate::dataset::Dataset;
+use crate::diagnose::OrderInJointSpace;
 use crate::kinematics::Robot;
 use crate::methods::default_params;
 use crate::model::ErrorModel;
@@ -76,6 +80,7 @@ pub struct PlanParams {
     candidates: usize,
     region_points: usize,
     via_step: f64,
+    passes: usize,
     tracker: Option<TrackerView>,
     seed: u64,
     calibration_share: bool,
@@ -93,6 +98,7 @@ impl PlanParams {
             candidates: 5000,
             region_points: 1000,
             via_step: 5.0,
+            passes: 1,
             tracker: None,
             seed: 1,
             calibration_share: true,
@@ -135,6 +141,14 @@ impl PlanParams {
         self
     }
 
+    /// Measure the poses in `passes` passes over the region
+    /// ([`order::in_passes`]); default 1: one tour of all of them, the
+    /// shortest path.
+    pub fn passes(mut self, passes: usize) -> Self {
+        self.passes = passes;
+        self
+    }
+
     /// Plan only poses this tracker sees (all poses for `None`).
     pub fn tracker(mut self, view: impl Into<Option<TrackerView>>) -> Self {
         self.tracker = view.into();
@@ -167,6 +181,9 @@ impl PlanParams {
         }
         if !(self.via_step.is_finite() && self.via_step > 0.0) {
             return bad("the via-point step must be a positive angle (degrees) or length (mm)");
+        }
+        if self.passes == 0 {
+            return bad("the passes must be at least one");
         }
         Ok(ValidPlanParams(self))
     }
@@ -212,6 +229,13 @@ pub struct Plan {
     /// Measured poses whose planned λ the order could not realise (a joint
     /// at its limit).
     pub unrealised: usize,
+    /// Passes over the region the poses are measured in
+    /// ([`order::in_passes`]).
+    pub passes: usize,
+    /// How far the order of the measured poses follows the joint space
+    /// (`None`: too few poses to tell): where it does, `diagnose` on the
+    /// campaign cannot tell an order effect from a pose effect.
+    pub order_in_joint_space: Option<OrderInJointSpace>,
     /// The model the plan used (re-estimated, or the prior refitted).
     pub model: Option<ErrorModel>,
     /// What the user should know.
@@ -302,8 +326,31 @@ impl ValidPlanParams {
             ),
             None => (robot.home.clone(), vec![1.0; n]),
         };
-        let (moves, unrealised, at_limit) =
-            order::order(&poses, &start, &start_dir, &ranges, &robot.limits, &step);
+        let passes = p.passes.clamp(1, poses.len().max(1));
+        let (moves, unrealised, at_limit) = order::in_passes(
+            &poses,
+            passes,
+            (&start, &start_dir),
+            &ranges,
+            &robot.limits,
+            &step,
+        );
+        let measured_q: Vec<Vec<f64>> = moves
+            .iter()
+            .filter(|m| m.measure)
+            .map(|m| m.q.clone())
+            .collect();
+        let order_in_joint_space = OrderInJointSpace::measure(&measured_q);
+        if let Some(text) = order_in_joint_space.as_ref().and_then(|o| o.text()) {
+            notes.push(format!(
+                "in the order planned, {text}{}",
+                if passes == 1 {
+                    " (--passes K measures in K passes over the region)"
+                } else {
+                    ""
+                }
+            ));
+        }
         if at_limit.iter().any(|&c| c > 0) {
             let prismatic = robot.prismatic_joints();
             let joints: Vec<String> = at_limit
@@ -335,6 +382,8 @@ impl ValidPlanParams {
             imse_counts_calibration,
             candidates: cand.len(),
             unrealised,
+            passes,
+            order_in_joint_space,
             model,
             notes,
         })

@@ -18,6 +18,18 @@ pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) ->
          hyperparameters: {source}\n",
         plan.candidates
     );
+    if plan.passes > 1 {
+        let (lo, hi) = (measured / plan.passes, measured.div_ceil(plan.passes));
+        let run = if lo == hi {
+            format!("{lo}")
+        } else {
+            format!("{lo}–{hi}")
+        };
+        s += &format!(
+            "order: {} passes over the region, each a tour of the next {run} poses in the order chosen\n",
+            plan.passes
+        );
+    }
     if let (Some(first), Some(last)) = (plan.imse_curve.first(), plan.imse_curve.last()) {
         s += &format!(
             "region's integrated MSE (x+y+z): {:.5} → {:.5} mm² (RMS {:.4} → {:.4} mm)\n",
@@ -80,7 +92,8 @@ pub fn text(plan: &Plan, forecast: Option<&Forecast>, target_mm: Option<f64>) ->
 
 /// The plan's summary as JSON: where the hyperparameters came from, the
 /// candidates, the chosen rows in the order chosen, the moves' measure
-/// flags, the IMSE curve (mm²), the unrealised directions, the notes and,
+/// flags, the IMSE curve (mm²), the unrealised directions, the passes and
+/// how far the order follows the joint space, the notes and,
 /// with a measured campaign, the forecast.
 pub fn json(plan: &Plan, forecast: Option<&Forecast>) -> serde_json::Value {
     serde_json::json!({
@@ -90,6 +103,8 @@ pub fn json(plan: &Plan, forecast: Option<&Forecast>) -> serde_json::Value {
         "measure": plan.moves.iter().map(|m| m.measure).collect::<Vec<_>>(),
         "imse_curve_mm2": plan.imse_curve,
         "unrealised": plan.unrealised,
+        "passes": plan.passes,
+        "order_in_joint_space": plan.order_in_joint_space,
         "notes": plan.notes,
         "forecast": forecast.map(|f| serde_json::json!({
             "measured": f.measured,
