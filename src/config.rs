@@ -202,6 +202,19 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
                 }
             } else {
                 for v in values {
+                    // a file named `-` would run the step, then fail or
+                    // write `./-`: the rule of the command line
+                    if v == "-" && refuses_dash(arg) {
+                        let default = if step.contains_key(key.as_str()) {
+                            ""
+                        } else {
+                            " (a top-level default)"
+                        };
+                        return Err(at(format!(
+                            "{key} = \"-\"{default}: {}",
+                            dash_reason(key, arg)
+                        )));
+                    }
                     options.push(format!("--{}", long(arg)));
                     options.push(v);
                 }
@@ -210,10 +223,6 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
         positional.sort_by_key(|(i, _)| *i);
         argv.extend(positional.into_iter().map(|(_, v)| v));
         argv.extend(options);
-        // a file named `-` would run the step, then fail or write `./-`
-        if let Some(opt) = dash_option(root, &argv) {
-            return Err(at(dash_message(&opt)));
-        }
         out.push(argv);
     }
     // a top-level key no step has (a misspelt `robt`) would be dropped
@@ -237,42 +246,49 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
     Ok(out)
 }
 
-/// The first option of the argument list `argv` (a command line of
-/// `root`, program name first) given `-` where only `--json` may be: `-` is
-/// standard output for the JSON reports, and nothing reads standard input,
-/// so any other option given `-` names a file `-`. The option as a user
-/// writes it (`--plot`, `-o/--output`); `None` when there is none, or when
-/// `root` does not parse `argv` (its parser then says why).
-///
-/// The command line checks its own arguments with it before any work, and
-/// `run` every step of a config before any step runs: one rule for both.
-pub fn dash_option(root: &clap::Command, argv: &[String]) -> Option<String> {
+/// Why the argument list `argv` (a command line of `root`, program name
+/// first) is refused, if it gives `-` to an option that may not take it
+/// (every option that takes a value but `--json`): `-` is standard output for the JSON reports, and
+/// nothing reads standard input. `None` when it does not, or when `root`
+/// does not parse `argv` (its parser then says why). The command line
+/// checks its arguments with it before any work; `run` applies the same
+/// rule to every step's keys before any step runs.
+pub fn dash_refusal(root: &clap::Command, argv: &[String]) -> Option<String> {
     let matches = root.clone().try_get_matches_from(argv).ok()?;
     let (mut cmd, mut m) = (root, &matches);
     while let Some((name, sub)) = m.subcommand() {
         cmd = cmd.find_subcommand(name)?;
         m = sub;
     }
-    cmd.get_arguments()
-        .filter(|a| !a.is_positional() && a.get_action().takes_values())
-        .filter(|a| a.get_long() != Some("json"))
-        .find(|a| {
-            m.try_get_raw(a.get_id().as_str())
-                .ok()
-                .flatten()
-                .is_some_and(|mut v| v.any(|v| v == "-"))
-        })
-        .map(|a| match a.get_short() {
-            Some(c) => format!("-{c}/--{}", long(a)),
-            None => format!("--{}", long(a)),
-        })
+    let arg = cmd.get_arguments().filter(|a| refuses_dash(a)).find(|a| {
+        m.try_get_raw(a.get_id().as_str())
+            .ok()
+            .flatten()
+            .is_some_and(|mut v| v.any(|v| v == "-"))
+    })?;
+    let name = match arg.get_short() {
+        Some(c) => format!("-{c}/--{}", long(arg)),
+        None => format!("--{}", long(arg)),
+    };
+    Some(format!("{name} -: {}", dash_reason(&name, arg)))
 }
 
-/// Why the option `opt` ([`dash_option`]) may not be `-`.
-pub fn dash_message(opt: &str) -> String {
-    format!(
-        "{opt} - would be a file named '-': only the --json reports go to standard output (--json -), and no input is read from it; give {opt} a path"
-    )
+/// Whether `arg` may not be given `-`: every option that takes a value
+/// but `--json`, whose `-` is standard output.
+fn refuses_dash(arg: &clap::Arg) -> bool {
+    !arg.is_positional() && arg.get_action().takes_values() && arg.get_long() != Some("json")
+}
+
+/// Why the option `name` (`arg`) may not be `-`: a file option would
+/// write or read a file named `-`; any other takes a value of its own.
+fn dash_reason(name: &str, arg: &clap::Arg) -> String {
+    if arg.get_value_parser().type_id() == std::any::TypeId::of::<PathBuf>() {
+        format!(
+            "'-' would be a file named '-': only the --json reports go to standard output (--json -), and no input is read from it; give {name} a path"
+        )
+    } else {
+        format!("'-' is standard output, which only --json takes; give {name} its value")
+    }
 }
 
 /// The argument of `cmd` a config key names: its id or its long name.

@@ -1101,7 +1101,39 @@ fn command_cases() -> Vec<Case> {
             "fit_output_dash_is_not_a_file",
             &["fit", &d, "-o", "-"],
             &[data],
-            fail(&["-o/--output - would be a file named '-'", "--json -"]),
+            fail(&["-o/--output -: '-' would be a file named '-'", "--json -"]),
+        ),
+        case(
+            "fit_output_dash_attached_is_not_a_file",
+            &["fit", &d, "-o-"],
+            &[data],
+            fail(&["-o/--output -: '-' would be a file named '-'"]),
+        ),
+        case(
+            "cv_groups_dash_is_not_a_column",
+            &["cv", &d, "--groups", "-"],
+            &[data],
+            fail(&[
+                "--groups -: '-' is standard output, which only --json takes; give --groups its value",
+            ]),
+        ),
+        case(
+            "plan_region_dash_is_not_a_file",
+            &[
+                "plan",
+                "--robot",
+                "ur10",
+                "--budget",
+                "5",
+                "--region=-",
+                "-o",
+                &out("p.csv"),
+            ],
+            &[],
+            fail(&[
+                "--region -: '-' would be a file named '-'",
+                "no input is read from it",
+            ]),
         ),
         case(
             "compensate_plot_dash_is_not_a_file",
@@ -1120,7 +1152,10 @@ fn command_cases() -> Vec<Case> {
                 "-",
             ],
             &[model],
-            fail(&["--plot - would be a file named '-'", "give --plot a path"]),
+            fail(&[
+                "--plot -: '-' would be a file named '-'",
+                "give --plot a path",
+            ]),
         ),
         case(
             "plan_negative_target",

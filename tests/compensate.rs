@@ -365,9 +365,9 @@ fn a_lag_model_compensates_along_the_path_better_than_one_without_it() {
 
 #[test]
 fn an_unreachable_position_only_target_says_where_its_orientation_came_from() {
-    // the library's compensate-and-evaluate (diagnose --traj, the demo) says
-    // what `robokrige compensate` says: position-only targets took the
-    // start pose's orientation
+    // the library's compensate-and-evaluate (diagnose --traj) says what
+    // `robokrige compensate` says: position-only targets took the start
+    // pose's orientation, and the file's columns give another
     let (ejs, _) = models();
     let dir = std::env::temp_dir().join(format!("rk-orient-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -391,7 +391,9 @@ fn an_unreachable_position_only_target_says_where_its_orientation_came_from() {
     .to_string();
     std::fs::remove_dir_all(&dir).ok();
     assert!(
-        e.contains("unreachable") && e.contains("orientation of the start pose"),
+        e.contains("unreachable")
+            && e.contains("orientation of the start pose")
+            && e.contains("roll_deg, pitch_deg, yaw_deg columns"),
         "{e}"
     );
 }

@@ -355,7 +355,8 @@ fn a_config_step_output_to_standard_output_is_refused_before_any_step() {
     let (c, _, err) = rk(&["run", &dir.write("run.toml", &config)]);
     assert_ne!(c, 0);
     assert!(
-        err.contains("step 2") && err.contains("give -o/--output a path"),
+        err.contains("step 2: output = \"-\": '-' would be a file named '-'")
+            && err.contains("give output a path"),
         "{err}"
     );
     assert!(

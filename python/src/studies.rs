@@ -205,6 +205,10 @@ fn stop_name(s: Stop) -> &'static str {
     }
 }
 
+/// How Python's `compensate` gives its targets' orientation, for an
+/// unreachable position-only target ([`Targets::explain`]).
+const ORIENTATION: &str = "the task's orientation with orientation=(roll, pitch, yaw), or a start= pose whose tool points as the task needs";
+
 /// A model `compensate` takes: a Kriging model, a physics model, or a
 /// model file of either kind (read as the command line's `--model`).
 #[derive(FromPyObject)]
@@ -300,14 +304,14 @@ pub fn compensate(
             let (res, coverage) = match m {
                 Predictor::Kriging(k) => {
                     let res = robokrige::compensate::compensate(&robot, k, &targets.traj, &opts)
-                        .map_err(|e| targets.explain(e))?;
+                        .map_err(|e| targets.explain(e, ORIENTATION))?;
                     // the means the compensation used; no standard deviations
                     let coverage = k.coverage(&res.joints, &res.dir, &res.predicted, None)?;
                     (res, coverage)
                 }
                 Predictor::Physics(p) => (
                     robokrige::compensate::compensate(&robot, p, &targets.traj, &opts)
-                        .map_err(|e| targets.explain(e))?,
+                        .map_err(|e| targets.explain(e, ORIENTATION))?,
                     Vec::new(),
                 ),
             };

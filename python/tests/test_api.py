@@ -300,6 +300,13 @@ def test_plan_a_first_batch_and_write_a_program(tmp_path):
         assert frame["source"].isna().sum() == k - 12
     with pytest.raises(rk.RobokrigeError, match="budget"):
         rk.plan("ur10", 0)
+    # in passes over the region: the same poses, each pass a run of them
+    three = rk.plan("ur10", 12, candidates=300, region_points=100, passes=3)
+    assert three.summary["passes"] == 3 and p.summary["passes"] == 1
+    assert sorted(three.summary["chosen"]) == sorted(p.summary["chosen"])
+    assert "order_correlation" in three.summary["order_in_joint_space"]
+    with pytest.raises(rk.RobokrigeError, match=r"passes=\) must be at least 1"):
+        rk.plan("ur10", 12, passes=0)
 
 
 def test_plan_from_a_prior_model(datasets):

@@ -138,7 +138,12 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
     let res = with_spinner("compensate", |_| {
         compensate(&robot, &model, &targets.traj, &opts)
     })
-    .map_err(|e| targets.explain(e))?;
+    .map_err(|e| {
+        targets.explain(
+            e,
+            "the task's orientation with --orientation roll,pitch,yaw, or a start pose (--start) whose tool points as the task needs",
+        )
+    })?;
     let secs = t0.elapsed().as_secs_f64();
     super::print_coverage(&model.coverage_of(&res)?, res.joints.len(), None);
     commands_out.write(&res)?;

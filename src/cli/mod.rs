@@ -108,10 +108,8 @@ fn json_to_stdout(args: &[String]) -> bool {
 /// Run a parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    if let Some(opt) = robokrige::config::dash_option(&Cli::command(), &args) {
-        return Err(robokrige::Error::InvalidParameter(
-            robokrige::config::dash_message(&opt),
-        ));
+    if let Some(why) = robokrige::config::dash_refusal(&Cli::command(), &args) {
+        return Err(robokrige::Error::InvalidParameter(why));
     }
     TEXT_TO_STDERR.store(json_to_stdout(&args), std::sync::atomic::Ordering::Relaxed);
     dispatch(cli.command)

@@ -284,7 +284,7 @@ pub struct Diagnosis {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub left_by_cap: Vec<LeftOut>,
     /// How far the measurement order follows the joint space
-    /// ([`super::regions`]): where it does, an order effect is not
+    /// ([`super::OrderInJointSpace`]): where it does, an order effect is not
     /// separable from an effect of the pose (`None`: too few rows, or a
     /// report written before it was measured).
     #[serde(default, skip_serializing_if = "Option::is_none")]

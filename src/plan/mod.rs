@@ -183,7 +183,7 @@ impl PlanParams {
             return bad("the via-point step must be a positive angle (degrees) or length (mm)");
         }
         if self.passes == 0 {
-            return bad("the passes must be at least one");
+            return bad("--passes (passes=) must be at least 1");
         }
         Ok(ValidPlanParams(self))
     }
@@ -341,15 +341,16 @@ impl ValidPlanParams {
             .map(|m| m.q.clone())
             .collect();
         let order_in_joint_space = OrderInJointSpace::measure(&measured_q);
-        if let Some(text) = order_in_joint_space.as_ref().and_then(|o| o.text()) {
-            notes.push(format!(
-                "in the order planned, {text}{}",
-                if passes == 1 {
-                    " (--passes K measures in K passes over the region)"
-                } else {
-                    ""
-                }
-            ));
+        let remedy = if passes == 1 {
+            "; measuring in passes over the region (`--passes K`, Python `passes=K`) spreads each stretch of the order over it"
+        } else {
+            "; more passes spread each stretch of the order over the region"
+        };
+        if let Some(text) = order_in_joint_space
+            .as_ref()
+            .and_then(|o| o.plan_text(remedy))
+        {
+            notes.push(text);
         }
         if at_limit.iter().any(|&c| c > 0) {
             let prismatic = robot.prismatic_joints();

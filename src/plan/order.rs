@@ -144,18 +144,18 @@ pub fn order(
 /// differing by at most one), each run toured in turn from where the last
 /// one ended. The poses are chosen one by one, each where the model is
 /// least sure given those before it, so each run spreads over the region
-/// and a campaign stopped after a pass is the best design of its size.
+/// and a campaign stopped after a pass is the design chosen for its size.
 ///
 /// One tour of all the poses measures the workspace region by region, and
 /// ties the measurement order to the pose: an order effect (a tracker
 /// step, a warm-up drift) is then a region of the joint space, which
 /// `diagnose` cannot tell from an effect of the pose
 /// ([`crate::diagnose::OrderInJointSpace`]). In passes, every stretch of
-/// the order covers the region, at the price of a longer path: on 300
-/// poses drawn in the working ranges, six passes took the correlation of
+/// the order covers the region, at the price of a longer path: on
+/// space-filling plans of 300 poses, six passes took the correlation of
 /// the row index with its nearest poses' from 0.36 to 0.21 on the COMAU
-/// NJ220 and from 0.44 to 0.09 on the UR10, and the largest joint's
-/// travel up by 9 % and 32 %.
+/// NJ220 and from 0.44 to 0.09 on the UR10, and the motion (the largest
+/// joint move of each move, summed) up by 9 % and 32 %.
 pub fn in_passes(
     poses: &PoseSet,
     passes: usize,

@@ -82,14 +82,15 @@ impl Targets {
     /// `e` with what the targets add to it: an [`Error::Unreachable`] of
     /// targets that took the start pose's orientation says so, since a
     /// start whose tool points elsewhere than the task needs makes
-    /// reachable positions unreachable.
-    pub fn explain(&self, e: Error) -> Error {
+    /// reachable positions unreachable; `ways` says how to give the
+    /// orientation, in the caller's words (options, keywords or columns).
+    pub fn explain(&self, e: Error, ways: &str) -> Error {
         match e {
             Error::Unreachable { indices, first } if self.orientation_from_start => {
                 Error::Unreachable {
                     indices,
                     first: format!(
-                        "{first}; the trajectory has positions only, and every target takes the tool orientation of the start pose (--start, else home): if the positions are within reach, give the task's orientation with --orientation roll,pitch,yaw, or a start pose whose tool points as the task needs"
+                        "{first}; the trajectory has positions only, and every target takes the tool orientation of the start pose: if the positions are within reach, give {ways}"
                     ),
                 }
             }
@@ -349,6 +350,12 @@ pub fn named_runs(evals: &[FileEvaluation]) -> Vec<(String, Vec<[f64; 3]>)> {
     before.into_iter().chain(after).collect()
 }
 
+/// How a trajectory file gives its targets' orientation: what an
+/// unreachable position-only target says to give ([`Targets::explain`])
+/// where there is no option for it.
+pub const TRAJECTORY_ORIENTATION: &str =
+    "the task's orientation as the trajectory's roll_deg, pitch_deg, yaw_deg columns (degrees)";
+
 /// A compensation and its evaluation on the simulated robot.
 #[derive(Debug, Clone)]
 pub struct CompensatedRun {
@@ -373,8 +380,8 @@ pub fn compensate_and_evaluate<M: ErrorPredictor + ?Sized>(
     seed: u64,
 ) -> Result<CompensatedRun> {
     let opts = targets.compensation_options(start);
-    let compensation =
-        compensate(robot, model, &targets.traj, &opts).map_err(|e| targets.explain(e))?;
+    let compensation = compensate(robot, model, &targets.traj, &opts)
+        .map_err(|e| targets.explain(e, TRAJECTORY_ORIENTATION))?;
     let (evaluation, runs) = evaluate(
         truth_path,
         truth,
@@ -420,18 +427,20 @@ mod tests {
         };
         let mut t = Targets::from_trajectory(Trajectory::new(Vec::new()));
         assert_eq!(
-            t.explain(unreachable()).to_string(),
+            t.explain(unreachable(), "WAYS").to_string(),
             unreachable().to_string()
         );
         t.orientation_from_start = true;
-        let e = t.explain(unreachable()).to_string();
+        let e = t.explain(unreachable(), "WAYS").to_string();
         assert!(
             e.contains("did not converge; the trajectory has positions only"),
             "{e}"
         );
-        assert!(e.contains("--orientation"), "{e}");
+        assert!(e.ends_with("give WAYS"), "{e}");
         // other errors pass unchanged
-        let other = t.explain(Error::InvalidParameter("x".into())).to_string();
+        let other = t
+            .explain(Error::InvalidParameter("x".into()), "WAYS")
+            .to_string();
         assert_eq!(other, Error::InvalidParameter("x".into()).to_string());
     }
 }
