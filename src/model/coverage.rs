@@ -87,11 +87,7 @@ impl std::fmt::Display for CoverageIssue {
                 max_deg,
                 prismatic,
             } => {
-                let unit = match prismatic {
-                    Some(true) => " mm",
-                    Some(false) => "°",
-                    None => "",
-                };
+                let unit = prismatic.map_or("", crate::kinematics::unit_suffix);
                 write!(
                     f,
                     "q{} = {value_deg:.2}{unit} outside the campaign's [{min_deg:.2}, {max_deg:.2}]{unit}",
