@@ -8,10 +8,16 @@ mod common;
 
 use common::rk;
 
+thread_local! {
+    /// This test's files, removed when it ends.
+    static DIR: common::Scratch = common::Scratch::new("robokrige-bad");
+    /// The compensation entries' JS model, fitted once by each test that
+    /// needs it.
+    static JS_MODEL: String = fit_js_model();
+}
+
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("robokrige-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    DIR.with(|d| d.path().to_path_buf())
 }
 
 fn write(name: &str, text: &str) -> String {
@@ -77,25 +83,24 @@ fn no_non_finite(path: &str) -> bool {
     !text.replace("\"min_jitter\":null", "").contains("null")
 }
 
-/// A JS model of the shipped campaign, fitted once for the compensation
-/// entries (tests run in parallel threads; the first one fits it).
+/// A JS model of the shipped campaign, for the compensation entries.
 fn js_model() -> String {
-    static M: std::sync::OnceLock<String> = std::sync::OnceLock::new();
-    M.get_or_init(|| {
-        let m = model_out("js_shared.json");
-        succeeds(&[
-            "fit",
-            &shipped("comau_lhs.csv"),
-            "--space",
-            "js",
-            "--optimizer",
-            "hj",
-            "-o",
-            &m,
-        ]);
-        m
-    })
-    .clone()
+    JS_MODEL.with(|m| m.clone())
+}
+
+fn fit_js_model() -> String {
+    let m = model_out("js_shared.json");
+    succeeds(&[
+        "fit",
+        &shipped("comau_lhs.csv"),
+        "--space",
+        "js",
+        "--optimizer",
+        "hj",
+        "-o",
+        &m,
+    ]);
+    m
 }
 
 fn model_out(name: &str) -> String {

@@ -17,7 +17,6 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
 
 /// What a case must give.
 enum Expect {
@@ -38,14 +37,16 @@ struct Case {
     expect: Expect,
 }
 
-/// The folder of this run's files.
-fn dir() -> &'static Path {
-    static D: OnceLock<PathBuf> = OnceLock::new();
-    D.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("robokrige-catalogue-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    })
+thread_local! {
+    /// This test's files, removed when it ends.
+    static DIR: common::Scratch = common::Scratch::new("robokrige-catalogue");
+    /// This test's good campaign and the model fitted on it.
+    static GOOD: (PathBuf, PathBuf) = fit_good();
+}
+
+/// The folder of this test's files.
+fn dir() -> PathBuf {
+    DIR.with(|d| d.path().to_path_buf())
 }
 
 fn path(name: &str) -> PathBuf {
@@ -115,16 +116,17 @@ fn with_cell(at: usize, col: usize, value: &'static str) -> impl Fn(usize, Strin
     }
 }
 
-/// The shared good campaign and a model fitted on it.
-fn good() -> &'static (PathBuf, PathBuf) {
-    static G: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
-    G.get_or_init(|| {
-        let data = write("good.csv", campaign(24));
-        let model = path("good.json");
-        let (c, _, err) = common::rk(&["fit", &s(&data), "--optimizer", "hj", "-o", &s(&model)]);
-        assert_eq!(c, 0, "{err}");
-        (data, model)
-    })
+/// The good campaign and a model fitted on it.
+fn good() -> (PathBuf, PathBuf) {
+    GOOD.with(|g| g.clone())
+}
+
+fn fit_good() -> (PathBuf, PathBuf) {
+    let data = write("good.csv", campaign(24));
+    let model = path("good.json");
+    let (c, _, err) = common::rk(&["fit", &s(&data), "--optimizer", "hj", "-o", &s(&model)]);
+    assert_eq!(c, 0, "{err}");
+    (data, model)
 }
 
 /// The good model's JSON with `edit` applied, as a new file.
@@ -167,7 +169,7 @@ fn fit_case(name: &'static str, file: &str, text: impl AsRef<[u8]>, expect: Expe
 
 /// `predict MODEL good.csv -o p.csv` with a model file, expecting `expect`.
 fn predict_case(name: &'static str, model: PathBuf, expect: Expect) -> Case {
-    let (data, _) = good();
+    let (data, _) = &good();
     let out = s(&path(&format!("{name}.pred.csv")));
     case(
         name,
@@ -180,7 +182,7 @@ fn predict_case(name: &'static str, model: PathBuf, expect: Expect) -> Case {
 /// `compensate TRAJ --model M -o c.csv` on trajectory text, expecting `expect`.
 fn traj_case(name: &'static str, file: &str, text: impl AsRef<[u8]>, expect: Expect) -> Case {
     let t = write(file, text);
-    let (_, model) = good();
+    let (_, model) = &good();
     let out = s(&path(&format!("{file}.comp.csv")));
     case(
         name,
@@ -423,9 +425,9 @@ fn csv_reader_cases() -> Vec<Case> {
         ),
         case(
             "csv_is_a_folder",
-            &["fit", &s(dir()), "-o", &s(&path("folder.json"))],
+            &["fit", &s(&dir()), "-o", &s(&path("folder.json"))],
             &[],
-            fail(&[&s(dir())]),
+            fail(&[&s(&dir())]),
         ),
         fit_case(
             "csv_bom_accepted",
@@ -507,7 +509,7 @@ fn covariate_cases() -> Vec<Case> {
 }
 
 fn output_cases() -> Vec<Case> {
-    let (data, model) = good();
+    let (data, model) = &good();
     let d = s(data);
     let m = s(model);
     let link = path("hardlink.csv");
@@ -679,7 +681,7 @@ fn output_cases() -> Vec<Case> {
         ),
         case(
             "out_is_a_folder",
-            &["fit", &d, "-o", &s(dir())],
+            &["fit", &d, "-o", &s(&dir())],
             &[data],
             fail(&["is a folder"]),
         ),
@@ -880,7 +882,7 @@ fn model_cases() -> Vec<Case> {
 }
 
 fn predict_cases() -> Vec<Case> {
-    let (_, model) = good();
+    let (_, model) = &good();
     let m = s(model);
     let four = write("four.csv", "q1,q2,q3,q4\n1,2,3,4\n");
     vec![
@@ -1030,7 +1032,7 @@ fn trajectory_cases() -> Vec<Case> {
 }
 
 fn command_cases() -> Vec<Case> {
-    let (data, model) = good();
+    let (data, model) = &good();
     let d = s(data);
     let m = s(model);
     let traj = copy("comau_circle.csv");
@@ -1488,7 +1490,7 @@ fn command_cases() -> Vec<Case> {
 }
 
 fn memory_cases() -> Vec<Case> {
-    let (data, _) = good();
+    let (data, _) = &good();
     let d = s(data);
     let mut cases = vec![
         case(
@@ -1621,7 +1623,7 @@ fn catalogue() {
 /// CSV, which reads back with the same ids.
 #[test]
 fn predicted_ids_are_quoted_and_read_back() {
-    let (_, model) = good();
+    let (_, model) = &good();
     let poses = write(
         "ids.csv",
         "id,q1,q2,q3,q4,q5,q6\n\"a,b\",1,2,3,4,5,6\n\"say \"\"hi\"\"\",2,3,4,5,6,7\n",
@@ -1640,7 +1642,7 @@ fn predicted_ids_are_quoted_and_read_back() {
 /// --model-out); the loader is the same one `predict` uses.
 #[test]
 fn written_models_load_back() {
-    let (data, model) = good();
+    let (data, model) = &good();
     robokrige::model::ErrorModel::load(model).unwrap();
     let after = path("diag_model.json");
     let (c, _, err) = common::rk(&[

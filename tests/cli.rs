@@ -507,8 +507,8 @@ fn outputs_never_overwrite_inputs() {
 /// alone, from the truth file).
 #[test]
 fn default_nugget_cross_validates_no_worse_than_the_interpolator() {
-    let dir = std::env::temp_dir().join(format!("robokrige-cli-nugget-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::Scratch::new("robokrige-cli-nugget");
+    let dir = scratch.path();
     let src = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/comau_lhs.csv");
     let text = std::fs::read_to_string(src).unwrap();
     let head: Vec<&str> = text.lines().take(151).collect();

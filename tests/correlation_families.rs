@@ -58,8 +58,8 @@ fn vectorised_fills_match_the_scalar_definition() {
 fn every_family_saves_by_name_and_predicts_the_same_after_loading() {
     let data = campaign(60);
     let test = campaign(80).select(&(60..80).collect::<Vec<_>>());
-    let dir = std::env::temp_dir().join(format!("robokrige-families-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::Scratch::new("robokrige-families");
+    let dir = scratch.path();
     let mut means = Vec::new();
     for corr in Correlation::ALL {
         let opts = KrigingOptions::default().corr(corr).nugget(false);

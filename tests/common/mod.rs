@@ -1,6 +1,40 @@
 //! Shared by the integration tests.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A folder for a test's files under the system's temporary folder,
+/// removed with everything in it when dropped. Kept in a `thread_local!`
+/// it lives as long as the test: the test harness runs each test on a
+/// thread of its own and drops its thread-locals when the test ends, pass
+/// or fail.
+#[allow(dead_code)] // not every test binary that shares this module uses it
+pub struct Scratch(PathBuf);
+
+#[allow(dead_code)]
+impl Scratch {
+    /// A new empty folder `{prefix}-{process id}-{n}`, n counting the
+    /// folders this test binary made.
+    pub fn new(prefix: &str) -> Self {
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("{prefix}-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        std::fs::remove_dir_all(&self.0).ok();
+    }
+}
 
 /// Run the `robokrige` binary: (exit code, stdout, stderr).
 #[allow(dead_code)] // not every test binary that shares this module uses it
