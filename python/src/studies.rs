@@ -106,17 +106,12 @@ impl TargetSpec<'_, '_> {
             return Targets::read(path, robot, self.orientation, start);
         }
         if let Some(q) = &self.joints {
-            if self.orientation.is_some() {
-                return Err(Error::InvalidParameter(
-                    "orientation is for position-only (x, y, z) targets of a six-axis robot; joint poses have their own".into(),
-                ));
-            }
             let q = rows(q);
             finite_rows("joints", &q, robokrige::dataset::MAX_ABS_JOINT)?;
             for r in &q {
                 robot.check_len(r)?;
             }
-            return Targets::from_joints(robot, &q);
+            return Targets::from_joints(robot, &q)?.orient(robot, self.orientation, start);
         }
         let Some(xyz) = &self.xyz else {
             unreachable!("one of the three was given")
@@ -136,63 +131,31 @@ impl TargetSpec<'_, '_> {
                 ));
             }
             finite_rows("rpy", r, 1e6)?;
-            if self.orientation.is_some() {
-                return Err(Error::InvalidParameter(
-                    "orientation is for position-only (x, y, z) targets; these have roll, pitch, yaw".into(),
-                ));
-            }
         }
         if xyz.is_empty() {
             return Err(Error::InvalidParameter(
                 "the trajectory has no points".into(),
             ));
         }
-        let euler = |a: &[f64]| {
-            UnitQuaternion::from_euler_angles(
-                a[0].to_radians(),
-                a[1].to_radians(),
-                a[2].to_radians(),
-            )
-        };
-        // position-only targets of a six-axis robot keep one orientation
-        // (given, else the start pose's), as `Targets::read`
-        let fixed = match (&rpy, self.orientation) {
-            (Some(_), _) => None,
-            (None, _) if robot.dof() < 6 => {
-                if self.orientation.is_some() {
-                    return Err(Error::InvalidParameter(
-                        "orientation is for a six-axis robot's position-only targets".into(),
-                    ));
-                }
-                None
-            }
-            (None, Some(o)) if o.len() == 3 && o.iter().all(|v| v.is_finite()) => Some(euler(o)),
-            (None, Some(_)) => {
-                return Err(Error::InvalidParameter(
-                    "orientation needs three finite angles: roll, pitch, yaw (deg)".into(),
-                ));
-            }
-            (None, None) => Some(robot.fk(start)?.rotation),
-        };
         let poses = xyz
             .iter()
             .enumerate()
             .map(|(i, p)| {
-                let rot = match (&rpy, fixed) {
-                    (Some(r), _) => euler(&r[i]),
-                    (None, Some(f)) => f,
-                    (None, None) => UnitQuaternion::identity(),
-                };
+                let rot = rpy.as_ref().map_or(UnitQuaternion::identity(), |r| {
+                    UnitQuaternion::from_euler_angles(
+                        r[i][0].to_radians(),
+                        r[i][1].to_radians(),
+                        r[i][2].to_radians(),
+                    )
+                });
                 Isometry3::from_parts(Translation3::from(Vector3::new(p[0], p[1], p[2])), rot)
             })
             .collect();
-        let mut targets = Targets::from_trajectory(Trajectory {
+        Targets::from_trajectory(Trajectory {
             poses,
-            has_orientation: rpy.is_some() || fixed.is_some(),
-        });
-        // an unreachable target then says where its orientation came from
-        targets.orientation_from_start = rpy.is_none() && fixed.is_some() && self.orientation.is_none();
-        Ok(targets)
+            has_orientation: rpy.is_some(),
+        })
+        .orient(robot, self.orientation, start)
     }
 }
 

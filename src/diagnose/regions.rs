@@ -84,9 +84,12 @@ impl OrderInJointSpace {
         };
         let mut ranges: Vec<[usize; 2]> = Vec::new();
         let mut last = None;
+        let (mut inside, mut scratch) = (vec![false; m], OverlapScratch::default());
         for t in steps {
-            let inside: Vec<bool> = (0..m).map(|i| i >= t).collect();
-            if overlap_with(&near, &inside) < SAME_RESIDUAL {
+            for (i, b) in inside.iter_mut().enumerate() {
+                *b = i >= t;
+            }
+            if overlap_with(&near, &inside, &mut scratch) < SAME_RESIDUAL {
                 continue;
             }
             match ranges.last_mut() {
@@ -208,17 +211,27 @@ pub fn region_overlap(q: &[Vec<f64>], inside: &[bool]) -> f64 {
     if q.len() <= NEIGHBOURS + 1 || inside.iter().all(|&b| b) || inside.iter().all(|&b| !b) {
         return 0.0;
     }
-    overlap_with(&nearest(q), inside)
+    overlap_with(&nearest(q), inside, &mut OverlapScratch::default())
+}
+
+/// The columns [`overlap_with`] correlates, kept between calls.
+#[derive(Default)]
+struct OverlapScratch {
+    x: Vec<f64>,
+    share: Vec<f64>,
 }
 
 /// [`region_overlap`] with each row's neighbours `near` known.
-fn overlap_with(near: &[Vec<usize>], inside: &[bool]) -> f64 {
-    let share: Vec<f64> = near
-        .iter()
-        .map(|n| n.iter().filter(|&&j| inside[j]).count() as f64 / n.len().max(1) as f64)
-        .collect();
-    let x: Vec<f64> = inside.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
-    correlation(&x, &share)
+fn overlap_with(near: &[Vec<usize>], inside: &[bool], scratch: &mut OverlapScratch) -> f64 {
+    let OverlapScratch { x, share } = scratch;
+    share.clear();
+    share.extend(
+        near.iter()
+            .map(|n| n.iter().filter(|&&j| inside[j]).count() as f64 / n.len().max(1) as f64),
+    );
+    x.clear();
+    x.extend(inside.iter().map(|&b| if b { 1.0 } else { 0.0 }));
+    correlation(x, share)
 }
 
 /// Each row's [`NEIGHBOURS`] nearest other poses (ties by index), a repeat

@@ -326,10 +326,14 @@ impl ValidPlanParams {
             ),
             None => (robot.home.clone(), vec![1.0; n]),
         };
-        let passes = p.passes.clamp(1, poses.len().max(1));
-        let (moves, unrealised, at_limit) = order::in_passes(
-            &poses,
+        let order::Tour {
+            moves,
+            unrealised,
+            at_limit,
             passes,
+        } = order::in_passes(
+            &poses,
+            p.passes,
             (&start, &start_dir),
             &ranges,
             &robot.limits,

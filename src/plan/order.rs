@@ -30,6 +30,19 @@ pub struct PlannedMove {
     pub pose: Option<usize>,
 }
 
+/// A tour of a plan's poses: its moves, and what it could not do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tour {
+    /// The moves in order: the poses measured and the via-points.
+    pub moves: Vec<PlannedMove>,
+    /// Poses that arrive from another side than planned on some joint.
+    pub unrealised: usize,
+    /// Per joint, the via-points stopped at a hard limit.
+    pub at_limit: Vec<usize>,
+    /// The passes toured: at least 1, at most the number of poses.
+    pub passes: usize,
+}
+
 /// The realised directions of a move from `(from, from_dir)` to `to`.
 fn arrival(from: &[f64], from_dir: &[f64], to: &[f64]) -> Vec<f64> {
     from.iter()
@@ -49,11 +62,11 @@ fn arrival(from: &[f64], from_dir: &[f64], to: &[f64]) -> Vec<f64> {
 
 /// Order `poses` (each with its planned λ) from the start pose
 /// `(start, start_dir)`, with a via-point `step` back before every pose the
-/// direct move would reach from a wrong side. `ranges` scale the joints for
-/// distances; `limits` bound the via-points (a joint whose via-point would
-/// leave them arrives as it can: its λ is then reported as not realised,
-/// the second value returned). A via-point whose joint `step` back would
-/// leave the limits stops at the limit; the third value counts those
+/// direct move would reach from a wrong side, in one pass. `ranges` scale
+/// the joints for distances; `limits` bound the via-points (a joint whose
+/// via-point would leave them arrives as it can: its λ is then counted in
+/// [`Tour::unrealised`]). A via-point whose joint `step` back would leave
+/// the limits stops at the limit; [`Tour::at_limit`] counts those
 /// via-points per joint, for the caller to warn about (a move to a hard
 /// limit).
 pub fn order(
@@ -63,7 +76,7 @@ pub fn order(
     ranges: &[(f64, f64)],
     limits: &[(f64, f64)],
     step: &[f64],
-) -> (Vec<PlannedMove>, usize, Vec<usize>) {
+) -> Tour {
     let scale: Vec<f64> = ranges.iter().map(|(lo, hi)| (hi - lo).max(1e-12)).collect();
     let dist = |a: &[f64], b: &[f64]| -> f64 {
         a.iter()
@@ -136,11 +149,16 @@ pub fn order(
         cur = q.clone();
         cur_dir = got;
     }
-    (moves, unrealised, at_limit)
+    Tour {
+        moves,
+        unrealised,
+        at_limit,
+        passes: 1,
+    }
 }
 
-/// [`order`] in `passes` passes over the region: the poses, in the order
-/// they were chosen, cut into `passes` runs of consecutive ones (sizes
+/// [`order`] in `passes` passes over the region (at least 1, at most one
+/// per pose): the poses, in the order they were chosen, cut into runs of consecutive ones (sizes
 /// differing by at most one), each run toured in turn from where the last
 /// one ended. The poses are chosen one by one, each where the model is
 /// least sure given those before it, so each run spreads over the region
@@ -163,7 +181,7 @@ pub fn in_passes(
     ranges: &[(f64, f64)],
     limits: &[(f64, f64)],
     step: &[f64],
-) -> (Vec<PlannedMove>, usize, Vec<usize>) {
+) -> Tour {
     let n = poses.len();
     let passes = passes.clamp(1, n.max(1));
     let (mut cur, mut cur_dir) = (start.to_vec(), start_dir.to_vec());
@@ -172,21 +190,26 @@ pub fn in_passes(
     let mut at_limit = vec![0; start.len()];
     for k in 0..passes {
         let rows: Vec<usize> = (k * n / passes..(k + 1) * n / passes).collect();
-        let (got, u, lim) = order(&poses.select(&rows), &cur, &cur_dir, ranges, limits, step);
-        if let Some(last) = got.last() {
+        let run = order(&poses.select(&rows), &cur, &cur_dir, ranges, limits, step);
+        if let Some(last) = run.moves.last() {
             cur.clone_from(&last.q);
             cur_dir.clone_from(&last.dir);
         }
-        moves.extend(got.into_iter().map(|mut m| {
+        moves.extend(run.moves.into_iter().map(|mut m| {
             m.pose = m.pose.map(|i| rows[i]);
             m
         }));
-        unrealised += u;
-        for (a, b) in at_limit.iter_mut().zip(lim) {
+        unrealised += run.unrealised;
+        for (a, b) in at_limit.iter_mut().zip(run.at_limit) {
             *a += b;
         }
     }
-    (moves, unrealised, at_limit)
+    Tour {
+        moves,
+        unrealised,
+        at_limit,
+        passes,
+    }
 }
 
 #[cfg(test)]
@@ -205,10 +228,9 @@ mod tests {
             dir: vec![vec![1.0, 1.0]; n],
         };
         let r = [(-50.0, 50.0), (-50.0, 50.0)];
-        let (moves, unrealised, _) =
-            in_passes(&poses, 3, (&[0.0, 0.0], &[1.0, 1.0]), &r, &r, &[5.0, 5.0]);
-        assert_eq!(unrealised, 0);
-        let measured: Vec<usize> = moves.iter().filter_map(|m| m.pose).collect();
+        let tour = in_passes(&poses, 3, (&[0.0, 0.0], &[1.0, 1.0]), &r, &r, &[5.0, 5.0]);
+        assert_eq!((tour.unrealised, tour.passes), (0, 3));
+        let measured: Vec<usize> = tour.moves.iter().filter_map(|m| m.pose).collect();
         let mut all = measured.clone();
         all.sort_unstable();
         assert_eq!(all, (0..n).collect::<Vec<_>>());
@@ -218,9 +240,12 @@ mod tests {
         assert!(passes.windows(2).all(|w| w[0] <= w[1]), "{passes:?}");
         assert_eq!(passes.iter().filter(|&&k| k == 0).count(), 3);
         // one pass is the tour of `order`
-        let (one, ..) = in_passes(&poses, 1, (&[0.0, 0.0], &[1.0, 1.0]), &r, &r, &[5.0, 5.0]);
-        let (tour, ..) = order(&poses, &[0.0, 0.0], &[1.0, 1.0], &r, &r, &[5.0, 5.0]);
+        let one = in_passes(&poses, 1, (&[0.0, 0.0], &[1.0, 1.0]), &r, &r, &[5.0, 5.0]);
+        let tour = order(&poses, &[0.0, 0.0], &[1.0, 1.0], &r, &r, &[5.0, 5.0]);
         assert_eq!(one, tour);
+        // more passes than poses: one per pose
+        let most = in_passes(&poses, 99, (&[0.0, 0.0], &[1.0, 1.0]), &r, &r, &[5.0, 5.0]);
+        assert_eq!(most.passes, n);
     }
 
     #[test]
@@ -240,7 +265,12 @@ mod tests {
             ],
         };
         let ranges = [(-90.0, 90.0), (-90.0, 90.0)];
-        let (moves, unrealised, at_limit) = order(
+        let Tour {
+            moves,
+            unrealised,
+            at_limit,
+            ..
+        } = order(
             &poses,
             &[0.0, 0.0],
             &[1.0, 1.0],
@@ -270,8 +300,8 @@ mod tests {
             dir: vec![vec![1.0]],
         };
         let r = [(-90.0, 90.0)];
-        let (_, unrealised, _) = order(&poses, &[0.0], &[1.0], &r, &r, &[5.0]);
-        assert_eq!(unrealised, 1);
+        let tour = order(&poses, &[0.0], &[1.0], &r, &r, &[5.0]);
+        assert_eq!(tour.unrealised, 1);
     }
 
     #[test]
@@ -284,14 +314,13 @@ mod tests {
         };
         let r = [(-30.0, 90.0), (-90.0, 90.0)];
         for (step, want) in [(50.0, [0, 0]), (100.0, [1, 0])] {
-            let (moves, unrealised, at_limit) =
-                order(&poses, &[70.0, -10.0], &[1.0, 1.0], &r, &r, &[step, 5.0]);
+            let tour = order(&poses, &[70.0, -10.0], &[1.0, 1.0], &r, &r, &[step, 5.0]);
             assert_eq!(
-                (unrealised, at_limit.as_slice()),
+                (tour.unrealised, tour.at_limit.as_slice()),
                 (0, &want[..]),
                 "step {step}"
             );
-            assert_eq!(moves.len(), 2, "one via-point, then the pose");
+            assert_eq!(tour.moves.len(), 2, "one via-point, then the pose");
         }
     }
 }

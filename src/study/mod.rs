@@ -99,16 +99,15 @@ impl Targets {
     }
 
     /// Read a target file: a trajectory CSV (`x,y,z[,roll,pitch,yaw]`) or a
-    /// q1..qN pose list, whose nominal TCP poses become the targets. A
-    /// six-axis robot's position-only targets take `orientation` (roll,
-    /// pitch, yaw in degrees), else the orientation of the pose `start`.
+    /// q1..qN pose list, whose nominal TCP poses become the targets, then
+    /// [`Targets::orient`] them.
     pub fn read(
         path: &Path,
         robot: &Robot,
         orientation: Option<&[f64]>,
         start: &[f64],
     ) -> Result<Self> {
-        let mut targets = match read_target_file(path)? {
+        let targets = match read_target_file(path)? {
             TargetFile::Joints(d) => {
                 robot.check_dataset(&d)?;
                 let mut t = Targets::from_joints(robot, &d.q)?;
@@ -117,45 +116,63 @@ impl Targets {
             }
             TargetFile::Tcp(t) => Targets::from_trajectory(t),
         };
-        let t = &mut targets.traj;
-        if orientation.is_some()
-            && (t.has_orientation || targets.hints.is_some() || robot.dof() < 6)
-        {
+        targets
+            .orient(robot, orientation, start)
+            .map_err(|e| match e {
+                Error::InvalidParameter(m) => {
+                    Error::InvalidParameter(format!("{m} ({})", path.display()))
+                }
+                e => e,
+            })
+    }
+
+    /// Give position-only targets of a six-axis robot one tool
+    /// orientation: `orientation` (roll, pitch, yaw in degrees), else the
+    /// orientation of the pose `start`, which
+    /// [`Targets::orientation_from_start`] then records. An orientation
+    /// given to targets that have their own (joint poses, roll, pitch, yaw
+    /// columns) or to a robot of fewer than six joints is an error.
+    pub fn orient(
+        mut self,
+        robot: &Robot,
+        orientation: Option<&[f64]>,
+        start: &[f64],
+    ) -> Result<Self> {
+        let t = &mut self.traj;
+        if orientation.is_some() && (t.has_orientation || self.hints.is_some() || robot.dof() < 6) {
             return Err(Error::InvalidParameter(format!(
-                "--orientation is for position-only (x,y,z) trajectories of a six-axis robot; {} {}",
-                path.display(),
-                if targets.hints.is_some() {
-                    "is a pose list (its orientations come from the joints)"
+                "an orientation (roll, pitch, yaw) is for position-only (x, y, z) targets of a six-axis robot, not for {}",
+                if self.hints.is_some() {
+                    "joint poses (their orientations come from the joints)"
                 } else if t.has_orientation {
-                    "has its own roll,pitch,yaw columns"
+                    "targets with their own roll, pitch, yaw"
                 } else {
-                    "is for a robot with fewer than six joints"
+                    "a robot with fewer than six joints"
                 }
             )));
         }
-        if !t.has_orientation && robot.dof() >= 6 {
-            let rot = match orientation {
-                Some(&[r, p, y]) => UnitQuaternion::from_euler_angles(
-                    r.to_radians(),
-                    p.to_radians(),
-                    y.to_radians(),
-                ),
-                Some(_) => {
-                    return Err(Error::InvalidParameter(
-                        "--orientation needs three angles: roll,pitch,yaw (deg)".into(),
-                    ));
-                }
-                None => {
-                    targets.orientation_from_start = true;
-                    robot.fk(start)?.rotation
-                }
-            };
-            for p in &mut t.poses {
-                *p = Isometry3::from_parts(p.translation, rot);
-            }
-            t.has_orientation = true;
+        if t.has_orientation || robot.dof() < 6 {
+            return Ok(self);
         }
-        Ok(targets)
+        let rot = match orientation {
+            Some(&[r, p, y]) if [r, p, y].iter().all(|v| v.is_finite()) => {
+                UnitQuaternion::from_euler_angles(r.to_radians(), p.to_radians(), y.to_radians())
+            }
+            Some(a) => {
+                return Err(Error::InvalidParameter(format!(
+                    "an orientation needs three finite angles: roll, pitch, yaw (deg), not {a:?}"
+                )));
+            }
+            None => {
+                self.orientation_from_start = true;
+                robot.fk(start)?.rotation
+            }
+        };
+        for p in &mut t.poses {
+            *p = Isometry3::from_parts(p.translation, rot);
+        }
+        t.has_orientation = true;
+        Ok(self)
     }
 }
 
