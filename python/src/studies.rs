@@ -17,7 +17,7 @@ use robokrige::cv::{CvMode, CvPlan, Folds};
 use robokrige::diagnose::DiagnoseOptions;
 use robokrige::kinematics::Robot;
 use robokrige::physics::AnyModel;
-use robokrige::study::{Targets, check_truth_robot, evaluate, load_truth};
+use robokrige::study::{GivenOrientation, Targets, check_truth_robot, evaluate, load_truth};
 use robokrige::trajectory::Trajectory;
 use robokrige::{Error, Result};
 use serde_json::json as j;
@@ -102,8 +102,12 @@ impl TargetSpec<'_, '_> {
                 "give the targets one way: a file, joint poses or TCP positions".into(),
             ));
         }
+        let orientation = self.orientation.map(|rpy_deg| GivenOrientation {
+            rpy_deg,
+            named: "orientation=",
+        });
         if let Some(path) = &self.path {
-            return Targets::read(path, robot, self.orientation, start);
+            return Targets::read(path, robot, orientation, start);
         }
         if let Some(q) = &self.joints {
             let q = rows(q);
@@ -111,7 +115,7 @@ impl TargetSpec<'_, '_> {
             for r in &q {
                 robot.check_len(r)?;
             }
-            return Targets::from_joints(robot, &q)?.orient(robot, self.orientation, start);
+            return Targets::from_joints(robot, &q)?.orient(robot, orientation, start);
         }
         let Some(xyz) = &self.xyz else {
             unreachable!("one of the three was given")
@@ -155,7 +159,7 @@ impl TargetSpec<'_, '_> {
             poses,
             has_orientation: rpy.is_some(),
         })
-        .orient(robot, self.orientation, start)
+        .orient(robot, orientation, start)
     }
 }
 

@@ -184,6 +184,11 @@ def test_compensate_targets():
     assert "unreachable" in str(info.value) and "start pose" not in str(info.value)
     with raises(r"the start pose is outside the limits of robot 'comau-nj220': q2 = 200° not in"):
         rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), start=[0, 200, 0, 0, 0, 0])
+    # an orientation is for position-only targets, named as Python takes it
+    with raises(r"orientation= \(roll, pitch, yaw\) is for position-only .*not for targets with their own"):
+        rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000, 180, 0, 0]]), orientation=[0, 0, 0])
+    with raises(r"orientation= needs three finite angles"):
+        rk.compensate(m, "comau-nj220", np.array([[1500.0, 0, 1000]]), orientation=[0, 0])
 
 
 def test_many_bad_inputs_never_panic():

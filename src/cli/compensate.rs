@@ -8,7 +8,8 @@ use robokrige::physics::AnyModel;
 use robokrige::program::ProgramFormat;
 use robokrige::report::compensate as report;
 use robokrige::study::{
-    Targets, before_after, evaluate_file, evaluate_on_file, load_truth, named_runs, truth_robot,
+    GivenOrientation, Targets, before_after, evaluate_file, evaluate_on_file, load_truth,
+    named_runs, truth_robot,
 };
 use std::path::{Path, PathBuf};
 
@@ -130,7 +131,15 @@ pub fn run_compensate(a: CompensateArgs) -> Result<()> {
         &a.traj,
     )?;
     let start = robot.start_or_home(a.start.as_deref())?;
-    let targets = Targets::read(&a.traj, &robot, a.orientation.as_deref(), &start)?;
+    let targets = Targets::read(
+        &a.traj,
+        &robot,
+        a.orientation.as_deref().map(|rpy_deg| GivenOrientation {
+            rpy_deg,
+            named: "--orientation",
+        }),
+        &start,
+    )?;
     super::warn(&targets.warnings);
     let opts = targets.compensation_options(&start);
     let opts = opts.iterations(a.iterative, a.tol, a.max_iter);

@@ -39,7 +39,7 @@ pub struct Tour {
     pub unrealised: usize,
     /// Per joint, the via-points stopped at a hard limit.
     pub at_limit: Vec<usize>,
-    /// The passes toured: at least 1, at most the number of poses.
+    /// The passes toured: at least 1, at most one per pose.
     pub passes: usize,
 }
 
@@ -158,9 +158,9 @@ pub fn order(
 }
 
 /// [`order`] in `passes` passes over the region (at least 1, at most one
-/// per pose): the poses, in the order they were chosen, cut into runs of consecutive ones (sizes
-/// differing by at most one), each run toured in turn from where the last
-/// one ended. The poses are chosen one by one, each where the model is
+/// per pose; [`Tour::passes`] says how many): the poses, in the order
+/// they were chosen, cut into runs of consecutive ones (sizes differing by
+/// at most one), each run toured in turn from where the last one ended. The poses are chosen one by one, each where the model is
 /// least sure given those before it, so each run spreads over the region
 /// and a campaign stopped after a pass is the design chosen for its size.
 ///

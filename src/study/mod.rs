@@ -17,6 +17,17 @@ use nalgebra::{Isometry3, UnitQuaternion};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// A tool orientation given for position-only targets: roll, pitch, yaw
+/// (degrees), and the name the caller took it by (an option, a keyword),
+/// for the messages.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GivenOrientation<'a> {
+    /// Roll, pitch, yaw, degrees.
+    pub rpy_deg: &'a [f64],
+    /// How the user gave it, e.g. `--orientation`.
+    pub named: &'a str,
+}
+
 /// Target poses, and for a q1..qN pose list the joints as IK hints.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Targets {
@@ -104,7 +115,7 @@ impl Targets {
     pub fn read(
         path: &Path,
         robot: &Robot,
-        orientation: Option<&[f64]>,
+        orientation: Option<GivenOrientation>,
         start: &[f64],
     ) -> Result<Self> {
         let targets = match read_target_file(path)? {
@@ -127,7 +138,7 @@ impl Targets {
     }
 
     /// Give position-only targets of a six-axis robot one tool
-    /// orientation: `orientation` (roll, pitch, yaw in degrees), else the
+    /// orientation: `orientation`, else the
     /// orientation of the pose `start`, which
     /// [`Targets::orientation_from_start`] then records. An orientation
     /// given to targets that have their own (joint poses, roll, pitch, yaw
@@ -135,13 +146,16 @@ impl Targets {
     pub fn orient(
         mut self,
         robot: &Robot,
-        orientation: Option<&[f64]>,
+        orientation: Option<GivenOrientation>,
         start: &[f64],
     ) -> Result<Self> {
         let t = &mut self.traj;
-        if orientation.is_some() && (t.has_orientation || self.hints.is_some() || robot.dof() < 6) {
+        if let Some(o) = orientation
+            && (t.has_orientation || self.hints.is_some() || robot.dof() < 6)
+        {
             return Err(Error::InvalidParameter(format!(
-                "an orientation (roll, pitch, yaw) is for position-only (x, y, z) targets of a six-axis robot, not for {}",
+                "{} (roll, pitch, yaw) is for position-only (x, y, z) targets of a six-axis robot, not for {}",
+                o.named,
                 if self.hints.is_some() {
                     "joint poses (their orientations come from the joints)"
                 } else if t.has_orientation {
@@ -154,13 +168,13 @@ impl Targets {
         if t.has_orientation || robot.dof() < 6 {
             return Ok(self);
         }
-        let rot = match orientation {
-            Some(&[r, p, y]) if [r, p, y].iter().all(|v| v.is_finite()) => {
+        let rot = match orientation.map(|o| (o.rpy_deg, o.named)) {
+            Some((&[r, p, y], _)) if [r, p, y].iter().all(|v| v.is_finite()) => {
                 UnitQuaternion::from_euler_angles(r.to_radians(), p.to_radians(), y.to_radians())
             }
-            Some(a) => {
+            Some((a, named)) => {
                 return Err(Error::InvalidParameter(format!(
-                    "an orientation needs three finite angles: roll, pitch, yaw (deg), not {a:?}"
+                    "{named} needs three finite angles: roll, pitch, yaw (deg), not {a:?}"
                 )));
             }
             None => {
