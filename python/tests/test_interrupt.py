@@ -23,8 +23,12 @@ CALLS = {
     "plan": 'rk.plan("comau-nj220", 100, campaign=lhs)',
 }
 
+# The child installs Python's SIGINT handler itself: Python leaves SIGINT
+# ignored when it starts with it ignored, as a shell starts a job in the
+# background (`.ci/run &`), and then no Ctrl-C reaches the library.
 CHILD = """
-import pathlib, sys, time, warnings
+import pathlib, signal, sys, time, warnings
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import robokrige as rk
 warnings.simplefilter("ignore")
 data = pathlib.Path(sys.argv[1])
