@@ -632,7 +632,9 @@ const INERT_LOG10_THETA: f64 = -3.0;
 /// run's ln ψ within its iteration limit was tried and dropped: on the
 /// calibration residual of UR10 series B's first 600 rows it cut ey's
 /// search from 1 263 evaluations to 358 at the same ln ψ (a finalist 0.23
-/// behind crawled to its limit at 13 evaluations an iteration), and left
+/// behind crawled to its iteration limit along a valley, each step a
+/// sixteenth to a thirty-second of the quasi-Newton step, 5–6 evaluations
+/// an iteration, about 1 080 in all), and left
 /// every default JS and EJS fit of the shipped campaigns and of B and C
 /// at the same ln ψ to five digits, but it stopped the winner of ex in
 /// the kinematic-trend EJS fit of all of series C (ln ψ −3.2468 against
