@@ -248,11 +248,12 @@ fn steps(table: &toml::Table, source: &str, root: &clap::Command) -> Result<Vec<
 
 /// Why the argument list `argv` (a command line of `root`, program name
 /// first) is refused, if it gives `-` to an option that may not take it
-/// (every option that takes a value but `--json`): `-` is standard output for the JSON reports, and
-/// nothing reads standard input. `None` when it does not, or when `root`
-/// does not parse `argv` (its parser then says why). The command line
-/// checks its arguments with it before any work; `run` applies the same
-/// rule to every step's keys before any step runs.
+/// (every option that takes a value but `--json`): `-` is standard
+/// output for the JSON reports, and nothing reads standard input. `None`
+/// when it does not, or when `root` does not parse `argv` (its parser
+/// then says why). The command line checks its arguments with it before
+/// any work; `run` applies the same rule to every step's keys before any
+/// step runs.
 pub fn dash_refusal(root: &clap::Command, argv: &[String]) -> Option<String> {
     let matches = root.clone().try_get_matches_from(argv).ok()?;
     let (mut cmd, mut m) = (root, &matches);

@@ -1,6 +1,8 @@
 //! Feed-forward compensation (seed 003 eq 22, seed 004 eqs 18–22), checked by
 //! running the commands on the simulator's true robot.
 
+mod common;
+
 use nalgebra::{Translation3, Vector3};
 use robokrige::compensate::{CompensationOptions, Stop, compensate, predict_along};
 use robokrige::dataset::read_csv;
@@ -369,9 +371,8 @@ fn an_unreachable_position_only_target_says_where_its_orientation_came_from() {
     // `robokrige compensate` says: position-only targets took the start
     // pose's orientation, and the file's columns give another
     let (ejs, _) = models();
-    let dir = std::env::temp_dir().join(format!("rk-orient-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let traj = dir.join("far.csv");
+    let dir = common::Scratch::new("rk-orient");
+    let traj = dir.path().join("far.csv");
     std::fs::write(&traj, "x,y,z\n1800,0,1000\n9000,0,1000\n").unwrap();
     let r = robot();
     let start = r.start_or_home(None).unwrap();
@@ -389,7 +390,6 @@ fn an_unreachable_position_only_target_says_where_its_orientation_came_from() {
     )
     .unwrap_err()
     .to_string();
-    std::fs::remove_dir_all(&dir).ok();
     assert!(
         e.contains("unreachable")
             && e.contains("orientation of the start pose")

@@ -310,15 +310,14 @@ fn a_plan_in_passes_keeps_its_order_from_following_the_joint_space() {
     };
     assert_eq!(note(&one), o1.matters());
     assert_eq!(note(&three), o3.matters());
-    if o1.matters() {
-        assert!(
-            one.notes
-                .iter()
-                .any(|n| n.contains("--passes K") && n.contains("from measured pose")),
-            "{:?}",
-            one.notes
-        );
-    }
+    assert!(o1.matters(), "{o1:?}");
+    assert!(
+        one.notes
+            .iter()
+            .any(|n| n.contains("--passes K") && n.contains("from measured pose")),
+        "{:?}",
+        one.notes
+    );
     assert!(
         PlanParams::new(10).passes(0).check().is_err(),
         "no pass is refused"

@@ -441,12 +441,9 @@ impl Rounds {
             scanned_rows: rows.len(),
             dropped_covariates: scan::dropped_covariates_on(data, &[], rows),
             left_by_cap: self.left_by_cap,
-            order_in_joint_space: super::OrderInJointSpace::measure_at(
-                &(0..rows.len())
-                    .map(|t| data.q[rows.row(t)].clone())
-                    .collect::<Vec<_>>(),
-                |t| rows.row(t),
-            ),
+            order_in_joint_space: super::OrderInJointSpace::measure_at(&rows.pick(&data.q), |t| {
+                rows.row(t)
+            }),
             seconds,
         }
     }

@@ -101,8 +101,8 @@ impl ScanRows {
     }
 
     /// The values of `v` (one per campaign row) at the scanned rows.
-    pub fn pick<T: Copy>(&self, v: &[T]) -> Vec<T> {
-        self.rows.iter().map(|&i| v[i]).collect()
+    pub fn pick<T: Clone>(&self, v: &[T]) -> Vec<T> {
+        self.rows.iter().map(|&i| v[i].clone()).collect()
     }
 }
 

@@ -29,13 +29,6 @@ pub use ik::{IkOptions, IkTarget};
 pub use locate::{TrackerFit, errors_from_positions, import_for, locate_imported, locate_tracker};
 pub use path::{all_reached, first_pass_joints, path_target};
 pub use presets::{PRESET_NAMES, preset, preset_file};
-
-/// The unit of a joint value as a suffix to a number: " mm" for a
-/// prismatic joint, "°" for a revolute one (`12.5°`, `190 mm`, as every
-/// joint value in a message is written; [`Robot::joint_unit`]).
-pub fn unit_suffix(prismatic: bool) -> &'static str {
-    if prismatic { " mm" } else { "°" }
-}
 pub use robot_file::{
     DEFAULT_REVOLUTE_LIMITS, FrameSpec, JointSpec, RobotFile, load_optional_robot, load_robot,
     load_robot_with_tool, read_robot_file, robot_or_preset_name, table_digest,
@@ -43,6 +36,13 @@ pub use robot_file::{
 
 use crate::{Error, Result};
 use nalgebra::{Isometry3, Matrix3xX, Matrix6xX, Translation3, UnitQuaternion, Vector3};
+
+/// The unit of a joint value as a suffix to a number: " mm" for a
+/// prismatic joint, "°" for a revolute one (`12.5°`, `190 mm`, as every
+/// joint value in a message is written; [`Robot::joint_unit`]).
+pub fn unit_suffix(prismatic: bool) -> &'static str {
+    if prismatic { " mm" } else { "°" }
+}
 use serde::{Deserialize, Serialize};
 
 /// What a joint's variable moves.

@@ -364,12 +364,10 @@ impl ValidPlanParams {
                 .filter(|(_, c)| **c > 0)
                 .map(|(j, c)| format!("q{} in {c}", j + 1))
                 .collect();
-            let unit = if prismatic.iter().all(|p| *p) {
-                " mm"
-            } else if prismatic.iter().any(|p| *p) {
-                " (degrees, mm for prismatic joints)"
-            } else {
-                "°"
+            // one step for every joint: one unit, unless they differ
+            let unit = match (prismatic.iter().all(|p| *p), prismatic.iter().any(|p| *p)) {
+                (all, any) if all || !any => crate::kinematics::unit_suffix(all),
+                _ => " (degrees, mm for prismatic joints)",
             };
             notes.push(format!(
                 "pre-position moves go to a joint's hard limit where --via-step {}{unit} back would leave it: {} of the {} via-points; a smaller --via-step keeps them inside",

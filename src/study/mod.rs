@@ -138,11 +138,11 @@ impl Targets {
     }
 
     /// Give position-only targets of a six-axis robot one tool
-    /// orientation: `orientation`, else the
-    /// orientation of the pose `start`, which
-    /// [`Targets::orientation_from_start`] then records. An orientation
-    /// given to targets that have their own (joint poses, roll, pitch, yaw
-    /// columns) or to a robot of fewer than six joints is an error.
+    /// orientation: `orientation`, else the orientation of the pose
+    /// `start`, which [`Targets::orientation_from_start`] then records.
+    /// An orientation given to targets that have their own (joint poses,
+    /// roll, pitch, yaw columns) or to a robot of fewer than six joints is
+    /// an error.
     pub fn orient(
         mut self,
         robot: &Robot,
